@@ -1,0 +1,479 @@
+//! Convex polygons (world frame, metres) and the closest-point query behind the
+//! LDCBF half-planes (SPEC 2.5).
+//!
+//! A [`ConvexPolygon`] can only be built through a validating constructor, so
+//! every polygon the controller sees is finite, has at least three distinct
+//! vertices, positive area, is strictly convex and is stored counter-clockwise
+//! with duplicate and collinear vertices removed. Input may come in either order.
+
+use nalgebra::Vector2;
+
+/// Two vertices closer than this (m) are the same vertex.
+pub const DUPLICATE_TOL: f64 = 1e-9;
+/// A point closer than this (m) to the boundary is on the boundary.
+pub const ON_BOUNDARY_TOL: f64 = 1e-9;
+/// Default vertex capacity of a polygon.
+pub const DEFAULT_MAX_VERTICES: usize = 32;
+
+/// Why a vertex list is not a valid convex polygon.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GeometryError {
+    /// A coordinate is NaN or infinite.
+    NotFinite,
+    /// Fewer than three distinct vertices.
+    TooFewVertices,
+    /// All vertices are collinear (zero area).
+    ZeroArea,
+    /// The vertices do not form a convex polygon in the given order (a reflex
+    /// vertex, a spike, or a self-intersecting outline).
+    NotConvex,
+    /// More vertices (after clean-up) than the capacity `V`.
+    TooManyVertices,
+}
+
+impl core::fmt::Display for GeometryError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            GeometryError::NotFinite => "a vertex coordinate is not finite",
+            GeometryError::TooFewVertices => "fewer than 3 distinct vertices",
+            GeometryError::ZeroArea => "all vertices are collinear (zero area)",
+            GeometryError::NotConvex => "the vertices do not form a convex polygon",
+            GeometryError::TooManyVertices => "more vertices than the polygon capacity",
+        })
+    }
+}
+
+impl core::error::Error for GeometryError {}
+
+/// A strictly convex polygon with at most `V` vertices, stored counter-clockwise.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ConvexPolygon<const V: usize = DEFAULT_MAX_VERTICES> {
+    vertices: [Vector2<f64>; V],
+    len: usize,
+}
+
+fn cross(a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
+    a.x * b.y - a.y * b.x
+}
+
+impl<const V: usize> ConvexPolygon<V> {
+    /// Validates a vertex list (either orientation) as a convex polygon.
+    /// Consecutive duplicates and collinear vertices are removed first.
+    pub fn new(points: &[[f64; 2]]) -> Result<Self, GeometryError> {
+        const { assert!(V >= 3, "a polygon needs room for 3 vertices") };
+        if points
+            .iter()
+            .any(|p| !(p[0].is_finite() && p[1].is_finite()))
+        {
+            return Err(GeometryError::NotFinite);
+        }
+        // 1. Drop consecutive duplicates (cyclically).
+        let mut buf = [Vector2::zeros(); V];
+        let mut n = 0usize;
+        for p in points {
+            let v = Vector2::new(p[0], p[1]);
+            if n > 0 && (v - buf[n - 1]).norm() <= DUPLICATE_TOL {
+                continue;
+            }
+            if n == V {
+                return Err(GeometryError::TooManyVertices);
+            }
+            buf[n] = v;
+            n += 1;
+        }
+        while n > 1 && (buf[n - 1] - buf[0]).norm() <= DUPLICATE_TOL {
+            n -= 1;
+        }
+        if n < 3 {
+            return Err(GeometryError::TooFewVertices);
+        }
+        // 2. Orientation from the signed area; zero area means collinear.
+        let mut area2 = 0.0;
+        for i in 0..n {
+            area2 += cross(&buf[i], &buf[(i + 1) % n]);
+        }
+        let scale = buf[..n].iter().fold(0.0f64, |m, v| m.max(v.amax()));
+        let span = (0..n).fold(0.0f64, |m, i| m.max((buf[i] - buf[0]).norm()));
+        if area2.abs() <= 1e-12 * span * span.max(scale.max(1.0)) {
+            return Err(GeometryError::ZeroArea);
+        }
+        if area2 < 0.0 {
+            buf[..n].reverse();
+        }
+        // 3. Remove collinear vertices; reject reflex vertices and spikes.
+        let mut out = [Vector2::zeros(); V];
+        let mut len = 0usize;
+        for i in 0..n {
+            let prev = buf[(i + n - 1) % n];
+            let cur = buf[i];
+            let next = buf[(i + 1) % n];
+            let e1 = cur - prev;
+            let e2 = next - cur;
+            let c = cross(&e1, &e2);
+            let tol = 1e-12 * e1.norm() * e2.norm();
+            if c.abs() <= tol {
+                if e1.dot(&e2) < 0.0 {
+                    return Err(GeometryError::NotConvex); // spike
+                }
+                continue; // collinear: not a corner
+            }
+            if c < 0.0 {
+                return Err(GeometryError::NotConvex);
+            }
+            out[len] = cur;
+            len += 1;
+        }
+        if len < 3 {
+            return Err(GeometryError::ZeroArea);
+        }
+        // 4. All left turns could still wind twice (a pentagram): require the
+        // exterior angles to add up to one turn.
+        let mut turn = 0.0;
+        for i in 0..len {
+            let e1 = out[(i + 1) % len] - out[i];
+            let e2 = out[(i + 2) % len] - out[(i + 1) % len];
+            turn += libm::atan2(cross(&e1, &e2), e1.dot(&e2));
+        }
+        if (turn - 2.0 * core::f64::consts::PI).abs() > 1e-6 {
+            return Err(GeometryError::NotConvex);
+        }
+        Ok(ConvexPolygon { vertices: out, len })
+    }
+
+    /// The convex hull of a point set (gift wrapping, at most `V` hull vertices,
+    /// `O(n V)`). Fails like [`ConvexPolygon::new`] when the hull has fewer than 3
+    /// corners (one or two distinct points, or collinear points).
+    pub fn hull(points: &[[f64; 2]]) -> Result<Self, GeometryError> {
+        if points
+            .iter()
+            .any(|p| !(p[0].is_finite() && p[1].is_finite()))
+        {
+            return Err(GeometryError::NotFinite);
+        }
+        let pt = |i: usize| Vector2::new(points[i][0], points[i][1]);
+        if points.is_empty() {
+            return Err(GeometryError::TooFewVertices);
+        }
+        // Start at the lowest (then leftmost) point: it is a hull corner.
+        let mut start = 0;
+        for i in 1..points.len() {
+            let (a, b) = (pt(i), pt(start));
+            if a.y < b.y || (a.y == b.y && a.x < b.x) {
+                start = i;
+            }
+        }
+        let mut hull = [[0.0f64; 2]; V];
+        let mut len = 0usize;
+        let mut cur = start;
+        // Each pass adds one corner; a closed hull has at most `points.len()`.
+        for _ in 0..=points.len() {
+            if len == V {
+                return Err(GeometryError::TooManyVertices);
+            }
+            hull[len] = points[cur];
+            len += 1;
+            let c = pt(cur);
+            let mut cand = if cur == 0 { 1 % points.len() } else { 0 };
+            for i in 0..points.len() {
+                if i == cur {
+                    continue;
+                }
+                let (a, b) = (pt(cand) - c, pt(i) - c);
+                let x = cross(&a, &b);
+                // Take i if it is clockwise of cand, or collinear and farther.
+                if x < 0.0 || (x == 0.0 && b.norm_squared() > a.norm_squared()) {
+                    cand = i;
+                }
+            }
+            if cand == start || (pt(cand) - pt(start)).norm() <= DUPLICATE_TOL {
+                break;
+            }
+            cur = cand;
+        }
+        if len == 2 {
+            return Err(GeometryError::ZeroArea);
+        }
+        Self::new(&hull[..len])
+    }
+
+    /// The vertices, counter-clockwise.
+    pub fn vertices(&self) -> &[Vector2<f64>] {
+        &self.vertices[..self.len]
+    }
+
+    /// Number of vertices (>= 3).
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Always false: a valid polygon has at least three vertices.
+    pub fn is_empty(&self) -> bool {
+        false
+    }
+
+    /// Whether `p` is inside or on the boundary (tolerance [`ON_BOUNDARY_TOL`]).
+    pub fn contains(&self, p: &Vector2<f64>) -> bool {
+        closest_point_point_polygon(p, self).signed_distance <= ON_BOUNDARY_TOL
+    }
+}
+
+/// Where the query point lies relative to the polygon.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PointLocation {
+    /// Strictly outside (distance > [`ON_BOUNDARY_TOL`]).
+    Outside,
+    /// Within [`ON_BOUNDARY_TOL`] of the boundary.
+    OnBoundary,
+    /// Strictly inside.
+    Inside,
+}
+
+/// Result of [`closest_point_point_polygon`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ClosestPoint {
+    /// `c`: the point of the boundary closest to the query point (m, world).
+    pub point: Vector2<f64>,
+    /// `eta`: unit normal of the LDCBF half-plane, pointing to the safe side:
+    /// `(p - c)/|p - c|` outside, `(c - p)/|c - p|` inside, the outward edge normal
+    /// on the boundary (at a vertex: the normalised sum of the two edge normals).
+    pub normal: Vector2<f64>,
+    /// Signed distance from the query point to the boundary (m): positive outside,
+    /// negative inside, zero on the boundary.
+    pub signed_distance: f64,
+    /// Where the query point is.
+    pub location: PointLocation,
+}
+
+/// Closest boundary point, safe-side normal and signed distance from `p` to `poly`.
+/// Cost `O(V)`. `p` must be finite (the controller checks its inputs first); a
+/// non-finite `p` gives a non-finite result, never a panic.
+pub fn closest_point_point_polygon<const V: usize>(
+    p: &Vector2<f64>,
+    poly: &ConvexPolygon<V>,
+) -> ClosestPoint {
+    let verts = poly.vertices();
+    let n = verts.len();
+    let mut best_d2 = f64::INFINITY;
+    let mut best_c = verts[0];
+    let mut best_edge = 0usize;
+    let mut best_t = 0.0;
+    let mut inside = true;
+    for i in 0..n {
+        let a = verts[i];
+        let b = verts[(i + 1) % n];
+        let ab = b - a;
+        let ap = p - a;
+        if cross(&ab, &ap) <= 0.0 {
+            inside = false;
+        }
+        let t = (ap.dot(&ab) / ab.norm_squared()).clamp(0.0, 1.0);
+        let c = a + ab * t;
+        let d2 = (p - c).norm_squared();
+        if d2 < best_d2 {
+            best_d2 = d2;
+            best_c = c;
+            best_edge = i;
+            best_t = t;
+        }
+    }
+    let dist = libm::sqrt(best_d2);
+    let edge_normal = |i: usize| {
+        let e = verts[(i + 1) % n] - verts[i];
+        Vector2::new(e.y, -e.x) / e.norm() // outward for counter-clockwise order
+    };
+    if dist <= ON_BOUNDARY_TOL {
+        let mut nrm = edge_normal(best_edge);
+        if best_t <= 0.0 {
+            nrm += edge_normal((best_edge + n - 1) % n);
+        } else if best_t >= 1.0 {
+            nrm += edge_normal((best_edge + 1) % n);
+        }
+        return ClosestPoint {
+            point: best_c,
+            normal: nrm / nrm.norm(),
+            signed_distance: 0.0,
+            location: PointLocation::OnBoundary,
+        };
+    }
+    if inside {
+        ClosestPoint {
+            point: best_c,
+            normal: (best_c - p) / dist,
+            signed_distance: -dist,
+            location: PointLocation::Inside,
+        }
+    } else {
+        ClosestPoint {
+            point: best_c,
+            normal: (p - best_c) / dist,
+            signed_distance: dist,
+            location: PointLocation::Outside,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    type Poly = ConvexPolygon<8>;
+    const SQUARE: [[f64; 2]; 4] = [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]];
+
+    fn v(x: f64, y: f64) -> Vector2<f64> {
+        Vector2::new(x, y)
+    }
+
+    #[test]
+    fn either_orientation_is_stored_ccw() {
+        let a = Poly::new(&SQUARE).unwrap();
+        let mut rev = SQUARE;
+        rev.reverse();
+        let b = Poly::new(&rev).unwrap();
+        assert_eq!(a.len(), 4);
+        assert_eq!(b.len(), 4);
+        for p in [&a, &b] {
+            let vs = p.vertices();
+            let mut area2 = 0.0;
+            for i in 0..vs.len() {
+                area2 += cross(&vs[i], &vs[(i + 1) % vs.len()]);
+            }
+            assert!((area2 - 2.0).abs() < 1e-15);
+        }
+    }
+
+    #[test]
+    fn duplicates_and_collinear_points_are_removed() {
+        let p = Poly::new(&[
+            [0.0, 0.0],
+            [0.0, 0.0],
+            [0.5, 0.0],
+            [1.0, 0.0],
+            [1.0, 1.0],
+            [0.0, 1.0],
+            [0.0, 0.0],
+        ])
+        .unwrap();
+        assert_eq!(p.len(), 4);
+    }
+
+    #[test]
+    fn invalid_inputs_are_typed_errors() {
+        assert_eq!(Poly::new(&[]), Err(GeometryError::TooFewVertices));
+        assert_eq!(
+            Poly::new(&[[0.0, 0.0], [1.0, 0.0], [0.0, 0.0]]),
+            Err(GeometryError::TooFewVertices)
+        );
+        assert_eq!(
+            Poly::new(&[[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]]),
+            Err(GeometryError::ZeroArea)
+        );
+        assert_eq!(
+            Poly::new(&[[0.0, 0.0], [1.0, f64::NAN], [2.0, 0.0]]),
+            Err(GeometryError::NotFinite)
+        );
+        // Reflex vertex (an arrow head).
+        assert_eq!(
+            Poly::new(&[[0.0, 0.0], [2.0, 0.0], [1.0, 0.5], [2.0, 2.0], [0.0, 2.0]]),
+            Err(GeometryError::NotConvex)
+        );
+        // Self-intersecting bow tie.
+        assert_eq!(
+            Poly::new(&[[0.0, 0.0], [2.0, 2.0], [2.0, 0.0], [0.0, 1.0]]),
+            Err(GeometryError::NotConvex)
+        );
+        // Pentagram: all turns the same way, but winds twice.
+        let mut star = [[0.0; 2]; 5];
+        for (i, s) in star.iter_mut().enumerate() {
+            let a = (i as f64) * 4.0 * core::f64::consts::PI / 5.0;
+            *s = [libm::cos(a), libm::sin(a)];
+        }
+        assert_eq!(Poly::new(&star), Err(GeometryError::NotConvex));
+        let many = [[0.0, 0.0]; 9];
+        assert_eq!(Poly::new(&many), Err(GeometryError::TooFewVertices));
+        let mut circle = [[0.0; 2]; 9];
+        for (i, s) in circle.iter_mut().enumerate() {
+            let a = (i as f64) * 2.0 * core::f64::consts::PI / 9.0;
+            *s = [libm::cos(a), libm::sin(a)];
+        }
+        assert_eq!(Poly::new(&circle), Err(GeometryError::TooManyVertices));
+    }
+
+    #[test]
+    fn hull_of_scattered_points() {
+        let pts = [
+            [0.5, 0.5],
+            [0.0, 0.0],
+            [1.0, 0.0],
+            [0.2, 0.7],
+            [1.0, 1.0],
+            [0.5, 0.0],
+            [0.0, 1.0],
+        ];
+        let h = Poly::hull(&pts).unwrap();
+        assert_eq!(h.len(), 4);
+        assert_eq!(h, Poly::new(&SQUARE).unwrap());
+        assert_eq!(
+            Poly::hull(&[[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]),
+            Err(GeometryError::ZeroArea)
+        );
+        assert_eq!(
+            Poly::hull(&[[0.0, 0.0]]),
+            Err(GeometryError::TooFewVertices)
+        );
+        assert_eq!(Poly::hull(&[]), Err(GeometryError::TooFewVertices));
+    }
+
+    #[test]
+    fn closest_point_outside_on_edge_and_vertex() {
+        let sq = Poly::new(&SQUARE).unwrap();
+        let r = closest_point_point_polygon(&v(0.5, -2.0), &sq);
+        assert_eq!(r.location, PointLocation::Outside);
+        assert!((r.point - v(0.5, 0.0)).norm() < 1e-15);
+        assert!((r.normal - v(0.0, -1.0)).norm() < 1e-15);
+        assert!((r.signed_distance - 2.0).abs() < 1e-15);
+        // Vertex region.
+        let r = closest_point_point_polygon(&v(2.0, 2.0), &sq);
+        assert!((r.point - v(1.0, 1.0)).norm() < 1e-15);
+        let s = 1.0 / libm::sqrt(2.0);
+        assert!((r.normal - v(s, s)).norm() < 1e-15);
+        assert!((r.signed_distance - libm::sqrt(2.0)).abs() < 1e-15);
+    }
+
+    #[test]
+    fn closest_point_inside_points_out_through_nearest_edge() {
+        let sq = Poly::new(&SQUARE).unwrap();
+        let r = closest_point_point_polygon(&v(0.9, 0.4), &sq);
+        assert_eq!(r.location, PointLocation::Inside);
+        assert!((r.point - v(1.0, 0.4)).norm() < 1e-15);
+        assert!((r.normal - v(1.0, 0.0)).norm() < 1e-15);
+        assert!((r.signed_distance + 0.1).abs() < 1e-15);
+        assert!(sq.contains(&v(0.9, 0.4)));
+        assert!(!sq.contains(&v(1.1, 0.4)));
+    }
+
+    #[test]
+    fn closest_point_on_boundary_uses_edge_or_vertex_normal() {
+        let sq = Poly::new(&SQUARE).unwrap();
+        let r = closest_point_point_polygon(&v(0.0, 0.3), &sq);
+        assert_eq!(r.location, PointLocation::OnBoundary);
+        assert_eq!(r.signed_distance, 0.0);
+        assert!((r.normal - v(-1.0, 0.0)).norm() < 1e-15);
+        let r = closest_point_point_polygon(&v(1.0, 0.0), &sq);
+        assert_eq!(r.location, PointLocation::OnBoundary);
+        let s = 1.0 / libm::sqrt(2.0);
+        assert!((r.normal - v(s, -s)).norm() < 1e-15, "{:?}", r.normal);
+        // Clockwise input gives the same answers.
+        let mut rev = SQUARE;
+        rev.reverse();
+        let sq2 = Poly::new(&rev).unwrap();
+        let r2 = closest_point_point_polygon(&v(0.0, 0.3), &sq2);
+        assert!((r2.normal - v(-1.0, 0.0)).norm() < 1e-15);
+    }
+
+    #[test]
+    fn non_finite_query_does_not_panic() {
+        let sq = Poly::new(&SQUARE).unwrap();
+        let r = closest_point_point_polygon(&v(f64::NAN, 0.0), &sq);
+        assert!(!r.signed_distance.is_finite());
+    }
+}

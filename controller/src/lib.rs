@@ -1,0 +1,58 @@
+//! # ldcbf-controller
+//!
+//! A `#![no_std]`, allocation-free footstep planner for humanoid robots: a model
+//! predictive controller on the 3D linear inverted pendulum (LIP) with heading,
+//! kept out of convex obstacles by linear discrete control barrier functions
+//! (LDCBF), after Peng et al., "Real-Time Safe Bipedal Robot Navigation using
+//! Linear Discrete Control Barrier Functions" (arXiv 2411.03619).
+//!
+//! Each control cycle ([`Controller::step`]):
+//!
+//! 1. predicts the CoM state `x_0` at the end of the current step ([`lip`]);
+//! 2. fixes the turning rate `omega_bar` and the headings `theta_k` ([`heading`]);
+//! 3. selects the obstacles within `r_active`, nearest first, and linearises each
+//!    as a half-plane at the boundary point closest to `p_0` ([`geometry`]);
+//! 4. builds the condensed QP over the next `N` footsteps
+//!    `u = [f_0x, f_0y, ..., f_{N-1}x, f_{N-1}y]` ([`constraints`]):
+//!
+//!    ```text
+//!    minimise    sum_{k=1..N} |p_k - g|^2  =  1/2 u'Hu + q'u + const
+//!    subject to  walking velocity, leg reachability, maneuverability (k = 0..N-1)
+//!                h_j(p_{k+1}) >= (1 - gamma) h_j(p_k)   for each active obstacle j
+//!    ```
+//!
+//!    `H` depends only on `(g, H_com, T, N)` and is factored once;
+//! 5. solves it with the dense dual active-set method of [`qp`] and returns the
+//!    swing-foot target `f_0`, `omega_bar`, the predicted plan, a status and
+//!    diagnostics ([`mpc`]).
+//!
+//! Frames and units: everything is in the world frame W, in metres, seconds and
+//! radians; headings are measured counter-clockwise from the world x axis.
+//!
+//! Sizes are const generics (horizon `N`, variables `NV = 2N`, row capacity `NC`,
+//! obstacle capacity `NOBS`), checked against each other at compile time; see
+//! [`mpc`] for the rules and [`PaperController`] for the paper's configuration.
+#![no_std]
+#![forbid(unsafe_code)]
+
+pub mod constraints;
+pub mod geometry;
+pub mod heading;
+pub mod lip;
+pub mod mpc;
+pub mod qp;
+
+pub use nalgebra;
+
+pub use constraints::{Condensed, HalfPlane, RowId, RowKind};
+pub use geometry::{
+    ClosestPoint, ConvexPolygon, GeometryError, PointLocation, closest_point_point_polygon,
+};
+pub use heading::{HeadingPlan, plan_heading, wrap_angle};
+pub use lip::Lip;
+pub use mpc::{
+    ActiveObstacle, Assembly, CommandSource, Config, ConfigError, Controller, CycleInfo,
+    CycleInput, CycleOutput, CycleStatus, InputError, LipState, PaperController, Plan, Prediction,
+    Side, constraint_capacity,
+};
+pub use qp::{DenseQp, DualActiveSet, HessianError, QpSettings, QpSolution, QpStatus};

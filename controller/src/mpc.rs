@@ -1,0 +1,1161 @@
+//! The controller: configuration, one control cycle, status and fallback commands.
+//!
+//! ## Sizes
+//!
+//! Stable Rust cannot write `2 * N` in a type, so the sizes are four const
+//! parameters whose relations are checked at compile time (`const { assert!(..) }`
+//! in [`Controller::new`]):
+//!
+//! | parameter | meaning | rule |
+//! |---|---|---|
+//! | `N` | horizon (footsteps planned) | `N >= 1` |
+//! | `NV` | QP variables | `NV == 2 * N` |
+//! | `NC` | QP row capacity | `NC >= 8 N + N NOBS` ([`constraint_capacity`]); `8 N + 2 N NOBS` to allow foot clearance |
+//! | `NOBS` | obstacle capacity (active obstacles used per cycle) | `NOBS >= 0` |
+//!
+//! [`PaperController`] is the paper's configuration (`N = 3`, 8 obstacles).
+//!
+//! ## Status and commands
+//!
+//! Every call to [`Controller::step`] returns a finite command and says where it
+//! came from ([`CommandSource`]):
+//!
+//! * [`CycleStatus::Optimal`]: the QP was solved; the command is `f_0` of the
+//!   optimal plan and `omega_bar`.
+//! * [`CycleStatus::Infeasible`], [`CycleStatus::BudgetExhausted`],
+//!   [`CycleStatus::NumericalFailure`]: the previous cycle's plan (shifted by one
+//!   step if a step ended in between) is used when it satisfies every row of this
+//!   cycle's QP ([`CommandSource::PreviousPlan`]); otherwise a *capture step*: the
+//!   swing foot goes to the instantaneous capture point `p_0 + v_0 / beta` clamped
+//!   into the reachability box around `p_0`, and the turning rate is 0
+//!   ([`CommandSource::CaptureStep`]). A capture step brings a LIP to rest over the
+//!   foot; it honours leg reachability but not necessarily the LDCBF rows.
+//! * [`CycleStatus::InvalidInput`]: a measured input was NaN or infinite. The
+//!   command holds: the last valid swing target (or the stance foot, or the
+//!   origin if that is not finite either) and turning rate 0 ([`CommandSource::Hold`]).
+#![allow(non_snake_case)]
+
+use nalgebra::{SVector, Vector2};
+
+use crate::constraints::{
+    Condensed, GaitBounds, HalfPlane, RowId, RowKind, push_foot_row, push_gait_rows, push_ldcbf_row,
+};
+use crate::geometry::{ConvexPolygon, closest_point_point_polygon};
+use crate::heading::{HeadingPlan, plan_heading, wrap_angle};
+use crate::lip::Lip;
+use crate::qp::{DenseQp, DualActiveSet, QpSettings, QpSolution, QpStatus};
+
+/// Row capacity needed for horizon `n`, `nobs` obstacles, with or without the
+/// foot-clearance rows: `8 n + n nobs (x2 with foot clearance)`.
+pub const fn constraint_capacity(n: usize, nobs: usize, foot_clearance: bool) -> usize {
+    8 * n + n * nobs * if foot_clearance { 2 } else { 1 }
+}
+
+/// The paper's configuration: horizon 3, up to 8 active obstacles, no foot
+/// clearance rows.
+pub type PaperController = Controller<3, 6, { constraint_capacity(3, 8, false) }, 8>;
+
+/// Which foot.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Side {
+    /// Left foot (`s = -1`).
+    Left,
+    /// Right foot (`s = +1`).
+    Right,
+}
+
+impl Side {
+    /// `s`: +1 for the right foot, -1 for the left (SPEC 2.5).
+    pub fn sign(self) -> f64 {
+        match self {
+            Side::Left => -1.0,
+            Side::Right => 1.0,
+        }
+    }
+    /// The other foot.
+    pub fn opposite(self) -> Side {
+        match self {
+            Side::Left => Side::Right,
+            Side::Right => Side::Left,
+        }
+    }
+}
+
+/// Controller settings. Units: SI (m, s, rad). Build with `Default` (the paper's
+/// Table I) and override fields; [`Config::validate`] names the first bad field.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Config {
+    /// Gravity `g`, m/s^2.
+    pub gravity: f64,
+    /// CoM height `H`, m.
+    pub com_height: f64,
+    /// Step duration `T`, s.
+    pub step_duration: f64,
+    /// Minimum longitudinal velocity at the end of a step, m/s.
+    pub vx_min: f64,
+    /// Maximum longitudinal velocity, m/s.
+    pub vx_max: f64,
+    /// Minimum lateral velocity (times the stance sign), m/s.
+    pub vy_min: f64,
+    /// Maximum lateral velocity (times the stance sign), m/s.
+    pub vy_max: f64,
+    /// Leg reachability half-width in each body axis, m.
+    pub l_max: f64,
+    /// Maneuverability coefficient `alpha` (m/rad): `v_lon <= vx_max - alpha/pi |omega|`.
+    pub alpha: f64,
+    /// Turning-rate bound `omega_max`, rad/s.
+    pub omega_max: f64,
+    /// LDCBF decay `gamma` in (0, 1]; 1 gives `h(p_{k+1}) >= 0`.
+    pub gamma: f64,
+    /// LDCBF margin `delta` >= 0, m.
+    pub delta: f64,
+    /// Obstacles whose signed distance to `p_0` is at most this are active, m.
+    pub r_active: f64,
+    /// Foot clearance `delta_foot` (m): `eta'(f_k - c) >= delta_foot`; `None` = off.
+    pub foot_clearance: Option<f64>,
+    /// Within this distance of the goal the heading is frozen (`omega_bar = 0`), m.
+    pub heading_freeze_radius: f64,
+    /// Iteration budget of the QP solver (adds plus drops) per cycle.
+    pub max_iter: u32,
+    /// Prefer the previous cycle's active rows (shifted) when choosing rows to add.
+    pub warm_start: bool,
+    /// Primal feasibility tolerance of the solver (on unit-norm rows), m or m/s.
+    pub tol_primal: f64,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Config {
+            gravity: 9.81,
+            com_height: 1.0,
+            step_duration: 0.4,
+            vx_min: -0.1,
+            vx_max: 0.8,
+            vy_min: 0.1,
+            vy_max: 0.4,
+            l_max: 0.1 * 1.732_050_807_568_877_2,
+            alpha: 1.44,
+            omega_max: 0.156 * core::f64::consts::PI,
+            gamma: 0.3,
+            delta: 0.0,
+            r_active: 4.0,
+            foot_clearance: None,
+            heading_freeze_radius: 0.3,
+            max_iter: 64,
+            warm_start: true,
+            tol_primal: 1e-10,
+        }
+    }
+}
+
+/// A configuration error: which field, and what is wrong with it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ConfigError {
+    /// Name of the offending field of [`Config`].
+    pub field: &'static str,
+    /// What the field must satisfy.
+    pub requirement: &'static str,
+}
+
+impl core::fmt::Display for ConfigError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "invalid controller setting `{}`: {}",
+            self.field, self.requirement
+        )
+    }
+}
+
+impl core::error::Error for ConfigError {}
+
+impl Config {
+    /// Checks every field; the error names the first bad one.
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        let err = |field, requirement| Err(ConfigError { field, requirement });
+        let pos = |v: f64| v.is_finite() && v > 0.0;
+        if !pos(self.gravity) {
+            return err("gravity", "must be finite and > 0");
+        }
+        if !pos(self.com_height) {
+            return err("com_height", "must be finite and > 0");
+        }
+        if !pos(self.step_duration) {
+            return err("step_duration", "must be finite and > 0");
+        }
+        if !self.vx_min.is_finite() {
+            return err("vx_min", "must be finite");
+        }
+        if !(self.vx_max.is_finite() && self.vx_max > self.vx_min) {
+            return err("vx_max", "must be finite and > vx_min");
+        }
+        if !self.vy_min.is_finite() {
+            return err("vy_min", "must be finite");
+        }
+        if !(self.vy_max.is_finite() && self.vy_max >= self.vy_min) {
+            return err("vy_max", "must be finite and >= vy_min");
+        }
+        if !pos(self.l_max) {
+            return err("l_max", "must be finite and > 0");
+        }
+        if !(self.alpha.is_finite() && self.alpha >= 0.0) {
+            return err("alpha", "must be finite and >= 0");
+        }
+        if !(self.omega_max.is_finite() && self.omega_max >= 0.0) {
+            return err("omega_max", "must be finite and >= 0");
+        }
+        if !(self.gamma.is_finite() && self.gamma > 0.0 && self.gamma <= 1.0) {
+            return err("gamma", "must be in (0, 1]");
+        }
+        if !(self.delta.is_finite() && self.delta >= 0.0) {
+            return err("delta", "must be finite and >= 0");
+        }
+        if !pos(self.r_active) {
+            return err("r_active", "must be finite and > 0");
+        }
+        if let Some(d) = self.foot_clearance
+            && !d.is_finite()
+        {
+            return err("foot_clearance", "must be finite when set");
+        }
+        if !(self.heading_freeze_radius.is_finite() && self.heading_freeze_radius >= 0.0) {
+            return err("heading_freeze_radius", "must be finite and >= 0");
+        }
+        if self.max_iter == 0 {
+            return err("max_iter", "must be >= 1");
+        }
+        if !(self.tol_primal.is_finite() && self.tol_primal > 0.0 && self.tol_primal < 1e-3) {
+            return err("tol_primal", "must be in (0, 1e-3)");
+        }
+        Ok(())
+    }
+}
+
+/// The measured state and context of one control cycle. World frame W.
+#[derive(Clone, Copy, Debug)]
+pub struct CycleInput<'a, const V: usize> {
+    /// CoM position, m.
+    pub com_position: Vector2<f64>,
+    /// CoM velocity, m/s.
+    pub com_velocity: Vector2<f64>,
+    /// Heading (yaw), rad.
+    pub heading: f64,
+    /// Current turning rate (the last commanded `omega`), rad/s.
+    pub turning_rate: f64,
+    /// Position of the current stance foot, m.
+    pub stance_foot: Vector2<f64>,
+    /// Which foot is the stance foot.
+    pub stance_side: Side,
+    /// Time already spent in the current step, s, in `[0, T]` (clamped otherwise).
+    pub time_in_step: f64,
+    /// Goal or current subgoal, m.
+    pub goal: Vector2<f64>,
+    /// Obstacles (validated convex polygons, world frame).
+    pub obstacles: &'a [ConvexPolygon<V>],
+}
+
+/// Which input was not finite.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InputError {
+    /// CoM position, velocity, heading or turning rate.
+    State,
+    /// Stance foot position.
+    StanceFoot,
+    /// Time in step.
+    TimeInStep,
+    /// Goal.
+    Goal,
+}
+
+impl core::fmt::Display for InputError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            InputError::State => "CoM state, heading or turning rate is not finite",
+            InputError::StanceFoot => "stance foot position is not finite",
+            InputError::TimeInStep => "time in step is not finite",
+            InputError::Goal => "goal is not finite",
+        })
+    }
+}
+
+impl core::error::Error for InputError {}
+
+/// Outcome of a cycle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CycleStatus {
+    /// QP solved; optimal command.
+    Optimal,
+    /// The QP has no feasible point; fallback command.
+    Infeasible,
+    /// The iteration budget ran out; fallback command.
+    BudgetExhausted,
+    /// The solver met a numerical failure; fallback command.
+    NumericalFailure,
+    /// An input was not finite; hold command.
+    InvalidInput(InputError),
+}
+
+impl CycleStatus {
+    /// True for [`CycleStatus::Optimal`].
+    pub fn is_optimal(self) -> bool {
+        matches!(self, CycleStatus::Optimal)
+    }
+    /// Short lower-case name, for logs.
+    pub fn name(self) -> &'static str {
+        match self {
+            CycleStatus::Optimal => "optimal",
+            CycleStatus::Infeasible => "infeasible",
+            CycleStatus::BudgetExhausted => "budget_exhausted",
+            CycleStatus::NumericalFailure => "numerical_failure",
+            CycleStatus::InvalidInput(_) => "invalid_input",
+        }
+    }
+}
+
+/// Where the returned command came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CommandSource {
+    /// This cycle's optimal plan.
+    Optimal,
+    /// The previous cycle's plan, still feasible for this cycle's rows.
+    PreviousPlan,
+    /// The clamped capture step (see module docs).
+    CaptureStep,
+    /// Hold the last valid target (invalid input).
+    Hold,
+}
+
+/// A LIP state in the world frame.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct LipState {
+    /// CoM position, m.
+    pub position: Vector2<f64>,
+    /// CoM velocity, m/s.
+    pub velocity: Vector2<f64>,
+    /// Heading, rad.
+    pub heading: f64,
+}
+
+/// The predicted plan of a cycle.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Plan<const N: usize> {
+    /// `x_0`: predicted state at the end of the current step.
+    pub x0: LipState,
+    /// `x_1 .. x_N`.
+    pub states: [LipState; N],
+    /// `f_0 .. f_{N-1}`: stance foot of each planned step, m.
+    pub feet: [Vector2<f64>; N],
+    /// Side of `f_0` (the current swing foot); later feet alternate.
+    pub first_side: Side,
+}
+
+/// Diagnostics of one cycle (`Copy`, for logs).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CycleInfo {
+    /// QP solver outcome, `None` when the QP was not built (invalid input).
+    pub qp_status: Option<QpStatus>,
+    /// Solver iterations (adds plus drops).
+    pub iterations: u32,
+    /// Size of the final active set.
+    pub active_set_size: u8,
+    /// Obstacles used in the QP.
+    pub active_obstacles: u8,
+    /// More obstacles were within `r_active` than the capacity `NOBS` (the farthest
+    /// were left out).
+    pub obstacles_truncated: bool,
+    /// `p_0` lies inside (or on) an obstacle.
+    pub inside_obstacle: bool,
+    /// `time_in_step` was outside `[0, T]` and was clamped.
+    pub time_clamped: bool,
+    /// Some marked (warm-start) rows were given to the solver.
+    pub warm_started: bool,
+    /// Where the command came from.
+    pub source: CommandSource,
+    /// Cost `sum_k |p_k - g|^2` of the returned plan (m^2); NaN for `Hold`.
+    pub cost: f64,
+    /// Largest violation of this cycle's QP rows by the returned plan (0 when all
+    /// hold); NaN for `Hold`.
+    pub max_violation: f64,
+    /// Smallest `h_j(p_0)` over the active obstacles (m), `+inf` if none.
+    pub min_h0: f64,
+}
+
+/// Everything one cycle returns. All numbers are finite.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CycleOutput<const N: usize> {
+    /// `f_0`: where the current swing foot should land, m (world).
+    pub foot_target: Vector2<f64>,
+    /// Turning rate to apply during the next step, rad/s.
+    pub turning_rate: f64,
+    /// Predicted plan.
+    pub plan: Plan<N>,
+    /// Outcome.
+    pub status: CycleStatus,
+    /// Diagnostics.
+    pub info: CycleInfo,
+}
+
+/// An obstacle used in this cycle's QP.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ActiveObstacle {
+    /// Index in the caller's obstacle slice.
+    pub index: u16,
+    /// Signed distance from `p_0`, m.
+    pub distance: f64,
+    /// The LDCBF half-plane.
+    pub half_plane: HalfPlane,
+}
+
+/// The quantities fixed before the QP: prediction and heading plan.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Prediction<const N: usize> {
+    /// Predicted CoM position at the end of the current step, m.
+    pub p0: Vector2<f64>,
+    /// Predicted CoM velocity at the end of the current step, m/s.
+    pub v0: Vector2<f64>,
+    /// Heading plan (theta_0 = predicted heading at the end of the current step).
+    pub heading: HeadingPlan<N>,
+    /// Side of `f_0`.
+    pub first_side: Side,
+    /// Goal used, m.
+    pub goal: Vector2<f64>,
+}
+
+/// One cycle's QP and its bookkeeping, as assembled by [`Controller::assemble`].
+/// Public so that the reference crate can solve exactly the same problem.
+#[derive(Clone, Debug)]
+pub struct Assembly<const N: usize, const NV: usize, const NC: usize, const NOBS: usize> {
+    /// The QP: `min 1/2 u'Hu + q'u, G u <= h` (H from [`Controller::solver`]).
+    pub qp: DenseQp<NV, NC>,
+    /// Constant of the cost: cost = `1/2 u'Hu + q'u + cost_constant`.
+    pub cost_constant: f64,
+    /// Identity of each row.
+    pub rows: [RowId; NC],
+    /// Prediction and headings.
+    pub prediction: Prediction<N>,
+    /// Active obstacles, nearest first (first `n_obstacles` valid).
+    pub obstacles: [ActiveObstacle; NOBS],
+    /// Number of active obstacles.
+    pub n_obstacles: usize,
+    /// See [`CycleInfo::obstacles_truncated`].
+    pub obstacles_truncated: bool,
+    /// See [`CycleInfo::time_clamped`].
+    pub time_clamped: bool,
+}
+
+impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize> Default
+    for Assembly<N, NV, NC, NOBS>
+{
+    fn default() -> Self {
+        let zero_hp = HalfPlane {
+            c: Vector2::zeros(),
+            eta: Vector2::zeros(),
+        };
+        Assembly {
+            qp: DenseQp::default(),
+            cost_constant: 0.0,
+            rows: [RowId::default(); NC],
+            prediction: Prediction {
+                p0: Vector2::zeros(),
+                v0: Vector2::zeros(),
+                heading: HeadingPlan {
+                    omega_bar: 0.0,
+                    theta: [0.0; N],
+                    theta_end: 0.0,
+                },
+                first_side: Side::Right,
+                goal: Vector2::zeros(),
+            },
+            obstacles: [ActiveObstacle {
+                index: 0,
+                distance: 0.0,
+                half_plane: zero_hp,
+            }; NOBS],
+            n_obstacles: 0,
+            obstacles_truncated: false,
+            time_clamped: false,
+        }
+    }
+}
+
+/// Warm-start and fallback memory carried from one cycle to the next.
+#[derive(Clone, Copy, Debug)]
+struct Memory<const NV: usize> {
+    /// Active rows of the last solved QP.
+    active: [RowId; NV],
+    n_active: usize,
+    /// Last planned footsteps (interleaved), valid when `has_plan`.
+    plan: SVector<f64, NV>,
+    has_plan: bool,
+    /// Stance side when that plan was made.
+    stance: Side,
+    /// Last valid swing target, for `Hold`.
+    last_target: Option<Vector2<f64>>,
+}
+
+/// The LDCBF-MPC controller: precomputed model and factored Hessian, plus the
+/// warm-start memory. One [`Controller::step`] per control cycle.
+#[derive(Clone, Debug)]
+pub struct Controller<const N: usize, const NV: usize, const NC: usize, const NOBS: usize> {
+    core: Core<N, NV, NC>,
+    memory: Memory<NV>,
+    work: Assembly<N, NV, NC, NOBS>,
+}
+
+/// The immutable, precomputed part of the controller.
+#[derive(Clone, Debug)]
+struct Core<const N: usize, const NV: usize, const NC: usize> {
+    config: Config,
+    lip: Lip,
+    model: Condensed<N>,
+    solver: DualActiveSet<NV, NC>,
+}
+
+impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
+    Controller<N, NV, NC, NOBS>
+{
+    /// Validates `config` and precomputes the model and the Hessian factorisation.
+    pub fn new(config: Config) -> Result<Self, ConfigError> {
+        const {
+            assert!(N >= 1, "horizon N must be >= 1");
+            assert!(NV == 2 * N, "NV must equal 2 * N");
+            assert!(NC >= 8 * N + N * NOBS, "NC must be >= 8 N + N NOBS");
+            assert!(N < 256 && NOBS < 256 && NV < 256);
+        }
+        config.validate()?;
+        if config.foot_clearance.is_some() && NC < constraint_capacity(N, NOBS, true) {
+            return Err(ConfigError {
+                field: "foot_clearance",
+                requirement: "needs row capacity NC >= 8 N + 2 N NOBS",
+            });
+        }
+        let lip = Lip::new(config.gravity, config.com_height, config.step_duration);
+        let model = Condensed::<N>::new(&lip);
+        let settings = QpSettings {
+            tol_primal: config.tol_primal,
+            ..QpSettings::default()
+        };
+        let solver = DualActiveSet::new(&model.hessian::<NV>(), settings).map_err(|_| ConfigError {
+            field: "com_height",
+            requirement: "gives a Hessian that is not positive definite (check gravity, com_height, step_duration)",
+        })?;
+        Ok(Controller {
+            core: Core {
+                config,
+                lip,
+                model,
+                solver,
+            },
+            memory: Memory {
+                active: [RowId::default(); NV],
+                n_active: 0,
+                plan: SVector::zeros(),
+                has_plan: false,
+                stance: Side::Left,
+                last_target: None,
+            },
+            work: Assembly::default(),
+        })
+    }
+
+    /// The validated configuration.
+    pub fn config(&self) -> &Config {
+        &self.core.config
+    }
+
+    /// The LIP model.
+    pub fn lip(&self) -> &Lip {
+        &self.core.lip
+    }
+
+    /// The condensed prediction matrices.
+    pub fn model(&self) -> &Condensed<N> {
+        &self.core.model
+    }
+
+    /// The QP solver (holds the constant Hessian `H`).
+    pub fn solver(&self) -> &DualActiveSet<NV, NC> {
+        &self.core.solver
+    }
+
+    /// The assembly of the last `step` (its QP, rows and obstacles).
+    pub fn last_assembly(&self) -> &Assembly<N, NV, NC, NOBS> {
+        &self.work
+    }
+
+    /// Forgets the warm-start and fallback memory (e.g. after a restart).
+    pub fn reset(&mut self) {
+        self.memory.n_active = 0;
+        self.memory.has_plan = false;
+        self.memory.last_target = None;
+    }
+
+    /// Steps 1-2 and 5 of SPEC section 2: prediction, headings, obstacle selection
+    /// and all QP rows, written into `out`. Pure: uses no warm-start memory.
+    pub fn assemble<const V: usize>(
+        &self,
+        input: &CycleInput<'_, V>,
+        out: &mut Assembly<N, NV, NC, NOBS>,
+    ) -> Result<(), InputError> {
+        self.core.assemble(input, out)
+    }
+
+    /// One control cycle (SPEC section 2): predict, plan headings, assemble and
+    /// solve the QP, and return the command. Never panics on any input; the
+    /// command is always finite (see the module docs for the fallbacks).
+    pub fn step<const V: usize>(&mut self, input: &CycleInput<'_, V>) -> CycleOutput<N> {
+        let Controller { core, memory, work } = self;
+        match core.assemble(input, work) {
+            Ok(()) => core.solve_assembled(memory, input, work),
+            Err(e) => hold(memory, input, e),
+        }
+    }
+}
+
+impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
+    fn assemble<const V: usize, const NOBS: usize>(
+        &self,
+        input: &CycleInput<'_, V>,
+        out: &mut Assembly<N, NV, NC, NOBS>,
+    ) -> Result<(), InputError> {
+        let cfg = &self.config;
+        let finite2 = |v: &Vector2<f64>| v.x.is_finite() && v.y.is_finite();
+        if !(finite2(&input.com_position)
+            && finite2(&input.com_velocity)
+            && input.heading.is_finite()
+            && input.turning_rate.is_finite())
+        {
+            return Err(InputError::State);
+        }
+        if !finite2(&input.stance_foot) {
+            return Err(InputError::StanceFoot);
+        }
+        if !input.time_in_step.is_finite() {
+            return Err(InputError::TimeInStep);
+        }
+        if !finite2(&input.goal) {
+            return Err(InputError::Goal);
+        }
+        let t_step = cfg.step_duration;
+        let t_in = input.time_in_step.clamp(0.0, t_step);
+        out.time_clamped = t_in != input.time_in_step;
+        let tau = t_step - t_in;
+
+        // 1. Predict x_0 at the end of the current step.
+        let (p0, v0) = self.lip.propagate(
+            &input.com_position,
+            &input.com_velocity,
+            &input.stance_foot,
+            tau,
+        );
+        if !(finite2(&p0) && finite2(&v0)) {
+            return Err(InputError::State);
+        }
+        let theta0 = wrap_angle(input.heading + input.turning_rate * tau);
+        if !theta0.is_finite() {
+            return Err(InputError::State);
+        }
+        // 2. Headings.
+        let heading = plan_heading::<N>(
+            theta0,
+            [p0.x, p0.y],
+            [input.goal.x, input.goal.y],
+            t_step,
+            cfg.omega_max,
+            cfg.heading_freeze_radius,
+        );
+        let first_side = input.stance_side.opposite();
+        out.prediction = Prediction {
+            p0,
+            v0,
+            heading,
+            first_side,
+            goal: input.goal,
+        };
+
+        // Active obstacles: within r_active of p_0, nearest first, at most NOBS.
+        out.n_obstacles = 0;
+        out.obstacles_truncated = false;
+        for (idx, poly) in input.obstacles.iter().enumerate() {
+            if idx > u16::MAX as usize {
+                out.obstacles_truncated = true;
+                break;
+            }
+            let cp = closest_point_point_polygon(&p0, poly);
+            if !(cp.signed_distance <= cfg.r_active) {
+                continue;
+            }
+            let cand = ActiveObstacle {
+                index: idx as u16,
+                distance: cp.signed_distance,
+                half_plane: HalfPlane {
+                    c: cp.point,
+                    eta: cp.normal,
+                },
+            };
+            // Insertion into the sorted list (bounded by NOBS).
+            let mut pos = out.n_obstacles;
+            while pos > 0 && out.obstacles[pos - 1].distance > cand.distance {
+                pos -= 1;
+            }
+            if pos >= NOBS {
+                out.obstacles_truncated = true;
+                continue;
+            }
+            if out.n_obstacles == NOBS {
+                out.obstacles_truncated = true;
+            } else {
+                out.n_obstacles += 1;
+            }
+            let mut i = out.n_obstacles - 1;
+            while i > pos {
+                out.obstacles[i] = out.obstacles[i - 1];
+                i -= 1;
+            }
+            out.obstacles[pos] = cand;
+        }
+
+        // 4-5. Cost and rows.
+        out.qp.clear();
+        let (q, c) = self.model.gradient::<NV>(&p0, &v0, &input.goal);
+        out.qp.q = q;
+        out.cost_constant = c;
+        let bounds = GaitBounds {
+            vx_min: cfg.vx_min,
+            vx_max: cfg.vx_max,
+            vy_min: cfg.vy_min,
+            vy_max: cfg.vy_max,
+            l_max: cfg.l_max,
+            alpha: cfg.alpha,
+        };
+        // Capacity is guaranteed by the compile-time check NC >= 8N + N NOBS and by
+        // `new` for the foot rows; a failed push would only drop rows, so it is
+        // checked anyway and reported as a numerical failure by the caller.
+        let mut ok = true;
+        let mut side = first_side;
+        for k in 0..N {
+            let m_before = out.qp.m;
+            ok &= push_gait_rows(
+                &mut out.qp,
+                &self.model,
+                &bounds,
+                k,
+                heading.theta[k],
+                side.sign(),
+                heading.omega_bar,
+                &p0,
+                &v0,
+            )
+            .is_ok();
+            for (r, kind) in RowKind::GAIT.iter().enumerate() {
+                if let Some(slot) = out.rows.get_mut(m_before + r) {
+                    *slot = RowId {
+                        kind: *kind,
+                        k: k as u8,
+                    };
+                }
+            }
+            side = side.opposite();
+        }
+        for ob in &out.obstacles[..out.n_obstacles] {
+            for k in 0..N {
+                let i = out.qp.m;
+                ok &= push_ldcbf_row(
+                    &mut out.qp,
+                    &self.model,
+                    &ob.half_plane,
+                    cfg.gamma,
+                    cfg.delta,
+                    k,
+                    &p0,
+                    &v0,
+                )
+                .is_ok();
+                if let Some(slot) = out.rows.get_mut(i) {
+                    *slot = RowId {
+                        kind: RowKind::Ldcbf(ob.index),
+                        k: k as u8,
+                    };
+                }
+            }
+        }
+        if let Some(df) = cfg.foot_clearance {
+            for ob in &out.obstacles[..out.n_obstacles] {
+                for k in 0..N {
+                    let i = out.qp.m;
+                    ok &= push_foot_row::<N, NV, NC>(&mut out.qp, &ob.half_plane, df, k).is_ok();
+                    if let Some(slot) = out.rows.get_mut(i) {
+                        *slot = RowId {
+                            kind: RowKind::FootClearance(ob.index),
+                            k: k as u8,
+                        };
+                    }
+                }
+            }
+        }
+        debug_assert!(ok, "row capacity exceeded despite compile-time check");
+        Ok(())
+    }
+
+    fn solve_assembled<const V: usize, const NOBS: usize>(
+        &self,
+        memory: &mut Memory<NV>,
+        input: &CycleInput<'_, V>,
+        work: &Assembly<N, NV, NC, NOBS>,
+    ) -> CycleOutput<N> {
+        let pred = &work.prediction;
+        // Shift of the horizon since the last plan: a new step began when the
+        // stance side changed.
+        let shift = usize::from(memory.has_plan && memory.stance != input.stance_side);
+        let mut prefer = [false; NC];
+        let mut warm = false;
+        if self.config.warm_start {
+            for id in &memory.active[..memory.n_active.min(NV)] {
+                let k = id.k as usize;
+                if k < shift {
+                    continue;
+                }
+                let target = RowId {
+                    kind: id.kind,
+                    k: (k - shift) as u8,
+                };
+                for (i, r) in work.rows[..work.qp.m.min(NC)].iter().enumerate() {
+                    if *r == target {
+                        prefer[i] = true;
+                        warm = true;
+                        break;
+                    }
+                }
+            }
+        }
+        let sol = self.solver.solve(&work.qp, &prefer, self.config.max_iter);
+        let min_h0 = work.obstacles[..work.n_obstacles]
+            .iter()
+            .map(|o| o.half_plane.h(&pred.p0, self.config.delta))
+            .fold(f64::INFINITY, f64::min);
+        let inside = work.obstacles[..work.n_obstacles]
+            .first()
+            .is_some_and(|o| o.distance <= 0.0);
+        let mut info = CycleInfo {
+            qp_status: Some(sol.status),
+            iterations: sol.iterations,
+            active_set_size: sol.n_active as u8,
+            active_obstacles: work.n_obstacles as u8,
+            obstacles_truncated: work.obstacles_truncated,
+            inside_obstacle: inside,
+            time_clamped: work.time_clamped,
+            warm_started: warm,
+            source: CommandSource::Optimal,
+            cost: f64::NAN,
+            max_violation: f64::NAN,
+            min_h0,
+        };
+        let (u, status) = match sol.status {
+            QpStatus::Solved => {
+                remember_active(memory, &sol, work);
+                (sol.x, CycleStatus::Optimal)
+            }
+            other => {
+                let status = match other {
+                    QpStatus::Infeasible => CycleStatus::Infeasible,
+                    QpStatus::IterationLimit => CycleStatus::BudgetExhausted,
+                    _ => CycleStatus::NumericalFailure,
+                };
+                memory.n_active = 0;
+                match self.previous_plan(memory, shift, work) {
+                    Some(u) => {
+                        info.source = CommandSource::PreviousPlan;
+                        (u, status)
+                    }
+                    None => {
+                        info.source = CommandSource::CaptureStep;
+                        (self.capture_step(pred), status)
+                    }
+                }
+            }
+        };
+        let omega = if info.source == CommandSource::Optimal {
+            pred.heading.omega_bar
+        } else {
+            0.0
+        };
+        info.max_violation = work.qp.max_violation(&u);
+        info.cost = self.solver.objective(&work.qp.q, &u) + work.cost_constant;
+        let plan = self.rollout(pred, &u, omega);
+        let foot = Vector2::new(u[0], u[1]);
+        memory.plan = u;
+        memory.has_plan = true;
+        memory.stance = input.stance_side;
+        memory.last_target = Some(foot);
+        let out = CycleOutput {
+            foot_target: foot,
+            turning_rate: omega,
+            plan,
+            status,
+            info,
+        };
+        if output_is_finite(&out) {
+            out
+        } else {
+            // Unreachable for finite inputs; kept so no NaN can ever leave.
+            hold(memory, input, InputError::State)
+        }
+    }
+
+    /// The previous plan shifted by `shift` steps (the last foot extrapolated by the
+    /// last stride), if it satisfies every row of this cycle's QP.
+    fn previous_plan<const NOBS: usize>(
+        &self,
+        memory: &Memory<NV>,
+        shift: usize,
+        work: &Assembly<N, NV, NC, NOBS>,
+    ) -> Option<SVector<f64, NV>> {
+        if !memory.has_plan {
+            return None;
+        }
+        let old = &memory.plan;
+        let mut u = SVector::<f64, NV>::zeros();
+        for k in 0..N {
+            let src = k + shift;
+            let (x, y) = if src < N {
+                (old[2 * src], old[2 * src + 1])
+            } else if N >= 2 {
+                let last = N - 1;
+                (
+                    2.0 * old[2 * last] - old[2 * last - 2],
+                    2.0 * old[2 * last + 1] - old[2 * last - 1],
+                )
+            } else {
+                (old[0], old[1])
+            };
+            u[2 * k] = x;
+            u[2 * k + 1] = y;
+        }
+        let viol = work.qp.max_violation(&u);
+        (viol <= 10.0 * self.config.tol_primal && u.iter().all(|v| v.is_finite())).then_some(u)
+    }
+
+    /// Capture step: `f_0 = p_0 + clamp_box(R(theta_0)' v_0 / beta, l_max)`, held
+    /// for the whole horizon.
+    fn capture_step(&self, pred: &Prediction<N>) -> SVector<f64, NV> {
+        let th = pred.heading.theta[0];
+        let (s, c) = (libm::sin(th), libm::cos(th));
+        let xi = pred.v0 / self.lip.beta;
+        let l = self.config.l_max;
+        let lon = (c * xi.x + s * xi.y).clamp(-l, l);
+        let lat = (-s * xi.x + c * xi.y).clamp(-l, l);
+        let f = pred.p0 + Vector2::new(c * lon - s * lat, s * lon + c * lat);
+        let mut u = SVector::<f64, NV>::zeros();
+        for k in 0..N {
+            u[2 * k] = f.x;
+            u[2 * k + 1] = f.y;
+        }
+        u
+    }
+
+    fn rollout(&self, pred: &Prediction<N>, u: &SVector<f64, NV>, omega: f64) -> Plan<N> {
+        let mut states = [LipState::default(); N];
+        let mut feet = [Vector2::zeros(); N];
+        let (mut p, mut v) = (pred.p0, pred.v0);
+        let mut th = pred.heading.theta[0];
+        for k in 0..N {
+            let f = Vector2::new(u[2 * k], u[2 * k + 1]);
+            (p, v) = self.lip.propagate(&p, &v, &f, self.config.step_duration);
+            th += omega * self.config.step_duration;
+            states[k] = LipState {
+                position: p,
+                velocity: v,
+                heading: th,
+            };
+            feet[k] = f;
+        }
+        Plan {
+            x0: LipState {
+                position: pred.p0,
+                velocity: pred.v0,
+                heading: pred.heading.theta[0],
+            },
+            states,
+            feet,
+            first_side: pred.first_side,
+        }
+    }
+}
+
+fn remember_active<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>(
+    memory: &mut Memory<NV>,
+    sol: &QpSolution<NV, NC>,
+    work: &Assembly<N, NV, NC, NOBS>,
+) {
+    let n = sol.n_active.min(NV);
+    for (dst, &row) in memory.active.iter_mut().zip(&sol.active[..n]) {
+        *dst = work.rows.get(row as usize).copied().unwrap_or_default();
+    }
+    memory.n_active = n;
+}
+
+fn hold<const N: usize, const NV: usize, const V: usize>(
+    memory: &mut Memory<NV>,
+    input: &CycleInput<'_, V>,
+    e: InputError,
+) -> CycleOutput<N> {
+    let finite2 = |v: &Vector2<f64>| v.x.is_finite() && v.y.is_finite();
+    let target = match memory.last_target {
+        Some(t) if finite2(&t) => t,
+        _ if finite2(&input.stance_foot) => input.stance_foot,
+        _ => Vector2::zeros(),
+    };
+    memory.n_active = 0;
+    memory.has_plan = false;
+    let st = LipState {
+        position: target,
+        velocity: Vector2::zeros(),
+        heading: 0.0,
+    };
+    CycleOutput {
+        foot_target: target,
+        turning_rate: 0.0,
+        plan: Plan {
+            x0: st,
+            states: [st; N],
+            feet: [target; N],
+            first_side: input.stance_side.opposite(),
+        },
+        status: CycleStatus::InvalidInput(e),
+        info: CycleInfo {
+            qp_status: None,
+            iterations: 0,
+            active_set_size: 0,
+            active_obstacles: 0,
+            obstacles_truncated: false,
+            inside_obstacle: false,
+            time_clamped: false,
+            warm_started: false,
+            source: CommandSource::Hold,
+            cost: f64::NAN,
+            max_violation: f64::NAN,
+            min_h0: f64::INFINITY,
+        },
+    }
+}
+
+fn output_is_finite<const N: usize>(o: &CycleOutput<N>) -> bool {
+    let f2 = |v: &Vector2<f64>| v.x.is_finite() && v.y.is_finite();
+    let fs = |s: &LipState| f2(&s.position) && f2(&s.velocity) && s.heading.is_finite();
+    f2(&o.foot_target)
+        && o.turning_rate.is_finite()
+        && fs(&o.plan.x0)
+        && o.plan.states.iter().all(fs)
+        && o.plan.feet.iter().all(f2)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    type Ctl = PaperController;
+    type Poly = ConvexPolygon<16>;
+
+    fn input<'a>(obstacles: &'a [Poly]) -> CycleInput<'a, 16> {
+        CycleInput {
+            com_position: Vector2::new(0.0, 0.0),
+            com_velocity: Vector2::new(0.0, 0.0),
+            heading: 0.0,
+            turning_rate: 0.0,
+            stance_foot: Vector2::new(0.0, -0.05),
+            stance_side: Side::Left,
+            time_in_step: 0.0,
+            goal: Vector2::new(5.0, 0.0),
+            obstacles,
+        }
+    }
+
+    #[test]
+    fn default_config_is_valid_and_bad_fields_are_named() {
+        assert!(Config::default().validate().is_ok());
+        let c = Config {
+            vx_max: -1.0,
+            ..Config::default()
+        };
+        assert_eq!(c.validate().unwrap_err().field, "vx_max");
+        let c = Config {
+            gamma: 0.0,
+            ..Config::default()
+        };
+        assert_eq!(c.validate().unwrap_err().field, "gamma");
+        let c = Config {
+            com_height: f64::NAN,
+            ..Config::default()
+        };
+        assert_eq!(c.validate().unwrap_err().field, "com_height");
+        let c = Config {
+            foot_clearance: Some(0.1),
+            ..Config::default()
+        };
+        assert_eq!(Ctl::new(c).unwrap_err().field, "foot_clearance");
+        assert!(Controller::<3, 6, { constraint_capacity(3, 8, true) }, 8>::new(c).is_ok());
+    }
+
+    #[test]
+    fn free_walk_is_optimal_and_feasible() {
+        let mut ctl = Ctl::new(Config::default()).unwrap();
+        let out = ctl.step(&input(&[]));
+        assert_eq!(out.status, CycleStatus::Optimal);
+        assert_eq!(out.info.source, CommandSource::Optimal);
+        assert!(out.info.max_violation <= 1e-9);
+        assert_eq!(out.plan.first_side, Side::Right);
+        // Walking towards +x: the plan moves forward.
+        assert!(out.plan.states[2].position.x > 0.0);
+    }
+
+    #[test]
+    fn obstacles_are_selected_nearest_first_and_truncated() {
+        let mut obs = [Poly::new(&[[0.0, 0.0], [1.0, 0.0], [1.0, 1.0]]).unwrap(); 10];
+        for (i, o) in obs.iter_mut().enumerate() {
+            let x = 1.0 + 0.3 * (9 - i) as f64;
+            *o = Poly::new(&[[x, 1.0], [x + 0.2, 1.0], [x + 0.1, 1.2]]).unwrap();
+        }
+        let ctl = Ctl::new(Config::default()).unwrap();
+        let mut asm = Assembly::default();
+        ctl.assemble(&input(&obs), &mut asm).unwrap();
+        assert_eq!(asm.n_obstacles, 8);
+        assert!(asm.obstacles_truncated);
+        assert_eq!(asm.obstacles[0].index, 9);
+        for w in asm.obstacles[..8].windows(2) {
+            assert!(w[0].distance <= w[1].distance);
+        }
+        assert_eq!(asm.qp.m, 8 * 3 + 8 * 3);
+        assert_eq!(asm.rows[24].kind, RowKind::Ldcbf(9));
+    }
+
+    #[test]
+    fn non_finite_input_holds() {
+        let mut ctl = Ctl::new(Config::default()).unwrap();
+        let mut inp = input(&[]);
+        inp.com_velocity.x = f64::NAN;
+        let out = ctl.step(&inp);
+        assert_eq!(out.status, CycleStatus::InvalidInput(InputError::State));
+        assert_eq!(out.foot_target, inp.stance_foot);
+        assert_eq!(out.info.source, CommandSource::Hold);
+        inp.com_velocity.x = 0.0;
+        inp.goal.y = f64::INFINITY;
+        assert_eq!(
+            ctl.step(&inp).status,
+            CycleStatus::InvalidInput(InputError::Goal)
+        );
+    }
+
+    #[test]
+    fn budget_exhaustion_falls_back_to_finite_command() {
+        let cfg = Config {
+            max_iter: 1,
+            ..Config::default()
+        };
+        let mut ctl = Ctl::new(cfg).unwrap();
+        let out = ctl.step(&input(&[]));
+        assert_eq!(out.status, CycleStatus::BudgetExhausted);
+        assert_eq!(out.info.source, CommandSource::CaptureStep);
+        assert!(output_is_finite(&out));
+        assert_eq!(out.turning_rate, 0.0);
+    }
+}

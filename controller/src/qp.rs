@@ -1,0 +1,667 @@
+//! Dense dual active-set QP solver (Goldfarb–Idnani family), no heap.
+//!
+//! Solves
+//!
+//! ```text
+//! minimise   1/2 x' H x + q' x
+//! subject to G x <= h          (m rows, m <= NC)
+//! ```
+//!
+//! for a fixed symmetric positive-definite `H` of size `NV x NV`. The Hessian is
+//! factored once in [`DualActiveSet::new`] (`H = L L'`, and `J0 = L^-T` is kept);
+//! each [`DualActiveSet::solve`] starts from the unconstrained minimiser
+//! `x = -H^-1 q` and adds violated constraints one at a time, dropping constraints
+//! whose multiplier would turn negative, exactly as in Goldfarb & Idnani (1983,
+//! "A numerically stable dual method for solving strictly convex quadratic
+//! programs"). The factorisation of the active set is kept as `J = L^-T Q` and the
+//! upper-triangular `R` of `L^-1 N_A = Q [R; 0]`, both updated by Givens rotations on
+//! every add and drop (no re-factorisation, no normal equations).
+//!
+//! Iteration count = number of adds plus drops; it never exceeds the budget passed
+//! to `solve`. Every loop is bounded by `NV`, `NC` or the budget.
+//!
+//! Warm start: the caller may mark rows it expects to be active (for example the
+//! previous cycle's active set). Among the violated rows the solver adds a marked
+//! one first. Any violated row is a valid choice in the dual method, so the marks
+//! change the path (usually shortening it), never the solution.
+//!
+//! Infeasibility: a violated row whose normal lies in the span of the active
+//! normals and for which no active multiplier can decrease proves the constraint
+//! set empty (Goldfarb & Idnani, step 2(c)(i)); the solver reports
+//! [`QpStatus::Infeasible`].
+#![allow(non_snake_case)]
+
+use nalgebra::{SMatrix, SVector};
+
+/// Rows with a normal shorter than this (Euclidean norm, in the units of `G`) are
+/// treated as zero rows: satisfied when `h_i >= -tol`, infeasible otherwise.
+const ZERO_ROW: f64 = 1e-300;
+
+/// What one solve did. `Copy`, so it can travel in every cycle's diagnostics.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum QpStatus {
+    /// All rows hold to the primal tolerance and all multipliers are >= 0: `x` is the
+    /// unique minimiser.
+    Solved,
+    /// The constraint set is empty (certified by the dual method, see module docs).
+    Infeasible,
+    /// The iteration budget ran out before optimality; `x` is the last iterate
+    /// (dual feasible, primal infeasible).
+    IterationLimit,
+    /// A non-finite number appeared in the data or the iterates, or the Hessian
+    /// was not positive definite.
+    NumericalError,
+}
+
+impl QpStatus {
+    /// True for [`QpStatus::Solved`].
+    pub fn is_solved(self) -> bool {
+        matches!(self, QpStatus::Solved)
+    }
+    /// True for [`QpStatus::Infeasible`].
+    pub fn is_infeasible(self) -> bool {
+        matches!(self, QpStatus::Infeasible)
+    }
+}
+
+/// Error from [`DualActiveSet::new`]: the Hessian cannot be used.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HessianError {
+    /// An entry of `H` is NaN or infinite.
+    NotFinite,
+    /// `H` is not symmetric to a relative 1e-12.
+    NotSymmetric,
+    /// The Cholesky factorisation failed: `H` is not positive definite.
+    NotPositiveDefinite,
+}
+
+impl core::fmt::Display for HessianError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            HessianError::NotFinite => f.write_str("Hessian has a non-finite entry"),
+            HessianError::NotSymmetric => f.write_str("Hessian is not symmetric"),
+            HessianError::NotPositiveDefinite => f.write_str("Hessian is not positive definite"),
+        }
+    }
+}
+
+impl core::error::Error for HessianError {}
+
+/// Tolerances of the solver. All are absolute, applied to rows scaled to unit norm.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct QpSettings {
+    /// A row counts as violated when `(h_i - g_i x) / |g_i| < -tol_primal`.
+    pub tol_primal: f64,
+    /// Relative size below which the component of a new normal outside the span of
+    /// the active normals is taken as zero (linear dependence).
+    pub tol_dependence: f64,
+}
+
+impl Default for QpSettings {
+    fn default() -> Self {
+        QpSettings {
+            tol_primal: 1e-10,
+            tol_dependence: 1e-12,
+        }
+    }
+}
+
+/// Result of one solve. `lambda` holds one multiplier per row (zero for inactive
+/// rows), so `H x + q + G' lambda = 0` at a solution.
+#[derive(Clone, Copy, Debug)]
+pub struct QpSolution<const NV: usize, const NC: usize> {
+    /// Primal solution (or last iterate when not solved).
+    pub x: SVector<f64, NV>,
+    /// Lagrange multipliers, one per row, in the order of the rows of `G`.
+    pub lambda: SVector<f64, NC>,
+    /// Objective `1/2 x'Hx + q'x` at `x`.
+    pub objective: f64,
+    /// Outcome.
+    pub status: QpStatus,
+    /// Adds plus drops performed.
+    pub iterations: u32,
+    /// Indices of the active rows (first `n_active` entries valid).
+    pub active: [u16; NV],
+    /// Number of active rows.
+    pub n_active: usize,
+}
+
+impl<const NV: usize, const NC: usize> QpSolution<NV, NC> {
+    /// The active rows as a slice.
+    pub fn active_set(&self) -> &[u16] {
+        &self.active[..self.n_active.min(NV)]
+    }
+}
+
+/// A QP of the form solved here, stored with fixed capacity: `m <= NC` rows are
+/// used. `gt` holds `G` transposed (one constraint normal per column) so each row of
+/// `G` is contiguous.
+#[derive(Clone, Debug)]
+pub struct DenseQp<const NV: usize, const NC: usize> {
+    /// Linear cost term `q`.
+    pub q: SVector<f64, NV>,
+    /// `G` transposed: column `i` is row `i` of `G`.
+    pub gt: SMatrix<f64, NV, NC>,
+    /// Right-hand side `h`.
+    pub h: SVector<f64, NC>,
+    /// Number of rows in use.
+    pub m: usize,
+}
+
+impl<const NV: usize, const NC: usize> Default for DenseQp<NV, NC> {
+    fn default() -> Self {
+        DenseQp {
+            q: SVector::zeros(),
+            gt: SMatrix::zeros(),
+            h: SVector::zeros(),
+            m: 0,
+        }
+    }
+}
+
+impl<const NV: usize, const NC: usize> DenseQp<NV, NC> {
+    /// Removes all rows and zeroes `q`.
+    pub fn clear(&mut self) {
+        self.q.fill(0.0);
+        self.m = 0;
+    }
+
+    /// Appends the row `g' x <= h`. Returns `Err(())` (and changes nothing) when the
+    /// capacity `NC` is full.
+    #[allow(clippy::result_unit_err)]
+    pub fn push_row(&mut self, g: &SVector<f64, NV>, h: f64) -> Result<(), ()> {
+        if self.m >= NC {
+            return Err(());
+        }
+        self.gt.set_column(self.m, g);
+        self.h[self.m] = h;
+        self.m += 1;
+        Ok(())
+    }
+
+    /// Row `i` of `G` (a column of `gt`).
+    pub fn row(&self, i: usize) -> SVector<f64, NV> {
+        self.gt.column(i).into_owned()
+    }
+
+    /// Largest violation `max_i (g_i x - h_i)^+` over the used rows, unscaled.
+    pub fn max_violation(&self, x: &SVector<f64, NV>) -> f64 {
+        let mut worst: f64 = 0.0;
+        for i in 0..self.m.min(NC) {
+            let v = self.gt.column(i).dot(x) - self.h[i];
+            if v > worst {
+                worst = v;
+            }
+        }
+        worst
+    }
+}
+
+/// The solver: the factored Hessian and the settings. Build once per Hessian;
+/// `solve` takes `&self`.
+#[derive(Clone, Debug)]
+pub struct DualActiveSet<const NV: usize, const NC: usize> {
+    H: SMatrix<f64, NV, NV>,
+    /// `J0 = L^-T` with `H = L L'`.
+    J0: SMatrix<f64, NV, NV>,
+    settings: QpSettings,
+}
+
+impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
+    /// Factors `H` (symmetric positive definite) once.
+    pub fn new(H: &SMatrix<f64, NV, NV>, settings: QpSettings) -> Result<Self, HessianError> {
+        const {
+            assert!(NV > 0, "NV must be positive");
+            assert!(NV <= u16::MAX as usize && NC <= u16::MAX as usize);
+        }
+        if H.iter().any(|v| !v.is_finite()) {
+            return Err(HessianError::NotFinite);
+        }
+        let scale = H.amax().max(f64::MIN_POSITIVE);
+        for i in 0..NV {
+            for j in 0..i {
+                if (H[(i, j)] - H[(j, i)]).abs() > 1e-12 * scale {
+                    return Err(HessianError::NotSymmetric);
+                }
+            }
+        }
+        let chol = nalgebra::linalg::Cholesky::new(*H).ok_or(HessianError::NotPositiveDefinite)?;
+        let L = chol.l();
+        let mut J0 = SMatrix::<f64, NV, NV>::identity();
+        if !L.transpose().solve_upper_triangular_mut(&mut J0) || J0.iter().any(|v| !v.is_finite()) {
+            return Err(HessianError::NotPositiveDefinite);
+        }
+        Ok(DualActiveSet {
+            H: *H,
+            J0,
+            settings,
+        })
+    }
+
+    /// The Hessian this solver was built for.
+    pub fn hessian(&self) -> &SMatrix<f64, NV, NV> {
+        &self.H
+    }
+
+    /// The settings.
+    pub fn settings(&self) -> &QpSettings {
+        &self.settings
+    }
+
+    /// Objective `1/2 x'Hx + q'x`.
+    pub fn objective(&self, q: &SVector<f64, NV>, x: &SVector<f64, NV>) -> f64 {
+        0.5 * (self.H * x).dot(x) + q.dot(x)
+    }
+
+    /// Solves the QP `qp` with at most `max_iter` adds plus drops. `prefer[i]` marks
+    /// row `i` as expected active (warm start); pass all `false` for a cold start.
+    pub fn solve(
+        &self,
+        qp: &DenseQp<NV, NC>,
+        prefer: &[bool; NC],
+        max_iter: u32,
+    ) -> QpSolution<NV, NC> {
+        let m = qp.m.min(NC);
+        let mut sol = QpSolution {
+            x: SVector::zeros(),
+            lambda: SVector::zeros(),
+            objective: 0.0,
+            status: QpStatus::NumericalError,
+            iterations: 0,
+            active: [0; NV],
+            n_active: 0,
+        };
+        let data_finite = qp.q.iter().all(|v| v.is_finite())
+            && (0..m).all(|i| qp.h[i].is_finite() && qp.gt.column(i).iter().all(|v| v.is_finite()));
+        if !data_finite {
+            return sol;
+        }
+
+        let tol = self.settings.tol_primal;
+        // Row norms, for scale-free violation tests.
+        let mut inv_norm = [0.0f64; NC];
+        for (i, inv) in inv_norm.iter_mut().enumerate().take(m) {
+            let n = qp.gt.column(i).norm();
+            *inv = if n > ZERO_ROW { 1.0 / n } else { 0.0 };
+            if n <= ZERO_ROW && qp.h[i] < -tol {
+                // 0'x <= h with h < 0: nothing satisfies it.
+                sol.status = QpStatus::Infeasible;
+                return sol;
+            }
+        }
+
+        // Unconstrained minimiser x = -J0 J0' q.
+        let mut J = self.J0;
+        let mut x = -(J * (J.transpose() * qp.q));
+        let mut R = SMatrix::<f64, NV, NV>::zeros();
+        let mut u = [0.0f64; NV]; // multipliers of the active rows
+        let mut act = [0u16; NV];
+        let mut is_active = [false; NC];
+        let mut nact: usize = 0;
+        let mut iters: u32 = 0;
+
+        let status = 'outer: loop {
+            // Step 1: choose a violated row (marked rows first).
+            let mut best: Option<usize> = None;
+            let mut best_v = -tol;
+            let mut best_pref: Option<usize> = None;
+            let mut best_pref_v = -tol;
+            for i in 0..m {
+                if is_active[i] || inv_norm[i] == 0.0 {
+                    continue;
+                }
+                let s = (qp.h[i] - qp.gt.column(i).dot(&x)) * inv_norm[i];
+                if !s.is_finite() {
+                    break 'outer QpStatus::NumericalError;
+                }
+                if s < best_v {
+                    best_v = s;
+                    best = Some(i);
+                }
+                if prefer[i] && s < best_pref_v {
+                    best_pref_v = s;
+                    best_pref = Some(i);
+                }
+            }
+            let p = match best_pref.or(best) {
+                None => break QpStatus::Solved,
+                Some(p) => p,
+            };
+            let np = -qp.gt.column(p).into_owned(); // GI normal: np'x >= -h_p
+            let mut u_new: f64 = 0.0; // multiplier of p
+
+            // Step 2: move until p is satisfied (full step) or a row must be dropped.
+            loop {
+                if iters >= max_iter {
+                    break 'outer QpStatus::IterationLimit;
+                }
+                let d = J.transpose() * np;
+                // z = J2 d2: component of the step outside the active span.
+                let mut z = SVector::<f64, NV>::zeros();
+                let mut d2sq = 0.0;
+                for j in nact..NV {
+                    z += J.column(j) * d[j];
+                    d2sq += d[j] * d[j];
+                }
+                // r = R^-1 d1 (back substitution on the active block).
+                let mut r = [0.0f64; NV];
+                for i in (0..nact).rev() {
+                    let mut acc = d[i];
+                    for k in (i + 1)..nact {
+                        acc -= R[(i, k)] * r[k];
+                    }
+                    r[i] = acc / R[(i, i)];
+                }
+                // Partial (dual) step length t1 and the row to drop.
+                let mut t1 = f64::INFINITY;
+                let mut drop: Option<usize> = None;
+                let rmax = r[..nact].iter().fold(0.0f64, |a, b| a.max(b.abs()));
+                for i in 0..nact {
+                    if r[i] > 1e-14 * rmax.max(1.0) {
+                        let t = u[i] / r[i];
+                        if t < t1 {
+                            t1 = t;
+                            drop = Some(i);
+                        }
+                    }
+                }
+                // Full (primal) step length t2.
+                let dn = d.norm();
+                let dependent = libm::sqrt(d2sq) <= self.settings.tol_dependence * dn;
+                let slack_p = qp.h[p] - qp.gt.column(p).dot(&x); // < 0 while violated
+                let t2 = if dependent {
+                    f64::INFINITY
+                } else {
+                    -slack_p / d2sq
+                };
+                if !(t1.is_finite() || t2.is_finite()) {
+                    if t1.is_nan() || t2.is_nan() {
+                        break 'outer QpStatus::NumericalError;
+                    }
+                    break 'outer QpStatus::Infeasible;
+                }
+                let t = t1.min(t2);
+                iters += 1;
+                // Multipliers move along (-r, 1).
+                for i in 0..nact {
+                    u[i] -= t * r[i];
+                }
+                u_new += t;
+                if !dependent {
+                    x += z * t;
+                }
+                if t2 <= t1 {
+                    // Full step: p becomes active.
+                    if !self.add_row(&mut J, &mut R, nact, &d) {
+                        break 'outer QpStatus::NumericalError;
+                    }
+                    act[nact] = p as u16;
+                    u[nact] = u_new;
+                    is_active[p] = true;
+                    nact += 1;
+                    continue 'outer;
+                }
+                // Partial step: drop row `l`, then retry the same p.
+                let l = match drop {
+                    Some(l) => l,
+                    None => break 'outer QpStatus::NumericalError,
+                };
+                is_active[act[l] as usize] = false;
+                Self::drop_row(&mut J, &mut R, nact, l);
+                for i in l..nact - 1 {
+                    act[i] = act[i + 1];
+                    u[i] = u[i + 1];
+                }
+                nact -= 1;
+            }
+        };
+
+        sol.x = x;
+        for i in 0..nact {
+            sol.lambda[act[i] as usize] = u[i].max(0.0);
+        }
+        sol.active = act;
+        sol.n_active = nact;
+        sol.iterations = iters;
+        sol.objective = self.objective(&qp.q, &x);
+        sol.status = if x.iter().all(|v| v.is_finite()) && sol.objective.is_finite() {
+            status
+        } else {
+            QpStatus::NumericalError
+        };
+        sol
+    }
+
+    /// Adds a row whose `d = J' n` is given: rotates columns `nact..NV` of `J` so
+    /// that `d[nact+1..]` vanishes, and stores `d[..=nact]` as column `nact` of `R`.
+    fn add_row(
+        &self,
+        J: &mut SMatrix<f64, NV, NV>,
+        R: &mut SMatrix<f64, NV, NV>,
+        nact: usize,
+        d: &SVector<f64, NV>,
+    ) -> bool {
+        if nact >= NV {
+            return false;
+        }
+        let mut d = *d;
+        for j in ((nact + 1)..NV).rev() {
+            let (a, b) = (d[j - 1], d[j]);
+            if b == 0.0 {
+                continue;
+            }
+            let (c, s, rr) = givens(a, b);
+            d[j - 1] = rr;
+            d[j] = 0.0;
+            rotate_columns(J, j - 1, j, c, s);
+        }
+        for i in 0..=nact {
+            R[(i, nact)] = d[i];
+        }
+        R[(nact, nact)] != 0.0 && R[(nact, nact)].is_finite()
+    }
+
+    /// Removes active row `l` (of `nact`): deletes column `l` of `R` and restores
+    /// the triangle with Givens rotations, applied to `J` as well.
+    fn drop_row(J: &mut SMatrix<f64, NV, NV>, R: &mut SMatrix<f64, NV, NV>, nact: usize, l: usize) {
+        for col in l..nact.saturating_sub(1) {
+            for i in 0..NV {
+                R[(i, col)] = R[(i, col + 1)];
+            }
+        }
+        if nact >= 1 {
+            for i in 0..NV {
+                R[(i, nact - 1)] = 0.0;
+            }
+        }
+        // Column `col` now has a sub-diagonal entry at row col+1 for col >= l.
+        for col in l..nact.saturating_sub(1) {
+            let (a, b) = (R[(col, col)], R[(col + 1, col)]);
+            if b == 0.0 {
+                continue;
+            }
+            let (c, s, rr) = givens(a, b);
+            R[(col, col)] = rr;
+            R[(col + 1, col)] = 0.0;
+            for k in (col + 1)..nact - 1 {
+                let (ra, rb) = (R[(col, k)], R[(col + 1, k)]);
+                R[(col, k)] = c * ra + s * rb;
+                R[(col + 1, k)] = -s * ra + c * rb;
+            }
+            rotate_columns(J, col, col + 1, c, s);
+        }
+    }
+}
+
+/// Givens rotation `(c, s, r)` with `c a + s b = r`, `-s a + c b = 0`.
+fn givens(a: f64, b: f64) -> (f64, f64, f64) {
+    let r = libm::hypot(a, b);
+    if r == 0.0 {
+        return (1.0, 0.0, 0.0);
+    }
+    (a / r, b / r, r)
+}
+
+/// `[Ji, Jj] <- [c Ji + s Jj, -s Ji + c Jj]`.
+fn rotate_columns<const NV: usize>(
+    J: &mut SMatrix<f64, NV, NV>,
+    i: usize,
+    j: usize,
+    c: f64,
+    s: f64,
+) {
+    for k in 0..NV {
+        let (a, b) = (J[(k, i)], J[(k, j)]);
+        J[(k, i)] = c * a + s * b;
+        J[(k, j)] = -s * a + c * b;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Matrix2, Vector2};
+
+    fn solver2() -> DualActiveSet<2, 4> {
+        DualActiveSet::new(&Matrix2::new(2.0, 0.0, 0.0, 2.0), QpSettings::default()).unwrap()
+    }
+
+    #[test]
+    fn unconstrained_minimiser() {
+        let s = solver2();
+        let mut qp = DenseQp::<2, 4>::default();
+        qp.q = Vector2::new(-2.0, -4.0);
+        let sol = s.solve(&qp, &[false; 4], 10);
+        assert_eq!(sol.status, QpStatus::Solved);
+        assert!((sol.x - Vector2::new(1.0, 2.0)).amax() < 1e-14);
+        assert_eq!(sol.iterations, 0);
+        assert!((sol.objective - (-5.0)).abs() < 1e-14);
+    }
+
+    #[test]
+    fn one_active_bound_and_multiplier() {
+        // min (x-1)^2 + (y-2)^2, s.t. x + y <= 1  -> x = 0, y = 1, lambda = 2.
+        let s = solver2();
+        let mut qp = DenseQp::<2, 4>::default();
+        qp.q = Vector2::new(-2.0, -4.0);
+        qp.push_row(&Vector2::new(1.0, 1.0), 1.0).unwrap();
+        let sol = s.solve(&qp, &[false; 4], 10);
+        assert_eq!(sol.status, QpStatus::Solved);
+        assert!((sol.x - Vector2::new(0.0, 1.0)).amax() < 1e-14);
+        assert!((sol.lambda[0] - 2.0).abs() < 1e-14);
+        assert_eq!(sol.active_set(), &[0]);
+    }
+
+    #[test]
+    fn drop_happens_and_result_is_optimal() {
+        // min (x-1)^2 + (y-2)^2 with y <= 0 and x <= -1, x + y <= -2 (redundant-ish)
+        let s = solver2();
+        let mut qp = DenseQp::<2, 4>::default();
+        qp.q = Vector2::new(-2.0, -4.0);
+        qp.push_row(&Vector2::new(1.0, 1.0), -2.0).unwrap();
+        qp.push_row(&Vector2::new(0.0, 1.0), 0.0).unwrap();
+        qp.push_row(&Vector2::new(1.0, 0.0), -1.0).unwrap();
+        let sol = s.solve(&qp, &[false; 4], 20);
+        assert_eq!(sol.status, QpStatus::Solved);
+        // Projection of (1, 2) onto {x + y <= -2}: (-1.5, -0.5), which satisfies
+        // the other two rows.
+        assert!(
+            (sol.x - Vector2::new(-1.5, -0.5)).amax() < 1e-12,
+            "{:?}",
+            sol.x
+        );
+        assert!(qp.max_violation(&sol.x) < 1e-12);
+        let grad = s.hessian() * sol.x + qp.q;
+        let mut stat = grad;
+        for i in 0..qp.m {
+            stat += qp.row(i) * sol.lambda[i];
+            assert!(sol.lambda[i] >= 0.0);
+        }
+        assert!(stat.amax() < 1e-12);
+    }
+
+    #[test]
+    fn infeasible_detected() {
+        let s = solver2();
+        let mut qp = DenseQp::<2, 4>::default();
+        qp.push_row(&Vector2::new(1.0, 0.0), -1.0).unwrap(); // x <= -1
+        qp.push_row(&Vector2::new(-1.0, 0.0), -1.0).unwrap(); // x >= 1
+        let sol = s.solve(&qp, &[false; 4], 20);
+        assert_eq!(sol.status, QpStatus::Infeasible);
+    }
+
+    #[test]
+    fn zero_row_negative_rhs_is_infeasible() {
+        let s = solver2();
+        let mut qp = DenseQp::<2, 4>::default();
+        qp.push_row(&Vector2::new(0.0, 0.0), -1.0).unwrap();
+        assert_eq!(s.solve(&qp, &[false; 4], 20).status, QpStatus::Infeasible);
+        let mut qp = DenseQp::<2, 4>::default();
+        qp.push_row(&Vector2::new(0.0, 0.0), 1.0).unwrap();
+        assert_eq!(s.solve(&qp, &[false; 4], 20).status, QpStatus::Solved);
+    }
+
+    #[test]
+    fn budget_is_respected() {
+        let s = solver2();
+        let mut qp = DenseQp::<2, 4>::default();
+        qp.q = Vector2::new(-2.0, -4.0);
+        qp.push_row(&Vector2::new(1.0, 1.0), -2.0).unwrap();
+        qp.push_row(&Vector2::new(0.0, 1.0), -1.0).unwrap();
+        let full = s.solve(&qp, &[false; 4], 10);
+        assert_eq!(full.status, QpStatus::Solved);
+        assert_eq!(full.iterations, 2);
+        let sol = s.solve(&qp, &[false; 4], 1);
+        assert_eq!(sol.status, QpStatus::IterationLimit);
+        assert_eq!(sol.iterations, 1);
+        let sol = s.solve(&qp, &[false; 4], 0);
+        assert_eq!(sol.status, QpStatus::IterationLimit);
+        assert_eq!(sol.iterations, 0);
+    }
+
+    #[test]
+    fn non_finite_data_is_numerical_error() {
+        let s = solver2();
+        let mut qp = DenseQp::<2, 4>::default();
+        qp.q = Vector2::new(f64::NAN, 0.0);
+        assert_eq!(
+            s.solve(&qp, &[false; 4], 10).status,
+            QpStatus::NumericalError
+        );
+    }
+
+    #[test]
+    fn bad_hessians_rejected() {
+        let e =
+            DualActiveSet::<2, 4>::new(&Matrix2::new(1.0, 0.0, 0.0, -1.0), QpSettings::default());
+        assert_eq!(e.unwrap_err(), HessianError::NotPositiveDefinite);
+        let e =
+            DualActiveSet::<2, 4>::new(&Matrix2::new(1.0, 0.5, 0.0, 1.0), QpSettings::default());
+        assert_eq!(e.unwrap_err(), HessianError::NotSymmetric);
+        let e = DualActiveSet::<2, 4>::new(
+            &Matrix2::new(f64::NAN, 0.0, 0.0, 1.0),
+            QpSettings::default(),
+        );
+        assert_eq!(e.unwrap_err(), HessianError::NotFinite);
+    }
+
+    #[test]
+    fn warm_start_marks_do_not_change_solution() {
+        let s = solver2();
+        let mut qp = DenseQp::<2, 4>::default();
+        qp.q = Vector2::new(-2.0, -4.0);
+        qp.push_row(&Vector2::new(1.0, 1.0), -2.0).unwrap();
+        qp.push_row(&Vector2::new(0.0, 1.0), 0.0).unwrap();
+        qp.push_row(&Vector2::new(1.0, 0.0), -1.0).unwrap();
+        let cold = s.solve(&qp, &[false; 4], 20);
+        // Wrong guesses cost iterations but not accuracy.
+        let wrong = s.solve(&qp, &[false, true, true, false], 20);
+        assert_eq!(wrong.status, QpStatus::Solved);
+        assert!((cold.x - wrong.x).amax() < 1e-12);
+        assert!(wrong.iterations > cold.iterations);
+        // The right guess is never slower.
+        let right = s.solve(&qp, &[true, false, false, false], 20);
+        assert!((cold.x - right.x).amax() < 1e-12);
+        assert!(right.iterations <= cold.iterations);
+    }
+}
