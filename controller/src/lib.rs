@@ -34,6 +34,7 @@
 //! [`mpc`] for the rules and [`PaperController`] for the paper's configuration.
 #![no_std]
 #![forbid(unsafe_code)]
+#![warn(clippy::std_instead_of_core, clippy::alloc_instead_of_core)]
 
 pub mod constraints;
 pub mod geometry;
@@ -55,4 +56,6 @@ pub use mpc::{
     CycleInput, CycleOutput, CycleStatus, InputError, LipState, PaperController, Plan, Prediction,
     Side, constraint_capacity,
 };
-pub use qp::{DenseQp, DualActiveSet, HessianError, QpSettings, QpSolution, QpStatus};
+pub use qp::{
+    DenseQp, DualActiveSet, HessianError, OwnSolver, QpBackend, QpSettings, QpSolution, QpStatus,
+};

@@ -43,7 +43,7 @@ use crate::constraints::{
 use crate::geometry::{ConvexPolygon, closest_point_point_polygon};
 use crate::heading::{HeadingPlan, plan_heading, wrap_angle};
 use crate::lip::Lip;
-use crate::qp::{DenseQp, DualActiveSet, QpSettings, QpSolution, QpStatus};
+use crate::qp::{DenseQp, DualActiveSet, OwnSolver, QpBackend, QpSettings, QpSolution, QpStatus};
 
 /// Row capacity needed for horizon `n`, `nobs` obstacles, with or without the
 /// foot-clearance rows: `8 n + n nobs (x2 with foot clearance)`.
@@ -604,9 +604,18 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
     /// solve the QP, and return the command. Never panics on any input; the
     /// command is always finite (see the module docs for the fallbacks).
     pub fn step<const V: usize>(&mut self, input: &CycleInput<'_, V>) -> CycleOutput<N> {
+        self.step_with(input, &mut OwnSolver)
+    }
+
+    /// [`Controller::step`] with another QP solver (for the reference closed loop).
+    pub fn step_with<const V: usize, B: QpBackend<NV, NC>>(
+        &mut self,
+        input: &CycleInput<'_, V>,
+        backend: &mut B,
+    ) -> CycleOutput<N> {
         let Controller { core, memory, work } = self;
         match core.assemble(input, work) {
-            Ok(()) => core.solve_assembled(memory, input, work),
+            Ok(()) => core.solve_assembled(memory, input, work, backend),
             Err(e) => hold(memory, input, e),
         }
     }
@@ -682,7 +691,8 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                 break;
             }
             let cp = closest_point_point_polygon(&p0, poly);
-            if !(cp.signed_distance <= cfg.r_active) {
+            // NaN distances (impossible for validated polygons) are skipped too.
+            if cp.signed_distance.is_nan() || cp.signed_distance > cfg.r_active {
                 continue;
             }
             let cand = ActiveObstacle {
@@ -797,11 +807,12 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         Ok(())
     }
 
-    fn solve_assembled<const V: usize, const NOBS: usize>(
+    fn solve_assembled<const V: usize, const NOBS: usize, B: QpBackend<NV, NC>>(
         &self,
         memory: &mut Memory<NV>,
         input: &CycleInput<'_, V>,
         work: &Assembly<N, NV, NC, NOBS>,
+        backend: &mut B,
     ) -> CycleOutput<N> {
         let pred = &work.prediction;
         // Shift of the horizon since the last plan: a new step began when the
@@ -828,7 +839,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                 }
             }
         }
-        let sol = self.solver.solve(&work.qp, &prefer, self.config.max_iter);
+        let sol = backend.solve_qp(&self.solver, &work.qp, &prefer, self.config.max_iter);
         let min_h0 = work.obstacles[..work.n_obstacles]
             .iter()
             .map(|o| o.half_plane.h(&pred.p0, self.config.delta))

@@ -160,6 +160,14 @@ impl<const NV: usize, const NC: usize> Default for DenseQp<NV, NC> {
 }
 
 impl<const NV: usize, const NC: usize> DenseQp<NV, NC> {
+    /// An empty QP with linear term `q`.
+    pub fn with_q(q: SVector<f64, NV>) -> Self {
+        DenseQp {
+            q,
+            ..DenseQp::default()
+        }
+    }
+
     /// Removes all rows and zeroes `q`.
     pub fn clear(&mut self) {
         self.q.fill(0.0);
@@ -493,6 +501,38 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
     }
 }
 
+/// Something that solves the controller's QPs. The controller uses
+/// [`OwnSolver`] (the dual active-set method of this module); the reference crate
+/// plugs in Clarabel through this trait so a whole closed loop can be run with
+/// either solver and compared.
+pub trait QpBackend<const NV: usize, const NC: usize> {
+    /// Solves `min 1/2 u'Hu + q'u, G u <= h` where `H = solver.hessian()` and the
+    /// rest is `qp`. `prefer` and `max_iter` are hints an external solver may ignore.
+    fn solve_qp(
+        &mut self,
+        solver: &DualActiveSet<NV, NC>,
+        qp: &DenseQp<NV, NC>,
+        prefer: &[bool; NC],
+        max_iter: u32,
+    ) -> QpSolution<NV, NC>;
+}
+
+/// The built-in backend: [`DualActiveSet::solve`].
+#[derive(Clone, Copy, Debug, Default)]
+pub struct OwnSolver;
+
+impl<const NV: usize, const NC: usize> QpBackend<NV, NC> for OwnSolver {
+    fn solve_qp(
+        &mut self,
+        solver: &DualActiveSet<NV, NC>,
+        qp: &DenseQp<NV, NC>,
+        prefer: &[bool; NC],
+        max_iter: u32,
+    ) -> QpSolution<NV, NC> {
+        solver.solve(qp, prefer, max_iter)
+    }
+}
+
 /// Givens rotation `(c, s, r)` with `c a + s b = r`, `-s a + c b = 0`.
 fn givens(a: f64, b: f64) -> (f64, f64, f64) {
     let r = libm::hypot(a, b);
@@ -529,8 +569,7 @@ mod tests {
     #[test]
     fn unconstrained_minimiser() {
         let s = solver2();
-        let mut qp = DenseQp::<2, 4>::default();
-        qp.q = Vector2::new(-2.0, -4.0);
+        let qp = DenseQp::<2, 4>::with_q(Vector2::new(-2.0, -4.0));
         let sol = s.solve(&qp, &[false; 4], 10);
         assert_eq!(sol.status, QpStatus::Solved);
         assert!((sol.x - Vector2::new(1.0, 2.0)).amax() < 1e-14);
@@ -542,8 +581,7 @@ mod tests {
     fn one_active_bound_and_multiplier() {
         // min (x-1)^2 + (y-2)^2, s.t. x + y <= 1  -> x = 0, y = 1, lambda = 2.
         let s = solver2();
-        let mut qp = DenseQp::<2, 4>::default();
-        qp.q = Vector2::new(-2.0, -4.0);
+        let mut qp = DenseQp::<2, 4>::with_q(Vector2::new(-2.0, -4.0));
         qp.push_row(&Vector2::new(1.0, 1.0), 1.0).unwrap();
         let sol = s.solve(&qp, &[false; 4], 10);
         assert_eq!(sol.status, QpStatus::Solved);
@@ -556,8 +594,7 @@ mod tests {
     fn drop_happens_and_result_is_optimal() {
         // min (x-1)^2 + (y-2)^2 with y <= 0 and x <= -1, x + y <= -2 (redundant-ish)
         let s = solver2();
-        let mut qp = DenseQp::<2, 4>::default();
-        qp.q = Vector2::new(-2.0, -4.0);
+        let mut qp = DenseQp::<2, 4>::with_q(Vector2::new(-2.0, -4.0));
         qp.push_row(&Vector2::new(1.0, 1.0), -2.0).unwrap();
         qp.push_row(&Vector2::new(0.0, 1.0), 0.0).unwrap();
         qp.push_row(&Vector2::new(1.0, 0.0), -1.0).unwrap();
@@ -604,8 +641,7 @@ mod tests {
     #[test]
     fn budget_is_respected() {
         let s = solver2();
-        let mut qp = DenseQp::<2, 4>::default();
-        qp.q = Vector2::new(-2.0, -4.0);
+        let mut qp = DenseQp::<2, 4>::with_q(Vector2::new(-2.0, -4.0));
         qp.push_row(&Vector2::new(1.0, 1.0), -2.0).unwrap();
         qp.push_row(&Vector2::new(0.0, 1.0), -1.0).unwrap();
         let full = s.solve(&qp, &[false; 4], 10);
@@ -622,8 +658,7 @@ mod tests {
     #[test]
     fn non_finite_data_is_numerical_error() {
         let s = solver2();
-        let mut qp = DenseQp::<2, 4>::default();
-        qp.q = Vector2::new(f64::NAN, 0.0);
+        let qp = DenseQp::<2, 4>::with_q(Vector2::new(f64::NAN, 0.0));
         assert_eq!(
             s.solve(&qp, &[false; 4], 10).status,
             QpStatus::NumericalError
@@ -648,8 +683,7 @@ mod tests {
     #[test]
     fn warm_start_marks_do_not_change_solution() {
         let s = solver2();
-        let mut qp = DenseQp::<2, 4>::default();
-        qp.q = Vector2::new(-2.0, -4.0);
+        let mut qp = DenseQp::<2, 4>::with_q(Vector2::new(-2.0, -4.0));
         qp.push_row(&Vector2::new(1.0, 1.0), -2.0).unwrap();
         qp.push_row(&Vector2::new(0.0, 1.0), 0.0).unwrap();
         qp.push_row(&Vector2::new(1.0, 0.0), -1.0).unwrap();

@@ -1,0 +1,259 @@
+//! Property test of the SPEC section 3 contract on the controller's own QPs:
+//! random but physically sensible cycles (state, heading, goal, 0..=10 random
+//! convex polygons around the robot, random gamma/delta), assembled by the
+//! controller, solved by our dual active-set solver and by Clarabel.
+//!
+//! Checked per case: feasibility agrees; when solved, primal within 1e-6 (scaled),
+//! objective within 1e-8 (relative), KKT residuals of our solution <= 1e-8; the
+//! warm-started `step` (second call with the same input) returns the same plan as
+//! the cold solve.
+
+use std::cell::Cell;
+use std::f64::consts::PI;
+
+use ldcbf_controller::nalgebra::Vector2;
+use ldcbf_controller::{
+    Assembly, Config, ConvexPolygon, CycleInput, CycleStatus, PaperController, Side,
+};
+use ldcbf_reference::{DenseProblem, RefStatus, compare, kkt, solve_clarabel};
+use proptest::prelude::*;
+use proptest::test_runner::{Config as PtConfig, TestCaseError, TestRunner};
+
+#[derive(Clone, Debug)]
+struct Obstacle {
+    /// Gap between the robot and the obstacle's circumcircle, m (negative: the
+    /// robot may be inside).
+    gap: f64,
+    bearing: f64,
+    radius: f64,
+    vertices: usize,
+    rotation: f64,
+    aspect: f64,
+}
+
+#[derive(Clone, Debug)]
+struct Case {
+    p: (f64, f64),
+    v: (f64, f64),
+    heading: f64,
+    omega: f64,
+    foot: (f64, f64),
+    right_stance: bool,
+    t_in: f64,
+    goal_dist: f64,
+    goal_bearing: f64,
+    gamma: f64,
+    delta: f64,
+    obstacles: Vec<Obstacle>,
+}
+
+fn obstacle() -> impl Strategy<Value = Obstacle> {
+    (
+        -0.1..3.0f64,
+        -PI..PI,
+        0.1..1.2f64,
+        3usize..13,
+        0.0..PI,
+        0.3..1.0f64,
+    )
+        .prop_map(
+            |(gap, bearing, radius, vertices, rotation, aspect)| Obstacle {
+                gap,
+                bearing,
+                radius,
+                vertices,
+                rotation,
+                aspect,
+            },
+        )
+}
+
+fn case() -> impl Strategy<Value = Case> {
+    (
+        ((-5.0..5.0f64, -5.0..5.0f64), (-0.1..0.8f64, 0.05..0.35f64)),
+        (
+            -PI..PI,
+            -0.5..0.5f64,
+            (-0.15..0.15f64, 0.0..0.17f64),
+            any::<bool>(),
+            0.0..0.4f64,
+        ),
+        (
+            0.0..12.0f64,
+            -PI..PI,
+            0.1..=1.0f64,
+            prop_oneof![Just(0.0), 0.0..0.4f64],
+        ),
+        prop::collection::vec(obstacle(), 0..=10),
+    )
+        .prop_map(
+            |(
+                (p, v),
+                (heading, omega, foot, right_stance, t_in),
+                (gd, gb, gamma, delta),
+                obstacles,
+            )| Case {
+                p,
+                v,
+                heading,
+                omega,
+                foot,
+                right_stance,
+                t_in,
+                goal_dist: gd,
+                goal_bearing: gb,
+                gamma,
+                delta,
+                obstacles,
+            },
+        )
+}
+
+fn polygon(c: &Case, o: &Obstacle) -> ConvexPolygon<16> {
+    let dist = o.radius + o.gap;
+    let (cx, cy) = (
+        c.p.0 + dist * o.bearing.cos(),
+        c.p.1 + dist * o.bearing.sin(),
+    );
+    let pts: Vec<[f64; 2]> = (0..o.vertices)
+        .map(|i| {
+            let a = 2.0 * PI * i as f64 / o.vertices as f64;
+            let (x, y) = (o.radius * a.cos(), o.radius * o.aspect * a.sin());
+            let (s, co) = o.rotation.sin_cos();
+            [cx + co * x - s * y, cy + s * x + co * y]
+        })
+        .collect();
+    ConvexPolygon::new(&pts).expect("generated polygons are convex")
+}
+
+#[test]
+fn controller_qps_agree_with_clarabel() {
+    let cases: u32 = std::env::var("LDCBF_PROPTEST_CASES")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(10_000);
+    let mut runner = TestRunner::new(PtConfig {
+        cases,
+        failure_persistence: None,
+        ..PtConfig::default()
+    });
+    let solved = Cell::new(0u32);
+    let infeasible = Cell::new(0u32);
+    let worst_primal = Cell::new(0.0f64);
+    let worst_obj = Cell::new(0.0f64);
+    let worst_kkt = Cell::new(0.0f64);
+    let worst_iter = Cell::new(0u32);
+    let worst_iter_solved = Cell::new(0u32);
+    let worst_raw = Cell::new(0.0f64);
+    let with_obstacles = Cell::new(0u32);
+    let result = runner.run(&case(), |c| {
+        let cfg = Config {
+            gamma: c.gamma,
+            delta: c.delta,
+            ..Config::default()
+        };
+        let polys: Vec<ConvexPolygon<16>> = c.obstacles.iter().map(|o| polygon(&c, o)).collect();
+        // The state is drawn where walking puts it: at the END of the current step
+        // the CoM is at `p`, with body-frame velocity (v.0 forward, v.1 lateral
+        // towards the swing side) and the stance foot on its own side of the CoM;
+        // the measured state is that one flowed back by the remaining time.
+        let (sh, ch) = c.heading.sin_cos();
+        let body = |lon: f64, lat: f64| Vector2::new(ch * lon - sh * lat, sh * lon + ch * lat);
+        let side_sign = if c.right_stance { -1.0 } else { 1.0 }; // right foot is on the right
+        let p_end = Vector2::new(c.p.0, c.p.1);
+        let v_end = body(c.v.0, -side_sign * c.v.1);
+        let foot = p_end + body(c.foot.0, side_sign * c.foot.1);
+        let lip = ldcbf_controller::Lip::new(9.81, 1.0, 0.4);
+        let (p_now, v_now) = lip.propagate(&p_end, &v_end, &foot, -(0.4 - c.t_in));
+        let input = CycleInput {
+            com_position: p_now,
+            com_velocity: v_now,
+            heading: c.heading,
+            turning_rate: c.omega,
+            stance_foot: foot,
+            stance_side: if c.right_stance { Side::Right } else { Side::Left },
+            time_in_step: c.t_in,
+            goal: Vector2::new(
+                c.p.0 + c.goal_dist * c.goal_bearing.cos(),
+                c.p.1 + c.goal_dist * c.goal_bearing.sin(),
+            ),
+            obstacles: &polys,
+        };
+        let mut ctl = PaperController::new(cfg).map_err(|e| TestCaseError::fail(e.to_string()))?;
+        let mut asm = Assembly::default();
+        ctl.assemble(&input, &mut asm).map_err(|e| TestCaseError::fail(e.to_string()))?;
+        if asm.n_obstacles > 0 {
+            with_obstacles.set(with_obstacles.get() + 1);
+        }
+        let problem = DenseProblem::from_assembly(ctl.solver(), &asm);
+        let own = ctl.solver().solve(&asm.qp, &[false; 48], 1000);
+        let reference = solve_clarabel(&problem);
+        prop_assert!(
+            reference.status != RefStatus::Failed,
+            "Clarabel failed ({:?}) on {:?}",
+            reference.raw_status,
+            c
+        );
+        let a = compare(&problem, &own, &reference);
+        prop_assert!(
+            a.holds(),
+            "{a:?}: ours {:?}, Clarabel {:?}; KKT ours {:?}, KKT Clarabel {:?}, x ours {:?} x ref {:?}",
+            own.status,
+            reference.raw_status,
+            kkt(&problem, own.x.as_slice(), &own.lambda.as_slice()[..problem.m]),
+            kkt(&problem, &reference.x, &reference.z),
+            own.x.as_slice(),
+            reference.x
+        );
+        worst_iter.set(worst_iter.get().max(own.iterations));
+        if a.both_solved {
+            solved.set(solved.get() + 1);
+            worst_iter_solved.set(worst_iter_solved.get().max(own.iterations));
+            let xr = reference.x_raw.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            let raw = (0..problem.n).fold(0.0f64, |a, i| a.max((own.x[i] - reference.x_raw[i]).abs()));
+            worst_raw.set(worst_raw.get().max(raw / (1.0 + xr)));
+            worst_primal.set(worst_primal.get().max(a.primal));
+            worst_obj.set(worst_obj.get().max(a.objective));
+            let k = kkt(&problem, own.x.as_slice(), &own.lambda.as_slice()[..problem.m]);
+            prop_assert!(k.max() <= 1e-8, "KKT {k:?}");
+            worst_kkt.set(worst_kkt.get().max(k.max()));
+            // Cold `step`, then the same input again: warm start from the first
+            // active set must reproduce the plan.
+            let first = ctl.step(&input);
+            let second = ctl.step(&input);
+            prop_assert_eq!(first.status, CycleStatus::Optimal);
+            prop_assert!(second.info.warm_started || first.info.active_set_size == 0);
+            let d = (first.foot_target - second.foot_target).amax();
+            prop_assert!(d <= 1e-9, "warm start moved f_0 by {d:e}");
+            prop_assert!((first.foot_target.x - own.x[0]).abs() <= 1e-12);
+        } else {
+            infeasible.set(infeasible.get() + 1);
+            let out = ctl.step(&input);
+            prop_assert_eq!(out.status, CycleStatus::Infeasible);
+        }
+        Ok(())
+    });
+    println!(
+        "{cases} cycles: {} solved, {} infeasible, {} with obstacles; worst scaled primal \
+         difference {:.3e}, worst relative objective difference {:.3e}, worst KKT residual \
+         {:.3e}, worst iterations {} ({} on solved QPs); unpolished Clarabel iterate: worst \
+         scaled primal difference {:.3e}",
+        solved.get(),
+        infeasible.get(),
+        with_obstacles.get(),
+        worst_primal.get(),
+        worst_obj.get(),
+        worst_kkt.get(),
+        worst_iter.get(),
+        worst_iter_solved.get(),
+        worst_raw.get()
+    );
+    if let Err(e) = result {
+        panic!("{e}");
+    }
+    assert!(
+        solved.get() > 0 && infeasible.get() > 0,
+        "both outcomes must be exercised"
+    );
+    assert!(with_obstacles.get() > cases / 2);
+}

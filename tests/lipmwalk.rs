@@ -1,0 +1,55 @@
+//! The 30 external LIP-walking QPs of `../shared/qpbench/lipmwalk/` (n = 16,
+//! m = 32, from the public mpc_qpbenchmark set), solved by our dual active-set
+//! solver at that fixed size and by Clarabel: the SPEC section 3 contract
+//! (primal 1e-6 scaled, objective 1e-8 relative, feasibility) must hold for all.
+
+use std::path::PathBuf;
+
+use ldcbf_reference::{DenseProblem, compare, kkt, solve_clarabel, solve_own};
+
+/// `../shared/qpbench/lipmwalk` relative to the repository root.
+fn data_dir() -> PathBuf {
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/qpbench/lipmwalk");
+    assert!(
+        dir.is_dir(),
+        "test data missing: expected the external QP set at {} (the `shared/` folder \
+         beside the repository root)",
+        dir.display()
+    );
+    dir
+}
+
+#[test]
+fn lipmwalk_agrees_with_clarabel() {
+    let dir = data_dir();
+    let mut worst_primal: f64 = 0.0;
+    let mut worst_obj: f64 = 0.0;
+    let mut worst_kkt: f64 = 0.0;
+    let mut max_iter = 0;
+    for i in 0..30 {
+        let path = dir.join(format!("LIPMWALK{i}.npz"));
+        let p = DenseProblem::from_npz(&path).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!((p.n, p.m), (16, 32), "{}", path.display());
+        let own = solve_own::<16, 32>(&p, 200).unwrap();
+        let r = solve_clarabel(&p);
+        let a = compare(&p, &own, &r);
+        assert!(
+            a.holds(),
+            "{}: {a:?} (ours {:?}, Clarabel {:?})",
+            path.display(),
+            own.status,
+            r.raw_status
+        );
+        assert!(a.both_solved, "{}: expected a feasible QP", path.display());
+        let k = kkt(&p, own.x.as_slice(), &own.lambda.as_slice()[..p.m]);
+        worst_primal = worst_primal.max(a.primal);
+        worst_obj = worst_obj.max(a.objective);
+        worst_kkt = worst_kkt.max(k.max());
+        max_iter = max_iter.max(own.iterations);
+    }
+    println!(
+        "LIPMWALK: worst scaled primal difference {worst_primal:.3e}, worst relative objective \
+         difference {worst_obj:.3e}, worst KKT residual {worst_kkt:.3e}, max iterations {max_iter}"
+    );
+    assert!(worst_kkt <= 1e-8, "KKT residual {worst_kkt:e}");
+}
