@@ -30,7 +30,9 @@ fn paper_obstacles() -> Vec<Poly> {
         &[[1.5, 3.0], [1.8, 3.3], [2.2, 3.0], [2.0, 2.6], [1.6, 2.6]],
         &[[2.5, 3.5], [2.8, 3.8], [3.2, 3.5], [3.0, 3.1], [2.6, 3.1]],
     ];
-    sets.iter().map(|s| Poly::hull(s).expect("convex")).collect()
+    sets.iter()
+        .map(|s| Poly::hull(s).expect("convex"))
+        .collect()
 }
 
 /// A recorded cycle (owned copy of the input fields).

@@ -9,7 +9,12 @@ use ldcbf_controller::{CycleOutput, PaperController};
 fn paper_controller_fits_in_static_memory() {
     let controller = core::mem::size_of::<PaperController>();
     let output = core::mem::size_of::<CycleOutput<3>>();
-    println!("size_of::<PaperController>() = {controller} bytes; size_of::<CycleOutput<3>>() = {output} bytes");
-    assert!(controller <= 8 * 1024, "PaperController is {controller} bytes");
+    println!(
+        "size_of::<PaperController>() = {controller} bytes; size_of::<CycleOutput<3>>() = {output} bytes"
+    );
+    assert!(
+        controller <= 8 * 1024,
+        "PaperController is {controller} bytes"
+    );
     assert!(output <= 1024, "CycleOutput is {output} bytes");
 }

@@ -1140,6 +1140,54 @@ mod tests {
     }
 
     #[test]
+    fn prediction_uses_remaining_time_and_current_turn_rate() {
+        let ctl = Ctl::new(Config::default()).unwrap();
+        let mut inp = input(&[]);
+        inp.com_velocity = Vector2::new(0.3, -0.1);
+        inp.heading = 3.1;
+        inp.turning_rate = 0.2;
+        inp.time_in_step = 0.1;
+        let mut asm = Assembly::default();
+        ctl.assemble(&inp, &mut asm).unwrap();
+        let lip = Lip::new(9.81, 1.0, 0.4);
+        let (px, vx) = lip.propagate_axis(0.0, 0.3, 0.0, 0.3);
+        let (py, vy) = lip.propagate_axis(0.0, -0.1, -0.05, 0.3);
+        let pr = &asm.prediction;
+        assert!((pr.p0 - Vector2::new(px, py)).amax() < 1e-15);
+        assert!((pr.v0 - Vector2::new(vx, vy)).amax() < 1e-15);
+        // 3.1 + 0.2 * 0.3 = 3.16 > pi: wrapped.
+        assert!((pr.heading.theta[0] - (3.16 - 2.0 * core::f64::consts::PI)).abs() < 1e-12);
+        assert_eq!(pr.first_side, Side::Right);
+        // Out-of-range time is clamped and flagged.
+        inp.time_in_step = 0.5;
+        ctl.assemble(&inp, &mut asm).unwrap();
+        assert!(asm.time_clamped);
+        assert!((asm.prediction.v0 - Vector2::new(0.3, -0.1)).amax() < 1e-15);
+    }
+
+    #[test]
+    fn warm_start_follows_the_horizon_shift() {
+        let mut ctl = Ctl::new(Config::default()).unwrap();
+        let first = ctl.step(&input(&[]));
+        assert!(first.status.is_optimal());
+        let n_active = ctl.memory.n_active;
+        assert!(n_active > 0);
+        // Same step: same rows are preferred.
+        let again = ctl.step(&input(&[]));
+        assert!(again.info.warm_started);
+        // The step ended: stance switches, rows of k = 0 are dropped and k >= 1
+        // move to k - 1; the plan is still the same optimum as a cold solve.
+        let mut next = input(&[]);
+        next.stance_side = Side::Right;
+        next.stance_foot = first.foot_target;
+        let warm = ctl.step(&next);
+        let mut cold_ctl = Ctl::new(Config::default()).unwrap();
+        let cold = cold_ctl.step(&next);
+        assert!((warm.foot_target - cold.foot_target).amax() < 1e-9);
+        assert_eq!(warm.status, cold.status);
+    }
+
+    #[test]
     fn non_finite_input_holds() {
         let mut ctl = Ctl::new(Config::default()).unwrap();
         let mut inp = input(&[]);

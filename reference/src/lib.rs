@@ -426,8 +426,10 @@ pub fn compare<const NV: usize, const NC: usize>(
     let own_solved = own.status == QpStatus::Solved;
     let feasibility_agrees = matches!(
         (own.status, r.status),
-        (QpStatus::Solved, RefStatus::Solved | RefStatus::AlmostSolved)
-            | (QpStatus::Infeasible, RefStatus::Infeasible)
+        (
+            QpStatus::Solved,
+            RefStatus::Solved | RefStatus::AlmostSolved
+        ) | (QpStatus::Infeasible, RefStatus::Infeasible)
     );
     if !(ref_solved && own_solved) {
         return Agreement {
