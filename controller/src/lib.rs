@@ -24,7 +24,8 @@
 //!    `H` depends only on `(g, H_com, T, N)` and is factored once;
 //! 5. solves it with the dense dual active-set method of [`qp`] and returns the
 //!    swing-foot target `f_0`, `omega_bar`, the predicted plan, a status and
-//!    diagnostics ([`mpc`]).
+//!    diagnostics ([`mpc`]). An infeasible QP is answered by the priority
+//!    scheme of [`relax`] (reachability, then safety, then gait rows).
 //!
 //! Frames and units: everything is in the world frame W, in metres, seconds and
 //! radians; headings are measured counter-clockwise from the world x axis.
@@ -42,6 +43,7 @@ pub mod heading;
 pub mod lip;
 pub mod mpc;
 pub mod qp;
+pub mod relax;
 
 pub use nalgebra;
 

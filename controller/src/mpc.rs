@@ -22,14 +22,22 @@
 //!
 //! * [`CycleStatus::Optimal`]: the QP was solved; the command is `f_0` of the
 //!   optimal plan and `omega_bar`.
-//! * [`CycleStatus::Infeasible`], [`CycleStatus::BudgetExhausted`],
-//!   [`CycleStatus::NumericalFailure`]: the previous cycle's plan (shifted by one
+//! * [`CycleStatus::Infeasible`]: the nominal QP has no solution. The priority
+//!   scheme of [`crate::relax`] relaxes the gait rows, and if that is not enough
+//!   the safety rows, by the smallest uniform amount and returns the optimal plan
+//!   of that relaxed problem ([`CommandSource::RelaxedGait`],
+//!   [`CommandSource::RelaxedSafety`]; the amounts are in [`CycleInfo`]). Leg
+//!   reachability always holds for these commands.
+//! * If the relaxation cannot finish (budget, numerical failure), and for
+//!   [`CycleStatus::BudgetExhausted`] and [`CycleStatus::NumericalFailure`]: the
+//!   previous cycle's plan (shifted by one
 //!   step if a step ended in between) is used when it satisfies every row of this
 //!   cycle's QP ([`CommandSource::PreviousPlan`]); otherwise a *capture step*: the
 //!   swing foot goes to the instantaneous capture point `p_0 + v_0 / beta` clamped
 //!   into the reachability box around `p_0`, and the turning rate is 0
 //!   ([`CommandSource::CaptureStep`]). A capture step brings a LIP to rest over the
-//!   foot; it honours leg reachability but not necessarily the LDCBF rows.
+//!   foot; the later feet repeat the rule from the state it leads to. It honours
+//!   leg reachability but not necessarily the LDCBF rows.
 //! * [`CycleStatus::InvalidInput`]: a measured input was NaN or infinite. The
 //!   command holds: the last valid swing target (or the stance foot, or the
 //!   origin if that is not finite either) and turning rate 0 ([`CommandSource::Hold`]).
@@ -44,6 +52,7 @@ use crate::geometry::{ConvexPolygon, closest_point_point_polygon};
 use crate::heading::{HeadingPlan, plan_heading, wrap_angle};
 use crate::lip::Lip;
 use crate::qp::{DenseQp, DualActiveSet, OwnSolver, QpBackend, QpSettings, QpSolution, QpStatus};
+use crate::relax;
 
 /// Row capacity needed for horizon `n`, `nobs` obstacles, with or without the
 /// foot-clearance rows: `8 n + n nobs (x2 with foot clearance)`.
@@ -115,8 +124,14 @@ pub struct Config {
     pub foot_clearance: Option<f64>,
     /// Within this distance of the goal the heading is frozen (`omega_bar = 0`), m.
     pub heading_freeze_radius: f64,
-    /// Iteration budget of the QP solver (adds plus drops) per cycle.
+    /// Iteration budget of one QP solve (adds plus drops).
     pub max_iter: u32,
+    /// Iteration budget of a whole cycle, including the solves of the priority
+    /// scheme for infeasible cycles (>= `max_iter`).
+    pub max_iter_cycle: u32,
+    /// Halvings of each bisection of the priority scheme (precision
+    /// `violation / 2^relax_bisections`), at most 52.
+    pub relax_bisections: u32,
     /// Prefer the previous cycle's active rows (shifted) when choosing rows to add.
     pub warm_start: bool,
     /// Primal feasibility tolerance of the solver (on unit-norm rows), m or m/s.
@@ -142,6 +157,8 @@ impl Default for Config {
             foot_clearance: None,
             heading_freeze_radius: 0.3,
             max_iter: 64,
+            max_iter_cycle: 2048,
+            relax_bisections: 12,
             warm_start: true,
             tol_primal: 1e-10,
         }
@@ -223,6 +240,12 @@ impl Config {
         }
         if self.max_iter == 0 {
             return err("max_iter", "must be >= 1");
+        }
+        if self.max_iter_cycle < self.max_iter {
+            return err("max_iter_cycle", "must be >= max_iter");
+        }
+        if self.relax_bisections > 52 {
+            return err("relax_bisections", "must be <= 52");
         }
         if !(self.tol_primal.is_finite() && self.tol_primal > 0.0 && self.tol_primal < 1e-3) {
             return err("tol_primal", "must be in (0, 1e-3)");
@@ -317,12 +340,31 @@ impl CycleStatus {
 pub enum CommandSource {
     /// This cycle's optimal plan.
     Optimal,
+    /// Optimal plan with the gait rows relaxed (nominal QP infeasible).
+    RelaxedGait,
+    /// Optimal plan with the safety (and gait) rows relaxed: even reachability and
+    /// safety together were infeasible.
+    RelaxedSafety,
     /// The previous cycle's plan, still feasible for this cycle's rows.
     PreviousPlan,
     /// The clamped capture step (see module docs).
     CaptureStep,
     /// Hold the last valid target (invalid input).
     Hold,
+}
+
+impl CommandSource {
+    /// Short lower-case name, for logs.
+    pub fn name(self) -> &'static str {
+        match self {
+            CommandSource::Optimal => "optimal",
+            CommandSource::RelaxedGait => "relaxed_gait",
+            CommandSource::RelaxedSafety => "relaxed_safety",
+            CommandSource::PreviousPlan => "previous_plan",
+            CommandSource::CaptureStep => "capture_step",
+            CommandSource::Hold => "hold",
+        }
+    }
 }
 
 /// A LIP state in the world frame.
@@ -354,7 +396,7 @@ pub struct Plan<const N: usize> {
 pub struct CycleInfo {
     /// QP solver outcome, `None` when the QP was not built (invalid input).
     pub qp_status: Option<QpStatus>,
-    /// Solver iterations (adds plus drops).
+    /// Solver iterations (adds plus drops) of the whole cycle, relaxation included.
     pub iterations: u32,
     /// Size of the final active set.
     pub active_set_size: u8,
@@ -378,6 +420,10 @@ pub struct CycleInfo {
     pub max_violation: f64,
     /// Smallest `h_j(p_0)` over the active obstacles (m), `+inf` if none.
     pub min_h0: f64,
+    /// Uniform relaxation of the gait rows in the returned plan, m/s (0 if none).
+    pub relax_gait: f64,
+    /// Uniform relaxation of the safety rows in the returned plan, m (0 if none).
+    pub relax_safety: f64,
 }
 
 /// Everything one cycle returns. All numbers are finite.
@@ -500,6 +546,8 @@ pub struct Controller<const N: usize, const NV: usize, const NC: usize, const NO
     core: Core<N, NV, NC>,
     memory: Memory<NV>,
     work: Assembly<N, NV, NC, NOBS>,
+    /// Workspace of the priority scheme (relaxed QPs).
+    scratch: DenseQp<NV, NC>,
 }
 
 /// The immutable, precomputed part of the controller.
@@ -555,6 +603,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
                 last_target: None,
             },
             work: Assembly::default(),
+            scratch: DenseQp::default(),
         })
     }
 
@@ -613,9 +662,14 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
         input: &CycleInput<'_, V>,
         backend: &mut B,
     ) -> CycleOutput<N> {
-        let Controller { core, memory, work } = self;
+        let Controller {
+            core,
+            memory,
+            work,
+            scratch,
+        } = self;
         match core.assemble(input, work) {
-            Ok(()) => core.solve_assembled(memory, input, work, backend),
+            Ok(()) => core.solve_assembled(memory, input, work, scratch, backend),
             Err(e) => hold(memory, input, e),
         }
     }
@@ -812,6 +866,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         memory: &mut Memory<NV>,
         input: &CycleInput<'_, V>,
         work: &Assembly<N, NV, NC, NOBS>,
+        scratch: &mut DenseQp<NV, NC>,
         backend: &mut B,
     ) -> CycleOutput<N> {
         let pred = &work.prediction;
@@ -860,6 +915,8 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             cost: f64::NAN,
             max_violation: f64::NAN,
             min_h0,
+            relax_gait: 0.0,
+            relax_safety: 0.0,
         };
         let (u, status) = match sol.status {
             QpStatus::Solved => {
@@ -873,22 +930,50 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                     _ => CycleStatus::NumericalFailure,
                 };
                 memory.n_active = 0;
-                match self.previous_plan(memory, shift, work) {
-                    Some(u) => {
-                        info.source = CommandSource::PreviousPlan;
-                        (u, status)
-                    }
-                    None => {
-                        info.source = CommandSource::CaptureStep;
-                        (self.capture_step(pred), status)
+                let relaxed = if other == QpStatus::Infeasible {
+                    relax::relax(
+                        &self.solver,
+                        backend,
+                        &work.qp,
+                        &work.rows,
+                        scratch,
+                        self.config.max_iter,
+                        self.config.max_iter_cycle.saturating_sub(sol.iterations),
+                        self.config.relax_bisections,
+                    )
+                } else {
+                    Err(relax::RelaxFailure::Budget)
+                };
+                if let Ok(r) = &relaxed {
+                    info.iterations = info.iterations.saturating_add(r.iterations);
+                    info.relax_gait = r.eps_gait;
+                    info.relax_safety = r.eps_safety;
+                    info.source = match r.level {
+                        relax::RelaxLevel::Gait => CommandSource::RelaxedGait,
+                        relax::RelaxLevel::Safety => CommandSource::RelaxedSafety,
+                    };
+                    (r.u, status)
+                } else {
+                    match self.previous_plan(memory, shift, work) {
+                        Some(u) => {
+                            info.source = CommandSource::PreviousPlan;
+                            (u, status)
+                        }
+                        None => {
+                            info.source = CommandSource::CaptureStep;
+                            (self.capture_step(pred), status)
+                        }
                     }
                 }
             }
         };
-        let omega = if info.source == CommandSource::Optimal {
-            pred.heading.omega_bar
-        } else {
-            0.0
+        // Plans computed with this cycle's headings turn at omega_bar; the
+        // fallbacks stop turning.
+        let omega = match info.source {
+            CommandSource::Optimal | CommandSource::RelaxedGait | CommandSource::RelaxedSafety => {
+                pred.heading.omega_bar
+            }
+            _ => 0.0,
         };
         info.max_violation = work.qp.max_violation(&u);
         info.cost = self.solver.objective(&work.qp.q, &u) + work.cost_constant;
@@ -946,20 +1031,23 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         (viol <= 10.0 * self.config.tol_primal && u.iter().all(|v| v.is_finite())).then_some(u)
     }
 
-    /// Capture step: `f_0 = p_0 + clamp_box(R(theta_0)' v_0 / beta, l_max)`, held
-    /// for the whole horizon.
+    /// Capture steps: `f_k = p_k + clamp_box(R(theta_k)' v_k / beta, l_max)` for
+    /// `k = 0..N-1`, each from the state the previous capture step leads to, so
+    /// every foot honours leg reachability.
     fn capture_step(&self, pred: &Prediction<N>) -> SVector<f64, NV> {
-        let th = pred.heading.theta[0];
-        let (s, c) = (libm::sin(th), libm::cos(th));
-        let xi = pred.v0 / self.lip.beta;
         let l = self.config.l_max;
-        let lon = (c * xi.x + s * xi.y).clamp(-l, l);
-        let lat = (-s * xi.x + c * xi.y).clamp(-l, l);
-        let f = pred.p0 + Vector2::new(c * lon - s * lat, s * lon + c * lat);
+        let (mut p, mut v) = (pred.p0, pred.v0);
         let mut u = SVector::<f64, NV>::zeros();
         for k in 0..N {
+            let th = pred.heading.theta[k];
+            let (s, c) = (libm::sin(th), libm::cos(th));
+            let xi = v / self.lip.beta;
+            let lon = (c * xi.x + s * xi.y).clamp(-l, l);
+            let lat = (-s * xi.x + c * xi.y).clamp(-l, l);
+            let f = p + Vector2::new(c * lon - s * lat, s * lon + c * lat);
             u[2 * k] = f.x;
             u[2 * k + 1] = f.y;
+            (p, v) = self.lip.propagate(&p, &v, &f, self.config.step_duration);
         }
         u
     }
@@ -1046,6 +1134,8 @@ fn hold<const N: usize, const NV: usize, const V: usize>(
             cost: f64::NAN,
             max_violation: f64::NAN,
             min_h0: f64::INFINITY,
+            relax_gait: 0.0,
+            relax_safety: 0.0,
         },
     }
 }
@@ -1185,6 +1275,122 @@ mod tests {
         let cold = cold_ctl.step(&next);
         assert!((warm.foot_target - cold.foot_target).amax() < 1e-9);
         assert_eq!(warm.status, cold.status);
+    }
+
+    /// Largest violation (per unit row norm) of the rows of `class` by the plan
+    /// of `out`, on the QP of the last step.
+    fn class_violation(ctl: &Ctl, out: &CycleOutput<3>, class: relax::RowClass) -> f64 {
+        let asm = ctl.last_assembly();
+        let mut u = SVector::<f64, 6>::zeros();
+        for k in 0..3 {
+            u[2 * k] = out.plan.feet[k].x;
+            u[2 * k + 1] = out.plan.feet[k].y;
+        }
+        (0..asm.qp.m)
+            .filter(|&i| relax::RowClass::of(asm.rows[i].kind) == class)
+            .map(|i| {
+                let g = asm.qp.row(i);
+                (g.dot(&u) - asm.qp.h[i]) / g.norm()
+            })
+            .fold(0.0, f64::max)
+    }
+
+    /// Feasibility of the last QP with the rows of `class` relaxed by `eps` and
+    /// the rows of `drop` left out.
+    fn feasible_with(
+        ctl: &Ctl,
+        class: relax::RowClass,
+        eps: f64,
+        drop: Option<relax::RowClass>,
+    ) -> bool {
+        let asm = ctl.last_assembly();
+        let mut qp = DenseQp::<6, 48>::with_q(asm.qp.q);
+        for i in 0..asm.qp.m {
+            let c = relax::RowClass::of(asm.rows[i].kind);
+            if Some(c) == drop {
+                continue;
+            }
+            let g = asm.qp.row(i);
+            let h = asm.qp.h[i] + if c == class { eps * g.norm() } else { 0.0 };
+            qp.push_row(&g, h).unwrap();
+        }
+        ctl.solver().solve(&qp, &[false; 48], 500).status == QpStatus::Solved
+    }
+
+    #[test]
+    fn velocity_conflict_relaxes_gait_rows_minimally() {
+        let mut ctl = Ctl::new(Config::default()).unwrap();
+        let mut inp = input(&[]);
+        // Sideways at 1.2 m/s towards the stance side: no reachable foot brings the
+        // lateral velocity into [0.1, 0.4] at the end of the next step.
+        inp.com_velocity = Vector2::new(0.0, -1.2);
+        let out = ctl.step(&inp);
+        assert_eq!(out.status, CycleStatus::Infeasible);
+        assert_eq!(out.info.source, CommandSource::RelaxedGait);
+        let eps = out.info.relax_gait;
+        assert!(eps > 0.0);
+        assert_eq!(out.info.relax_safety, 0.0);
+        assert!(class_violation(&ctl, &out, relax::RowClass::Reach) <= 1e-9);
+        assert!(class_violation(&ctl, &out, relax::RowClass::Gait) <= eps * (1.0 + 1e-9) + 1e-9);
+        // Minimal: 1% less relaxation is infeasible, the reported one is feasible.
+        assert!(!feasible_with(
+            &ctl,
+            relax::RowClass::Gait,
+            0.99 * eps,
+            None
+        ));
+        assert!(feasible_with(&ctl, relax::RowClass::Gait, eps, None));
+        assert!(output_is_finite(&out));
+        assert_eq!(
+            out.turning_rate,
+            ctl.last_assembly().prediction.heading.omega_bar
+        );
+    }
+
+    #[test]
+    fn wall_ahead_inside_margin_relaxes_safety_but_keeps_reach() {
+        let cfg = Config {
+            delta: 0.3,
+            ..Config::default()
+        };
+        let mut ctl = Ctl::new(cfg).unwrap();
+        // A wall 0.05 m ahead of x_0, robot walking into it at 0.8 m/s.
+        let wall = [Poly::new(&[[0.0, -2.0], [1.0, -2.0], [1.0, 2.0], [0.0, 2.0]]).unwrap()];
+        let mut inp = input(&wall);
+        inp.time_in_step = 0.4;
+        inp.com_position = Vector2::new(-0.05, 0.0);
+        inp.stance_foot = Vector2::new(-0.05, -0.05);
+        inp.com_velocity = Vector2::new(0.8, 0.0);
+        let out = ctl.step(&inp);
+        assert_eq!(out.status, CycleStatus::Infeasible);
+        assert_eq!(out.info.source, CommandSource::RelaxedSafety);
+        assert!(out.info.relax_safety > 0.0);
+        assert!(class_violation(&ctl, &out, relax::RowClass::Reach) <= 1e-9);
+        let eps = out.info.relax_safety;
+        assert!(class_violation(&ctl, &out, relax::RowClass::Safety) <= eps * (1.0 + 1e-9) + 1e-9);
+        assert!(!feasible_with(
+            &ctl,
+            relax::RowClass::Safety,
+            0.99 * eps,
+            Some(relax::RowClass::Gait)
+        ));
+        assert!(output_is_finite(&out));
+    }
+
+    #[test]
+    fn exhausted_cycle_budget_falls_back() {
+        let cfg = Config {
+            max_iter_cycle: 64,
+            ..Config::default()
+        };
+        let mut ctl = Ctl::new(cfg).unwrap();
+        let mut inp = input(&[]);
+        inp.com_velocity = Vector2::new(0.0, -1.2);
+        let out = ctl.step(&inp);
+        assert_eq!(out.status, CycleStatus::Infeasible);
+        assert_eq!(out.info.source, CommandSource::CaptureStep);
+        assert!(out.info.iterations <= 64);
+        assert!(class_violation(&ctl, &out, relax::RowClass::Reach) <= 1e-9);
     }
 
     #[test]

@@ -317,8 +317,9 @@ pub fn solve_clarabel(p: &DenseProblem) -> RefSolution {
 
 /// The polishing step of [`solve_clarabel`]; `None` when no guessed active set
 /// gives a better KKT point. Three guesses are tried (multiplier > slack, slack
-/// ~ 0, multiplier clearly positive) and the KKT system is solved through an SVD
-/// so that linearly dependent active rows do not break it.
+/// ~ 0, multiplier clearly positive), each refined by a few rounds of dropping
+/// negative multipliers and adding violated rows; the KKT systems are solved
+/// through an SVD so that linearly dependent active rows do not break them.
 fn polish(p: &DenseProblem, x: &[f64], z: &[f64], s: &[f64]) -> Option<(Vec<f64>, Vec<f64>)> {
     let guesses: [Vec<usize>; 3] = [
         (0..p.m).filter(|&i| z[i] > s[i]).collect(),
@@ -329,8 +330,34 @@ fn polish(p: &DenseProblem, x: &[f64], z: &[f64], s: &[f64]) -> Option<(Vec<f64>
     ];
     let mut best: Option<(Vec<f64>, Vec<f64>, f64)> = None;
     let base = kkt(p, x, z).max();
-    for active in &guesses {
-        if let Some((xp, zp)) = solve_equality_kkt(p, active) {
+    for guess in &guesses {
+        // Refine the guess like a primal-dual active-set method: drop the row with
+        // the most negative multiplier, else add the most violated row; a few
+        // rounds suffice when Clarabel's guess is close.
+        let mut active = guess.clone();
+        for _ in 0..(2 * p.n + 4) {
+            let Some((xp, zp)) = solve_equality_kkt(p, &active) else {
+                break;
+            };
+            let neg = active
+                .iter()
+                .enumerate()
+                .map(|(r, &i)| (r, zp[i]))
+                .filter(|&(_, l)| l < -1e-12)
+                .min_by(|a, b| a.1.total_cmp(&b.1));
+            if let Some((r, _)) = neg {
+                active.remove(r);
+                continue;
+            }
+            let viol = (0..p.m)
+                .filter(|i| !active.contains(i))
+                .map(|i| (i, p.row_dot(i, &xp) - p.h[i]))
+                .filter(|&(_, v)| v > 1e-12)
+                .max_by(|a, b| a.1.total_cmp(&b.1));
+            if let Some((i, _)) = viol {
+                active.push(i);
+                continue;
+            }
             let k = kkt(p, &xp, &zp);
             let score = k.max();
             if k.primal <= 1e-9
@@ -340,6 +367,7 @@ fn polish(p: &DenseProblem, x: &[f64], z: &[f64], s: &[f64]) -> Option<(Vec<f64>
             {
                 best = Some((xp, zp, score));
             }
+            break;
         }
     }
     best.map(|(xp, mut zp, _)| {

@@ -1,0 +1,291 @@
+//! The priority scheme for infeasible cycles: which rows give way, and by how
+//! little.
+//!
+//! Rows fall in three classes ([`RowClass`]): leg **reachability** (physical: never
+//! relaxed), **safety** (LDCBF and foot clearance), and **gait** (walking velocity
+//! and maneuverability). When the nominal QP is infeasible the controller solves,
+//! lexicographically:
+//!
+//! 1. **Gait relaxed.** Keep reachability and safety; relax every gait row by the
+//!    same amount `eps_gait` (m/s, on unit-norm rows: `g_i u <= h_i + eps |g_i|`),
+//!    the smallest that makes the problem feasible; then minimise the nominal
+//!    cost under that relaxation.
+//! 2. **Safety relaxed** (only if reachability + safety alone are infeasible):
+//!    keep reachability; find the smallest uniform relaxation `eps_safety` (m) of
+//!    the safety rows, then, with safety relaxed by exactly that, the smallest
+//!    `eps_gait`, then minimise the cost. This is the least-violating reachable
+//!    step in the sense of the largest LDCBF violation.
+//!
+//! Reachability alone is always feasible (each `f_k` may sit at `p_k`), so stage 2
+//! always has an answer up to numerical failure or budget exhaustion.
+//!
+//! Each smallest relaxation is found by bisection between 0 (infeasible) and the
+//! violation of the solution without those rows (feasible), with a fixed number
+//! of halvings ([`crate::Config::relax_bisections`]); the reported `eps` is the
+//! feasible end of the final bracket, so it exceeds the true minimum by at most
+//! `violation / 2^bisections`. Every solve draws on one per-cycle iteration
+//! budget ([`crate::Config::max_iter_cycle`]); if it runs out the controller falls
+//! back to the previous plan or the capture step.
+
+use nalgebra::SVector;
+
+use crate::constraints::{RowId, RowKind};
+use crate::qp::{DenseQp, DualActiveSet, QpBackend, QpStatus};
+
+/// Priority class of a row.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RowClass {
+    /// Leg reachability: never relaxed.
+    Reach,
+    /// LDCBF and foot clearance.
+    Safety,
+    /// Walking velocity and maneuverability.
+    Gait,
+}
+
+impl RowClass {
+    /// The class of a row kind.
+    pub fn of(kind: RowKind) -> RowClass {
+        match kind {
+            RowKind::ReachLonUpper
+            | RowKind::ReachLonLower
+            | RowKind::ReachLatUpper
+            | RowKind::ReachLatLower => RowClass::Reach,
+            RowKind::Ldcbf(_) | RowKind::FootClearance(_) => RowClass::Safety,
+            RowKind::VelLonUpper
+            | RowKind::VelLonLower
+            | RowKind::VelLatUpper
+            | RowKind::VelLatLower => RowClass::Gait,
+        }
+    }
+}
+
+/// Which rows a relaxed problem keeps, and by how much each class is relaxed
+/// (`None`: the class is left out).
+#[derive(Clone, Copy, Debug)]
+struct Keep {
+    safety: Option<f64>,
+    gait: Option<f64>,
+}
+
+impl Keep {
+    fn eps(&self, c: RowClass) -> Option<f64> {
+        match c {
+            RowClass::Reach => Some(0.0),
+            RowClass::Safety => self.safety,
+            RowClass::Gait => self.gait,
+        }
+    }
+}
+
+/// Which stage produced the relaxed plan.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RelaxLevel {
+    /// Stage 1: gait rows relaxed, safety and reachability kept.
+    Gait,
+    /// Stage 2: safety (and gait) rows relaxed, reachability kept.
+    Safety,
+}
+
+/// A relaxed plan.
+#[derive(Clone, Copy, Debug)]
+pub struct Relaxed<const NV: usize> {
+    /// Footsteps.
+    pub u: SVector<f64, NV>,
+    /// Stage that produced it.
+    pub level: RelaxLevel,
+    /// Uniform relaxation of the gait rows, m/s (0 if none was needed).
+    pub eps_gait: f64,
+    /// Uniform relaxation of the safety rows, m (0 at stage 1).
+    pub eps_safety: f64,
+    /// Solver iterations spent.
+    pub iterations: u32,
+}
+
+/// Why the relaxation gave up.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RelaxFailure {
+    /// The per-cycle iteration budget ran out.
+    Budget,
+    /// A solve reported a numerical error.
+    Numerical,
+}
+
+/// Runs the priority scheme on the nominal QP `qp` (rows identified by `rows`),
+/// using `scratch` as workspace. `budget` is the number of solver iterations left
+/// in this cycle; `bisections` the number of halvings per relaxation.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
+    solver: &DualActiveSet<NV, NC>,
+    backend: &mut B,
+    qp: &DenseQp<NV, NC>,
+    rows: &[RowId; NC],
+    scratch: &mut DenseQp<NV, NC>,
+    max_iter: u32,
+    budget: u32,
+    bisections: u32,
+) -> Result<Relaxed<NV>, RelaxFailure> {
+    let mut ctx = Ctx {
+        solver,
+        backend,
+        qp,
+        rows,
+        scratch,
+        max_iter,
+        budget,
+        used: 0,
+        bisections,
+    };
+    // Stage 1: safety hard, gait soft.
+    let hard = Keep {
+        safety: Some(0.0),
+        gait: None,
+    };
+    match ctx.minimal(hard, RowClass::Gait)? {
+        Some((u, eps)) => Ok(Relaxed {
+            u,
+            level: RelaxLevel::Gait,
+            eps_gait: eps,
+            eps_safety: 0.0,
+            iterations: ctx.used,
+        }),
+        None => {
+            // Stage 2: reachability only is hard.
+            let reach = Keep {
+                safety: None,
+                gait: None,
+            };
+            let (_, eps_s) = ctx
+                .minimal(reach, RowClass::Safety)?
+                .ok_or(RelaxFailure::Numerical)?;
+            let fixed = Keep {
+                safety: Some(eps_s),
+                gait: None,
+            };
+            let (u, eps_g) = ctx
+                .minimal(fixed, RowClass::Gait)?
+                .ok_or(RelaxFailure::Numerical)?;
+            Ok(Relaxed {
+                u,
+                level: RelaxLevel::Safety,
+                eps_gait: eps_g,
+                eps_safety: eps_s,
+                iterations: ctx.used,
+            })
+        }
+    }
+}
+
+struct Ctx<'a, const NV: usize, const NC: usize, B> {
+    solver: &'a DualActiveSet<NV, NC>,
+    backend: &'a mut B,
+    qp: &'a DenseQp<NV, NC>,
+    rows: &'a [RowId; NC],
+    scratch: &'a mut DenseQp<NV, NC>,
+    max_iter: u32,
+    budget: u32,
+    used: u32,
+    bisections: u32,
+}
+
+impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> {
+    /// Builds the problem `keep` into the scratch QP and solves it: `Ok(Some(u))`
+    /// feasible, `Ok(None)` infeasible.
+    fn solve(&mut self, keep: Keep) -> Result<Option<SVector<f64, NV>>, RelaxFailure> {
+        let left = self.budget.saturating_sub(self.used);
+        if left == 0 {
+            return Err(RelaxFailure::Budget);
+        }
+        self.scratch.clear();
+        self.scratch.q = self.qp.q;
+        let m = self.qp.m.min(NC);
+        for i in 0..m {
+            let class = RowClass::of(self.rows[i].kind);
+            if let Some(eps) = keep.eps(class) {
+                let g = self.qp.gt.column(i).into_owned();
+                let h = self.qp.h[i] + eps * g.norm();
+                // Capacity cannot be exceeded: the scratch QP has the same
+                // capacity and receives a subset of the rows.
+                let _ = self.scratch.push_row(&g, h);
+            }
+        }
+        let sol = self.backend.solve_qp(
+            self.solver,
+            self.scratch,
+            &[false; NC],
+            self.max_iter.min(left),
+        );
+        self.used = self.used.saturating_add(sol.iterations);
+        match sol.status {
+            QpStatus::Solved => Ok(Some(sol.x)),
+            QpStatus::Infeasible => Ok(None),
+            QpStatus::IterationLimit => Err(RelaxFailure::Budget),
+            QpStatus::NumericalError => Err(RelaxFailure::Numerical),
+        }
+    }
+
+    /// Largest violation of the rows of `class` at `u`, per unit row norm.
+    fn violation(&self, class: RowClass, u: &SVector<f64, NV>) -> f64 {
+        let mut worst: f64 = 0.0;
+        for i in 0..self.qp.m.min(NC) {
+            if RowClass::of(self.rows[i].kind) != class {
+                continue;
+            }
+            let g = self.qp.gt.column(i);
+            let n = g.norm();
+            if n > 0.0 {
+                worst = worst.max((g.dot(u) - self.qp.h[i]) / n);
+            }
+        }
+        worst
+    }
+
+    /// With `fixed` kept, the smallest uniform relaxation of `soft` and the
+    /// optimal plan under it. `Ok(None)` when `fixed` alone is infeasible.
+    fn minimal(
+        &mut self,
+        fixed: Keep,
+        soft: RowClass,
+    ) -> Result<Option<(SVector<f64, NV>, f64)>, RelaxFailure> {
+        let Some(u_free) = self.solve(fixed)? else {
+            return Ok(None);
+        };
+        let with = |eps: f64| match soft {
+            RowClass::Gait => Keep {
+                gait: Some(eps),
+                ..fixed
+            },
+            RowClass::Safety => Keep {
+                safety: Some(eps),
+                ..fixed
+            },
+            RowClass::Reach => fixed,
+        };
+        let mut hi = self.violation(soft, &u_free);
+        if !hi.is_finite() {
+            return Err(RelaxFailure::Numerical);
+        }
+        if hi <= 0.0 {
+            // The solution without the soft rows already satisfies them.
+            return Ok(Some((u_free, 0.0)));
+        }
+        let mut lo = 0.0;
+        let mut best: Option<SVector<f64, NV>> = None;
+        for _ in 0..self.bisections {
+            let mid = 0.5 * (lo + hi);
+            match self.solve(with(mid))? {
+                Some(u) => {
+                    hi = mid;
+                    best = Some(u);
+                }
+                None => lo = mid,
+            }
+        }
+        let u = match best {
+            Some(u) => u,
+            // `hi` is still the violation of `u_free`, which is feasible there.
+            None => self.solve(with(hi))?.ok_or(RelaxFailure::Numerical)?,
+        };
+        Ok(Some((u, hi)))
+    }
+}
