@@ -74,14 +74,13 @@ fn record(obs: &[Poly], goal: Vector2<f64>) -> Vec<Cycle> {
         side: Side::Left,
         t_in: 0.0,
     };
-    let mut target = c.foot;
     let mut cycles = Vec::new();
     let dt = 0.05;
     for _ in 0..(8 * 150) {
         cycles.push(c);
         let out = ctl.step(&input(&c, goal, obs));
         assert!(out.status != CycleStatus::InvalidInput(ldcbf_controller::InputError::State));
-        target = out.foot_target;
+        let target = out.foot_target;
         c.omega = out.turning_rate;
         let (p, v) = lip.propagate(&c.p, &c.v, &c.foot, dt);
         c.p = p;

@@ -12,6 +12,9 @@ use nalgebra::Vector2;
 pub const DUPLICATE_TOL: f64 = 1e-9;
 /// A point closer than this (m) to the boundary is on the boundary.
 pub const ON_BOUNDARY_TOL: f64 = 1e-9;
+/// Largest absolute vertex coordinate accepted (m): 1000 km, far beyond any map,
+/// small enough that squared distances stay exact to well under a millimetre.
+pub const MAX_COORDINATE: f64 = 1e6;
 /// Default vertex capacity of a polygon.
 pub const DEFAULT_MAX_VERTICES: usize = 32;
 
@@ -20,6 +23,8 @@ pub const DEFAULT_MAX_VERTICES: usize = 32;
 pub enum GeometryError {
     /// A coordinate is NaN or infinite.
     NotFinite,
+    /// A coordinate exceeds [`MAX_COORDINATE`] in absolute value.
+    OutOfRange,
     /// Fewer than three distinct vertices.
     TooFewVertices,
     /// All vertices are collinear (zero area).
@@ -35,6 +40,7 @@ impl core::fmt::Display for GeometryError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.write_str(match self {
             GeometryError::NotFinite => "a vertex coordinate is not finite",
+            GeometryError::OutOfRange => "a vertex coordinate exceeds 1e6 m in absolute value",
             GeometryError::TooFewVertices => "fewer than 3 distinct vertices",
             GeometryError::ZeroArea => "all vertices are collinear (zero area)",
             GeometryError::NotConvex => "the vertices do not form a convex polygon",
@@ -52,6 +58,18 @@ pub struct ConvexPolygon<const V: usize = DEFAULT_MAX_VERTICES> {
     len: usize,
 }
 
+fn check_points(points: &[[f64; 2]]) -> Result<(), GeometryError> {
+    for p in points {
+        if !(p[0].is_finite() && p[1].is_finite()) {
+            return Err(GeometryError::NotFinite);
+        }
+        if p[0].abs() > MAX_COORDINATE || p[1].abs() > MAX_COORDINATE {
+            return Err(GeometryError::OutOfRange);
+        }
+    }
+    Ok(())
+}
+
 fn cross(a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
     a.x * b.y - a.y * b.x
 }
@@ -61,12 +79,7 @@ impl<const V: usize> ConvexPolygon<V> {
     /// Consecutive duplicates and collinear vertices are removed first.
     pub fn new(points: &[[f64; 2]]) -> Result<Self, GeometryError> {
         const { assert!(V >= 3, "a polygon needs room for 3 vertices") };
-        if points
-            .iter()
-            .any(|p| !(p[0].is_finite() && p[1].is_finite()))
-        {
-            return Err(GeometryError::NotFinite);
-        }
+        check_points(points)?;
         // 1. Drop consecutive duplicates (cyclically).
         let mut buf = [Vector2::zeros(); V];
         let mut n = 0usize;
@@ -144,12 +157,7 @@ impl<const V: usize> ConvexPolygon<V> {
     /// `O(n V)`). Fails like [`ConvexPolygon::new`] when the hull has fewer than 3
     /// corners (one or two distinct points, or collinear points).
     pub fn hull(points: &[[f64; 2]]) -> Result<Self, GeometryError> {
-        if points
-            .iter()
-            .any(|p| !(p[0].is_finite() && p[1].is_finite()))
-        {
-            return Err(GeometryError::NotFinite);
-        }
+        check_points(points)?;
         let pt = |i: usize| Vector2::new(points[i][0], points[i][1]);
         if points.is_empty() {
             return Err(GeometryError::TooFewVertices);
@@ -295,17 +303,30 @@ pub fn closest_point_point_polygon<const V: usize>(
             location: PointLocation::OnBoundary,
         };
     }
+    // Inside an edge (0 < t < 1) the normal is the edge's outward normal, exactly;
+    // computing it as (p - c)/|p - c| would lose precision when p is within
+    // nanometres of the edge. At a vertex (outside only) the direction to p is
+    // the normal.
+    let interior = best_t > 0.0 && best_t < 1.0;
     if inside {
         ClosestPoint {
             point: best_c,
-            normal: (best_c - p) / dist,
+            normal: if interior {
+                edge_normal(best_edge)
+            } else {
+                (best_c - p) / dist
+            },
             signed_distance: -dist,
             location: PointLocation::Inside,
         }
     } else {
         ClosestPoint {
             point: best_c,
-            normal: (p - best_c) / dist,
+            normal: if interior {
+                edge_normal(best_edge)
+            } else {
+                (p - best_c) / dist
+            },
             signed_distance: dist,
             location: PointLocation::Outside,
         }
@@ -388,6 +409,10 @@ mod tests {
             *s = [libm::cos(a), libm::sin(a)];
         }
         assert_eq!(Poly::new(&star), Err(GeometryError::NotConvex));
+        assert_eq!(
+            Poly::new(&[[0.0, 0.0], [2e6, 0.0], [0.0, 1.0]]),
+            Err(GeometryError::OutOfRange)
+        );
         let many = [[0.0, 0.0]; 9];
         assert_eq!(Poly::new(&many), Err(GeometryError::TooFewVertices));
         let mut circle = [[0.0; 2]; 9];

@@ -48,7 +48,7 @@ use nalgebra::{SVector, Vector2};
 use crate::constraints::{
     Condensed, GaitBounds, HalfPlane, RowId, RowKind, push_foot_row, push_gait_rows, push_ldcbf_row,
 };
-use crate::geometry::{ConvexPolygon, closest_point_point_polygon};
+use crate::geometry::{ConvexPolygon, MAX_COORDINATE, closest_point_point_polygon};
 use crate::heading::{HeadingPlan, plan_heading, wrap_angle};
 use crate::lip::Lip;
 use crate::qp::{DenseQp, DualActiveSet, OwnSolver, QpBackend, QpSettings, QpSolution, QpStatus};
@@ -277,7 +277,13 @@ pub struct CycleInput<'a, const V: usize> {
     pub obstacles: &'a [ConvexPolygon<V>],
 }
 
-/// Which input was not finite.
+/// Largest accepted CoM speed (m/s) and turning rate (rad/s): far beyond any
+/// walking robot; larger values are treated as corrupted measurements.
+pub const MAX_RATE: f64 = 100.0;
+
+/// Which input was not finite or out of its physical range (positions within
+/// [`crate::geometry::MAX_COORDINATE`], speed and turning rate within
+/// [`MAX_RATE`], heading within `MAX_COORDINATE` rad).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum InputError {
     /// CoM position, velocity, heading or turning rate.
@@ -293,10 +299,10 @@ pub enum InputError {
 impl core::fmt::Display for InputError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         f.write_str(match self {
-            InputError::State => "CoM state, heading or turning rate is not finite",
-            InputError::StanceFoot => "stance foot position is not finite",
+            InputError::State => "CoM state, heading or turning rate is not finite or out of range",
+            InputError::StanceFoot => "stance foot position is not finite or out of range",
             InputError::TimeInStep => "time in step is not finite",
-            InputError::Goal => "goal is not finite",
+            InputError::Goal => "goal is not finite or out of range",
         })
     }
 }
@@ -683,20 +689,23 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
     ) -> Result<(), InputError> {
         let cfg = &self.config;
         let finite2 = |v: &Vector2<f64>| v.x.is_finite() && v.y.is_finite();
-        if !(finite2(&input.com_position)
-            && finite2(&input.com_velocity)
-            && input.heading.is_finite()
-            && input.turning_rate.is_finite())
+        // `!(x <= bound)` is also true for NaN.
+        let within = |v: f64, bound: f64| v.abs() <= bound;
+        let pos_ok = |v: &Vector2<f64>| within(v.x, MAX_COORDINATE) && within(v.y, MAX_COORDINATE);
+        if !(pos_ok(&input.com_position)
+            && within(input.com_velocity.norm(), MAX_RATE)
+            && within(input.heading, MAX_COORDINATE)
+            && within(input.turning_rate, MAX_RATE))
         {
             return Err(InputError::State);
         }
-        if !finite2(&input.stance_foot) {
+        if !pos_ok(&input.stance_foot) {
             return Err(InputError::StanceFoot);
         }
         if !input.time_in_step.is_finite() {
             return Err(InputError::TimeInStep);
         }
-        if !finite2(&input.goal) {
+        if !pos_ok(&input.goal) {
             return Err(InputError::Goal);
         }
         let t_step = cfg.step_duration;
@@ -1408,6 +1417,21 @@ mod tests {
             ctl.step(&inp).status,
             CycleStatus::InvalidInput(InputError::Goal)
         );
+    }
+
+    #[test]
+    fn fuzz_regression_huge_coordinates_are_invalid_input() {
+        // Found by `cargo fuzz run step`: a CoM at x = 1.2e111 m gave a plan whose
+        // reachability rows failed by 1e80 (all precision lost). Such inputs are
+        // now rejected as out of range.
+        let mut ctl = Ctl::new(Config::default()).unwrap();
+        let mut inp = input(&[]);
+        inp.com_position = Vector2::new(1.210_696_639_093_781_8e111, -1.2e-59);
+        inp.stance_foot = Vector2::new(1.2e111, 0.0);
+        inp.time_in_step = -1.2e-59;
+        let out = ctl.step(&inp);
+        assert_eq!(out.status, CycleStatus::InvalidInput(InputError::State));
+        assert!(output_is_finite(&out));
     }
 
     #[test]

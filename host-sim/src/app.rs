@@ -1,0 +1,123 @@
+//! The `run` pipeline behind `ldcbf-sim run`: load and validate the scenario,
+//! simulate, write the logs and figures into a temporary directory, and move it
+//! into place only when everything succeeded (see [`crate::report::OutputDir`]).
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+
+use crate::plot::PlotOptions;
+use crate::report::{OutputDir, Summary, summarize, write_logs};
+use crate::scenario::{LoadOptions, load};
+use crate::sim::{MpcRate, SimOptions, SimResult, Solver, run};
+
+/// Everything `ldcbf-sim run` needs.
+#[derive(Clone, Debug)]
+pub struct RunRequest {
+    /// Scenario name (`scenarios/<name>.toml`) or path.
+    pub scenario: String,
+    /// Output directory; default `out/<name>` (`out/<name>-seed<S>` for a
+    /// scenario with a generator).
+    pub out: Option<PathBuf>,
+    /// Seed (generator).
+    pub seed: Option<u64>,
+    /// `--set key=value` overrides.
+    pub sets: Vec<(String, String)>,
+    /// QP solver.
+    pub solver: Solver,
+    /// Controller rate.
+    pub mpc_rate: MpcRate,
+    /// Render the PNG figures.
+    pub plots: bool,
+    /// Render `walk.gif` (only with `plots`).
+    pub gif: bool,
+    /// Write every n-th 1 kHz sample to `trajectory.csv`.
+    pub trajectory_every: usize,
+}
+
+impl RunRequest {
+    /// A request with the defaults of the CLI: own solver, 20 Hz, all figures,
+    /// trajectory at 100 Hz.
+    pub fn new(scenario: &str) -> Self {
+        RunRequest {
+            scenario: scenario.into(),
+            out: None,
+            seed: None,
+            sets: Vec::new(),
+            solver: Solver::Own,
+            mpc_rate: MpcRate::Hz(20),
+            plots: true,
+            gif: true,
+            trajectory_every: 10,
+        }
+    }
+}
+
+/// What a finished run produced.
+#[derive(Debug)]
+pub struct RunReport {
+    /// The summary (also in `summary.json`).
+    pub summary: Summary,
+    /// The output directory.
+    pub out_dir: PathBuf,
+    /// Files written, relative to `out_dir`.
+    pub files: Vec<String>,
+    /// The full result (logs in memory).
+    pub result: SimResult,
+}
+
+/// Runs the request. Errors (bad scenario, I/O) leave no output directory.
+pub fn execute_run(req: &RunRequest) -> Result<RunReport> {
+    let scenario = load(
+        &req.scenario,
+        &LoadOptions {
+            seed: req.seed,
+            sets: req.sets.clone(),
+        },
+    )?;
+    let out = req.out.clone().unwrap_or_else(|| {
+        let name = if scenario.generator.is_some() {
+            format!("{}-seed{}", scenario.name, scenario.seed)
+        } else {
+            scenario.name.clone()
+        };
+        PathBuf::from("out").join(name)
+    });
+    let dir = OutputDir::create(&out)
+        .with_context(|| format!("cannot create output directory {}", out.display()))?;
+    let result = run(
+        &scenario,
+        SimOptions {
+            solver: req.solver,
+            mpc_rate: req.mpc_rate,
+        },
+    )?;
+    let summary = summarize(&result);
+    write_logs(&result, &summary, dir.path(), req.trajectory_every)
+        .with_context(|| format!("writing logs into {}", dir.path().display()))?;
+    let mut files: Vec<String> = [
+        "summary.json",
+        "cycles.csv",
+        "footsteps.csv",
+        "trajectory.csv",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
+    if req.plots {
+        let opts = PlotOptions {
+            gif: req.gif,
+            ..PlotOptions::default()
+        };
+        files.extend(crate::plot::render_all(&result, dir.path(), &opts)?);
+    }
+    let out_dir = dir
+        .commit()
+        .with_context(|| format!("cannot move the results into {}", out.display()))?;
+    Ok(RunReport {
+        summary,
+        out_dir,
+        files,
+        result,
+    })
+}

@@ -1,0 +1,563 @@
+//! Run outputs: the summary, the CSV logs and the output directory.
+//!
+//! Files written by [`write_logs`] (all CSV with a header line, SI units, world
+//! frame):
+//!
+//! * `cycles.csv`: one row per control cycle: `t` (s), `time_in_step` (s),
+//!   `step`, `stance`, `x0_px, x0_py, x0_vx, x0_vy, x0_theta` (the predicted state
+//!   at the end of the current step), `active_obstacles`, `truncated`, `status`
+//!   (`CycleStatus::name`), `source` (where the command came from), `iterations`,
+//!   `active_set`, `compute_ns` (wall clock around the controller call only),
+//!   `max_violation` (of this cycle's QP rows by the returned plan, m or m/s),
+//!   `cost` (m^2), `min_h0` (m), `relax_gait` (m/s), `relax_safety` (m) (the
+//!   uniform relaxations of an infeasible cycle), `foot_x, foot_y` (the swing target), `omega`
+//!   (rad/s), `landed` (1 when this target is where the foot landed).
+//! * `footsteps.csv`: `step, side, x, y, t, clearance`: the initial stance foot is
+//!   step 0; step `k` landed at the end of step `k - 1`.
+//! * `trajectory.csv`: `t, px, py, vx, vy, theta, omega, stance, clearance` of the
+//!   CoM, every `trajectory_every`-th 1 kHz plant sample (every sample with 1;
+//!   the clearance minimum in the summary always uses every sample).
+//! * `summary.json`: [`Summary`].
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+use ldcbf_controller::{Config, Side};
+use serde::Serialize;
+
+use crate::sim::SimResult;
+
+/// Percentiles of the controller's compute time, ns.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct ComputeStats {
+    /// Median (nearest rank), ns.
+    pub p50_ns: u64,
+    /// 99th percentile (nearest rank), ns.
+    pub p99_ns: u64,
+    /// Maximum, ns.
+    pub max_ns: u64,
+    /// Mean, ns.
+    pub mean_ns: f64,
+}
+
+/// `summary.json`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Summary {
+    /// Scenario name.
+    pub scenario: String,
+    /// Scenario file.
+    pub source: String,
+    /// Seed used by the scenario's generator.
+    pub seed: u64,
+    /// QP solver (`own` or `clarabel`).
+    pub solver: String,
+    /// Controller rate, e.g. `20 Hz` or `once per step`.
+    pub mpc_rate: String,
+    /// Why the run ended: `goal_reached`, `time_limit` or `stuck`.
+    pub outcome: String,
+    /// The CoM came within `success_radius` of the goal.
+    pub reached_goal: bool,
+    /// Some 1 kHz CoM sample was strictly inside an obstacle (`min_com_clearance < 0`).
+    pub collision: bool,
+    /// SPEC 4 success: `reached_goal && !collision`.
+    pub success: bool,
+    /// Footsteps landed (the initial stance foot not counted).
+    pub steps: usize,
+    /// Simulated time at the end, s.
+    pub sim_time: f64,
+    /// Distance from the final CoM to the goal, m.
+    pub final_distance: f64,
+    /// Minimum over all 1 kHz CoM samples of the signed distance to the nearest
+    /// obstacle, m (negative = collision; null without obstacles).
+    pub min_com_clearance: Option<f64>,
+    /// Time of that minimum, s.
+    pub min_com_clearance_time: Option<f64>,
+    /// Minimum over all footsteps (initial stance included) of the signed distance
+    /// to the nearest obstacle, m (negative = a foot inside an obstacle).
+    pub min_footstep_clearance: Option<f64>,
+    /// Max over every cycle of `CycleInfo::max_violation`: the largest violation of
+    /// that cycle's own QP rows (gait + LDCBF) by the plan it returned and the
+    /// simulator applied (every cycle's command is sent to the plant); in the rows'
+    /// units (m or m/s, rows are unit-normalised by the controller). Cycles that
+    /// hold (invalid input, NaN violation) are not counted.
+    pub max_violation: f64,
+    /// Same, restricted to the cycles whose swing target actually landed (the last
+    /// cycle of each step).
+    pub max_violation_landed: f64,
+    /// Largest gait relaxation of an applied plan, m/s (0 when no cycle was relaxed).
+    pub max_relax_gait: f64,
+    /// Largest safety (LDCBF) relaxation of an applied plan, m (0 when none).
+    pub max_relax_safety: f64,
+    /// Number of cycles per `CycleStatus::name`.
+    pub status_counts: BTreeMap<String, usize>,
+    /// Number of cycles per command source (`optimal`, `relaxed_gait`,
+    /// `relaxed_safety`, `previous_plan`, `capture_step`, `hold`).
+    pub source_counts: BTreeMap<String, usize>,
+    /// Control cycles run.
+    pub cycles: usize,
+    /// Controller compute time (wall clock, around the call only).
+    pub compute: ComputeStats,
+    /// Solver iterations: max over cycles.
+    pub max_iterations: u32,
+    /// Obstacles in the scenario.
+    pub obstacles: usize,
+    /// Controller configuration used (defaults + overrides).
+    pub config: BTreeMap<String, serde_json::Value>,
+    /// The overrides given by the scenario file and `--set`.
+    pub overrides: BTreeMap<String, serde_json::Value>,
+    /// The scenario's note.
+    pub note: String,
+}
+
+/// Nearest-rank percentile `p` (0..=100) of `sorted` (ascending), 0 if empty.
+pub fn percentile(sorted: &[u64], p: f64) -> u64 {
+    if sorted.is_empty() {
+        return 0;
+    }
+    let rank = ((p / 100.0) * sorted.len() as f64).ceil() as usize;
+    sorted[rank.clamp(1, sorted.len()) - 1]
+}
+
+/// Compute-time statistics of a list of durations (ns).
+pub fn compute_stats(ns: &[u64]) -> ComputeStats {
+    let mut v = ns.to_vec();
+    v.sort_unstable();
+    ComputeStats {
+        p50_ns: percentile(&v, 50.0),
+        p99_ns: percentile(&v, 99.0),
+        max_ns: v.last().copied().unwrap_or(0),
+        mean_ns: if v.is_empty() {
+            0.0
+        } else {
+            v.iter().map(|&x| x as f64).sum::<f64>() / v.len() as f64
+        },
+    }
+}
+
+/// `CommandSource` as a snake_case name (`Optimal` -> `optimal`,
+/// `RelaxedGait` -> `relaxed_gait`), derived from its `Debug` form so that new
+/// sources are logged without a change here.
+pub fn source_name(s: ldcbf_controller::CommandSource) -> String {
+    let mut out = String::new();
+    for (i, ch) in format!("{s:?}").chars().enumerate() {
+        if ch.is_ascii_uppercase() {
+            if i > 0 {
+                out.push('_');
+            }
+            out.push(ch.to_ascii_lowercase());
+        } else {
+            out.push(ch);
+        }
+    }
+    out
+}
+
+fn side_name(s: Side) -> &'static str {
+    match s {
+        Side::Left => "left",
+        Side::Right => "right",
+    }
+}
+
+/// The configuration as a JSON map (field -> value).
+pub fn config_map(c: &Config) -> BTreeMap<String, serde_json::Value> {
+    let mut m = BTreeMap::new();
+    let mut put = |k: &str, v: serde_json::Value| {
+        m.insert(k.to_string(), v);
+    };
+    put("gravity", c.gravity.into());
+    put("com_height", c.com_height.into());
+    put("step_duration", c.step_duration.into());
+    put("vx_min", c.vx_min.into());
+    put("vx_max", c.vx_max.into());
+    put("vy_min", c.vy_min.into());
+    put("vy_max", c.vy_max.into());
+    put("l_max", c.l_max.into());
+    put("alpha", c.alpha.into());
+    put("omega_max", c.omega_max.into());
+    put("gamma", c.gamma.into());
+    put("delta", c.delta.into());
+    put("r_active", c.r_active.into());
+    put(
+        "foot_clearance",
+        c.foot_clearance.map_or(serde_json::Value::Null, Into::into),
+    );
+    put("heading_freeze_radius", c.heading_freeze_radius.into());
+    put("max_iter", c.max_iter.into());
+    put("max_iter_cycle", c.max_iter_cycle.into());
+    put("relax_bisections", c.relax_bisections.into());
+    put("warm_start", c.warm_start.into());
+    put("tol_primal", c.tol_primal.into());
+    m
+}
+
+/// Builds the summary of a run.
+pub fn summarize(r: &SimResult) -> Summary {
+    let sc = &r.scenario;
+    let (min_c, min_t) = r
+        .samples
+        .iter()
+        .map(|s| (s.clearance, s.time))
+        .fold((f64::INFINITY, 0.0), |a, b| if b.0 < a.0 { b } else { a });
+    let has_obs = !sc.obstacles.is_empty();
+    let min_foot = r
+        .footsteps
+        .iter()
+        .map(|f| f.clearance)
+        .fold(f64::INFINITY, f64::min);
+    let mut status_counts = BTreeMap::new();
+    let mut source_counts = BTreeMap::new();
+    let mut max_violation = 0.0f64;
+    let mut max_violation_landed = 0.0f64;
+    let (mut max_relax_gait, mut max_relax_safety) = (0.0f64, 0.0f64);
+    for c in &r.cycles {
+        max_relax_gait = max_relax_gait.max(c.output.info.relax_gait);
+        max_relax_safety = max_relax_safety.max(c.output.info.relax_safety);
+        *status_counts
+            .entry(c.output.status.name().to_string())
+            .or_insert(0) += 1;
+        *source_counts
+            .entry(source_name(c.output.info.source))
+            .or_insert(0) += 1;
+        let v = c.output.info.max_violation;
+        if v.is_finite() {
+            max_violation = max_violation.max(v);
+            if c.landed {
+                max_violation_landed = max_violation_landed.max(v);
+            }
+        }
+    }
+    let ns: Vec<u64> = r.cycles.iter().map(|c| c.compute_ns).collect();
+    let reached = r.outcome == crate::sim::Outcome::GoalReached;
+    let collision = has_obs && min_c < 0.0;
+    Summary {
+        scenario: sc.name.clone(),
+        source: sc.source.clone(),
+        seed: sc.seed,
+        solver: match r.options.solver {
+            crate::sim::Solver::Own => "own".into(),
+            crate::sim::Solver::Clarabel => "clarabel".into(),
+        },
+        mpc_rate: r.options.mpc_rate.to_string(),
+        outcome: r.outcome.name().into(),
+        reached_goal: reached,
+        collision,
+        success: reached && !collision,
+        steps: r.steps(),
+        sim_time: r.sim_time(),
+        final_distance: r.final_distance(),
+        min_com_clearance: has_obs.then_some(min_c),
+        min_com_clearance_time: has_obs.then_some(min_t),
+        min_footstep_clearance: has_obs.then_some(min_foot),
+        max_violation,
+        max_violation_landed,
+        max_relax_gait,
+        max_relax_safety,
+        status_counts,
+        source_counts,
+        cycles: r.cycles.len(),
+        compute: compute_stats(&ns),
+        max_iterations: r
+            .cycles
+            .iter()
+            .map(|c| c.output.info.iterations)
+            .max()
+            .unwrap_or(0),
+        obstacles: sc.obstacles.len(),
+        config: config_map(&sc.config),
+        overrides: crate::scenario::overrides_map(&sc.controller),
+        note: sc.note.clone(),
+    }
+}
+
+/// A short human summary (a few lines).
+pub fn human_summary(s: &Summary) -> String {
+    let mut o = String::new();
+    let _ = writeln!(
+        o,
+        "scenario {} ({}), solver {}, MPC {}",
+        s.scenario, s.source, s.solver, s.mpc_rate
+    );
+    let verdict = match (s.outcome.as_str(), s.collision) {
+        ("goal_reached", false) => "goal reached".to_string(),
+        ("goal_reached", true) => "goal reached WITH COLLISION".to_string(),
+        (o, c) => format!(
+            "goal NOT reached ({o}){}",
+            if c { ", WITH COLLISION" } else { "" }
+        ),
+    };
+    let _ = writeln!(
+        o,
+        "  {verdict}: t = {:.2} s, {} steps, final distance {:.3} m",
+        s.sim_time, s.steps, s.final_distance
+    );
+    let f = |v: Option<f64>| v.map_or("n/a".to_string(), |x| format!("{x:.3} m"));
+    let _ = writeln!(
+        o,
+        "  min CoM clearance {}, min footstep clearance {}, max plan violation {:.1e}",
+        f(s.min_com_clearance),
+        f(s.min_footstep_clearance),
+        s.max_violation
+    );
+    let statuses: Vec<String> = s
+        .status_counts
+        .iter()
+        .map(|(k, v)| format!("{k} {v}"))
+        .collect();
+    let _ = writeln!(
+        o,
+        "  {} cycles ({}), max {} iterations; compute p50 {:.1} us, p99 {:.1} us, max {:.1} us",
+        s.cycles,
+        statuses.join(", "),
+        s.max_iterations,
+        s.compute.p50_ns as f64 / 1e3,
+        s.compute.p99_ns as f64 / 1e3,
+        s.compute.max_ns as f64 / 1e3
+    );
+    if s.source_counts.len() > 1 || !s.source_counts.contains_key("optimal") {
+        let src: Vec<String> = s
+            .source_counts
+            .iter()
+            .map(|(k, v)| format!("{k} {v}"))
+            .collect();
+        let _ = writeln!(
+            o,
+            "  commands: {}; max relaxation gait {:.2e} m/s, safety {:.2e} m",
+            src.join(", "),
+            s.max_relax_gait,
+            s.max_relax_safety
+        );
+    }
+    o
+}
+
+fn write_file(path: &Path, text: &str) -> std::io::Result<()> {
+    let mut f = std::io::BufWriter::new(std::fs::File::create(path)?);
+    f.write_all(text.as_bytes())?;
+    f.flush()
+}
+
+/// Writes `cycles.csv`, `footsteps.csv`, `trajectory.csv` (every
+/// `trajectory_every`-th sample) and `summary.json` into `dir`.
+pub fn write_logs(
+    r: &SimResult,
+    summary: &Summary,
+    dir: &Path,
+    trajectory_every: usize,
+) -> std::io::Result<()> {
+    let mut s = String::from(
+        "t,time_in_step,step,stance,x0_px,x0_py,x0_vx,x0_vy,x0_theta,active_obstacles,truncated,\
+status,source,iterations,active_set,compute_ns,max_violation,cost,min_h0,relax_gait,relax_safety,foot_x,foot_y,omega,landed\n",
+    );
+    for c in &r.cycles {
+        let o = &c.output;
+        let x0 = &o.plan.x0;
+        let _ = writeln!(
+            s,
+            "{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:e},{},{},{},{},{},{},{},{}",
+            c.time,
+            c.time_in_step,
+            c.step,
+            side_name(c.stance_side),
+            x0.position.x,
+            x0.position.y,
+            x0.velocity.x,
+            x0.velocity.y,
+            x0.heading,
+            o.info.active_obstacles,
+            u8::from(o.info.obstacles_truncated),
+            o.status.name(),
+            source_name(o.info.source),
+            o.info.iterations,
+            o.info.active_set_size,
+            c.compute_ns,
+            o.info.max_violation,
+            o.info.cost,
+            o.info.min_h0,
+            o.info.relax_gait,
+            o.info.relax_safety,
+            o.foot_target.x,
+            o.foot_target.y,
+            o.turning_rate,
+            u8::from(c.landed),
+        );
+    }
+    write_file(&dir.join("cycles.csv"), &s)?;
+
+    let mut s = String::from("step,side,x,y,t,clearance\n");
+    for f in &r.footsteps {
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{:.3},{}",
+            f.index,
+            side_name(f.side),
+            f.position.x,
+            f.position.y,
+            f.time,
+            f.clearance
+        );
+    }
+    write_file(&dir.join("footsteps.csv"), &s)?;
+
+    let mut s = String::from("t,px,py,vx,vy,theta,omega,stance,clearance\n");
+    let every = trajectory_every.max(1);
+    for (i, p) in r.samples.iter().enumerate() {
+        if i % every != 0 && i + 1 != r.samples.len() {
+            continue;
+        }
+        let _ = writeln!(
+            s,
+            "{:.3},{},{},{},{},{},{},{},{}",
+            p.time,
+            p.position.x,
+            p.position.y,
+            p.velocity.x,
+            p.velocity.y,
+            p.heading,
+            p.turning_rate,
+            side_name(p.stance_side),
+            p.clearance
+        );
+    }
+    write_file(&dir.join("trajectory.csv"), &s)?;
+
+    let json = serde_json::to_string_pretty(summary).map_err(std::io::Error::other)?;
+    write_file(&dir.join("summary.json"), &(json + "\n"))
+}
+
+/// An output directory written atomically: files go into a hidden temporary
+/// sibling (`.<name>.tmp-<pid>`), which [`OutputDir::commit`] renames onto the
+/// final path. An existing final path is replaced only if it is empty or holds a
+/// previous run (a `summary.json`); any other existing path is refused by
+/// [`OutputDir::create`], before anything is written. Dropped without `commit`,
+/// the temporary directory is removed, so a failed run leaves nothing behind.
+#[derive(Debug)]
+pub struct OutputDir {
+    final_path: PathBuf,
+    tmp: PathBuf,
+    committed: bool,
+}
+
+impl OutputDir {
+    /// Creates the temporary directory for `final_path` (and its parents).
+    pub fn create(final_path: &Path) -> std::io::Result<Self> {
+        let name = final_path
+            .file_name()
+            .and_then(|s| s.to_str())
+            .filter(|s| !s.is_empty() && *s != "." && *s != "..")
+            .ok_or_else(|| {
+                std::io::Error::other(format!(
+                    "output directory {} has no usable final component",
+                    final_path.display()
+                ))
+            })?;
+        let parent = final_path
+            .parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
+        if final_path.exists() && !replaceable(final_path) {
+            return Err(std::io::Error::other(format!(
+                "refusing to replace {}: it exists and is not a previous ldcbf-sim output \
+                 (no summary.json); choose another --out",
+                final_path.display()
+            )));
+        }
+        std::fs::create_dir_all(parent)?;
+        let tmp = parent.join(format!(".{name}.tmp-{}", std::process::id()));
+        if tmp.exists() {
+            std::fs::remove_dir_all(&tmp)?;
+        }
+        std::fs::create_dir(&tmp)?;
+        Ok(OutputDir {
+            final_path: final_path.to_path_buf(),
+            tmp,
+            committed: false,
+        })
+    }
+
+    /// Where to write the files now.
+    pub fn path(&self) -> &Path {
+        &self.tmp
+    }
+
+    /// Moves the finished directory into place and returns its final path.
+    pub fn commit(mut self) -> std::io::Result<PathBuf> {
+        let mut old = None;
+        if self.final_path.exists() {
+            if !replaceable(&self.final_path) {
+                return Err(std::io::Error::other(format!(
+                    "refusing to replace {}: not a previous ldcbf-sim output",
+                    self.final_path.display()
+                )));
+            }
+            let trash = self.tmp.with_extension("old");
+            std::fs::rename(&self.final_path, &trash)?;
+            old = Some(trash);
+        }
+        std::fs::rename(&self.tmp, &self.final_path)?;
+        self.committed = true;
+        if let Some(trash) = old {
+            std::fs::remove_dir_all(trash)?;
+        }
+        Ok(self.final_path.clone())
+    }
+}
+
+/// An existing output path may be replaced: an empty directory or a previous run.
+fn replaceable(p: &Path) -> bool {
+    p.is_dir()
+        && (p.join("summary.json").is_file()
+            || std::fs::read_dir(p).is_ok_and(|mut d| d.next().is_none()))
+}
+
+impl Drop for OutputDir {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_dir_all(&self.tmp);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn nearest_rank_percentiles() {
+        let v: Vec<u64> = (1..=100).collect();
+        assert_eq!(percentile(&v, 50.0), 50);
+        assert_eq!(percentile(&v, 99.0), 99);
+        assert_eq!(percentile(&v, 100.0), 100);
+        assert_eq!(percentile(&[7], 99.0), 7);
+        assert_eq!(percentile(&[], 50.0), 0);
+        let s = compute_stats(&[5, 1, 3]);
+        assert_eq!((s.p50_ns, s.max_ns), (3, 5));
+    }
+
+    #[test]
+    fn output_dir_is_removed_unless_committed() {
+        let base = std::env::temp_dir().join(format!("ldcbf-outdir-{}", std::process::id()));
+        let target = base.join("run");
+        {
+            let d = OutputDir::create(&target).unwrap();
+            std::fs::write(d.path().join("x"), "1").unwrap();
+        }
+        assert!(!target.exists());
+        assert_eq!(std::fs::read_dir(&base).unwrap().count(), 0);
+        let d = OutputDir::create(&target).unwrap();
+        std::fs::write(d.path().join("x"), "1").unwrap();
+        let p = d.commit().unwrap();
+        assert!(p.join("x").is_file());
+        // A directory that is not a previous run is never replaced.
+        assert!(OutputDir::create(&target).is_err());
+        std::fs::write(target.join("summary.json"), "{}").unwrap();
+        let d = OutputDir::create(&target).unwrap();
+        std::fs::write(d.path().join("y"), "2").unwrap();
+        let p = d.commit().unwrap();
+        assert!(p.join("y").is_file() && !p.join("x").exists());
+        assert_eq!(std::fs::read_dir(&base).unwrap().count(), 1);
+        std::fs::remove_dir_all(&base).unwrap();
+    }
+}

@@ -1,0 +1,409 @@
+//! The closed loop: the 1 kHz [`Plant`] and the controller, called as an onboard
+//! loop would call it.
+//!
+//! Each tick, in this order:
+//!
+//! 1. **Step end.** When the current step has lasted `T`, the swing foot lands at
+//!    the `foot_target` of the most recent controller cycle, the stance side
+//!    flips, and the `turning_rate` of that cycle takes effect for the new step
+//!    (the controller plans `omega_bar` for the step that starts at `x_0`,
+//!    [`ldcbf_controller::CycleOutput::turning_rate`]).
+//! 2. **Control.** At 20 Hz (every 50 ticks; `MpcRate::Hz`) or once at the start of
+//!    every step (`MpcRate::PerStep`), a [`CycleInput`] is built from the plant's
+//!    true state (CoM position, velocity, heading, the turning rate in force, stance
+//!    foot and side, time in step), the goal and the obstacle list, and
+//!    `Controller::step_with` is called. Its wall-clock time is measured with
+//!    [`Instant`] around that call only.
+//! 3. **Record** the 1 kHz sample (and its clearance to every obstacle), then check
+//!    the end conditions: goal reached (`|p - goal| <= success_radius`), time
+//!    limit, or stuck (no 5 cm improvement of the best distance to the goal for
+//!    `stuck_window` seconds).
+//! 4. **Integrate** one tick.
+//!
+//! The simulator never reaches inside the controller: it uses the returned
+//! [`ldcbf_controller::CycleOutput`] to drive the plant and reads
+//! `Controller::last_assembly` only to log the cycle's LDCBF half-planes for the
+//! figures.
+
+use std::time::Instant;
+
+use ldcbf_controller::nalgebra::Vector2;
+use ldcbf_controller::{
+    CycleInput, CycleOutput, HalfPlane, OwnSolver, PaperController, QpBackend, Side,
+    closest_point_point_polygon,
+};
+use ldcbf_reference::ClarabelBackend;
+
+use crate::plant::{Plant, PlantParams};
+use crate::scenario::{Polygon, Scenario};
+
+/// Horizon of [`PaperController`].
+pub const HORIZON: usize = 3;
+/// QP variables of [`PaperController`].
+pub const NV: usize = 2 * HORIZON;
+/// QP row capacity of [`PaperController`].
+pub const NC: usize = ldcbf_controller::constraint_capacity(HORIZON, 8, false);
+
+/// Plant tick, s (1 kHz).
+pub const PLANT_DT: f64 = 1e-3;
+
+/// Which QP solver runs inside the controller.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Solver {
+    /// The controller's own dual active-set solver.
+    Own,
+    /// Clarabel, through `ldcbf_reference::ClarabelBackend` (reference in the loop).
+    Clarabel,
+}
+
+/// How often the controller runs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MpcRate {
+    /// At a fixed rate in Hz (20 Hz in the paper): one call every
+    /// `round(1000 / hz)` plant ticks, starting at t = 0.
+    Hz(u32),
+    /// Once per step, at its start (`time_in_step = 0`), as the report did.
+    PerStep,
+}
+
+impl core::str::FromStr for MpcRate {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        if s == "step" {
+            return Ok(MpcRate::PerStep);
+        }
+        let hz = s.trim_end_matches("hz").trim_end_matches("Hz");
+        match hz.parse::<u32>() {
+            Ok(h) if (1..=1000).contains(&h) => Ok(MpcRate::Hz(h)),
+            _ => Err(format!(
+                "expected `step` or a rate in Hz in 1..=1000 (e.g. 20), got {s:?}"
+            )),
+        }
+    }
+}
+
+impl core::fmt::Display for MpcRate {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            MpcRate::Hz(h) => write!(f, "{h} Hz"),
+            MpcRate::PerStep => f.write_str("once per step"),
+        }
+    }
+}
+
+/// Simulation options (not part of the scenario).
+#[derive(Clone, Copy, Debug)]
+pub struct SimOptions {
+    /// QP solver.
+    pub solver: Solver,
+    /// Controller rate.
+    pub mpc_rate: MpcRate,
+}
+
+impl Default for SimOptions {
+    fn default() -> Self {
+        SimOptions {
+            solver: Solver::Own,
+            mpc_rate: MpcRate::Hz(20),
+        }
+    }
+}
+
+/// Why the run ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    /// The CoM came within `success_radius` of the goal.
+    GoalReached,
+    /// The simulated-time limit was hit.
+    TimeLimit,
+    /// No progress towards the goal for `stuck_window` seconds.
+    Stuck,
+}
+
+impl Outcome {
+    /// Short name for logs.
+    pub fn name(self) -> &'static str {
+        match self {
+            Outcome::GoalReached => "goal_reached",
+            Outcome::TimeLimit => "time_limit",
+            Outcome::Stuck => "stuck",
+        }
+    }
+}
+
+/// One LDCBF half-plane used by a cycle (for the figures).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ActiveHalfPlane {
+    /// Index of the obstacle in the scenario's list.
+    pub obstacle: usize,
+    /// The half-plane: `c` (m) and unit `eta`, world frame.
+    pub half_plane: HalfPlane,
+}
+
+/// One control cycle, as logged.
+#[derive(Clone, Debug)]
+pub struct CycleRecord {
+    /// Cycle index from 0.
+    pub index: usize,
+    /// Simulated time of the call, s.
+    pub time: f64,
+    /// Time already spent in the current step, s.
+    pub time_in_step: f64,
+    /// Index of the step in progress (0 = the first step).
+    pub step: u32,
+    /// Stance side during the call.
+    pub stance_side: Side,
+    /// Goal given to the controller, m.
+    pub goal: Vector2<f64>,
+    /// What the controller returned.
+    pub output: CycleOutput<HORIZON>,
+    /// Wall-clock time of the controller call, ns.
+    pub compute_ns: u64,
+    /// This cycle's `foot_target` is where the swing foot actually landed (it was
+    /// the last cycle before a step end).
+    pub landed: bool,
+    /// The LDCBF half-planes of the cycle (active obstacles, nearest first).
+    pub half_planes: Vec<ActiveHalfPlane>,
+}
+
+/// One footstep (a stance foot).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Footstep {
+    /// Step index: 0 is the initial stance foot, `k` the foot landed at the end of
+    /// step `k - 1`.
+    pub index: u32,
+    /// Position, m (world).
+    pub position: Vector2<f64>,
+    /// Which foot.
+    pub side: Side,
+    /// Time it became the stance foot, s.
+    pub time: f64,
+    /// Signed distance to the nearest obstacle, m (negative = inside).
+    pub clearance: f64,
+}
+
+/// One 1 kHz plant sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Sample {
+    /// Time, s.
+    pub time: f64,
+    /// CoM position, m (world).
+    pub position: Vector2<f64>,
+    /// CoM velocity, m/s (world).
+    pub velocity: Vector2<f64>,
+    /// Heading, rad (accumulated).
+    pub heading: f64,
+    /// Turning rate in force, rad/s.
+    pub turning_rate: f64,
+    /// Stance side.
+    pub stance_side: Side,
+    /// Signed distance from the CoM to the nearest obstacle, m (negative =
+    /// inside; `+inf` without obstacles).
+    pub clearance: f64,
+}
+
+/// Everything a run produced.
+#[derive(Clone, Debug)]
+pub struct SimResult {
+    /// The scenario that ran.
+    pub scenario: Scenario,
+    /// The options it ran with.
+    pub options: SimOptions,
+    /// Why it ended.
+    pub outcome: Outcome,
+    /// Control cycles in order.
+    pub cycles: Vec<CycleRecord>,
+    /// Footsteps in order (the initial stance foot first).
+    pub footsteps: Vec<Footstep>,
+    /// CoM samples at 1 kHz.
+    pub samples: Vec<Sample>,
+}
+
+impl SimResult {
+    /// Simulated time at the end, s.
+    pub fn sim_time(&self) -> f64 {
+        self.samples.last().map_or(0.0, |s| s.time)
+    }
+
+    /// Distance from the last CoM sample to the goal, m.
+    pub fn final_distance(&self) -> f64 {
+        self.samples
+            .last()
+            .map_or(f64::INFINITY, |s| (s.position - self.scenario.goal).norm())
+    }
+
+    /// Footsteps landed during the run (the initial stance foot not counted).
+    pub fn steps(&self) -> usize {
+        self.footsteps.len().saturating_sub(1)
+    }
+}
+
+/// Why a run could not start.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SimError(pub String);
+
+impl core::fmt::Display for SimError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for SimError {}
+
+/// Signed distance from `p` to the nearest polygon, m (`+inf` if none).
+pub fn clearance(p: &Vector2<f64>, obstacles: &[Polygon]) -> f64 {
+    obstacles
+        .iter()
+        .map(|o| closest_point_point_polygon(p, o).signed_distance)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Runs the scenario to its end (see the module docs).
+pub fn run(scenario: &Scenario, options: SimOptions) -> Result<SimResult, SimError> {
+    match options.solver {
+        Solver::Own => run_with(scenario, options, &mut OwnSolver),
+        Solver::Clarabel => run_with(scenario, options, &mut ClarabelBackend::default()),
+    }
+}
+
+fn run_with<B: QpBackend<NV, NC>>(
+    scenario: &Scenario,
+    options: SimOptions,
+    backend: &mut B,
+) -> Result<SimResult, SimError> {
+    let cfg = scenario.config;
+    let mut controller =
+        PaperController::new(cfg).map_err(|e| SimError(format!("controller: {e}")))?;
+    let mut plant = Plant::new(
+        PlantParams {
+            gravity: cfg.gravity,
+            com_height: cfg.com_height,
+            step_duration: cfg.step_duration,
+            dt: PLANT_DT,
+        },
+        scenario.start,
+        scenario.start_heading,
+        scenario.stance,
+    )
+    .map_err(|e| SimError(format!("plant: {e}")))?;
+    let period = match options.mpc_rate {
+        MpcRate::Hz(h) => Some(((1.0 / f64::from(h)) / PLANT_DT).round().max(1.0) as u64),
+        MpcRate::PerStep => None,
+    };
+    let obstacles = &scenario.obstacles;
+    let max_ticks = (scenario.time_limit / PLANT_DT).round() as u64;
+    let stuck_ticks = (scenario.stuck_window / PLANT_DT).round() as u64;
+
+    let mut cycles: Vec<CycleRecord> = Vec::new();
+    let mut footsteps = vec![Footstep {
+        index: 0,
+        position: plant.stance_foot,
+        side: plant.stance_side,
+        time: 0.0,
+        clearance: clearance(&plant.stance_foot, obstacles),
+    }];
+    let mut samples = Vec::with_capacity(max_ticks.min(1 << 20) as usize + 1);
+    let mut best_distance = f64::INFINITY;
+    let mut best_tick = 0u64;
+
+    let outcome = loop {
+        // 1. Step end: land the swing foot at the latest target.
+        if plant.step_over() {
+            let last = cycles
+                .last_mut()
+                .expect("a cycle runs at t = 0, before the first step ends");
+            last.landed = true;
+            let (foot, omega) = (last.output.foot_target, last.output.turning_rate);
+            plant.land(foot, omega);
+            footsteps.push(Footstep {
+                index: plant.steps,
+                position: foot,
+                side: plant.stance_side,
+                time: plant.time(),
+                clearance: clearance(&foot, obstacles),
+            });
+        }
+        // 2. Control.
+        let due = match period {
+            Some(p) => plant.tick % p == 0,
+            None => plant.tick_in_step == 0,
+        };
+        if due {
+            let input = CycleInput {
+                com_position: plant.position,
+                com_velocity: plant.velocity,
+                heading: plant.heading,
+                turning_rate: plant.turning_rate,
+                stance_foot: plant.stance_foot,
+                stance_side: plant.stance_side,
+                time_in_step: plant.time_in_step(),
+                goal: scenario.goal,
+                obstacles,
+            };
+            let t0 = Instant::now();
+            let output = controller.step_with(&input, backend);
+            let compute_ns = u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX);
+            let half_planes = if output.status.name() == "invalid_input" {
+                Vec::new()
+            } else {
+                let asm = controller.last_assembly();
+                asm.obstacles[..asm.n_obstacles]
+                    .iter()
+                    .map(|o| ActiveHalfPlane {
+                        obstacle: usize::from(o.index),
+                        half_plane: o.half_plane,
+                    })
+                    .collect()
+            };
+            cycles.push(CycleRecord {
+                index: cycles.len(),
+                time: plant.time(),
+                time_in_step: plant.time_in_step(),
+                step: plant.steps,
+                stance_side: plant.stance_side,
+                goal: scenario.goal,
+                output,
+                compute_ns,
+                landed: false,
+                half_planes,
+            });
+        }
+        // 3. Record and check the end conditions.
+        let sample = Sample {
+            time: plant.time(),
+            position: plant.position,
+            velocity: plant.velocity,
+            heading: plant.heading,
+            turning_rate: plant.turning_rate,
+            stance_side: plant.stance_side,
+            clearance: clearance(&plant.position, obstacles),
+        };
+        samples.push(sample);
+        let dist = (plant.position - scenario.goal).norm();
+        if dist <= scenario.success_radius {
+            break Outcome::GoalReached;
+        }
+        if dist < best_distance - 0.05 {
+            best_distance = dist;
+            best_tick = plant.tick;
+        }
+        if stuck_ticks > 0 && plant.tick - best_tick >= stuck_ticks {
+            break Outcome::Stuck;
+        }
+        if plant.tick >= max_ticks {
+            break Outcome::TimeLimit;
+        }
+        // 4. Integrate.
+        plant.tick();
+    };
+    Ok(SimResult {
+        scenario: scenario.clone(),
+        options,
+        outcome,
+        cycles,
+        footsteps,
+        samples,
+    })
+}

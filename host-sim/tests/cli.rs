@@ -1,0 +1,101 @@
+//! The `ldcbf-sim` binary: exit codes, messages, files.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn sim(args: &[&str], cwd: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_ldcbf-sim"))
+        .args(args)
+        .current_dir(cwd)
+        .output()
+        .expect("binary runs")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+#[test]
+fn list_shows_the_shipped_scenarios() {
+    let tmp = tempfile::tempdir().unwrap();
+    let o = sim(&["list"], tmp.path());
+    assert!(o.status.success());
+    let out = text(&o.stdout);
+    for name in ["simple", "circles", "maze", "paper", "random"] {
+        assert!(out.contains(name), "{out}");
+    }
+}
+
+/// The README's main command, `ldcbf-sim run maze`, with no other argument:
+/// finds the shipped scenario (from any directory), writes `out/maze/` with the
+/// logs and every figure, and says where they are.
+#[test]
+fn run_maze_main_command_writes_everything() {
+    let tmp = tempfile::tempdir().unwrap();
+    let o = sim(&["run", "maze"], tmp.path());
+    let (out, err) = (text(&o.stdout), text(&o.stderr));
+    assert!(o.status.success(), "{out}\n{err}");
+    assert!(out.contains("out/maze"), "{out}");
+    let dir = tmp.path().join("out/maze");
+    for f in [
+        "summary.json",
+        "cycles.csv",
+        "footsteps.csv",
+        "trajectory.csv",
+        "map.png",
+        "states.png",
+        "frames.png",
+        "walk.gif",
+    ] {
+        let p = dir.join(f);
+        assert!(p.is_file(), "{f} missing");
+        assert!(std::fs::metadata(&p).unwrap().len() > 100, "{f} empty");
+    }
+    let png = std::fs::read(dir.join("map.png")).unwrap();
+    assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
+    let gif = std::fs::read(dir.join("walk.gif")).unwrap();
+    assert_eq!(&gif[..6], b"GIF89a");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["scenario"], "maze");
+    assert_eq!(summary["collision"], false);
+    assert!(summary["compute"]["p99_ns"].as_u64().unwrap() > 0);
+    // Nothing else (no temporary directory) next to it.
+    let entries: Vec<_> = std::fs::read_dir(tmp.path().join("out"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(entries, vec![std::ffi::OsString::from("maze")]);
+}
+
+#[test]
+fn malformed_scenario_fails_cleanly() {
+    let tmp = tempfile::tempdir().unwrap();
+    std::fs::write(
+        tmp.path().join("bad.toml"),
+        "name = \"bad\"\nstart = { x = 0.0, y = 0.0 }\ngoal = [1.0, 1.0]\n\n[[obstacles]]\n\
+         vertices = [[0.0, 0.0], [2.0, 0.0], [1.0, 0.5], [2.0, 2.0], [0.0, 2.0]]\n",
+    )
+    .unwrap();
+    let o = sim(&["run", "bad.toml", "--out", "res"], tmp.path());
+    assert!(!o.status.success());
+    let err = text(&o.stderr);
+    assert_eq!(err.lines().count(), 1, "one error line: {err}");
+    assert!(
+        err.starts_with("error: bad.toml:6: field `obstacles[0].vertices`"),
+        "{err}"
+    );
+    assert!(!tmp.path().join("res").exists());
+    assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 1);
+}
+
+#[test]
+fn bad_arguments_fail() {
+    let tmp = tempfile::tempdir().unwrap();
+    let o = sim(&["run", "simple", "--set", "nonsense=1"], tmp.path());
+    assert!(!o.status.success());
+    assert!(text(&o.stderr).contains("nonsense"));
+    let o = sim(&["run", "simple", "--mpc-rate", "fast"], tmp.path());
+    assert!(!o.status.success());
+    assert!(!tmp.path().join("out").exists());
+}
