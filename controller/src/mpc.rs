@@ -29,10 +29,12 @@
 //!   [`CommandSource::RelaxedSafety`]; the amounts are in [`CycleInfo`]). Leg
 //!   reachability always holds for these commands.
 //! * If the relaxation cannot finish (budget, numerical failure), and for
-//!   [`CycleStatus::BudgetExhausted`] and [`CycleStatus::NumericalFailure`]: the
-//!   previous cycle's plan (shifted by one
-//!   step if a step ended in between) is used when it satisfies every row of this
-//!   cycle's QP ([`CommandSource::PreviousPlan`]); otherwise a *capture step*: the
+//!   [`CycleStatus::BudgetExhausted`] and [`CycleStatus::NumericalFailure`]: a
+//!   fallback chosen from two candidates, the previous cycle's plan (shifted by
+//!   one step if a step ended in between, [`CommandSource::PreviousPlan`]) and
+//!   the *capture steps* ([`CommandSource::CaptureStep`]): the first that
+//!   satisfies every row of this cycle's QP, else the one that keeps leg
+//!   reachability with the smaller safety-row violation. The capture step: the
 //!   swing foot goes to the instantaneous capture point `p_0 + v_0 / beta` clamped
 //!   into the reachability box around `p_0`, and the turning rate is 0
 //!   ([`CommandSource::CaptureStep`]). A capture step brings a LIP to rest over the
@@ -963,16 +965,9 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                     };
                     (r.u, status)
                 } else {
-                    match self.previous_plan(memory, shift, work) {
-                        Some(u) => {
-                            info.source = CommandSource::PreviousPlan;
-                            (u, status)
-                        }
-                        None => {
-                            info.source = CommandSource::CaptureStep;
-                            (self.capture_step(pred), status)
-                        }
-                    }
+                    let (u, source) = self.fallback(memory, shift, work);
+                    info.source = source;
+                    (u, status)
                 }
             }
         };
@@ -1009,12 +1004,44 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
 
     /// The previous plan shifted by `shift` steps (the last foot extrapolated by the
     /// last stride), if it satisfies every row of this cycle's QP.
-    fn previous_plan<const NOBS: usize>(
+    /// The fallback command (see the module docs): of the previous plan (shifted)
+    /// and the capture steps, the first that satisfies every row of this cycle's
+    /// QP; otherwise the one that keeps leg reachability with the smaller largest
+    /// safety-row violation (the previous plan on ties). So the fallback never
+    /// violates an LDCBF row that the other candidate satisfies.
+    fn fallback<const NOBS: usize>(
         &self,
         memory: &Memory<NV>,
         shift: usize,
         work: &Assembly<N, NV, NC, NOBS>,
-    ) -> Option<SVector<f64, NV>> {
+    ) -> (SVector<f64, NV>, CommandSource) {
+        let tol = 10.0 * self.config.tol_primal;
+        let capture = self.capture_step(&work.prediction);
+        let cap_v = relax::class_violation(&work.qp, &work.rows, &capture);
+        let Some(prev) = self.previous_plan(memory, shift) else {
+            return (capture, CommandSource::CaptureStep);
+        };
+        let prev_v = relax::class_violation(&work.qp, &work.rows, &prev);
+        let all = |v: &relax::ClassViolation| v.reach.max(v.safety).max(v.gait) <= tol;
+        let use_prev = if all(&prev_v) {
+            true
+        } else if all(&cap_v) {
+            false
+        } else if (prev_v.reach <= tol) != (cap_v.reach <= tol) {
+            prev_v.reach <= tol
+        } else {
+            prev_v.safety <= cap_v.safety
+        };
+        if use_prev {
+            (prev, CommandSource::PreviousPlan)
+        } else {
+            (capture, CommandSource::CaptureStep)
+        }
+    }
+
+    /// The previous plan shifted by `shift` steps (the last foot extrapolated by
+    /// the last stride); `None` without a finite previous plan.
+    fn previous_plan(&self, memory: &Memory<NV>, shift: usize) -> Option<SVector<f64, NV>> {
         if !memory.has_plan {
             return None;
         }
@@ -1036,8 +1063,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             u[2 * k] = x;
             u[2 * k + 1] = y;
         }
-        let viol = work.qp.max_violation(&u);
-        (viol <= 10.0 * self.config.tol_primal && u.iter().all(|v| v.is_finite())).then_some(u)
+        u.iter().all(|v| v.is_finite()).then_some(u)
     }
 
     /// Capture steps: `f_k = p_k + clamp_box(R(theta_k)' v_k / beta, l_max)` for
@@ -1290,18 +1316,12 @@ mod tests {
     /// of `out`, on the QP of the last step.
     fn class_violation(ctl: &Ctl, out: &CycleOutput<3>, class: relax::RowClass) -> f64 {
         let asm = ctl.last_assembly();
-        let mut u = SVector::<f64, 6>::zeros();
-        for k in 0..3 {
-            u[2 * k] = out.plan.feet[k].x;
-            u[2 * k + 1] = out.plan.feet[k].y;
+        let v = relax::class_violation(&asm.qp, &asm.rows, &feet(out));
+        match class {
+            relax::RowClass::Reach => v.reach,
+            relax::RowClass::Safety => v.safety,
+            relax::RowClass::Gait => v.gait,
         }
-        (0..asm.qp.m)
-            .filter(|&i| relax::RowClass::of(asm.rows[i].kind) == class)
-            .map(|i| {
-                let g = asm.qp.row(i);
-                (g.dot(&u) - asm.qp.h[i]) / g.norm()
-            })
-            .fold(0.0, f64::max)
     }
 
     /// Feasibility of the last QP with the rows of `class` relaxed by `eps` and
@@ -1400,6 +1420,46 @@ mod tests {
         assert_eq!(out.info.source, CommandSource::CaptureStep);
         assert!(out.info.iterations <= 64);
         assert!(class_violation(&ctl, &out, relax::RowClass::Reach) <= 1e-9);
+    }
+
+    #[test]
+    fn fallback_prefers_the_candidate_that_keeps_safety() {
+        let wall = [Poly::new(&[[0.6, -2.0], [1.6, -2.0], [1.6, 2.0], [0.6, 2.0]]).unwrap()];
+        let cfg = Config {
+            max_iter: 1,
+            ..Config::default()
+        };
+        let mut ctl = Ctl::new(cfg).unwrap();
+        let inp = input(&wall);
+        // A remembered plan that walks into the wall: the capture steps (at rest:
+        // feet under the CoM, far from the wall) must win.
+        ctl.memory.has_plan = true;
+        ctl.memory.stance = inp.stance_side;
+        ctl.memory.plan = SVector::<f64, 6>::from([0.15, 0.0, 0.3, 0.0, 0.45, 0.0]);
+        let out = ctl.step(&inp);
+        assert_eq!(out.status, CycleStatus::BudgetExhausted);
+        assert_eq!(out.info.source, CommandSource::CaptureStep);
+        let v = relax::class_violation(
+            &ctl.last_assembly().qp,
+            &ctl.last_assembly().rows,
+            &feet(&out),
+        );
+        assert!(v.safety <= 1e-9 && v.reach <= 1e-9, "{v:?}");
+        // A remembered plan that satisfies every row is used as it is.
+        let asm = ctl.last_assembly().clone();
+        let good = ctl.solver().solve(&asm.qp, &[false; 48], 100);
+        assert!(good.status.is_solved());
+        ctl.memory.has_plan = true;
+        ctl.memory.stance = inp.stance_side;
+        ctl.memory.plan = good.x;
+        let out = ctl.step(&inp);
+        assert_eq!(out.info.source, CommandSource::PreviousPlan);
+        assert!((feet(&out) - good.x).amax() < 1e-15);
+    }
+
+    fn feet(out: &CycleOutput<3>) -> SVector<f64, 6> {
+        let f = &out.plan.feet;
+        SVector::<f64, 6>::from([f[0].x, f[0].y, f[1].x, f[1].y, f[2].x, f[2].y])
     }
 
     #[test]

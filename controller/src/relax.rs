@@ -60,6 +60,48 @@ impl RowClass {
     }
 }
 
+/// Largest violation of each row class by a plan, per unit row norm (m/s for
+/// gait rows, m for reachability and safety rows); 0 when the class holds.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ClassViolation {
+    /// Leg reachability rows.
+    pub reach: f64,
+    /// LDCBF and foot-clearance rows.
+    pub safety: f64,
+    /// Walking velocity and maneuverability rows.
+    pub gait: f64,
+}
+
+/// Measures [`ClassViolation`] of the plan `u` on `qp` (rows identified by `rows`).
+/// A non-finite plan gets infinite violations.
+pub fn class_violation<const NV: usize, const NC: usize>(
+    qp: &DenseQp<NV, NC>,
+    rows: &[RowId; NC],
+    u: &SVector<f64, NV>,
+) -> ClassViolation {
+    let mut v = ClassViolation {
+        reach: 0.0,
+        safety: 0.0,
+        gait: 0.0,
+    };
+    for (i, id) in rows.iter().enumerate().take(qp.m.min(NC)) {
+        let g = qp.gt.column(i);
+        let n = g.norm();
+        if n == 0.0 {
+            continue;
+        }
+        let e = (g.dot(u) - qp.h[i]) / n;
+        let e = if e.is_nan() { f64::INFINITY } else { e };
+        let slot = match RowClass::of(id.kind) {
+            RowClass::Reach => &mut v.reach,
+            RowClass::Safety => &mut v.safety,
+            RowClass::Gait => &mut v.gait,
+        };
+        *slot = slot.max(e);
+    }
+    v
+}
+
 /// Which rows a relaxed problem keeps, and by how much each class is relaxed
 /// (`None`: the class is left out).
 #[derive(Clone, Copy, Debug)]
