@@ -1,0 +1,705 @@
+//! The Cortex-M7 firmware (`firmware/`, its own crate for `thumbv7em-none-eabihf`)
+//! against the host, under QEMU.
+//!
+//! * `firmware_matches_host_in_qemu` builds the firmware, runs it twice in
+//!   `qemu-system-arm -M mps2-an500 -icount shift=5` and checks: both runs print
+//!   exactly the same lines (the instruction counts are deterministic); every
+//!   command (`foot_target`, `turning_rate`) equals the host's to 1e-9 and every
+//!   status is the host's, the host replaying the same recorded cycles in the
+//!   same order (the warm start carries across cycles); the instructions per
+//!   cycle, flash and RAM stay within the ceilings of [`budgets`], and it prints
+//!   which of the issue's targets are met. It needs `qemu-system-arm` and the
+//!   `thumbv7em-none-eabihf` target and fails if either is missing, so it is
+//!   `#[ignore]`d in the plain `cargo test` and run by `.ci/embedded.sh`.
+//! * `regenerate_recorded_cycles` rewrites `firmware/src/recorded.rs` from the
+//!   closed loop below (run by hand, see `firmware/README.md`).
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use ldcbf_controller::nalgebra::Vector2;
+use ldcbf_controller::{Config, ConvexPolygon, CycleInput, CycleStatus, PaperController, Side};
+
+mod recorded {
+    include!("../firmware/src/recorded.rs");
+}
+
+/// The targets of the issue: instructions per control cycle at N = 3 (0.25 ms
+/// at 400 MHz, one instruction per clock), flash 64 KiB, RAM 16 KiB. Each is
+/// reported as met or not; the test enforces the ceilings of [`budgets`]:
+/// the target where it is met and, where it is not yet (see
+/// firmware/README.md), today's value plus about 20-50 % so that gross
+/// regressions still fail.
+const TARGET_INSTRUCTIONS: u64 = 100_000;
+const TARGET_FLASH: u64 = 64 * 1024;
+const TARGET_RAM: u64 = 16 * 1024;
+/// Commands must agree with the host's to this (m, rad/s).
+const COMMAND_TOL: f64 = 1e-9;
+/// `-icount` shift: one instruction = 2^ICOUNT_SHIFT ns of virtual time.
+const ICOUNT_SHIFT: u32 = 5;
+/// SysTick period on `mps2-an500` (25 MHz processor clock), ns.
+const SYSTICK_NS: f64 = 40.0;
+/// Wall-clock limit of one QEMU run.
+const QEMU_TIMEOUT: Duration = Duration::from_secs(120);
+
+/// The SPEC's `paper` scenario: goal and obstacle point sets (convex hulls).
+const PAPER_GOAL: [f64; 2] = [10.0, 10.0];
+const PAPER_OBSTACLES: [&[[f64; 2]]; 6] = [
+    &[[2.0, 7.5], [1.5, 7.0], [1.8, 6.5]],
+    &[[4.0, 6.5], [4.3, 6.8], [4.7, 6.5], [4.5, 6.2], [4.1, 6.2]],
+    &[[7.0, 7.0], [7.5, 7.5], [8.0, 7.0], [7.5, 6.5]],
+    &[[6.0, 2.5], [6.5, 2.0], [7.0, 2.5]],
+    &[[1.5, 3.0], [1.8, 3.3], [2.2, 3.0], [2.0, 2.6], [1.6, 2.6]],
+    &[[2.5, 3.5], [2.8, 3.8], [3.2, 3.5], [3.0, 3.1], [2.6, 3.1]],
+];
+/// Cycles kept in `recorded.rs`.
+const RECORDED_CYCLES: usize = 240;
+
+type Poly = ConvexPolygon<8>;
+
+fn workspace_root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn polygons(sets: &[&[[f64; 2]]]) -> Vec<Poly> {
+    sets.iter()
+        .map(|s| Poly::hull(s).expect("convex obstacle"))
+        .collect()
+}
+
+/// A recorded cycle: `[p_x, p_y, v_x, v_y, heading, omega, foot_x, foot_y,
+/// time_in_step, side]` as `f64` bits (side: 0 left, 1 right).
+type Row = [u64; 10];
+
+fn decode<'a>(r: &Row, goal: Vector2<f64>, obstacles: &'a [Poly]) -> CycleInput<'a, 8> {
+    let f = |i: usize| f64::from_bits(r[i]);
+    CycleInput {
+        com_position: Vector2::new(f(0), f(1)),
+        com_velocity: Vector2::new(f(2), f(3)),
+        heading: f(4),
+        turning_rate: f(5),
+        stance_foot: Vector2::new(f(6), f(7)),
+        stance_side: if r[9] == 1 { Side::Right } else { Side::Left },
+        time_in_step: f(8),
+        goal,
+        obstacles,
+    }
+}
+
+fn encode(c: &CycleInput<'_, 8>) -> Row {
+    [
+        c.com_position.x.to_bits(),
+        c.com_position.y.to_bits(),
+        c.com_velocity.x.to_bits(),
+        c.com_velocity.y.to_bits(),
+        c.heading.to_bits(),
+        c.turning_rate.to_bits(),
+        c.stance_foot.x.to_bits(),
+        c.stance_foot.y.to_bits(),
+        c.time_in_step.to_bits(),
+        u64::from(c.stance_side == Side::Right),
+    ]
+}
+
+/// The closed loop of `benches/controller.rs`: walk from (0, 0) towards the goal
+/// among the obstacles, controller at 20 Hz (8 cycles per 0.4 s step), LIP
+/// integrated in closed form, the swing foot landing on the last target at the
+/// end of each step. Returns every cycle's input and the controller's
+/// iterations for it.
+fn closed_loop(obstacles: &[Poly], goal: Vector2<f64>) -> Vec<(Row, u32)> {
+    let mut ctl = PaperController::new(Config::default()).expect("valid config");
+    let lip = *ctl.lip();
+    let dt = 0.05;
+    let mut input = CycleInput {
+        com_position: Vector2::zeros(),
+        com_velocity: Vector2::zeros(),
+        heading: 0.0,
+        turning_rate: 0.0,
+        stance_foot: Vector2::zeros(),
+        stance_side: Side::Left,
+        time_in_step: 0.0,
+        goal,
+        obstacles,
+    };
+    let mut rows = Vec::new();
+    for _ in 0..(8 * 150) {
+        let out = ctl.step(&input);
+        rows.push((encode(&input), out.info.iterations));
+        let target = out.foot_target;
+        input.turning_rate = out.turning_rate;
+        let (p, v) = lip.propagate(
+            &input.com_position,
+            &input.com_velocity,
+            &input.stance_foot,
+            dt,
+        );
+        input.com_position = p;
+        input.com_velocity = v;
+        input.heading += input.turning_rate * dt;
+        input.time_in_step += dt;
+        if input.time_in_step >= 0.4 - 1e-9 {
+            input.time_in_step = 0.0;
+            input.stance_foot = target;
+            input.stance_side = input.stance_side.opposite();
+        }
+        if (input.com_position - goal).norm() < 0.15 {
+            break;
+        }
+    }
+    rows
+}
+
+/// What the host computes for one recorded cycle.
+#[derive(Clone, Copy, Debug)]
+struct HostCommand {
+    foot: [f64; 2],
+    turning_rate: f64,
+    status: CycleStatus,
+    iterations: u32,
+}
+
+/// Replays the recorded cycles in order through one controller (as the firmware).
+fn host_replay(rows: &[Row], goal: Vector2<f64>, obstacles: &[Poly]) -> Vec<HostCommand> {
+    let mut ctl = PaperController::new(Config::default()).expect("valid config");
+    rows.iter()
+        .map(|r| {
+            let out = ctl.step(&decode(r, goal, obstacles));
+            HostCommand {
+                foot: [out.foot_target.x, out.foot_target.y],
+                turning_rate: out.turning_rate,
+                status: out.status,
+                iterations: out.info.iterations,
+            }
+        })
+        .collect()
+}
+
+/// The `RECORDED_CYCLES` consecutive cycles of the closed loop with the most
+/// solver iterations (the hardest stretch: obstacles close by); first such
+/// window on ties.
+fn hardest_window(all: &[(Row, u32)]) -> std::ops::Range<usize> {
+    let n = RECORDED_CYCLES.min(all.len());
+    let total = |s: usize| -> u64 { all[s..s + n].iter().map(|(_, it)| u64::from(*it)).sum() };
+    let start = (0..=all.len() - n)
+        .max_by_key(|&s| (total(s), std::cmp::Reverse(s)))
+        .unwrap_or(0);
+    start..start + n
+}
+
+#[test]
+#[ignore = "rewrites firmware/src/recorded.rs; run by hand (firmware/README.md)"]
+fn regenerate_recorded_cycles() {
+    let obstacles = polygons(&PAPER_OBSTACLES);
+    let goal = Vector2::new(PAPER_GOAL[0], PAPER_GOAL[1]);
+    let all = closed_loop(&obstacles, goal);
+    let window = hardest_window(&all);
+    let rows: Vec<Row> = all[window.clone()].iter().map(|(r, _)| *r).collect();
+
+    let mut s = String::new();
+    let f = &mut s;
+    writeln!(
+        f,
+        "// @generated by tests/firmware_qemu.rs (`regenerate_recorded_cycles`); do not edit."
+    )
+    .unwrap();
+    writeln!(
+        f,
+        "// Closed loop of the SPEC `paper` scenario: start (0, 0), goal (10, 10), controller"
+    )
+    .unwrap();
+    writeln!(
+        f,
+        "// at 20 Hz, {} cycles in all; kept: cycles {}..{}, the {} consecutive cycles",
+        all.len(),
+        window.start,
+        window.end,
+        rows.len()
+    )
+    .unwrap();
+    writeln!(
+        f,
+        "// with the most solver iterations. Shared by the firmware and the host test."
+    )
+    .unwrap();
+    writeln!(f).unwrap();
+    writeln!(f, "/// Goal of every recorded cycle, m.").unwrap();
+    writeln!(f, "pub const GOAL: [f64; 2] = {PAPER_GOAL:?};").unwrap();
+    writeln!(f).unwrap();
+    writeln!(
+        f,
+        "/// Obstacle point sets (both sides take their convex hulls), m."
+    )
+    .unwrap();
+    writeln!(
+        f,
+        "pub const OBSTACLES: [&[[f64; 2]]; {}] = [",
+        PAPER_OBSTACLES.len()
+    )
+    .unwrap();
+    for o in PAPER_OBSTACLES {
+        writeln!(f, "    &{o:?},").unwrap();
+    }
+    writeln!(f, "];").unwrap();
+    writeln!(f).unwrap();
+    writeln!(
+        f,
+        "/// Recorded cycle inputs, to be replayed in order: `[p_x, p_y, v_x, v_y, heading,"
+    )
+    .unwrap();
+    writeln!(
+        f,
+        "/// omega, foot_x, foot_y, time_in_step, side]` as `f64` bits (side 0 = left,"
+    )
+    .unwrap();
+    writeln!(f, "/// 1 = right stance foot).").unwrap();
+    writeln!(f, "#[rustfmt::skip]").unwrap();
+    writeln!(f, "pub static CYCLES: [[u64; 10]; {}] = [", rows.len()).unwrap();
+    for (k, r) in rows.iter().enumerate() {
+        let c = decode(r, goal, &obstacles);
+        let mut fields: Vec<String> = r[..9].iter().map(|b| format!("{b:#018x}")).collect();
+        fields.push(r[9].to_string());
+        writeln!(
+            f,
+            "    [{}], // {}: p = ({:.3}, {:.3})",
+            fields.join(", "),
+            window.start + k,
+            c.com_position.x,
+            c.com_position.y
+        )
+        .unwrap();
+    }
+    writeln!(f, "];").unwrap();
+    let path = workspace_root().join("firmware/src/recorded.rs");
+    std::fs::write(&path, s).expect("write recorded.rs");
+    println!(
+        "wrote {} cycles ({}..{} of {}) to {}",
+        rows.len(),
+        window.start,
+        window.end,
+        all.len(),
+        path.display()
+    );
+}
+
+/// Builds the firmware (its own crate and target directory) and returns the ELF.
+fn build_firmware() -> PathBuf {
+    let dir = workspace_root().join("firmware");
+    let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+    // The firmware's .cargo/config.toml sets the target, the rustflags (linker
+    // script, cortex-m7) and the runner: variables that would override them go.
+    // Not `--locked`: firmware/Cargo.lock pins the versions it has, but a new
+    // dependency of the controller must not break this test (commit the
+    // updated lock file then).
+    let out = Command::new(cargo)
+        .args(["build", "--release"])
+        .current_dir(&dir)
+        .env_remove("CARGO_TARGET_DIR")
+        .env_remove("CARGO_BUILD_TARGET")
+        .env_remove("CARGO_BUILD_TARGET_DIR")
+        .env_remove("RUSTFLAGS")
+        .env_remove("CARGO_ENCODED_RUSTFLAGS")
+        .env_remove("CARGO_BUILD_RUSTFLAGS")
+        .output()
+        .expect("run cargo to build the firmware");
+    assert!(
+        out.status.success(),
+        "building the firmware failed (is the target installed? `rustup target add \
+         thumbv7em-none-eabihf`):\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let elf = dir.join("target/thumbv7em-none-eabihf/release/ldcbf-firmware");
+    assert!(elf.is_file(), "no firmware ELF at {}", elf.display());
+    elf
+}
+
+/// Runs the firmware in `qemu-system-arm` (mps2-an500, Cortex-M7, semihosting,
+/// deterministic `-icount`) and returns its standard output. Panics if QEMU is
+/// missing, fails, or runs past [`QEMU_TIMEOUT`].
+fn run_qemu(elf: &Path) -> String {
+    let icount = format!("shift={ICOUNT_SHIFT},align=off,sleep=off");
+    let mut child = Command::new("qemu-system-arm")
+        .args(["-M", "mps2-an500", "-cpu", "cortex-m7", "-nographic"])
+        .args(["-monitor", "none", "-serial", "none"])
+        .args(["-semihosting-config", "enable=on,target=native"])
+        .args(["-icount", &icount, "-kernel"])
+        .arg(elf)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap_or_else(|e| {
+            panic!(
+                "cannot start qemu-system-arm ({e}): install Debian's `qemu-system-arm` \
+                 (.ci/embedded.sh does)"
+            )
+        });
+    // Drain the pipes on threads so a chatty run cannot block on a full pipe.
+    let mut stdout = child.stdout.take().expect("piped stdout");
+    let mut stderr = child.stderr.take().expect("piped stderr");
+    let out_reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        std::io::Read::read_to_string(&mut stdout, &mut s).map(|_| s)
+    });
+    let err_reader = std::thread::spawn(move || {
+        let mut s = String::new();
+        std::io::Read::read_to_string(&mut stderr, &mut s).map(|_| s)
+    });
+    let started = Instant::now();
+    let status = loop {
+        if let Some(status) = child.try_wait().expect("wait for qemu") {
+            break status;
+        }
+        if started.elapsed() > QEMU_TIMEOUT {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!("qemu-system-arm did not exit within {QEMU_TIMEOUT:?}");
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let out = out_reader
+        .join()
+        .expect("stdout reader")
+        .expect("read stdout");
+    let err = err_reader
+        .join()
+        .expect("stderr reader")
+        .expect("read stderr");
+    assert!(
+        status.success(),
+        "the firmware failed in QEMU ({status}):\nstderr:\n{err}\nstdout (tail):\n{}",
+        out.lines().rev().take(5).collect::<Vec<_>>().join("\n")
+    );
+    out
+}
+
+/// One `cycle` line of the firmware.
+#[derive(Clone, Debug)]
+struct FirmwareCycle {
+    index: usize,
+    foot: [f64; 2],
+    turning_rate: f64,
+    status: String,
+    iterations: u32,
+    ticks: u64,
+    stack: u64,
+}
+
+/// The parsed output of a firmware run.
+#[derive(Debug)]
+struct FirmwareRun {
+    empty_ticks: u64,
+    nop256_ticks: u64,
+    startup_stack_peak: u64,
+    main_stack_depth: u64,
+    cycles: Vec<FirmwareCycle>,
+}
+
+fn parse_run(out: &str) -> FirmwareRun {
+    let mut run = FirmwareRun {
+        empty_ticks: 0,
+        nop256_ticks: 0,
+        startup_stack_peak: 0,
+        main_stack_depth: 0,
+        cycles: Vec::new(),
+    };
+    let mut announced = None;
+    let mut done = false;
+    for line in out.lines() {
+        let w: Vec<&str> = line.split_whitespace().collect();
+        let num = |i: usize| -> u64 {
+            w.get(i)
+                .and_then(|s| s.parse().ok())
+                .unwrap_or_else(|| panic!("bad number in firmware line {line:?}"))
+        };
+        let bits = |i: usize| -> f64 {
+            let s = w.get(i).unwrap_or_else(|| panic!("short line {line:?}"));
+            f64::from_bits(
+                u64::from_str_radix(s, 16).unwrap_or_else(|_| panic!("bad hex in {line:?}")),
+            )
+        };
+        match w.first().copied() {
+            Some("ldcbf-firmware") => announced = Some(num(2) as usize),
+            Some("calibration") => {
+                run.empty_ticks = num(2);
+                run.nop256_ticks = num(4);
+            }
+            Some("stack") => {
+                run.startup_stack_peak = num(2);
+                run.main_stack_depth = num(4);
+            }
+            Some("cycle") => {
+                assert_eq!(w.len(), 9, "firmware line {line:?}");
+                run.cycles.push(FirmwareCycle {
+                    index: num(1) as usize,
+                    foot: [bits(2), bits(3)],
+                    turning_rate: bits(4),
+                    status: w[5].to_string(),
+                    iterations: num(6) as u32,
+                    ticks: num(7),
+                    stack: num(8),
+                });
+            }
+            Some("done") => done = true,
+            _ => panic!("unexpected firmware output line {line:?}"),
+        }
+    }
+    assert!(done, "the firmware output has no `done` line:\n{out}");
+    assert_eq!(announced, Some(run.cycles.len()), "cycle count");
+    run
+}
+
+/// Berkeley sizes of an ELF32 file (as `size`/`llvm-size`): `text` = allocated
+/// and executable or read-only sections, `data` = allocated, writable, with
+/// contents, `bss` = allocated without contents; plus the size of the symbol
+/// whose mangled name contains `symbol`.
+fn elf_sizes(path: &Path, symbol: &str) -> (u64, u64, u64, u64) {
+    let b = std::fs::read(path).expect("read ELF");
+    assert!(
+        b.len() > 52 && &b[..4] == b"\x7fELF" && b[4] == 1 && b[5] == 1,
+        "not an ELF32 LE file"
+    );
+    let u16_at = |o: usize| u64::from(u16::from_le_bytes([b[o], b[o + 1]]));
+    let u32_at = |o: usize| u64::from(u32::from_le_bytes([b[o], b[o + 1], b[o + 2], b[o + 3]]));
+    let (shoff, shentsize, shnum) = (
+        u32_at(0x20) as usize,
+        u16_at(0x2e) as usize,
+        u16_at(0x30) as usize,
+    );
+    let sh = |i: usize| {
+        let o = shoff + i * shentsize;
+        // (type, flags, offset, size, link)
+        (
+            u32_at(o + 4),
+            u32_at(o + 8),
+            u32_at(o + 16) as usize,
+            u32_at(o + 20),
+            u32_at(o + 24) as usize,
+        )
+    };
+    const SHT_SYMTAB: u64 = 2;
+    const SHT_NOBITS: u64 = 8;
+    const SHF_WRITE: u64 = 1;
+    const SHF_ALLOC: u64 = 2;
+    const SHF_EXECINSTR: u64 = 4;
+    let (mut text, mut data, mut bss, mut sym) = (0, 0, 0, 0);
+    for i in 0..shnum {
+        let (ty, flags, offset, size, link) = sh(i);
+        if flags & SHF_ALLOC != 0 {
+            if flags & SHF_EXECINSTR != 0 || flags & SHF_WRITE == 0 {
+                text += size;
+            } else if ty == SHT_NOBITS {
+                bss += size;
+            } else {
+                data += size;
+            }
+        }
+        if ty == SHT_SYMTAB {
+            let (_, _, stroff, _, _) = sh(link);
+            for k in 0..(size as usize / 16) {
+                let e = offset + 16 * k;
+                let name_at = stroff + u32_at(e) as usize;
+                let end = b[name_at..].iter().position(|&c| c == 0).unwrap_or(0);
+                if std::str::from_utf8(&b[name_at..name_at + end]).is_ok_and(|n| n.contains(symbol))
+                {
+                    sym = sym.max(u32_at(e + 8));
+                }
+            }
+        }
+    }
+    (text, data, bss, sym)
+}
+
+#[test]
+#[ignore = "needs qemu-system-arm and the thumbv7em-none-eabihf target; run by .ci/embedded.sh"]
+fn firmware_matches_host_in_qemu() {
+    let elf = build_firmware();
+
+    // Determinism: two runs print exactly the same, instruction counts included.
+    let first = run_qemu(&elf);
+    let second = run_qemu(&elf);
+    assert!(
+        first == second,
+        "two QEMU runs of the same firmware printed different output (not deterministic)"
+    );
+    let run = parse_run(&first);
+
+    // The commands equal the host's: same recorded cycles, same order.
+    assert_eq!(recorded::GOAL, PAPER_GOAL, "recorded.rs goal");
+    assert_eq!(
+        recorded::OBSTACLES,
+        PAPER_OBSTACLES,
+        "recorded.rs obstacles"
+    );
+    let obstacles = polygons(&recorded::OBSTACLES);
+    let goal = Vector2::new(recorded::GOAL[0], recorded::GOAL[1]);
+    let host = host_replay(&recorded::CYCLES, goal, &obstacles);
+    assert_eq!(run.cycles.len(), host.len(), "cycles replayed");
+    let mut worst = 0.0f64;
+    let mut iteration_mismatches = 0;
+    let mut failures = Vec::new();
+    for (k, (fw, h)) in run.cycles.iter().zip(&host).enumerate() {
+        assert_eq!(fw.index, k, "cycle order");
+        let diff = (fw.foot[0] - h.foot[0])
+            .abs()
+            .max((fw.foot[1] - h.foot[1]).abs())
+            .max((fw.turning_rate - h.turning_rate).abs());
+        worst = worst.max(diff);
+        if diff.is_nan() || diff > COMMAND_TOL || fw.status != h.status.name() {
+            failures.push(format!(
+                "cycle {k}: firmware foot {:?} omega {:e} {} / host foot {:?} omega {:e} {} \
+                 (diff {diff:e})",
+                fw.foot,
+                fw.turning_rate,
+                fw.status,
+                h.foot,
+                h.turning_rate,
+                h.status.name()
+            ));
+        }
+        iteration_mismatches += usize::from(fw.iterations != h.iterations);
+    }
+    assert!(
+        failures.is_empty(),
+        "{} of {} commands differ from the host's by more than {COMMAND_TOL:e} or in status:\n{}",
+        failures.len(),
+        host.len(),
+        failures.join("\n")
+    );
+
+    // Instructions per cycle: ticks of the 25 MHz SysTick, 2^shift ns per
+    // instruction; checked against 256 `nop`s.
+    let ticks_per_instruction = f64::from(1u32 << ICOUNT_SHIFT) / SYSTICK_NS;
+    let nop = (run.nop256_ticks - run.empty_ticks) as f64 / 256.0;
+    assert!(
+        (nop - ticks_per_instruction).abs() <= 0.01 * ticks_per_instruction,
+        "calibration: 256 nops took {} ticks, {nop} per instruction, expected {ticks_per_instruction}",
+        run.nop256_ticks - run.empty_ticks
+    );
+    let instructions = |c: &FirmwareCycle| {
+        (c.ticks.saturating_sub(run.empty_ticks) as f64 / ticks_per_instruction).round() as u64
+    };
+    let stats = |pick: &dyn Fn(&FirmwareCycle) -> bool| {
+        let mut v: Vec<u64> = run
+            .cycles
+            .iter()
+            .filter(|c| pick(c))
+            .map(instructions)
+            .collect();
+        v.sort_unstable();
+        let median = if v.is_empty() {
+            0
+        } else {
+            v[(v.len() - 1) / 2]
+        };
+        (v.len(), median, v.last().copied().unwrap_or(0))
+    };
+    let (n_all, med_all, max_all) = stats(&|_| true);
+    let (n_opt, med_opt, max_opt) = stats(&|c| c.status == "optimal");
+    let (n_fb, med_fb, max_fb) = stats(&|c| c.status != "optimal");
+
+    // Memory.
+    let (text, data, bss, recorded_bytes) = elf_sizes(&elf, "8recorded6CYCLES");
+    assert_eq!(
+        recorded_bytes,
+        (std::mem::size_of::<Row>() * recorded::CYCLES.len()) as u64,
+        "size of the recorded::CYCLES symbol"
+    );
+    let cycle_stack = run.cycles.iter().map(|c| c.stack).max().unwrap_or(0);
+    let flash = text + data - recorded_bytes;
+    let ram_loop = data + bss + run.main_stack_depth + cycle_stack;
+    let ram_startup = data + bss + run.startup_stack_peak;
+
+    println!(
+        "firmware vs host: {} cycles, commands agree to {worst:e} (tolerance \
+         {COMMAND_TOL:e}), statuses equal; solver iterations differ in \
+         {iteration_mismatches} cycles",
+        host.len()
+    );
+    println!("determinism: two QEMU runs (-icount shift={ICOUNT_SHIFT}) printed identical output");
+    println!(
+        "instructions per cycle: all {n_all}: median {med_all} max {max_all}; optimal \
+         {n_opt}: median {med_opt} max {max_opt}; fallback {n_fb}: median {med_fb} max {max_fb}"
+    );
+    println!(
+        "ELF: text {text} data {data} bss {bss} (text includes the recorded cycles, \
+         {recorded_bytes} bytes)"
+    );
+    println!(
+        "stack: start-up peak {}, main's frame {}, a cycle's high-water mark {cycle_stack}",
+        run.startup_stack_peak, run.main_stack_depth
+    );
+    let budgets = budgets(max_opt, max_all, flash, ram_loop, ram_startup);
+    println!(
+        "{:<58} {:>9} {:>9} {:>9}",
+        "budget", "value", "target", "ceiling"
+    );
+    for b in &budgets {
+        println!(
+            "{:<58} {:>9} {:>9} {:>9} {}",
+            b.what,
+            b.value,
+            b.target,
+            b.ceiling,
+            if b.value <= b.target {
+                "met"
+            } else {
+                "NOT met"
+            }
+        );
+    }
+    let over: Vec<_> = budgets.iter().filter(|b| b.value > b.ceiling).collect();
+    assert!(over.is_empty(), "over the enforced ceiling: {over:?}");
+}
+
+/// A measured quantity, its target and the ceiling this test enforces.
+#[derive(Debug)]
+struct Budget {
+    what: &'static str,
+    value: u64,
+    target: u64,
+    ceiling: u64,
+}
+
+/// The enforced ceilings. Where a target is not met today the ceiling says so.
+fn budgets(max_opt: u64, max_all: u64, flash: u64, ram_loop: u64, ram_startup: u64) -> [Budget; 5] {
+    [
+        Budget {
+            what: "instructions, cycles with a solved QP (max)",
+            value: max_opt,
+            target: TARGET_INSTRUCTIONS,
+            ceiling: TARGET_INSTRUCTIONS,
+        },
+        Budget {
+            // Not met: infeasible cycles run the relaxation (controller/src/relax.rs),
+            // ~540k instructions today.
+            what: "instructions, all cycles incl. infeasible (max)",
+            value: max_all,
+            target: TARGET_INSTRUCTIONS,
+            ceiling: 800_000,
+        },
+        Budget {
+            // Not met: ~90 KiB, of which ~25 KiB is core's float formatting, linked
+            // only because `f64::clamp`'s panic message formats its bounds.
+            what: "flash bytes: text + data - recorded cycles",
+            value: flash,
+            target: TARGET_FLASH,
+            ceiling: 112 * 1024,
+        },
+        Budget {
+            what: "RAM bytes, control loop: data + bss + main + cycle stack",
+            value: ram_loop,
+            target: TARGET_RAM,
+            ceiling: TARGET_RAM,
+        },
+        Budget {
+            // Not met: `Controller::new` returns the ~8 KiB controller by value
+            // (plus its temporaries), a ~15 KiB stack peak at start-up.
+            what: "RAM bytes, start-up: data + bss + start-up stack peak",
+            value: ram_startup,
+            target: TARGET_RAM,
+            ceiling: 28 * 1024,
+        },
+    ]
+}
