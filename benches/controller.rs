@@ -22,25 +22,10 @@ use std::hint::black_box;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use ldcbf_controller::nalgebra::Vector2;
-use ldcbf_controller::{
-    Assembly, Config, Controller, ConvexPolygon, CycleInput, InputError, Side, constraint_capacity,
-};
+use ldcbf_controller::{Assembly, Config, Controller, ConvexPolygon, constraint_capacity};
+use ldcbf_nav::fixtures::{PAPER_GOAL, Recorded, paper_obstacles, walk};
 
 type Poly = ConvexPolygon<8>;
-
-fn paper_obstacles() -> Vec<Poly> {
-    let sets: [&[[f64; 2]]; 6] = [
-        &[[2.0, 7.5], [1.5, 7.0], [1.8, 6.5]],
-        &[[4.0, 6.5], [4.3, 6.8], [4.7, 6.5], [4.5, 6.2], [4.1, 6.2]],
-        &[[7.0, 7.0], [7.5, 7.5], [8.0, 7.0], [7.5, 6.5]],
-        &[[6.0, 2.5], [6.5, 2.0], [7.0, 2.5]],
-        &[[1.5, 3.0], [1.8, 3.3], [2.2, 3.0], [2.0, 2.6], [1.6, 2.6]],
-        &[[2.5, 3.5], [2.8, 3.8], [3.2, 3.5], [3.0, 3.1], [2.6, 3.1]],
-    ];
-    sets.iter()
-        .map(|s| Poly::hull(s).expect("convex"))
-        .collect()
-}
 
 /// Posts of 0.2 m on a 1 m grid over [-3, 13]^2, leaving a clear corridor of
 /// half-width 0.5 m along the diagonal from (0, 0) to (10, 10).
@@ -64,71 +49,15 @@ fn post_field() -> Vec<Poly> {
     out
 }
 
-/// A recorded cycle (owned copy of the input fields).
-#[derive(Clone, Copy)]
-struct Cycle {
-    p: Vector2<f64>,
-    v: Vector2<f64>,
-    heading: f64,
-    omega: f64,
-    foot: Vector2<f64>,
-    side: Side,
-    t_in: f64,
-}
-
-fn input<'a>(c: &Cycle, goal: Vector2<f64>, obs: &'a [Poly]) -> CycleInput<'a, 8> {
-    CycleInput {
-        com_position: c.p,
-        com_velocity: c.v,
-        heading: c.heading,
-        turning_rate: c.omega,
-        stance_foot: c.foot,
-        stance_side: c.side,
-        time_in_step: c.t_in,
-        goal,
-        obstacles: obs,
-    }
-}
-
-/// Runs the closed loop with a controller of the given sizes and records every
-/// cycle's input (at most 150 steps, until the CoM is within 0.15 m of the goal).
+/// The inputs of a walk with a controller of the given sizes.
 fn record<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>(
     obs: &[Poly],
     goal: Vector2<f64>,
-) -> Vec<Cycle> {
-    let mut ctl = Controller::<N, NV, NC, NOBS>::new(Config::default()).expect("valid config");
-    let lip = *ctl.lip();
-    let mut c = Cycle {
-        p: Vector2::zeros(),
-        v: Vector2::zeros(),
-        heading: 0.0,
-        omega: 0.0,
-        foot: Vector2::zeros(),
-        side: Side::Left,
-        t_in: 0.0,
-    };
-    let mut cycles = Vec::new();
-    let dt = 0.05;
-    for _ in 0..(8 * 150) {
-        cycles.push(c);
-        let out = ctl.step(&input(&c, goal, obs));
-        assert!(out.status != ldcbf_controller::CycleStatus::InvalidInput(InputError::State));
-        let (p, v) = lip.propagate(&c.p, &c.v, &c.foot, dt);
-        c.p = p;
-        c.v = v;
-        c.heading += c.omega * dt;
-        c.t_in += dt;
-        if c.t_in >= 0.4 - 1e-9 {
-            c.t_in = 0.0;
-            c.foot = out.foot_target;
-            c.side = c.side.opposite();
-            c.omega = out.turning_rate;
-        }
-        if (c.p - goal).norm() < 0.15 {
-            break;
-        }
-    }
-    cycles
+) -> Vec<Recorded> {
+    walk::<N, NV, NC, NOBS, 8>(obs, goal, 150)
+        .into_iter()
+        .map(|(c, _)| c)
+        .collect()
 }
 
 /// Benchmarks `step` (warm) over cycles recorded with the same sizes.
@@ -145,7 +74,7 @@ fn bench_step<const N: usize, const NV: usize, const NC: usize, const NOBS: usiz
         b.iter(|| {
             let c = &cycles[i % cycles.len()];
             i += 1;
-            black_box(ctl.step(black_box(&input(c, goal, obs))))
+            black_box(ctl.step(black_box(&c.input(goal, obs))))
         })
     });
 }
@@ -154,8 +83,8 @@ fn paper(cr: &mut Criterion) {
     const N: usize = 3;
     const NC: usize = constraint_capacity(3, 8, false);
     type Paper = Controller<3, 6, NC, 8>;
-    let obs = paper_obstacles();
-    let goal = Vector2::new(10.0, 10.0);
+    let obs = paper_obstacles::<8>();
+    let goal = Vector2::from(PAPER_GOAL);
     let cycles = record::<N, 6, NC, 8>(&obs, goal);
     let mut group = cr.benchmark_group("paper_config");
     group.bench_function("step/warm", |b| {
@@ -164,7 +93,7 @@ fn paper(cr: &mut Criterion) {
         b.iter(|| {
             let c = &cycles[i % cycles.len()];
             i += 1;
-            black_box(ctl.step(black_box(&input(c, goal, &obs))))
+            black_box(ctl.step(black_box(&c.input(goal, &obs))))
         })
     });
     group.bench_function("step/cold", |b| {
@@ -174,7 +103,7 @@ fn paper(cr: &mut Criterion) {
             let c = &cycles[i % cycles.len()];
             i += 1;
             ctl.reset();
-            black_box(ctl.step(black_box(&input(c, goal, &obs))))
+            black_box(ctl.step(black_box(&c.input(goal, &obs))))
         })
     });
     let ctl = Paper::new(Config::default()).unwrap();
@@ -182,7 +111,7 @@ fn paper(cr: &mut Criterion) {
         .iter()
         .map(|c| {
             let mut a = Assembly::default();
-            ctl.assemble(&input(c, goal, &obs), &mut a).unwrap();
+            ctl.assemble(&c.input(goal, &obs), &mut a).unwrap();
             a
         })
         .collect();
@@ -198,8 +127,8 @@ fn paper(cr: &mut Criterion) {
 }
 
 fn horizon(cr: &mut Criterion) {
-    let obs = paper_obstacles();
-    let goal = Vector2::new(10.0, 10.0);
+    let obs = paper_obstacles::<8>();
+    let goal = Vector2::from(PAPER_GOAL);
     let mut group = cr.benchmark_group("horizon");
     bench_step::<3, 6, { constraint_capacity(3, 8, false) }, 8>(
         &mut group,
@@ -224,7 +153,7 @@ fn horizon(cr: &mut Criterion) {
 
 fn obstacles(cr: &mut Criterion) {
     let obs = post_field();
-    let goal = Vector2::new(10.0, 10.0);
+    let goal = Vector2::from(PAPER_GOAL);
     let mut group = cr.benchmark_group("obstacles");
     bench_step::<3, 6, { constraint_capacity(3, 0, false) }, 0>(
         &mut group,

@@ -1,1 +1,132 @@
-//! Workspace root package: hosts the cross-crate integration tests in `tests/` and the benchmarks in `benches/`.
+//! Workspace root package: hosts the cross-crate integration tests in `tests/`
+//! and the benchmarks in `benches/`, and the fixtures they share ([`fixtures`]).
+
+pub mod fixtures {
+    //! Shared test and benchmark fixtures: the SPEC's `paper` obstacles and a
+    //! miniature closed loop that records controller cycles.
+    //!
+    //! The loop is the simulator's in miniature (`host-sim/src/sim.rs` is the full
+    //! one): the controller runs at 20 Hz (8 cycles per 0.4 s step) on the exact
+    //! state, the LIP is integrated in closed form over each 50 ms, and at each
+    //! step end the swing foot lands on the last `foot_target`, the stance side
+    //! flips and the last `turning_rate` takes effect for the new step.
+
+    use ldcbf_controller::nalgebra::Vector2;
+    use ldcbf_controller::{Config, Controller, ConvexPolygon, CycleInput, CycleOutput, Side};
+
+    /// Goal of the SPEC's `paper` scenario, m (world).
+    pub const PAPER_GOAL: [f64; 2] = [10.0, 10.0];
+
+    /// Obstacle point sets of the SPEC's `paper` scenario (each obstacle is the
+    /// convex hull of its points), m (world).
+    pub const PAPER_OBSTACLES: [&[[f64; 2]]; 6] = [
+        &[[2.0, 7.5], [1.5, 7.0], [1.8, 6.5]],
+        &[[4.0, 6.5], [4.3, 6.8], [4.7, 6.5], [4.5, 6.2], [4.1, 6.2]],
+        &[[7.0, 7.0], [7.5, 7.5], [8.0, 7.0], [7.5, 6.5]],
+        &[[6.0, 2.5], [6.5, 2.0], [7.0, 2.5]],
+        &[[1.5, 3.0], [1.8, 3.3], [2.2, 3.0], [2.0, 2.6], [1.6, 2.6]],
+        &[[2.5, 3.5], [2.8, 3.8], [3.2, 3.5], [3.0, 3.1], [2.6, 3.1]],
+    ];
+
+    /// The `paper` obstacles as polygons of capacity `V`.
+    pub fn paper_obstacles<const V: usize>() -> Vec<ConvexPolygon<V>> {
+        PAPER_OBSTACLES
+            .iter()
+            .map(|s| ConvexPolygon::hull(s).expect("the paper obstacles are valid"))
+            .collect()
+    }
+
+    /// The measured part of one cycle's input (goal and obstacles are fixed per
+    /// walk). World frame; m, m/s, rad, rad/s, s.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    pub struct Recorded {
+        /// CoM position.
+        pub com_position: Vector2<f64>,
+        /// CoM velocity.
+        pub com_velocity: Vector2<f64>,
+        /// Heading.
+        pub heading: f64,
+        /// Turning rate in force.
+        pub turning_rate: f64,
+        /// Stance foot position.
+        pub stance_foot: Vector2<f64>,
+        /// Stance side.
+        pub stance_side: Side,
+        /// Time spent in the current step.
+        pub time_in_step: f64,
+    }
+
+    impl Recorded {
+        /// At rest at the origin, heading 0, left stance foot under the CoM.
+        pub const START: Recorded = Recorded {
+            com_position: Vector2::new(0.0, 0.0),
+            com_velocity: Vector2::new(0.0, 0.0),
+            heading: 0.0,
+            turning_rate: 0.0,
+            stance_foot: Vector2::new(0.0, 0.0),
+            stance_side: Side::Left,
+            time_in_step: 0.0,
+        };
+
+        /// The full controller input.
+        pub fn input<'a, const V: usize>(
+            &self,
+            goal: Vector2<f64>,
+            obstacles: &'a [ConvexPolygon<V>],
+        ) -> CycleInput<'a, V> {
+            CycleInput {
+                com_position: self.com_position,
+                com_velocity: self.com_velocity,
+                heading: self.heading,
+                turning_rate: self.turning_rate,
+                stance_foot: self.stance_foot,
+                stance_side: self.stance_side,
+                time_in_step: self.time_in_step,
+                goal,
+                obstacles,
+            }
+        }
+    }
+
+    /// Walks from [`Recorded::START`] toward `goal` with a fresh controller of
+    /// the given sizes (default configuration), for at most `max_steps` steps or
+    /// until the CoM is within 0.15 m of the goal; returns every cycle's input and
+    /// output, in order.
+    pub fn walk<
+        const N: usize,
+        const NV: usize,
+        const NC: usize,
+        const NOBS: usize,
+        const V: usize,
+    >(
+        obstacles: &[ConvexPolygon<V>],
+        goal: Vector2<f64>,
+        max_steps: usize,
+    ) -> Vec<(Recorded, CycleOutput<N>)> {
+        let mut ctl = Controller::<N, NV, NC, NOBS>::new(Config::default()).expect("valid config");
+        let lip = *ctl.lip();
+        let t_step = ctl.config().step_duration;
+        let dt = t_step / 8.0;
+        let mut c = Recorded::START;
+        let mut out = Vec::new();
+        for _ in 0..8 * max_steps {
+            let cmd = ctl.step(&c.input(goal, obstacles));
+            out.push((c, cmd));
+            let (p, v) = lip.propagate(&c.com_position, &c.com_velocity, &c.stance_foot, dt);
+            c.com_position = p;
+            c.com_velocity = v;
+            c.heading += c.turning_rate * dt;
+            c.time_in_step += dt;
+            if c.time_in_step >= t_step - 1e-9 {
+                c.time_in_step = 0.0;
+                c.stance_foot = cmd.foot_target;
+                c.stance_side = c.stance_side.opposite();
+                c.turning_rate = cmd.turning_rate;
+            }
+            if (c.com_position - goal).norm() < 0.15 {
+                break;
+            }
+        }
+        out
+    }
+}

@@ -20,7 +20,10 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use ldcbf_controller::nalgebra::Vector2;
-use ldcbf_controller::{Config, ConvexPolygon, CycleInput, CycleStatus, PaperController, Side};
+use ldcbf_controller::{
+    Config, ConvexPolygon, CycleInput, CycleStatus, PaperController, Side, constraint_capacity,
+};
+use ldcbf_nav::fixtures::{PAPER_GOAL, PAPER_OBSTACLES, paper_obstacles, walk};
 
 mod recorded {
     include!("../firmware/src/recorded.rs");
@@ -44,16 +47,6 @@ const SYSTICK_NS: f64 = 40.0;
 /// Wall-clock limit of one QEMU run.
 const QEMU_TIMEOUT: Duration = Duration::from_secs(120);
 
-/// The SPEC's `paper` scenario: goal and obstacle point sets (convex hulls).
-const PAPER_GOAL: [f64; 2] = [10.0, 10.0];
-const PAPER_OBSTACLES: [&[[f64; 2]]; 6] = [
-    &[[2.0, 7.5], [1.5, 7.0], [1.8, 6.5]],
-    &[[4.0, 6.5], [4.3, 6.8], [4.7, 6.5], [4.5, 6.2], [4.1, 6.2]],
-    &[[7.0, 7.0], [7.5, 7.5], [8.0, 7.0], [7.5, 6.5]],
-    &[[6.0, 2.5], [6.5, 2.0], [7.0, 2.5]],
-    &[[1.5, 3.0], [1.8, 3.3], [2.2, 3.0], [2.0, 2.6], [1.6, 2.6]],
-    &[[2.5, 3.5], [2.8, 3.8], [3.2, 3.5], [3.0, 3.1], [2.6, 3.1]],
-];
 /// Cycles kept in `recorded.rs`.
 const RECORDED_CYCLES: usize = 240;
 
@@ -61,12 +54,6 @@ type Poly = ConvexPolygon<8>;
 
 fn workspace_root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn polygons(sets: &[&[[f64; 2]]]) -> Vec<Poly> {
-    sets.iter()
-        .map(|s| Poly::hull(s).expect("convex obstacle"))
-        .collect()
 }
 
 /// A recorded cycle: `[p_x, p_y, v_x, v_y, heading, omega, foot_x, foot_y,
@@ -103,52 +90,13 @@ fn encode(c: &CycleInput<'_, 8>) -> Row {
     ]
 }
 
-/// The closed loop of `benches/controller.rs`: walk from (0, 0) towards the goal
-/// among the obstacles, controller at 20 Hz (8 cycles per 0.4 s step), LIP
-/// integrated in closed form, the swing foot landing on the last target at the
-/// end of each step. Returns every cycle's input and the controller's
-/// iterations for it.
+/// The shared closed loop (`ldcbf_nav::fixtures::walk`, as in the benchmarks):
+/// every cycle's input and the controller's iterations for it.
 fn closed_loop(obstacles: &[Poly], goal: Vector2<f64>) -> Vec<(Row, u32)> {
-    let mut ctl = PaperController::new(Config::default()).expect("valid config");
-    let lip = *ctl.lip();
-    let dt = 0.05;
-    let mut input = CycleInput {
-        com_position: Vector2::zeros(),
-        com_velocity: Vector2::zeros(),
-        heading: 0.0,
-        turning_rate: 0.0,
-        stance_foot: Vector2::zeros(),
-        stance_side: Side::Left,
-        time_in_step: 0.0,
-        goal,
-        obstacles,
-    };
-    let mut rows = Vec::new();
-    for _ in 0..(8 * 150) {
-        let out = ctl.step(&input);
-        rows.push((encode(&input), out.info.iterations));
-        let target = out.foot_target;
-        input.turning_rate = out.turning_rate;
-        let (p, v) = lip.propagate(
-            &input.com_position,
-            &input.com_velocity,
-            &input.stance_foot,
-            dt,
-        );
-        input.com_position = p;
-        input.com_velocity = v;
-        input.heading += input.turning_rate * dt;
-        input.time_in_step += dt;
-        if input.time_in_step >= 0.4 - 1e-9 {
-            input.time_in_step = 0.0;
-            input.stance_foot = target;
-            input.stance_side = input.stance_side.opposite();
-        }
-        if (input.com_position - goal).norm() < 0.15 {
-            break;
-        }
-    }
-    rows
+    walk::<3, 6, { constraint_capacity(3, 8, false) }, 8, 8>(obstacles, goal, 150)
+        .iter()
+        .map(|(c, out)| (encode(&c.input(goal, obstacles)), out.info.iterations))
+        .collect()
 }
 
 /// What the host computes for one recorded cycle.
@@ -191,8 +139,8 @@ fn hardest_window(all: &[(Row, u32)]) -> std::ops::Range<usize> {
 #[test]
 #[ignore = "rewrites firmware/src/recorded.rs; run by hand (firmware/README.md)"]
 fn regenerate_recorded_cycles() {
-    let obstacles = polygons(&PAPER_OBSTACLES);
-    let goal = Vector2::new(PAPER_GOAL[0], PAPER_GOAL[1]);
+    let obstacles = paper_obstacles::<8>();
+    let goal = Vector2::from(PAPER_GOAL);
     let all = closed_loop(&obstacles, goal);
     let window = hardest_window(&all);
     let rows: Vec<Row> = all[window.clone()].iter().map(|(r, _)| *r).collect();
@@ -532,8 +480,9 @@ fn firmware_matches_host_in_qemu() {
         PAPER_OBSTACLES,
         "recorded.rs obstacles"
     );
-    let obstacles = polygons(&recorded::OBSTACLES);
-    let goal = Vector2::new(recorded::GOAL[0], recorded::GOAL[1]);
+    // Same point sets as checked above, so the shared polygons are the firmware's.
+    let obstacles = paper_obstacles::<8>();
+    let goal = Vector2::from(recorded::GOAL);
     let host = host_replay(&recorded::CYCLES, goal, &obstacles);
     assert_eq!(run.cycles.len(), host.len(), "cycles replayed");
     let mut worst = 0.0f64;

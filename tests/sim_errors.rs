@@ -105,10 +105,36 @@ fn bad_controller_override_is_named() {
 }
 
 #[test]
-fn reserved_planner_is_rejected_clearly() {
+fn unknown_planner_is_rejected_clearly() {
+    let msg = run_bad(&GOOD.replace("time_limit = 5.0", "time_limit = 5.0\nplanner = \"rrt\""));
+    assert!(msg.contains("planner") && msg.contains(":5:"), "{msg}");
+}
+
+#[test]
+fn rrt_star_with_lidar_is_rejected_clearly() {
     let msg = run_bad(&GOOD.replace(
         "time_limit = 5.0",
-        "time_limit = 5.0\nplanner = \"rrt_star\"",
+        "time_limit = 5.0\nplanner = \"rrt_star\"\nperception = \"lidar\"",
     ));
-    assert!(msg.contains("planner") && msg.contains(":5:"), "{msg}");
+    assert!(
+        msg.contains("planner") && msg.contains(":5:") && msg.contains("lidar"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn bad_planner_and_lidar_settings_are_named() {
+    let msg = run_bad(&GOOD.replace(
+        "time_limit = 5.0",
+        "time_limit = 5.0\n[rrt_star]\nmargin = -1.0",
+    ));
+    assert!(
+        msg.contains("rrt_star.margin") && msg.contains(":6:"),
+        "{msg}"
+    );
+    let msg = run_bad(&GOOD.replace(
+        "time_limit = 5.0",
+        "time_limit = 5.0\n[lidar]\nrays = 360\neps = 0.0",
+    ));
+    assert!(msg.contains("lidar.eps") && msg.contains(":7:"), "{msg}");
 }

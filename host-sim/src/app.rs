@@ -90,6 +90,7 @@ pub fn execute_run(req: &RunRequest) -> Result<RunReport> {
         SimOptions {
             solver: req.solver,
             mpc_rate: req.mpc_rate,
+            record_scans: req.plots,
         },
     )?;
     let summary = summarize(&result);

@@ -7,17 +7,26 @@
 //! * [`plant`]: the continuous 3D-LIP integrated in closed form at 1 kHz;
 //! * [`scenario`]: TOML scenario files, validation, `--set` overrides and the
 //!   seeded `random` family;
+//! * [`planner`]: RRT* on an occupancy grid of the known map, whose path gives
+//!   the subgoals (SPEC 5);
+//! * [`perception`]: simulated 2D LiDAR, DBSCAN and one convex obstacle per
+//!   cluster, for unknown maps (SPEC 6);
 //! * [`sim`]: the closed loop (controller at 20 Hz or once per step, with the own
 //!   QP solver or Clarabel);
 //! * [`report`]: `cycles.csv`, `footsteps.csv`, `trajectory.csv`, `summary.json`
 //!   and the atomic output directory;
 //! * [`plot`]: the map, state panels, LDCBF frames and the animated GIF, drawn
 //!   with plotters and an embedded font (no system font needed);
-//! * [`app`]: the `run` pipeline behind the `ldcbf-sim` binary.
+//! * [`app`]: the `run` pipeline behind the `ldcbf-sim` binary;
+//! * [`batch`]: `ldcbf-sim batch` and `merge`: many seeds of a scenario family in
+//!   parallel, sharded across machines, one CSV row per run and a Markdown table.
 //!
 //! Frames and units: world frame W, metres, seconds, radians, as in the controller.
 
 pub mod app;
+pub mod batch;
+pub mod perception;
+pub mod planner;
 pub mod plant;
 pub mod plot;
 pub mod report;

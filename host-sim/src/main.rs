@@ -4,12 +4,18 @@
 //! ldcbf-sim run <scenario> [--out DIR] [--seed S] [--set key=value ...]
 //!               [--solver own|clarabel] [--mpc-rate 20|step] [--no-plots] [--no-gif]
 //! ldcbf-sim list
+//! ldcbf-sim batch --family random --seeds 0..200 [--planner none|rrt_star]
+//!                 [--perception known|lidar] [--jobs J] [--shard I/N] [--out DIR] [--set k=v ...]
+//! ldcbf-sim merge DIR... --out DIR [--allow-partial]
+//! ldcbf-sim table DIR...
 //! ```
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
+use ldcbf_sim::batch::{BatchRequest, SeedRange, Shard};
+use ldcbf_sim::scenario::{Perception, Planner};
 use ldcbf_sim::sim::{MpcRate, Solver};
 use ldcbf_sim::{RunRequest, execute_run};
 
@@ -58,6 +64,62 @@ enum Command {
     },
     /// List the scenarios shipped in scenarios/.
     List,
+    /// Run many seeds of a scenario family in parallel: runs.csv (one row per
+    /// run), summary.json and summary.md (Markdown table).
+    Batch {
+        /// Scenario family: a scenario with a [generator] (name or path).
+        #[arg(long, default_value = "random")]
+        family: String,
+        /// Seeds: `A..B` (B excluded), `A..=B`, or one seed.
+        #[arg(long)]
+        seeds: SeedRange,
+        /// Planner (default: the scenario file's).
+        #[arg(long, value_enum)]
+        planner: Option<Planner>,
+        /// Perception (default: the scenario file's).
+        #[arg(long, value_enum)]
+        perception: Option<Perception>,
+        /// Worker threads [default: one per core].
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Run only shard I of N (1-based) of the seeds, for studies split across
+        /// machines; combine the shard directories with `merge`.
+        #[arg(long, default_value = "1/1")]
+        shard: Shard,
+        /// Output directory [default: out/batch-<family>-<planner>-<perception>[-shard<I>of<N>]].
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Override a scenario field for every run (as for `run`).
+        #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_set)]
+        sets: Vec<(String, String)>,
+        /// QP solver inside the controller.
+        #[arg(long, value_enum, default_value = "own")]
+        solver: Solver,
+        /// Controller rate: a rate in Hz, or `step`.
+        #[arg(long, default_value = "20")]
+        mpc_rate: MpcRate,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Merge the shard directories of one batch study into one directory.
+    Merge {
+        /// Shard directories written by `batch --shard I/N`.
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Merge even if some seeds of the study are missing.
+        #[arg(long)]
+        allow_partial: bool,
+    },
+    /// Print the Markdown table of one or more batch directories side by side.
+    Table {
+        /// Batch directories (one column each).
+        #[arg(required = true)]
+        dirs: Vec<PathBuf>,
+    },
 }
 
 fn parse_set(s: &str) -> Result<(String, String), String> {
@@ -71,9 +133,90 @@ fn parse_set(s: &str) -> Result<(String, String), String> {
     Ok((k.to_string(), v.trim().to_string()))
 }
 
+fn fail(err: anyhow::Error) -> ExitCode {
+    eprintln!("error: {err:#}");
+    ExitCode::FAILURE
+}
+
+fn print_batch(rep: &ldcbf_sim::batch::BatchReport) {
+    let a = &rep.aggregate;
+    println!(
+        "{} seeds {} shard {}: {} runs, {} successful, {} collisions, {} stuck, {} time limit, {} diverged; wall time {:.1} s",
+        rep.meta.scenario,
+        rep.meta.seeds,
+        rep.meta.shard,
+        a.runs,
+        a.success,
+        a.collisions,
+        a.stuck,
+        a.timeouts,
+        a.diverged,
+        rep.meta.wall_time_s
+    );
+    println!(
+        "wrote {}/: runs.csv summary.json summary.md",
+        rep.out_dir.display()
+    );
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
+        Command::Batch {
+            family,
+            seeds,
+            planner,
+            perception,
+            jobs,
+            shard,
+            out,
+            sets,
+            solver,
+            mpc_rate,
+            quiet,
+        } => {
+            let mut req = BatchRequest::new(&family, seeds);
+            req.planner = planner;
+            req.perception = perception;
+            if let Some(j) = jobs {
+                req.jobs = j;
+            }
+            req.shard = shard;
+            req.out = out;
+            req.sets = sets;
+            req.solver = solver;
+            req.mpc_rate = mpc_rate;
+            req.progress = !quiet;
+            match ldcbf_sim::batch::run_batch(&req) {
+                Ok(rep) => {
+                    print_batch(&rep);
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail(e),
+            }
+        }
+        Command::Merge {
+            dirs,
+            out,
+            allow_partial,
+        } => match ldcbf_sim::batch::merge(&dirs, &out, allow_partial) {
+            Ok(rep) => {
+                print_batch(&rep);
+                ExitCode::SUCCESS
+            }
+            Err(e) => fail(e),
+        },
+        Command::Table { dirs } => {
+            let mut cols = Vec::new();
+            for d in &dirs {
+                match ldcbf_sim::batch::read_dir(d) {
+                    Ok((meta, agg, _)) => cols.push((ldcbf_sim::batch::label(&meta), agg)),
+                    Err(e) => return fail(e),
+                }
+            }
+            print!("{}", ldcbf_sim::batch::markdown_table(&cols));
+            ExitCode::SUCCESS
+        }
         Command::List => {
             let dir = ldcbf_sim::scenario::scenario_dir();
             println!("scenarios in {}:", dir.display());

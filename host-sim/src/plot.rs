@@ -9,13 +9,26 @@
 //!   norm), CoM velocity `vx, vy`, heading `theta`, turning rate `omega` (the rate
 //!   in force in the plant).
 //! * `frames.png` ([`frames_png`]): six moments of the walk like the report's
-//!   figure 5: obstacles, path so far, footsteps, the robot (a triangle along its
+//!   figure 5 (with LiDAR, also that cycle's scan and inferred polygons):
+//!   obstacles, path so far, footsteps, the robot (a triangle along its
 //!   heading), and for the control cycle at that moment each active LDCBF
 //!   half-plane `h_j(p) = eta_j'(p - c_j) - delta >= 0` (light), their
 //!   intersection (dark), each `c_j` (red dot) and `eta_j` (red arrow).
 //! * `walk.gif` ([`walk_gif`]): the same drawing for the control cycle at the
 //!   start of every step (decimated to at most `gif_max_frames` frames), with one
 //!   palette for the whole animation.
+//! * `planner.png` ([`planner_png`], runs with `planner = "rrt_star"`): the
+//!   report's figure 8: the occupancy grid (inflated obstacles, grey), the true
+//!   obstacles, the RRT* tree, the RRT* path (red), the subgoals (orange), the
+//!   start (red dot) and the goal (blue star).
+//! * `perception.png` ([`perception_png`], runs with `perception = "lidar"`): the
+//!   report's figure 12: six frames with the LiDAR hit points (green), the
+//!   sensor range (red circle), the inferred polygons (blue) and the true map
+//!   (faded).
+//!
+//! With subgoals, the map-like figures also draw the subgoal polyline and the
+//! subgoals (orange; in a frame the current one is ringed). With LiDAR, the
+//! true obstacles are drawn faded and, in frames, the scan of that cycle on top.
 
 use std::path::Path;
 use std::sync::Once;
@@ -27,7 +40,8 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-use crate::sim::{CycleRecord, SimResult};
+use crate::scenario::Perception;
+use crate::sim::{CycleRecord, ScanRecord, SimResult};
 
 /// Figure options.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -61,6 +75,11 @@ const RIGHT: RGBColor = RGBColor(20, 150, 60);
 const PATH: RGBColor = RGBColor(30, 30, 30);
 const SAFE: RGBColor = RGBColor(70, 110, 200);
 const GOAL: RGBColor = RGBColor(210, 30, 30);
+const SUBGOAL: RGBColor = RGBColor(245, 150, 0);
+const SCAN: RGBColor = RGBColor(0, 170, 60);
+const INFERRED: RGBColor = RGBColor(40, 80, 220);
+const TREE: RGBColor = RGBColor(120, 150, 200);
+const GRID_OCC: RGBColor = RGBColor(200, 200, 200);
 
 fn ensure_fonts() {
     static ONCE: Once = Once::new();
@@ -83,6 +102,14 @@ pub fn render_all(r: &SimResult, dir: &Path, opts: &PlotOptions) -> Result<Vec<S
     states_png(r, &dir.join("states.png"))?;
     frames_png(&scene, &dir.join("frames.png"))?;
     let mut files = vec!["map.png".into(), "states.png".into(), "frames.png".into()];
+    if r.navigation.plan.is_some() {
+        planner_png(r, &dir.join("planner.png"))?;
+        files.push("planner.png".into());
+    }
+    if r.scenario.perception == Perception::Lidar && !r.scans.is_empty() {
+        perception_png(&scene, &dir.join("perception.png"))?;
+        files.push("perception.png".into());
+    }
     if opts.gif {
         walk_gif(&scene, &dir.join("walk.gif"), opts)?;
         files.push("walk.gif".into());
@@ -116,6 +143,7 @@ impl<'r> Scene<'r> {
             .map(|(_, s)| (s.time, s.position.x, s.position.y))
             .collect();
         pts.extend(path.iter().map(|p| Vector2::new(p.1, p.2)));
+        pts.extend(r.navigation.subgoals.iter().copied());
         pts.extend(r.footsteps.iter().map(|f| f.position));
         let (mut x0, mut x1, mut y0, mut y1) = pts.iter().fold(
             (
@@ -209,18 +237,30 @@ fn clip(poly: &[(f64, f64)], hp: &HalfPlane, delta: f64) -> Vec<(f64, f64)> {
     out
 }
 
+/// What a map-like drawing shows of one moment of the run.
+#[derive(Clone, Copy)]
+struct Moment<'a> {
+    /// Path and footsteps up to this time, s.
+    until: f64,
+    /// The control cycle whose LDCBF half-planes are drawn.
+    cycle: Option<&'a CycleRecord>,
+    /// The LiDAR scan drawn on top.
+    scan: Option<&'a ScanRecord>,
+}
+
 /// Draws a map-like scene into `area`: title, axes, (half-planes of `cycle`),
 /// obstacles, path and footsteps up to `until` (s), robot, start and goal.
 fn draw_scene<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     scene: &Scene<'_>,
     layout: MapLayout,
-    until: f64,
-    cycle: Option<&CycleRecord>,
+    moment: Moment<'_>,
     title: &str,
     legend: bool,
 ) -> Result<()> {
+    let Moment { until, cycle, scan } = moment;
     let r = scene.r;
+    let lidar = sc_perception(r) == Perception::Lidar;
     let sc = &r.scenario;
     let (x0, x1, y0, y1) = scene.bounds;
     let (w, _) = area.dim_in_pixel();
@@ -288,7 +328,8 @@ fn draw_scene<DB: DrawingBackend>(
         }
     }
 
-    // Obstacles.
+    // Obstacles (the true map; faded when the controller only perceives it).
+    let fill = if lidar { 0.30 } else { 0.85 };
     for (i, o) in sc.obstacles.iter().enumerate() {
         let v: Vec<(f64, f64)> = o.vertices().iter().map(|p| (p.x, p.y)).collect();
         let mut closed = v.clone();
@@ -296,17 +337,105 @@ fn draw_scene<DB: DrawingBackend>(
         let s = chart
             .draw_series(std::iter::once(Polygon::new(
                 v,
-                OBSTACLE.mix(0.85).filled(),
+                OBSTACLE.mix(fill).filled(),
             )))
             .map_err(e)?;
         if legend && i == 0 {
-            s.label("obstacle").legend(|(x, y)| {
-                Rectangle::new([(x - 6, y - 6), (x + 6, y + 6)], OBSTACLE.filled())
+            let label = if lidar {
+                "true obstacle (unknown)"
+            } else {
+                "obstacle"
+            };
+            s.label(label).legend(move |(x, y)| {
+                Rectangle::new(
+                    [(x - 6, y - 6), (x + 6, y + 6)],
+                    OBSTACLE.mix(fill).filled(),
+                )
             });
         }
         chart
             .draw_series(std::iter::once(PathElement::new(closed, OBSTACLE_EDGE)))
             .map_err(e)?;
+    }
+
+    // LiDAR scan: range, inferred polygons, hit points.
+    if let Some(sc_rec) = scan {
+        let rng = sc.lidar.range;
+        let ring: Vec<(f64, f64)> = (0..=96)
+            .map(|i| {
+                let a = core::f64::consts::TAU * f64::from(i) / 96.0;
+                (
+                    sc_rec.origin.x + rng * a.cos(),
+                    sc_rec.origin.y + rng * a.sin(),
+                )
+            })
+            .collect();
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                ring,
+                GOAL.stroke_width(1),
+            )))
+            .map_err(e)?;
+        for o in &sc_rec.obstacles {
+            let v: Vec<(f64, f64)> = o.vertices().iter().map(|p| (p.x, p.y)).collect();
+            let mut closed = v.clone();
+            closed.push(v[0]);
+            chart
+                .draw_series(std::iter::once(Polygon::new(
+                    v,
+                    INFERRED.mix(0.45).filled(),
+                )))
+                .map_err(e)?;
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    closed,
+                    INFERRED.stroke_width(2),
+                )))
+                .map_err(e)?;
+        }
+        chart
+            .draw_series(
+                sc_rec
+                    .points
+                    .iter()
+                    .map(|p| Circle::new((p.x, p.y), 1, SCAN.filled())),
+            )
+            .map_err(e)?;
+    }
+
+    // Subgoals: the polyline from the start and the points.
+    if r.navigation.plan.is_some() {
+        let mut line = vec![(sc.start.x, sc.start.y)];
+        line.extend(r.navigation.subgoals.iter().map(|p| (p.x, p.y)));
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                line,
+                SUBGOAL.mix(0.8).stroke_width(2),
+            )))
+            .map_err(e)?;
+        let s = chart
+            .draw_series(
+                r.navigation
+                    .subgoals
+                    .iter()
+                    .map(|p| Circle::new((p.x, p.y), 5, SUBGOAL.filled())),
+            )
+            .map_err(e)?;
+        if legend {
+            s.label("subgoals (RRT*)")
+                .legend(|(x, y)| Circle::new((x, y), 5, SUBGOAL.filled()));
+        }
+        if let Some(c) = cycle
+            && let Some(p) = r.navigation.subgoals.get(c.subgoal)
+        {
+            chart
+                .draw_series(std::iter::once(Circle::new(
+                    (p.x, p.y),
+                    9,
+                    SUBGOAL.stroke_width(2),
+                )))
+                .map_err(e)?;
+        }
     }
 
     // c_j and eta_j on top of the obstacles.
@@ -450,6 +579,10 @@ fn draw_scene<DB: DrawingBackend>(
     Ok(())
 }
 
+fn sc_perception(r: &SimResult) -> Perception {
+    r.scenario.perception
+}
+
 fn outcome_text(r: &SimResult) -> String {
     let s = crate::report::summarize(r);
     format!(
@@ -476,8 +609,11 @@ pub fn map_png(scene: &Scene<'_>, path: &Path) -> Result<()> {
         &root,
         scene,
         layout,
-        end,
-        None,
+        Moment {
+            until: end,
+            cycle: None,
+            scan: None,
+        },
         &outcome_text(scene.r),
         true,
     )?;
@@ -649,7 +785,18 @@ pub fn frames_png(scene: &Scene<'_>, path: &Path) -> Result<()> {
             c.half_planes.len(),
             if c.half_planes.len() == 1 { "" } else { "s" }
         );
-        draw_scene(cell, scene, layout, c.time, Some(c), &title, false)?;
+        draw_scene(
+            cell,
+            scene,
+            layout,
+            Moment {
+                until: c.time,
+                cycle: Some(c),
+                scan: scan_of(scene.r, c),
+            },
+            &title,
+            false,
+        )?;
     }
     root.present().map_err(e)?;
     Ok(())
@@ -681,7 +828,19 @@ pub fn walk_gif(scene: &Scene<'_>, path: &Path, opts: &PlotOptions) -> Result<()
         let root = BitMapBackend::with_buffer(buf, (w, h)).into_drawing_area();
         root.fill(&WHITE).map_err(e)?;
         let title = format!("{}  t = {:.1} s", r.scenario.name, until);
-        draw_scene(&root, scene, layout, until, Some(c), &title, false)?;
+        let scan = scan_of(r, c);
+        draw_scene(
+            &root,
+            scene,
+            layout,
+            Moment {
+                until,
+                cycle: Some(c),
+                scan,
+            },
+            &title,
+            false,
+        )?;
         root.present().map_err(e)?;
         Ok(())
     };
@@ -737,5 +896,253 @@ pub fn walk_gif(scene: &Scene<'_>, path: &Path, opts: &PlotOptions) -> Result<()
         };
         enc.write_frame(&frame).map_err(e)?;
     }
+    Ok(())
+}
+
+/// The scan that fed cycle `c`, if recorded.
+fn scan_of<'a>(r: &'a SimResult, c: &CycleRecord) -> Option<&'a ScanRecord> {
+    r.scans
+        .binary_search_by_key(&c.index, |s| s.cycle)
+        .ok()
+        .map(|i| &r.scans[i])
+}
+
+/// Figure 12 of the report: six frames of a LiDAR run with the scan of each.
+pub fn perception_png(scene: &Scene<'_>, path: &Path) -> Result<()> {
+    ensure_fonts();
+    let side = 440;
+    let layout = MapLayout::for_side(side);
+    let (cw, ch) = layout.cell(side);
+    let (cols, rows) = (3u32, 2u32);
+    let root = BitMapBackend::new(path, (cw * cols, ch * rows)).into_drawing_area();
+    root.fill(&WHITE).map_err(e)?;
+    let cells = root.split_evenly((rows as usize, cols as usize));
+    let picks = pick_cycles(scene.r, (cols * rows) as usize);
+    for (cell, c) in cells.iter().zip(picks) {
+        let scan = scan_of(scene.r, c);
+        let title = format!(
+            "t = {:.1} s: {} hits, {} inferred",
+            c.time,
+            scan.map_or(0, |s| s.points.len()),
+            scan.map_or(0, |s| s.obstacles.len())
+        );
+        draw_scene(
+            cell,
+            scene,
+            layout,
+            Moment {
+                until: c.time,
+                cycle: None,
+                scan,
+            },
+            &title,
+            false,
+        )?;
+    }
+    root.present().map_err(e)?;
+    Ok(())
+}
+
+/// A five-pointed star around `c` (data units), outer radius `r`.
+fn star(c: (f64, f64), r: f64) -> Vec<(f64, f64)> {
+    (0..10)
+        .map(|i| {
+            let a = core::f64::consts::FRAC_PI_2 + core::f64::consts::PI * f64::from(i) / 5.0;
+            let rr = if i % 2 == 0 { r } else { 0.4 * r };
+            (c.0 + rr * a.cos(), c.1 + rr * a.sin())
+        })
+        .collect()
+}
+
+/// Figure 8 of the report: the RRT* tree over the occupancy grid. Does nothing
+/// for a run without a plan.
+pub fn planner_png(r: &SimResult, path: &Path) -> Result<()> {
+    ensure_fonts();
+    let Some(plan) = r.navigation.plan.as_ref() else {
+        return Ok(());
+    };
+    let sc = &r.scenario;
+    let g = &plan.grid;
+    let (mut x0, mut y0) = (g.origin.x, g.origin.y);
+    let (mut x1, mut y1) = (
+        x0 + g.width as f64 * g.resolution,
+        y0 + g.height as f64 * g.resolution,
+    );
+    let (w, h) = (x1 - x0, y1 - y0);
+    if w > h {
+        y0 -= 0.5 * (w - h);
+        y1 += 0.5 * (w - h);
+    } else {
+        x0 -= 0.5 * (h - w);
+        x1 += 0.5 * (h - w);
+    }
+    let side = 760;
+    let layout = MapLayout::for_side(side);
+    let (cw, chh) = layout.cell(side);
+    let root = BitMapBackend::new(path, (cw, chh)).into_drawing_area();
+    root.fill(&WHITE).map_err(e)?;
+    let (title_area, chart_area) = root.split_vertically(layout.title_h);
+    let title = format!(
+        "{}: RRT* {} nodes, {} subgoals, path {:.2} m (grid {} m, margin {} m)",
+        sc.name,
+        plan.tree.nodes.len(),
+        plan.subgoals.len(),
+        plan.subgoal_length(sc.start),
+        sc.rrt.resolution,
+        sc.rrt.margin
+    );
+    title_area
+        .draw_text(
+            &title,
+            &(FONT, layout.font as f64 * 1.1)
+                .into_font()
+                .color(&BLACK)
+                .pos(Pos::new(HPos::Center, VPos::Center)),
+            (cw as i32 / 2, layout.title_h as i32 / 2),
+        )
+        .map_err(e)?;
+    let mut chart = ChartBuilder::on(&chart_area)
+        .margin(layout.margin)
+        .x_label_area_size(layout.x_label)
+        .y_label_area_size(layout.y_label)
+        .build_cartesian_2d(x0..x1, y0..y1)
+        .map_err(e)?;
+    chart
+        .configure_mesh()
+        .x_desc("x [m]")
+        .y_desc("y [m]")
+        .label_style((FONT, layout.font))
+        .axis_desc_style((FONT, layout.font))
+        .light_line_style(TRANSPARENT.stroke_width(0))
+        .bold_line_style(RGBColor(225, 225, 225))
+        .draw()
+        .map_err(e)?;
+    // Planning box and occupied cells (row runs as rectangles).
+    let (gx0, gy0) = (g.origin.x, g.origin.y);
+    let gx1 = gx0 + g.width as f64 * g.resolution;
+    let gy1 = gy0 + g.height as f64 * g.resolution;
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            vec![(gx0, gy0), (gx1, gy0), (gx1, gy1), (gx0, gy1), (gx0, gy0)],
+            BLACK.stroke_width(1),
+        )))
+        .map_err(e)?;
+    let mut cells = Vec::new();
+    for j in 0..g.height {
+        let mut i = 0;
+        while i < g.width {
+            if g.is_occupied(i, j) {
+                let start = i;
+                while i < g.width && g.is_occupied(i, j) {
+                    i += 1;
+                }
+                let (ya, yb) = (
+                    gy0 + j as f64 * g.resolution,
+                    gy0 + (j + 1) as f64 * g.resolution,
+                );
+                cells.push(Rectangle::new(
+                    [
+                        (gx0 + start as f64 * g.resolution, ya),
+                        (gx0 + i as f64 * g.resolution, yb),
+                    ],
+                    GRID_OCC.filled(),
+                ));
+            } else {
+                i += 1;
+            }
+        }
+    }
+    chart
+        .draw_series(cells)
+        .map_err(e)?
+        .label(format!("occupied cell (obstacle + {} m)", sc.rrt.margin))
+        .legend(|(x, y)| Rectangle::new([(x - 6, y - 6), (x + 6, y + 6)], GRID_OCC.filled()));
+    for (i, o) in sc.obstacles.iter().enumerate() {
+        let v: Vec<(f64, f64)> = o.vertices().iter().map(|p| (p.x, p.y)).collect();
+        let s = chart
+            .draw_series(std::iter::once(Polygon::new(v, OBSTACLE.mix(0.9).filled())))
+            .map_err(e)?;
+        if i == 0 {
+            s.label("obstacle").legend(|(x, y)| {
+                Rectangle::new([(x - 6, y - 6), (x + 6, y + 6)], OBSTACLE.filled())
+            });
+        }
+    }
+    // Tree.
+    let t = &plan.tree;
+    chart
+        .draw_series((1..t.nodes.len()).filter_map(|k| {
+            t.parent[k].map(|p| {
+                PathElement::new(
+                    vec![(t.nodes[p].x, t.nodes[p].y), (t.nodes[k].x, t.nodes[k].y)],
+                    TREE.stroke_width(1),
+                )
+            })
+        }))
+        .map_err(e)?
+        .label("RRT* tree")
+        .legend(|(x, y)| PathElement::new(vec![(x - 8, y), (x + 8, y)], TREE.stroke_width(2)));
+    // Path, subgoals, start, goal.
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            plan.path.iter().map(|p| (p.x, p.y)).collect::<Vec<_>>(),
+            GOAL.stroke_width(3),
+        )))
+        .map_err(e)?
+        .label("RRT* path")
+        .legend(|(x, y)| PathElement::new(vec![(x - 8, y), (x + 8, y)], GOAL.stroke_width(3)));
+    let mut line = vec![(sc.start.x, sc.start.y)];
+    line.extend(plan.subgoals.iter().map(|p| (p.x, p.y)));
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            line,
+            SUBGOAL.stroke_width(2),
+        )))
+        .map_err(e)?;
+    chart
+        .draw_series(
+            plan.subgoals
+                .iter()
+                .map(|p| Circle::new((p.x, p.y), 6, SUBGOAL.filled())),
+        )
+        .map_err(e)?
+        .label("subgoals (shortcut path)")
+        .legend(|(x, y)| Circle::new((x, y), 6, SUBGOAL.filled()));
+    chart
+        .draw_series(std::iter::once(Circle::new(
+            (sc.start.x, sc.start.y),
+            7,
+            GOAL.filled(),
+        )))
+        .map_err(e)?
+        .label("start")
+        .legend(|(x, y)| Circle::new((x, y), 6, GOAL.filled()));
+    let blue = RGBColor(30, 60, 200);
+    let sz = 0.025 * (x1 - x0);
+    chart
+        .draw_series(std::iter::once(Polygon::new(
+            star((sc.goal.x, sc.goal.y), sz),
+            blue.filled(),
+        )))
+        .map_err(e)?
+        .label("goal")
+        .legend(move |(x, y)| {
+            Polygon::new(
+                star((f64::from(x), f64::from(y)), 7.0)
+                    .into_iter()
+                    .map(|(a, b)| (a as i32, b as i32))
+                    .collect::<Vec<_>>(),
+                blue.filled(),
+            )
+        });
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .label_font((FONT, layout.font))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(e)?;
+    root.present().map_err(e)?;
     Ok(())
 }

@@ -101,8 +101,29 @@ pub struct Summary {
     pub compute: ComputeStats,
     /// Solver iterations: max over cycles.
     pub max_iterations: u32,
-    /// Obstacles in the scenario.
+    /// Obstacles in the scenario (the true map).
     pub obstacles: usize,
+    /// Planner (`none` or `rrt_star`).
+    pub planner: String,
+    /// Perception (`known` or `lidar`).
+    pub perception: String,
+    /// Why planning failed, if it did (the run then walked to the goal directly).
+    pub planner_error: Option<String>,
+    /// Wall-clock planning time, ms (null without a planner).
+    pub plan_time_ms: Option<f64>,
+    /// Nodes of the RRT* tree (null without a plan).
+    pub tree_nodes: Option<usize>,
+    /// Length of the subgoal polyline from the start, m (null without a plan).
+    pub path_length: Option<f64>,
+    /// Subgoals handed to the controller, the goal included (1 without a plan).
+    pub subgoals: usize,
+    /// Subgoals passed (the goal included when reached).
+    pub subgoals_reached: usize,
+    /// Mean number of obstacles handed to the controller per cycle (the true
+    /// count with `known`, the inferred count with `lidar`).
+    pub obstacles_seen_mean: f64,
+    /// Largest number of obstacles handed to the controller in one cycle.
+    pub obstacles_seen_max: usize,
     /// Controller configuration used (defaults + overrides).
     pub config: BTreeMap<String, serde_json::Value>,
     /// The overrides given by the scenario file and `--set`.
@@ -266,6 +287,29 @@ pub fn summarize(r: &SimResult) -> Summary {
             .max()
             .unwrap_or(0),
         obstacles: sc.obstacles.len(),
+        planner: sc.planner.name().into(),
+        perception: sc.perception.name().into(),
+        planner_error: r.navigation.error.clone(),
+        plan_time_ms: (sc.planner != crate::scenario::Planner::None)
+            .then(|| r.navigation.plan_time_ns as f64 / 1e6),
+        tree_nodes: r.navigation.plan.as_ref().map(|p| p.tree.nodes.len()),
+        path_length: r
+            .navigation
+            .plan
+            .as_ref()
+            .map(|p| p.subgoal_length(sc.start)),
+        subgoals: r.navigation.subgoals.len(),
+        subgoals_reached: r.navigation.reached_at.len(),
+        obstacles_seen_mean: if r.cycles.is_empty() {
+            0.0
+        } else {
+            r.cycles
+                .iter()
+                .map(|c| c.obstacles_seen as f64)
+                .sum::<f64>()
+                / r.cycles.len() as f64
+        },
+        obstacles_seen_max: r.cycles.iter().map(|c| c.obstacles_seen).max().unwrap_or(0),
         config: config_map(&sc.config),
         overrides: crate::scenario::overrides_map(&sc.controller),
         note: sc.note.clone(),
@@ -293,6 +337,36 @@ pub fn human_summary(s: &Summary) -> String {
         "  {verdict}: t = {:.2} s, {} steps, final distance {:.3} m",
         s.sim_time, s.steps, s.final_distance
     );
+    if s.planner != "none" {
+        match &s.planner_error {
+            Some(err) => {
+                let _ = writeln!(
+                    o,
+                    "  planner {}: FAILED ({err}); walked to the goal directly",
+                    s.planner
+                );
+            }
+            None => {
+                let _ = writeln!(
+                    o,
+                    "  planner {}: {} nodes in {:.1} ms, {} subgoals ({} passed), path {:.2} m",
+                    s.planner,
+                    s.tree_nodes.unwrap_or(0),
+                    s.plan_time_ms.unwrap_or(0.0),
+                    s.subgoals,
+                    s.subgoals_reached,
+                    s.path_length.unwrap_or(0.0)
+                );
+            }
+        }
+    }
+    if s.perception != "known" {
+        let _ = writeln!(
+            o,
+            "  perception {}: {:.1} inferred obstacles per cycle on average (max {}); clearances use the true map",
+            s.perception, s.obstacles_seen_mean, s.obstacles_seen_max
+        );
+    }
     let f = |v: Option<f64>| v.map_or("n/a".to_string(), |x| format!("{x:.3} m"));
     let _ = writeln!(
         o,

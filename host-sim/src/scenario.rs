@@ -16,9 +16,11 @@
 //! success_radius = 0.15    # m, goal reached when |p - goal| <= this (default 0.15, SPEC 4)
 //! stuck_window = 30.0      # s: stop as "stuck" when the best distance to the goal
 //!                          # has not improved by 5 cm for this long; 0 disables (default 30)
-//! planner = "none"         # "none" only for now ("rrt_star" is reserved)
-//! perception = "known"     # "known" only for now ("lidar" is reserved)
-//! seed = 0                 # seed of the generator (overridden by --seed)
+//!                          # (with a planner: no 5 cm decrease of the remaining path length)
+//! planner = "none"         # "none" (walk to the goal) or "rrt_star" (subgoals, SPEC 5)
+//! perception = "known"     # "known" (true polygons) or "lidar" (LiDAR + DBSCAN, SPEC 6)
+//! seed = 0                 # seed of the generator, the planner and the LiDAR noise
+//!                          # (overridden by --seed)
 //!
 //! [controller]             # overrides of ldcbf_controller::Config fields
 //! delta = 0.3
@@ -36,7 +38,19 @@
 //! [generator]              # optional: adds seeded random convex obstacles
 //! kind = "random_polygons"
 //! count = 8
+//! min_gap = 0.0            # optional: minimum distance between two polygons, m
+//!
+//! [rrt_star]               # optional: planner settings (crate::planner::RrtParams)
+//! iterations = 3000
+//! margin = 0.4
+//!
+//! [lidar]                  # optional: perception settings (crate::perception::LidarParams)
+//! range = 3.0
+//! min_points = 3
 //! ```
+//!
+//! `planner = "rrt_star"` needs a known map: it is refused together with
+//! `perception = "lidar"` (planning on the perceived map is not implemented).
 //!
 //! Without `hull = true` a vertex list must already be a convex polygon
 //! ([`ConvexPolygon::new`]); a non-convex list is an error naming the obstacle.
@@ -66,32 +80,57 @@ use rand_chacha::rand_core::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
 use toml::Spanned;
 
+use crate::perception::LidarParams;
+use crate::planner::RrtParams;
+
 /// Vertex capacity of scenario polygons.
 pub const MAX_VERTICES: usize = 32;
 
 /// The polygon type used by the simulator (world frame, metres).
 pub type Polygon = ConvexPolygon<MAX_VERTICES>;
 
-/// Global planner (SPEC 5). Only `none` is implemented so far.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+/// Global planner (SPEC 5).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "snake_case")]
 pub enum Planner {
     /// Walk straight to the goal (the MPC alone).
     #[default]
     None,
-    /// RRT* subgoals (reserved; rejected for now).
+    /// RRT* on the known map; its path's nodes are subgoals ([`crate::planner`]).
+    #[value(name = "rrt_star")]
     RrtStar,
 }
 
-/// Obstacle perception (SPEC 6). Only `known` is implemented so far.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize)]
+impl Planner {
+    /// The name used in files (`none`, `rrt_star`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Planner::None => "none",
+            Planner::RrtStar => "rrt_star",
+        }
+    }
+}
+
+/// Obstacle perception (SPEC 6).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "snake_case")]
 pub enum Perception {
     /// The controller gets the true obstacle polygons.
     #[default]
     Known,
-    /// LiDAR + DBSCAN (reserved; rejected for now).
+    /// The controller gets only the obstacles inferred from a simulated LiDAR
+    /// by DBSCAN ([`crate::perception`]).
     Lidar,
+}
+
+impl Perception {
+    /// The name used in files (`known`, `lidar`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Perception::Known => "known",
+            Perception::Lidar => "lidar",
+        }
+    }
 }
 
 /// Foot side as written in a file.
@@ -228,6 +267,11 @@ pub struct RandomParams {
     /// Minimum distance from the start and from the goal to every polygon, m.
     #[serde(default = "default_clearance")]
     pub clearance: f64,
+    /// Minimum distance between two polygons, m (0 = they may touch or overlap,
+    /// the paper's test). A polygon closer than this to an earlier one is drawn
+    /// again; with 0 the generator draws exactly as before this field existed.
+    #[serde(default)]
+    pub min_gap: f64,
 }
 
 fn default_kind() -> String {
@@ -262,6 +306,7 @@ impl Default for RandomParams {
             radius: default_radius(),
             points: default_points(),
             clearance: default_clearance(),
+            min_gap: 0.0,
         }
     }
 }
@@ -303,6 +348,9 @@ impl RandomParams {
         }
         if !(self.clearance.is_finite() && self.clearance >= 0.0) {
             return Err(("clearance", "must be finite and >= 0".into()));
+        }
+        if !(self.min_gap.is_finite() && self.min_gap >= 0.0) {
+            return Err(("min_gap", "must be finite and >= 0".into()));
         }
         if self.count > 1000 {
             return Err(("count", "must be <= 1000".into()));
@@ -360,11 +408,45 @@ pub fn random_obstacles(
         let clear = |p: Vector2<f64>| {
             closest_point_point_polygon(&p, &poly).signed_distance >= params.clearance
         };
-        if clear(start) && clear(goal) {
+        if clear(start)
+            && clear(goal)
+            && (params.min_gap <= 0.0
+                || out
+                    .iter()
+                    .all(|o| polygon_distance(o, &poly) >= params.min_gap))
+        {
             out.push(poly);
         }
     }
     Ok(out)
+}
+
+/// Distance between two convex polygons, m (0 when they touch or overlap): the
+/// smallest vertex-to-polygon distance either way, or 0 if two edges cross.
+pub fn polygon_distance(a: &Polygon, b: &Polygon) -> f64 {
+    let cross = |o: Vector2<f64>, p: Vector2<f64>, q: Vector2<f64>| {
+        (p.x - o.x) * (q.y - o.y) - (p.y - o.y) * (q.x - o.x)
+    };
+    let (va, vb) = (a.vertices(), b.vertices());
+    for i in 0..va.len() {
+        let (p1, p2) = (va[i], va[(i + 1) % va.len()]);
+        for j in 0..vb.len() {
+            let (q1, q2) = (vb[j], vb[(j + 1) % vb.len()]);
+            let d1 = cross(p1, p2, q1);
+            let d2 = cross(p1, p2, q2);
+            let d3 = cross(q1, q2, p1);
+            let d4 = cross(q1, q2, p2);
+            if d1 * d2 <= 0.0 && d3 * d4 <= 0.0 {
+                return 0.0;
+            }
+        }
+    }
+    let d = |v: &[Vector2<f64>], p: &Polygon| {
+        v.iter()
+            .map(|q| closest_point_point_polygon(q, p).signed_distance)
+            .fold(f64::INFINITY, f64::min)
+    };
+    d(va, b).min(d(vb, a)).max(0.0)
 }
 
 /// The paper's random test as a ready scenario: start (0, 0) heading 0, goal
@@ -393,6 +475,8 @@ pub fn random_scenario(seed: u64) -> Scenario {
         generator: Some(params),
         controller: ControllerOverrides::default(),
         config: Config::default(),
+        rrt: RrtParams::default(),
+        lidar: LidarParams::default(),
         obstacles,
     }
 }
@@ -420,13 +504,15 @@ pub struct Scenario {
     pub time_limit: f64,
     /// Goal radius, m.
     pub success_radius: f64,
-    /// Stuck detection window, s (0 = off).
+    /// Stuck detection window, s (0 = off): the run ends as stuck when the
+    /// remaining path length (the distance to the goal without a planner) has
+    /// not decreased by 5 cm for this long.
     pub stuck_window: f64,
-    /// Planner (only `None` runs).
+    /// Global planner.
     pub planner: Planner,
-    /// Perception (only `Known` runs).
+    /// What the controller knows of the obstacles.
     pub perception: Perception,
-    /// Seed used by the generator (and, later, by noise sources).
+    /// Seed of the generator, of the RRT* samples and of the LiDAR noise.
     pub seed: u64,
     /// The generator parameters, when the scenario has random obstacles.
     pub generator: Option<RandomParams>,
@@ -434,7 +520,12 @@ pub struct Scenario {
     pub controller: ControllerOverrides,
     /// The validated controller configuration (defaults + overrides).
     pub config: Config,
-    /// Obstacles, world frame: the file's, then the generated ones.
+    /// Planner settings (the `[rrt_star]` table; used with `planner = "rrt_star"`).
+    pub rrt: RrtParams,
+    /// LiDAR and clustering settings (the `[lidar]` table; used with
+    /// `perception = "lidar"`).
+    pub lidar: LidarParams,
+    /// Obstacles, world frame: the file's, then the generated ones (the TRUE map).
     pub obstacles: Vec<Polygon>,
 }
 
@@ -504,6 +595,10 @@ struct RawScenario {
     obstacles: Vec<Spanned<RawObstacle>>,
     #[serde(default)]
     generator: Option<Spanned<RandomParams>>,
+    #[serde(default = "spanned_default")]
+    rrt_star: Spanned<RrtParams>,
+    #[serde(default = "spanned_default")]
+    lidar: Spanned<LidarParams>,
 }
 
 fn spanned_default<T: Default>() -> Spanned<T> {
@@ -718,6 +813,8 @@ fn apply_set(table: &mut toml::Table, key: &str, value: &str) -> Result<(), Stri
         "controller",
         "obstacles",
         "generator",
+        "rrt_star",
+        "lidar",
     ];
     let mut parts: Vec<&str> = key.split('.').collect();
     if parts.iter().any(|p| p.is_empty()) {
@@ -946,19 +1043,33 @@ fn validate(
             "must be finite and >= 0 (0 disables)".into(),
         ));
     }
-    if *raw.planner.get_ref() != Planner::None {
+    if *raw.planner.get_ref() == Planner::RrtStar && *raw.perception.get_ref() == Perception::Lidar
+    {
         return Err(err(
             "planner",
             Some(raw.planner.span()),
-            "only planner = \"none\" is implemented so far (rrt_star is planned)".into(),
+            "planner = \"rrt_star\" plans on the known map and cannot be combined with \
+             perception = \"lidar\" (planning on the perceived map is not implemented)"
+                .into(),
         ));
     }
-    if *raw.perception.get_ref() != Perception::Known {
-        return Err(err(
-            "perception",
-            Some(raw.perception.span()),
-            "only perception = \"known\" is implemented so far (lidar is planned)".into(),
-        ));
+    if let Err((f, m)) = raw.rrt_star.get_ref().validate() {
+        let line = text.and_then(|t| find_key_line(t, "rrt_star", f));
+        return Err(ScenarioError {
+            file: file.into(),
+            field: format!("rrt_star.{f}"),
+            line,
+            message: m,
+        });
+    }
+    if let Err((f, m)) = raw.lidar.get_ref().validate() {
+        let line = text.and_then(|t| find_key_line(t, "lidar", f));
+        return Err(ScenarioError {
+            file: file.into(),
+            field: format!("lidar.{f}"),
+            line,
+            message: m,
+        });
     }
     let overrides = raw.controller.get_ref().clone();
     let config = overrides.apply(Config::default());
@@ -1073,6 +1184,8 @@ fn validate(
         generator,
         controller: overrides,
         config,
+        rrt: raw.rrt_star.get_ref().clone(),
+        lidar: raw.lidar.get_ref().clone(),
         obstacles,
     })
 }

@@ -3,6 +3,11 @@
 //!
 //! Each tick, in this order:
 //!
+//! Before the first tick, with `planner = "rrt_star"`, [`crate::planner::plan`]
+//! turns the known map into subgoals (the goal last; without a planner the goal
+//! is the only subgoal). If planning fails the run goes on towards the goal
+//! directly and the error is kept in [`Navigation::error`].
+//!
 //! 1. **Step end.** When the current step has lasted `T`, the swing foot lands at
 //!    the `foot_target` of the most recent controller cycle, the stance side
 //!    flips, and the `turning_rate` of that cycle takes effect for the new step
@@ -13,11 +18,21 @@
 //!    true state (CoM position, velocity, heading, the turning rate in force, stance
 //!    foot and side, time in step), the goal and the obstacle list, and
 //!    `Controller::step_with` is called. Its wall-clock time is measured with
-//!    [`Instant`] around that call only.
-//! 3. **Record** the 1 kHz sample (and its clearance to every obstacle), then check
-//!    the end conditions: goal reached (`|p - goal| <= success_radius`), time
-//!    limit, or stuck (no 5 cm improvement of the best distance to the goal for
-//!    `stuck_window` seconds).
+//!    [`Instant`] around that call only. Before the call, the current subgoal
+//!    is advanced while the CoM is within `switch_radius` of it (never past the
+//!    goal), and the controller's goal is the current subgoal. With
+//!    `perception = "lidar"` the obstacle list is the one inferred from a LiDAR
+//!    scan taken at that moment from the CoM ([`crate::perception`]); otherwise
+//!    it is the true map.
+//! 3. **Record** the 1 kHz sample (and its clearance to every TRUE obstacle), then
+//!    check the end conditions: goal reached (`|p - goal| <= success_radius`),
+//!    time limit, or stuck: the remaining path length
+//!    ([`crate::planner::remaining_length`]: distance to the current subgoal plus
+//!    the rest of the subgoal polyline; the distance to the goal without a
+//!    planner) has not improved by 5 cm for `stuck_window` seconds. Walking
+//!    around an obstacle towards a subgoal is progress; circling is not. A
+//!    cycle whose input the controller rejects as invalid (a state out of
+//!    range: the pendulum is falling) ends the run as `diverged`.
 //! 4. **Integrate** one tick.
 //!
 //! The simulator never reaches inside the controller: it uses the returned
@@ -34,8 +49,10 @@ use ldcbf_controller::{
 };
 use ldcbf_reference::ClarabelBackend;
 
+use crate::perception::Lidar;
+use crate::planner::{Plan, remaining_length};
 use crate::plant::{Plant, PlantParams};
-use crate::scenario::{Polygon, Scenario};
+use crate::scenario::{Perception, Planner, Polygon, Scenario};
 
 /// Horizon of [`PaperController`].
 pub const HORIZON: usize = 3;
@@ -99,6 +116,9 @@ pub struct SimOptions {
     pub solver: Solver,
     /// Controller rate.
     pub mpc_rate: MpcRate,
+    /// Keep every LiDAR scan (points and inferred polygons) in
+    /// [`SimResult::scans`] for the figures; batch runs turn it off.
+    pub record_scans: bool,
 }
 
 impl Default for SimOptions {
@@ -106,6 +126,7 @@ impl Default for SimOptions {
         SimOptions {
             solver: Solver::Own,
             mpc_rate: MpcRate::Hz(20),
+            record_scans: true,
         }
     }
 }
@@ -120,6 +141,11 @@ pub enum Outcome {
     TimeLimit,
     /// No progress towards the goal for `stuck_window` seconds.
     Stuck,
+    /// The walk diverged: the controller rejected the measured state as out of
+    /// range (`CycleStatus::InvalidInput`, e.g. a CoM speed above
+    /// `ldcbf_controller::mpc::MAX_RATE`), i.e. the pendulum is falling. The run
+    /// stops at that cycle instead of integrating the fall.
+    Diverged,
 }
 
 impl Outcome {
@@ -129,6 +155,7 @@ impl Outcome {
             Outcome::GoalReached => "goal_reached",
             Outcome::TimeLimit => "time_limit",
             Outcome::Stuck => "stuck",
+            Outcome::Diverged => "diverged",
         }
     }
 }
@@ -164,8 +191,42 @@ pub struct CycleRecord {
     /// This cycle's `foot_target` is where the swing foot actually landed (it was
     /// the last cycle before a step end).
     pub landed: bool,
-    /// The LDCBF half-planes of the cycle (active obstacles, nearest first).
+    /// The LDCBF half-planes of the cycle (active obstacles, nearest first). With
+    /// LiDAR, `obstacle` indexes that cycle's inferred obstacles.
     pub half_planes: Vec<ActiveHalfPlane>,
+    /// Index of the current subgoal in [`Navigation::subgoals`].
+    pub subgoal: usize,
+    /// Obstacles handed to the controller (the true map's size, or the number
+    /// inferred from this cycle's scan).
+    pub obstacles_seen: usize,
+}
+
+/// One LiDAR scan and what was inferred from it.
+#[derive(Clone, Debug)]
+pub struct ScanRecord {
+    /// The control cycle it fed.
+    pub cycle: usize,
+    /// Sensor position (the CoM), m.
+    pub origin: Vector2<f64>,
+    /// Noisy hit points, m (world).
+    pub points: Vec<Vector2<f64>>,
+    /// Inferred obstacles (one per DBSCAN cluster), world frame.
+    pub obstacles: Vec<Polygon>,
+}
+
+/// The planner's part of a run.
+#[derive(Clone, Debug, Default)]
+pub struct Navigation {
+    /// The RRT* plan (tree, path, grid), when planned and found.
+    pub plan: Option<Plan>,
+    /// Why planning failed (the run then walked to the goal directly).
+    pub error: Option<String>,
+    /// Wall-clock planning time, ns (0 without a planner).
+    pub plan_time_ns: u64,
+    /// Subgoals in order, the goal last, m.
+    pub subgoals: Vec<Vector2<f64>>,
+    /// Simulated time at which each subgoal was passed (switch or goal), s.
+    pub reached_at: Vec<f64>,
 }
 
 /// One footstep (a stance foot).
@@ -219,6 +280,11 @@ pub struct SimResult {
     pub footsteps: Vec<Footstep>,
     /// CoM samples at 1 kHz.
     pub samples: Vec<Sample>,
+    /// Planner output and subgoal progress.
+    pub navigation: Navigation,
+    /// LiDAR scans, one per control cycle (with `perception = "lidar"` and
+    /// [`SimOptions::record_scans`]).
+    pub scans: Vec<ScanRecord>,
 }
 
 impl SimResult {
@@ -293,6 +359,41 @@ fn run_with<B: QpBackend<NV, NC>>(
         MpcRate::PerStep => None,
     };
     let obstacles = &scenario.obstacles;
+    // Global planner: subgoals, the goal last.
+    let mut navigation = Navigation::default();
+    if scenario.planner == Planner::RrtStar {
+        let t0 = Instant::now();
+        let res = crate::planner::plan(
+            scenario.start,
+            scenario.goal,
+            obstacles,
+            &scenario.rrt,
+            scenario.seed,
+        );
+        navigation.plan_time_ns = u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX);
+        match res {
+            Ok(p) => {
+                navigation.subgoals = p.subgoals.clone();
+                navigation.plan = Some(p);
+            }
+            Err(e) => navigation.error = Some(e.to_string()),
+        }
+    }
+    if navigation.subgoals.is_empty() {
+        navigation.subgoals.push(scenario.goal);
+    }
+    let subgoals = navigation.subgoals.clone();
+    let switch_radius = scenario.rrt.switch_radius;
+    let mut current = 0usize;
+    let mut lidar = match scenario.perception {
+        Perception::Lidar => {
+            Some(Lidar::new(scenario.lidar.clone(), scenario.seed).map_err(SimError)?)
+        }
+        Perception::Known => None,
+    };
+    let mut scans: Vec<ScanRecord> = Vec::new();
+    // The inferred obstacles of the current cycle (LiDAR), borrowed by its input.
+    let mut seen: Vec<Polygon>;
     let max_ticks = (scenario.time_limit / PLANT_DT).round() as u64;
     let stuck_ticks = (scenario.stuck_window / PLANT_DT).round() as u64;
 
@@ -331,6 +432,28 @@ fn run_with<B: QpBackend<NV, NC>>(
             None => plant.tick_in_step == 0,
         };
         if due {
+            while current + 1 < subgoals.len()
+                && (plant.position - subgoals[current]).norm() <= switch_radius
+            {
+                navigation.reached_at.push(plant.time());
+                current += 1;
+            }
+            let cycle_obstacles: &[Polygon] = match lidar.as_mut() {
+                Some(l) => {
+                    let (points, polys) = l.perceive(plant.position, plant.heading, obstacles);
+                    seen = polys;
+                    if options.record_scans {
+                        scans.push(ScanRecord {
+                            cycle: cycles.len(),
+                            origin: plant.position,
+                            points,
+                            obstacles: seen.clone(),
+                        });
+                    }
+                    &seen
+                }
+                None => obstacles,
+            };
             let input = CycleInput {
                 com_position: plant.position,
                 com_velocity: plant.velocity,
@@ -339,8 +462,8 @@ fn run_with<B: QpBackend<NV, NC>>(
                 stance_foot: plant.stance_foot,
                 stance_side: plant.stance_side,
                 time_in_step: plant.time_in_step(),
-                goal: scenario.goal,
-                obstacles,
+                goal: subgoals[current],
+                obstacles: cycle_obstacles,
             };
             let t0 = Instant::now();
             let output = controller.step_with(&input, backend);
@@ -363,13 +486,22 @@ fn run_with<B: QpBackend<NV, NC>>(
                 time_in_step: plant.time_in_step(),
                 step: plant.steps,
                 stance_side: plant.stance_side,
-                goal: scenario.goal,
+                goal: subgoals[current],
                 output,
                 compute_ns,
                 landed: false,
                 half_planes,
+                subgoal: current,
+                obstacles_seen: cycle_obstacles.len(),
             });
         }
+        let diverged = due
+            && cycles.last().is_some_and(|c| {
+                matches!(
+                    c.output.status,
+                    ldcbf_controller::CycleStatus::InvalidInput(_)
+                )
+            });
         // 3. Record and check the end conditions.
         let sample = Sample {
             time: plant.time(),
@@ -383,10 +515,15 @@ fn run_with<B: QpBackend<NV, NC>>(
         samples.push(sample);
         let dist = (plant.position - scenario.goal).norm();
         if dist <= scenario.success_radius {
+            navigation.reached_at.push(plant.time());
             break Outcome::GoalReached;
         }
-        if dist < best_distance - 0.05 {
-            best_distance = dist;
+        if diverged {
+            break Outcome::Diverged;
+        }
+        let progress = remaining_length(plant.position, &subgoals, current);
+        if progress < best_distance - 0.05 {
+            best_distance = progress;
             best_tick = plant.tick;
         }
         if stuck_ticks > 0 && plant.tick - best_tick >= stuck_ticks {
@@ -405,5 +542,7 @@ fn run_with<B: QpBackend<NV, NC>>(
         cycles,
         footsteps,
         samples,
+        navigation,
+        scans,
     })
 }

@@ -21,7 +21,9 @@ fn list_shows_the_shipped_scenarios() {
     let o = sim(&["list"], tmp.path());
     assert!(o.status.success());
     let out = text(&o.stdout);
-    for name in ["simple", "circles", "maze", "paper", "random"] {
+    for name in [
+        "simple", "circles", "maze", "paper", "random", "trap", "crowded",
+    ] {
         assert!(out.contains(name), "{out}");
     }
 }

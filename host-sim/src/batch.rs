@@ -1,0 +1,954 @@
+//! Batch evaluation: many seeds of a scenario family, in parallel, sharded
+//! across machines, and merged.
+//!
+//! * [`run_batch`] (`ldcbf-sim batch`): loads the family's scenario file once per
+//!   seed exactly as `ldcbf-sim run <family> --seed S` does (same generator, same
+//!   overrides: `--planner`, `--perception` and `--set` become `--set`
+//!   overrides), simulates every seed of the shard with a rayon pool of `jobs`
+//!   threads (no figures, no scans kept), and writes an output directory
+//!   atomically (temporary sibling, renamed at the end; see
+//!   [`crate::report::OutputDir`]):
+//!   * `runs.csv`: one [`RunRow`] per seed, sorted by seed;
+//!   * `summary.json`: the [`BatchMeta`] (what ran, shard, wall time) and the
+//!     [`Aggregate`];
+//!   * `summary.md`: the aggregate as a Markdown table ([`markdown_table`]).
+//! * Sharding: `--shard i/n` (1-based) runs the seeds `s` of the range with
+//!   `(s - start) mod n == i - 1`, so shards are interleaved and balanced; every
+//!   shard writes its own directory.
+//! * [`merge`] (`ldcbf-sim merge`): checks that the shard directories come from
+//!   the same study (family, seed range, planner, perception, overrides,
+//!   solver, rate, shard count), that no shard or seed appears twice and, unless
+//!   partial results are allowed, that every seed of the range is there; then
+//!   writes the same three files for the whole study.
+//!
+//! Aggregates: success = goal reached with no CoM sample inside a TRUE obstacle
+//! (SPEC 4); steps and time to goal are over the successful runs; compute times
+//! are per-run statistics (the p99 of each run's controller calls), summarised by
+//! their median and maximum over runs (the raw call times are not kept, so a
+//! merged study can still be summarised). Timings from different machines are
+//! comparable only as far as the machines are.
+
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use anyhow::{Context, Result, anyhow, bail};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+
+use crate::report::{OutputDir, summarize};
+use crate::scenario::{LoadOptions, Perception, Planner, load};
+use crate::sim::{MpcRate, SimOptions, Solver, run};
+
+/// A half-open range of seeds `start..end`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct SeedRange {
+    /// First seed.
+    pub start: u64,
+    /// One past the last seed.
+    pub end: u64,
+}
+
+impl SeedRange {
+    /// Number of seeds.
+    pub fn len(&self) -> u64 {
+        self.end - self.start
+    }
+    /// Never true for a parsed range (it holds at least one seed).
+    pub fn is_empty(&self) -> bool {
+        self.end <= self.start
+    }
+}
+
+impl core::fmt::Display for SeedRange {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "{}..{}", self.start, self.end)
+    }
+}
+
+impl core::str::FromStr for SeedRange {
+    type Err = String;
+    /// `A..B` (B excluded), `A..=B` (B included) or a single seed `A`.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad = || format!("expected a seed range like 0..200, 0..=199 or 7, got {s:?}");
+        let num = |t: &str| t.trim().parse::<u64>().map_err(|_| bad());
+        let (start, end) = if let Some((a, b)) = s.split_once("..=") {
+            (num(a)?, num(b)?.checked_add(1).ok_or_else(bad)?)
+        } else if let Some((a, b)) = s.split_once("..") {
+            (num(a)?, num(b)?)
+        } else {
+            let a = num(s)?;
+            (a, a.checked_add(1).ok_or_else(bad)?)
+        };
+        if end <= start {
+            return Err(format!(
+                "empty seed range {s:?} (the end must be above the start)"
+            ));
+        }
+        Ok(SeedRange { start, end })
+    }
+}
+
+/// Shard `index` of `count` (1-based: `1/4` .. `4/4`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Shard {
+    /// Which shard, `1..=count`.
+    pub index: u32,
+    /// How many shards the study is split into.
+    pub count: u32,
+}
+
+impl Shard {
+    /// The whole study in one shard.
+    pub const ALL: Shard = Shard { index: 1, count: 1 };
+
+    /// The seeds of `range` in this shard, ascending.
+    pub fn seeds(&self, range: SeedRange) -> Vec<u64> {
+        (range.start..range.end)
+            .filter(|s| (s - range.start) % u64::from(self.count) == u64::from(self.index - 1))
+            .collect()
+    }
+}
+
+impl core::fmt::Display for Shard {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(f, "{}/{}", self.index, self.count)
+    }
+}
+
+impl core::str::FromStr for Shard {
+    type Err = String;
+    /// `I/N` with `1 <= I <= N`.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let (i, n) = s
+            .split_once('/')
+            .ok_or_else(|| format!("expected a shard like 1/4 (I/N, 1 <= I <= N), got {s:?}"))?;
+        let (i, n) = (
+            i.trim()
+                .parse::<u32>()
+                .map_err(|_| format!("bad shard index in {s:?}"))?,
+            n.trim()
+                .parse::<u32>()
+                .map_err(|_| format!("bad shard count in {s:?}"))?,
+        );
+        if n == 0 || i == 0 || i > n {
+            return Err(format!(
+                "shard {s:?} out of range: need 1 <= I <= N (shards are numbered 1..N)"
+            ));
+        }
+        Ok(Shard { index: i, count: n })
+    }
+}
+
+/// What `ldcbf-sim batch` needs.
+#[derive(Clone, Debug)]
+pub struct BatchRequest {
+    /// Scenario family: a scenario name or path whose file has a `[generator]`.
+    pub family: String,
+    /// Seeds of the whole study.
+    pub seeds: SeedRange,
+    /// Planner override (`None` = the file's).
+    pub planner: Option<Planner>,
+    /// Perception override (`None` = the file's).
+    pub perception: Option<Perception>,
+    /// Further `--set key=value` overrides, as for `run`.
+    pub sets: Vec<(String, String)>,
+    /// Worker threads (>= 1).
+    pub jobs: usize,
+    /// This machine's part of the study.
+    pub shard: Shard,
+    /// Output directory (default [`BatchRequest::default_out`]).
+    pub out: Option<PathBuf>,
+    /// Show a progress bar on stderr (hidden anyway when stderr is no terminal).
+    pub progress: bool,
+    /// QP solver.
+    pub solver: Solver,
+    /// Controller rate.
+    pub mpc_rate: MpcRate,
+}
+
+impl BatchRequest {
+    /// A request with the defaults of the CLI: the family's own planner and
+    /// perception, one job per core, the whole range, no progress bar.
+    pub fn new(family: &str, seeds: SeedRange) -> Self {
+        BatchRequest {
+            family: family.into(),
+            seeds,
+            planner: None,
+            perception: None,
+            sets: Vec::new(),
+            jobs: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            shard: Shard::ALL,
+            out: None,
+            progress: false,
+            solver: Solver::Own,
+            mpc_rate: MpcRate::Hz(20),
+        }
+    }
+
+    /// `out/batch-<family>-<planner>-<perception>[-shard<I>of<N>]`.
+    pub fn default_out(&self, family: &str, planner: Planner, perception: Perception) -> PathBuf {
+        let mut name = format!("batch-{family}-{}-{}", planner.name(), perception.name());
+        if self.shard.count > 1 {
+            name += &format!("-shard{}of{}", self.shard.index, self.shard.count);
+        }
+        PathBuf::from("out").join(name)
+    }
+
+    /// All overrides in the order they are applied: planner, perception, sets.
+    fn all_sets(&self) -> Vec<(String, String)> {
+        let mut v = Vec::new();
+        if let Some(p) = self.planner {
+            v.push(("planner".into(), format!("\"{}\"", p.name())));
+        }
+        if let Some(p) = self.perception {
+            v.push(("perception".into(), format!("\"{}\"", p.name())));
+        }
+        v.extend(self.sets.iter().cloned());
+        v
+    }
+}
+
+/// One run of a batch: a row of `runs.csv`. Units: m, s, ns, ms.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RunRow {
+    /// Seed.
+    pub seed: u64,
+    /// `goal_reached`, `time_limit`, `stuck` or `diverged`.
+    pub outcome: String,
+    /// Goal reached and no CoM sample inside a true obstacle.
+    pub success: bool,
+    /// Some CoM sample was inside a true obstacle.
+    pub collision: bool,
+    /// Footsteps landed.
+    pub steps: u64,
+    /// Simulated time at the end, s.
+    pub sim_time: f64,
+    /// Final distance to the goal, m.
+    pub final_distance: f64,
+    /// Minimum CoM clearance to the true obstacles over the 1 kHz samples, m.
+    pub min_com_clearance: f64,
+    /// Minimum footstep clearance, m.
+    pub min_footstep_clearance: f64,
+    /// Largest violation of a cycle's own rows by its applied plan.
+    pub max_violation: f64,
+    /// Control cycles.
+    pub cycles: u64,
+    /// Cycles whose status was not optimal.
+    pub non_optimal_cycles: u64,
+    /// Median controller call, ns.
+    pub compute_p50_ns: u64,
+    /// 99th percentile of the controller calls, ns.
+    pub compute_p99_ns: u64,
+    /// Slowest controller call, ns.
+    pub compute_max_ns: u64,
+    /// The planner failed (the run walked to the goal directly).
+    pub planner_failed: bool,
+    /// Subgoals (1 = the goal only).
+    pub subgoals: u64,
+    /// Planning time, ms (0 without a planner).
+    pub plan_time_ms: f64,
+    /// Mean obstacles handed to the controller per cycle.
+    pub obstacles_seen_mean: f64,
+    /// Wall-clock time of the whole run (simulation and summary), ms.
+    pub wall_ms: f64,
+}
+
+const CSV_HEADER: &str = "seed,outcome,success,collision,steps,sim_time,final_distance,\
+min_com_clearance,min_footstep_clearance,max_violation,cycles,non_optimal_cycles,\
+compute_p50_ns,compute_p99_ns,compute_max_ns,planner_failed,subgoals,plan_time_ms,\
+obstacles_seen_mean,wall_ms";
+
+impl RunRow {
+    fn csv(&self) -> String {
+        format!(
+            "{},{},{},{},{},{},{},{},{},{:e},{},{},{},{},{},{},{},{},{},{}",
+            self.seed,
+            self.outcome,
+            u8::from(self.success),
+            u8::from(self.collision),
+            self.steps,
+            self.sim_time,
+            self.final_distance,
+            self.min_com_clearance,
+            self.min_footstep_clearance,
+            self.max_violation,
+            self.cycles,
+            self.non_optimal_cycles,
+            self.compute_p50_ns,
+            self.compute_p99_ns,
+            self.compute_max_ns,
+            u8::from(self.planner_failed),
+            self.subgoals,
+            self.plan_time_ms,
+            self.obstacles_seen_mean,
+            self.wall_ms
+        )
+    }
+
+    fn parse(line: &str) -> Result<Self, String> {
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() != CSV_HEADER.split(',').count() {
+            return Err(format!(
+                "expected {} fields, got {}",
+                CSV_HEADER.split(',').count(),
+                f.len()
+            ));
+        }
+        fn p<T: core::str::FromStr>(s: &str, name: &str) -> Result<T, String> {
+            s.trim().parse().map_err(|_| format!("bad {name} {s:?}"))
+        }
+        let b = |s: &str, name: &str| match s.trim() {
+            "1" => Ok(true),
+            "0" => Ok(false),
+            _ => Err(format!("bad {name} {s:?}")),
+        };
+        Ok(RunRow {
+            seed: p(f[0], "seed")?,
+            outcome: f[1].trim().to_string(),
+            success: b(f[2], "success")?,
+            collision: b(f[3], "collision")?,
+            steps: p(f[4], "steps")?,
+            sim_time: p(f[5], "sim_time")?,
+            final_distance: p(f[6], "final_distance")?,
+            min_com_clearance: p(f[7], "min_com_clearance")?,
+            min_footstep_clearance: p(f[8], "min_footstep_clearance")?,
+            max_violation: p(f[9], "max_violation")?,
+            cycles: p(f[10], "cycles")?,
+            non_optimal_cycles: p(f[11], "non_optimal_cycles")?,
+            compute_p50_ns: p(f[12], "compute_p50_ns")?,
+            compute_p99_ns: p(f[13], "compute_p99_ns")?,
+            compute_max_ns: p(f[14], "compute_max_ns")?,
+            planner_failed: b(f[15], "planner_failed")?,
+            subgoals: p(f[16], "subgoals")?,
+            plan_time_ms: p(f[17], "plan_time_ms")?,
+            obstacles_seen_mean: p(f[18], "obstacles_seen_mean")?,
+            wall_ms: p(f[19], "wall_ms")?,
+        })
+    }
+}
+
+/// What a batch directory is: the study and this part of it.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BatchMeta {
+    /// Always `"ldcbf-sim batch"` (how `merge` recognises the directory).
+    pub kind: String,
+    /// `ldcbf-sim` version that wrote it.
+    pub version: String,
+    /// Family as given (`random`, a path, ...).
+    pub family: String,
+    /// Scenario name of the family.
+    pub scenario: String,
+    /// Seeds of the whole study.
+    pub seeds: SeedRange,
+    /// Shard of this directory (`1/1` for a whole or merged study).
+    pub shard: Shard,
+    /// Shards merged into this directory (empty unless written by `merge`).
+    pub merged_shards: Vec<u32>,
+    /// Planner used.
+    pub planner: String,
+    /// Perception used.
+    pub perception: String,
+    /// Every override applied (`--planner`, `--perception`, `--set`), in order.
+    pub sets: Vec<(String, String)>,
+    /// QP solver.
+    pub solver: String,
+    /// Controller rate.
+    pub mpc_rate: String,
+    /// Worker threads (0 for a merged study).
+    pub jobs: usize,
+    /// Wall-clock time of the batch, s (sum over shards for a merged study).
+    pub wall_time_s: f64,
+    /// Runs in this directory.
+    pub runs: usize,
+}
+
+impl BatchMeta {
+    /// The fields two shards of one study must share.
+    fn study_key(
+        &self,
+    ) -> (
+        String,
+        SeedRange,
+        String,
+        String,
+        String,
+        String,
+        String,
+        u32,
+    ) {
+        (
+            self.scenario.clone(),
+            self.seeds,
+            self.planner.clone(),
+            self.perception.clone(),
+            format!("{:?}", self.sets),
+            self.solver.clone(),
+            self.mpc_rate.clone(),
+            self.shard.count,
+        )
+    }
+}
+
+/// Aggregate of a set of runs (the Markdown table's rows).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Aggregate {
+    /// Runs.
+    pub runs: usize,
+    /// Successful runs (goal reached, no collision).
+    pub success: usize,
+    /// Runs that reached the goal (with or without a collision).
+    pub reached: usize,
+    /// Runs with a CoM sample inside a true obstacle.
+    pub collisions: usize,
+    /// Runs that ended stuck.
+    pub stuck: usize,
+    /// Runs that hit the time limit.
+    pub timeouts: usize,
+    /// Runs that diverged (controller input out of range).
+    pub diverged: usize,
+    /// Runs whose planner failed.
+    pub planner_failures: usize,
+    /// Mean steps to the goal over successful runs.
+    pub mean_steps: f64,
+    /// Median steps to the goal over successful runs.
+    pub median_steps: f64,
+    /// Mean time to the goal over successful runs, s.
+    pub mean_time: f64,
+    /// Median time to the goal over successful runs, s.
+    pub median_time: f64,
+    /// Smallest CoM clearance to the true obstacles over all runs, m.
+    pub min_com_clearance: f64,
+    /// Runs with some non-optimal (relaxed or fallback) cycle.
+    pub runs_with_non_optimal: usize,
+    /// Median over runs of each run's compute p99, ns.
+    pub compute_p99_median_ns: u64,
+    /// Largest per-run compute p99, ns.
+    pub compute_p99_max_ns: u64,
+    /// Slowest controller call of all runs, ns.
+    pub compute_max_ns: u64,
+}
+
+fn median(v: &mut [f64]) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// Aggregates rows.
+pub fn aggregate(rows: &[RunRow]) -> Aggregate {
+    let ok: Vec<&RunRow> = rows.iter().filter(|r| r.success).collect();
+    let mean = |v: &[f64]| {
+        if v.is_empty() {
+            f64::NAN
+        } else {
+            v.iter().sum::<f64>() / v.len() as f64
+        }
+    };
+    let mut steps: Vec<f64> = ok.iter().map(|r| r.steps as f64).collect();
+    let mut times: Vec<f64> = ok.iter().map(|r| r.sim_time).collect();
+    let mut p99: Vec<f64> = rows.iter().map(|r| r.compute_p99_ns as f64).collect();
+    let count = |f: &dyn Fn(&RunRow) -> bool| rows.iter().filter(|r| f(r)).count();
+    Aggregate {
+        runs: rows.len(),
+        success: ok.len(),
+        reached: count(&|r| r.outcome == "goal_reached"),
+        collisions: count(&|r| r.collision),
+        stuck: count(&|r| r.outcome == "stuck"),
+        timeouts: count(&|r| r.outcome == "time_limit"),
+        diverged: count(&|r| r.outcome == "diverged"),
+        planner_failures: count(&|r| r.planner_failed),
+        mean_steps: mean(&steps),
+        median_steps: median(&mut steps),
+        mean_time: mean(&times),
+        median_time: median(&mut times),
+        min_com_clearance: rows
+            .iter()
+            .map(|r| r.min_com_clearance)
+            .fold(f64::INFINITY, f64::min),
+        runs_with_non_optimal: count(&|r| r.non_optimal_cycles > 0),
+        compute_p99_median_ns: median(&mut p99).max(0.0) as u64,
+        compute_p99_max_ns: rows.iter().map(|r| r.compute_p99_ns).max().unwrap_or(0),
+        compute_max_ns: rows.iter().map(|r| r.compute_max_ns).max().unwrap_or(0),
+    }
+}
+
+/// A Markdown table with one column per `(label, aggregate)`.
+pub fn markdown_table(cols: &[(String, Aggregate)]) -> String {
+    let pct = |a: usize, n: usize| {
+        if n == 0 {
+            "n/a".to_string()
+        } else {
+            format!("{:.1} % ({a}/{n})", 100.0 * a as f64 / n as f64)
+        }
+    };
+    let f1 = |v: f64| {
+        if v.is_finite() {
+            format!("{v:.1}")
+        } else {
+            "n/a".into()
+        }
+    };
+    let us = |ns: u64| format!("{:.1} us", ns as f64 / 1e3);
+    type Row<'a> = (&'a str, Box<dyn Fn(&Aggregate) -> String + 'a>);
+    let rows: Vec<Row<'_>> = vec![
+        ("runs", Box::new(|a: &Aggregate| a.runs.to_string())),
+        (
+            "success rate (goal, no collision)",
+            Box::new(move |a: &Aggregate| pct(a.success, a.runs)),
+        ),
+        (
+            "collisions (CoM inside a true obstacle)",
+            Box::new(|a: &Aggregate| a.collisions.to_string()),
+        ),
+        ("stuck", Box::new(|a: &Aggregate| a.stuck.to_string())),
+        (
+            "time limit",
+            Box::new(|a: &Aggregate| a.timeouts.to_string()),
+        ),
+        ("diverged", Box::new(|a: &Aggregate| a.diverged.to_string())),
+        (
+            "planner failures",
+            Box::new(|a: &Aggregate| a.planner_failures.to_string()),
+        ),
+        (
+            "steps to goal, mean / median",
+            Box::new(move |a: &Aggregate| format!("{} / {}", f1(a.mean_steps), f1(a.median_steps))),
+        ),
+        (
+            "time to goal, mean / median [s]",
+            Box::new(move |a: &Aggregate| format!("{} / {}", f1(a.mean_time), f1(a.median_time))),
+        ),
+        (
+            "min CoM clearance [m]",
+            Box::new(|a: &Aggregate| {
+                if a.min_com_clearance.is_finite() {
+                    format!("{:.3}", a.min_com_clearance)
+                } else {
+                    "n/a".into()
+                }
+            }),
+        ),
+        (
+            "runs with a relaxed/fallback cycle",
+            Box::new(|a: &Aggregate| a.runs_with_non_optimal.to_string()),
+        ),
+        (
+            "compute p99, median / max over runs",
+            Box::new(move |a: &Aggregate| {
+                format!(
+                    "{} / {}",
+                    us(a.compute_p99_median_ns),
+                    us(a.compute_p99_max_ns)
+                )
+            }),
+        ),
+        (
+            "compute max",
+            Box::new(move |a: &Aggregate| us(a.compute_max_ns)),
+        ),
+    ];
+    let mut s = String::from("| |");
+    for (label, _) in cols {
+        s += &format!(" {label} |");
+    }
+    s += "\n|---|";
+    for _ in cols {
+        s += "---|";
+    }
+    s += "\n";
+    for (name, f) in &rows {
+        s += &format!("| {name} |");
+        for (_, a) in cols {
+            s += &format!(" {} |", f(a));
+        }
+        s += "\n";
+    }
+    s
+}
+
+/// Column label of a study: `planner / perception` and any `--set`.
+pub fn label(meta: &BatchMeta) -> String {
+    let extra: Vec<String> = meta
+        .sets
+        .iter()
+        .filter(|(k, _)| k != "planner" && k != "perception")
+        .map(|(k, v)| format!("{k}={v}"))
+        .collect();
+    let mut l = format!("{} / {}", meta.planner, meta.perception);
+    if !extra.is_empty() {
+        l += &format!(" ({})", extra.join(", "));
+    }
+    l
+}
+
+/// What a finished batch or merge produced.
+#[derive(Debug)]
+pub struct BatchReport {
+    /// The directory written.
+    pub out_dir: PathBuf,
+    /// What ran.
+    pub meta: BatchMeta,
+    /// The runs, by seed.
+    pub rows: Vec<RunRow>,
+    /// Their aggregate.
+    pub aggregate: Aggregate,
+}
+
+#[derive(Serialize, Deserialize)]
+struct SummaryFile {
+    meta: BatchMeta,
+    aggregate: Aggregate,
+}
+
+fn write_dir(out: &Path, meta: &BatchMeta, rows: &[RunRow], agg: &Aggregate) -> Result<PathBuf> {
+    let dir = OutputDir::create(out)
+        .with_context(|| format!("cannot create output directory {}", out.display()))?;
+    let mut csv = String::from(CSV_HEADER);
+    csv.push('\n');
+    for r in rows {
+        csv += &r.csv();
+        csv.push('\n');
+    }
+    std::fs::write(dir.path().join("runs.csv"), csv)?;
+    let json = serde_json::to_string_pretty(&SummaryFile {
+        meta: meta.clone(),
+        aggregate: agg.clone(),
+    })?;
+    std::fs::write(dir.path().join("summary.json"), json + "\n")?;
+    let mut md = format!(
+        "# {} seeds {} (shard {}), {} runs\n\nplanner {}, perception {}, overrides {:?}; wall time {:.1} s\n\n",
+        meta.scenario,
+        meta.seeds,
+        meta.shard,
+        meta.runs,
+        meta.planner,
+        meta.perception,
+        meta.sets,
+        meta.wall_time_s
+    );
+    md += &markdown_table(&[(label(meta), agg.clone())]);
+    std::fs::write(dir.path().join("summary.md"), md)?;
+    dir.commit()
+        .with_context(|| format!("cannot move the results into {}", out.display()))
+}
+
+/// Runs a batch (see the module docs). Nothing is written unless every run
+/// completed.
+pub fn run_batch(req: &BatchRequest) -> Result<BatchReport> {
+    if req.jobs == 0 {
+        bail!("--jobs must be >= 1");
+    }
+    let sets = req.all_sets();
+    let first = load(
+        &req.family,
+        &LoadOptions {
+            seed: Some(req.seeds.start),
+            sets: sets.clone(),
+        },
+    )?;
+    if first.generator.is_none() {
+        bail!(
+            "scenario {} ({}) has no [generator]: a batch needs a seeded family (e.g. random)",
+            first.name,
+            first.source
+        );
+    }
+    let seeds = req.shard.seeds(req.seeds);
+    if seeds.is_empty() {
+        bail!(
+            "shard {} of seeds {} holds no seed (more shards than seeds)",
+            req.shard,
+            req.seeds
+        );
+    }
+    let out = req
+        .out
+        .clone()
+        .unwrap_or_else(|| req.default_out(&first.name, first.planner, first.perception));
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(req.jobs)
+        .build()
+        .context("cannot start the worker threads")?;
+    let bar = if req.progress {
+        let b = indicatif::ProgressBar::new(seeds.len() as u64);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "{prefix} [{elapsed_precise}] {wide_bar} {pos}/{len} (eta {eta}) {msg}",
+            )
+            .expect("valid template"),
+        );
+        b.set_prefix(format!("{} {}", first.name, req.shard));
+        b
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let failures = AtomicUsize::new(0);
+    let opts = SimOptions {
+        solver: req.solver,
+        mpc_rate: req.mpc_rate,
+        record_scans: false,
+    };
+    let t0 = Instant::now();
+    let rows: Vec<Result<RunRow>> = pool.install(|| {
+        seeds
+            .par_iter()
+            .map(|&seed| {
+                let t = Instant::now();
+                let sc = load(
+                    &req.family,
+                    &LoadOptions {
+                        seed: Some(seed),
+                        sets: sets.clone(),
+                    },
+                )
+                .with_context(|| format!("seed {seed}"))?;
+                let r = run(&sc, opts).with_context(|| format!("seed {seed}"))?;
+                let s = summarize(&r);
+                let row = RunRow {
+                    seed,
+                    outcome: s.outcome.clone(),
+                    success: s.success,
+                    collision: s.collision,
+                    steps: s.steps as u64,
+                    sim_time: s.sim_time,
+                    final_distance: s.final_distance,
+                    min_com_clearance: s.min_com_clearance.unwrap_or(f64::INFINITY),
+                    min_footstep_clearance: s.min_footstep_clearance.unwrap_or(f64::INFINITY),
+                    max_violation: s.max_violation,
+                    cycles: s.cycles as u64,
+                    non_optimal_cycles: (s.cycles
+                        - s.status_counts.get("optimal").copied().unwrap_or(0))
+                        as u64,
+                    compute_p50_ns: s.compute.p50_ns,
+                    compute_p99_ns: s.compute.p99_ns,
+                    compute_max_ns: s.compute.max_ns,
+                    planner_failed: s.planner_error.is_some(),
+                    subgoals: s.subgoals as u64,
+                    plan_time_ms: s.plan_time_ms.unwrap_or(0.0),
+                    obstacles_seen_mean: s.obstacles_seen_mean,
+                    wall_ms: t.elapsed().as_secs_f64() * 1e3,
+                };
+                if !row.success {
+                    let n = failures.fetch_add(1, Ordering::Relaxed) + 1;
+                    bar.set_message(format!("{n} not successful"));
+                }
+                bar.inc(1);
+                Ok(row)
+            })
+            .collect()
+    });
+    bar.finish_and_clear();
+    let wall = t0.elapsed().as_secs_f64();
+    let rows: Vec<RunRow> = rows.into_iter().collect::<Result<_>>()?;
+    let meta = BatchMeta {
+        kind: "ldcbf-sim batch".into(),
+        version: env!("CARGO_PKG_VERSION").into(),
+        family: req.family.clone(),
+        scenario: first.name.clone(),
+        seeds: req.seeds,
+        shard: req.shard,
+        merged_shards: Vec::new(),
+        planner: first.planner.name().into(),
+        perception: first.perception.name().into(),
+        sets,
+        solver: match req.solver {
+            Solver::Own => "own".into(),
+            Solver::Clarabel => "clarabel".into(),
+        },
+        mpc_rate: req.mpc_rate.to_string(),
+        jobs: req.jobs,
+        wall_time_s: wall,
+        runs: rows.len(),
+    };
+    let agg = aggregate(&rows);
+    let out_dir = write_dir(&out, &meta, &rows, &agg)?;
+    Ok(BatchReport {
+        out_dir,
+        meta,
+        rows,
+        aggregate: agg,
+    })
+}
+
+/// Reads a batch directory written by [`run_batch`] or [`merge`].
+pub fn read_dir(dir: &Path) -> Result<(BatchMeta, Aggregate, Vec<RunRow>)> {
+    if !dir.is_dir() {
+        bail!("{}: no such batch directory", dir.display());
+    }
+    let sj = dir.join("summary.json");
+    let text =
+        std::fs::read_to_string(&sj).with_context(|| format!("{}: cannot read", sj.display()))?;
+    let sf: SummaryFile = serde_json::from_str(&text)
+        .map_err(|e| anyhow!("{}: not a batch summary: {e}", sj.display()))?;
+    if sf.meta.kind != "ldcbf-sim batch" {
+        bail!("{}: not written by ldcbf-sim batch", sj.display());
+    }
+    let csv = dir.join("runs.csv");
+    let text =
+        std::fs::read_to_string(&csv).with_context(|| format!("{}: cannot read", csv.display()))?;
+    let mut lines = text.lines();
+    if lines.next() != Some(CSV_HEADER) {
+        bail!("{}: unexpected header", csv.display());
+    }
+    let mut rows = Vec::new();
+    for (i, l) in lines.enumerate() {
+        if l.trim().is_empty() {
+            continue;
+        }
+        rows.push(RunRow::parse(l).map_err(|e| anyhow!("{}:{}: {e}", csv.display(), i + 2))?);
+    }
+    if rows.len() != sf.meta.runs {
+        bail!(
+            "{}: {} rows but summary.json says {} runs (truncated file?)",
+            csv.display(),
+            rows.len(),
+            sf.meta.runs
+        );
+    }
+    Ok((sf.meta, sf.aggregate, rows))
+}
+
+/// Merges shard directories of one study into `out` (see the module docs).
+/// With `allow_partial`, missing seeds are allowed (the summary says how many
+/// runs it holds).
+pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<BatchReport> {
+    if inputs.is_empty() {
+        bail!("merge needs at least one batch directory");
+    }
+    let mut parts = Vec::new();
+    for d in inputs {
+        parts.push(read_dir(d)?);
+    }
+    let key = parts[0].0.study_key();
+    let mut shards: Vec<u32> = Vec::new();
+    let mut rows: Vec<RunRow> = Vec::new();
+    let mut wall = 0.0;
+    for ((meta, _, r), dir) in parts.iter().zip(inputs) {
+        if meta.study_key() != key {
+            bail!(
+                "{}: not the same study as {} (family, seeds, planner, perception, overrides, solver, rate and shard count must agree)",
+                dir.display(),
+                inputs[0].display()
+            );
+        }
+        let mine: Vec<u32> = if meta.merged_shards.is_empty() {
+            vec![meta.shard.index]
+        } else {
+            meta.merged_shards.clone()
+        };
+        for s in mine {
+            if shards.contains(&s) {
+                bail!(
+                    "{}: shard {s}/{} given twice",
+                    dir.display(),
+                    meta.shard.count
+                );
+            }
+            shards.push(s);
+        }
+        wall += meta.wall_time_s;
+        rows.extend(r.iter().cloned());
+    }
+    rows.sort_by_key(|r| r.seed);
+    if let Some(w) = rows.windows(2).find(|w| w[0].seed == w[1].seed) {
+        bail!("seed {} appears twice", w[0].seed);
+    }
+    let m0 = &parts[0].0;
+    let expected = m0.seeds.len();
+    if !allow_partial && (rows.len() as u64) < expected {
+        shards.sort_unstable();
+        let missing: Vec<String> = (1..=m0.shard.count)
+            .filter(|s| !shards.contains(s))
+            .map(|s| format!("{s}/{}", m0.shard.count))
+            .collect();
+        bail!(
+            "incomplete study: {} of {} seeds (missing shards: {}); pass --allow-partial to merge anyway",
+            rows.len(),
+            expected,
+            if missing.is_empty() {
+                "none, but seeds are missing".into()
+            } else {
+                missing.join(", ")
+            }
+        );
+    }
+    shards.sort_unstable();
+    let meta = BatchMeta {
+        shard: Shard::ALL,
+        merged_shards: shards,
+        jobs: 0,
+        wall_time_s: wall,
+        runs: rows.len(),
+        ..m0.clone()
+    };
+    let agg = aggregate(&rows);
+    let out_dir = write_dir(out, &meta, &rows, &agg)?;
+    Ok(BatchReport {
+        out_dir,
+        meta,
+        rows,
+        aggregate: agg,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn seed_ranges_and_shards_parse() {
+        assert_eq!("0..200".parse::<SeedRange>().unwrap().len(), 200);
+        assert_eq!(
+            "3..=5".parse::<SeedRange>().unwrap(),
+            SeedRange { start: 3, end: 6 }
+        );
+        assert_eq!("7".parse::<SeedRange>().unwrap().len(), 1);
+        assert!("5..2".parse::<SeedRange>().is_err());
+        assert!("a..b".parse::<SeedRange>().is_err());
+        assert!("3/2".parse::<Shard>().is_err());
+        assert!("0/2".parse::<Shard>().is_err());
+        let r = SeedRange { start: 10, end: 17 };
+        let a: Vec<u64> = (1..=3)
+            .flat_map(|i| Shard { index: i, count: 3 }.seeds(r))
+            .collect();
+        let mut s = a.clone();
+        s.sort_unstable();
+        assert_eq!(s, (10..17).collect::<Vec<_>>());
+        assert_eq!(Shard { index: 2, count: 3 }.seeds(r), vec![11, 14]);
+    }
+
+    #[test]
+    fn rows_round_trip_through_csv() {
+        let r = RunRow {
+            seed: 3,
+            outcome: "goal_reached".into(),
+            success: true,
+            collision: false,
+            steps: 52,
+            sim_time: 20.99,
+            final_distance: 0.1499,
+            min_com_clearance: 0.34,
+            min_footstep_clearance: f64::INFINITY,
+            max_violation: 2.3e-13,
+            cycles: 420,
+            non_optimal_cycles: 0,
+            compute_p50_ns: 1500,
+            compute_p99_ns: 4000,
+            compute_max_ns: 97000,
+            planner_failed: false,
+            subgoals: 1,
+            plan_time_ms: 0.0,
+            obstacles_seen_mean: 8.0,
+            wall_ms: 12.5,
+        };
+        assert_eq!(RunRow::parse(&r.csv()).unwrap(), r);
+    }
+}

@@ -1,0 +1,734 @@
+//! Global planner (SPEC 5, report 5.1): RRT* on an occupancy grid of the known
+//! map, whose path becomes a sequence of subgoals for the footstep MPC.
+//!
+//! All positions are in the world frame W, metres.
+//!
+//! # Pipeline ([`plan`])
+//!
+//! 1. **Occupancy grid** ([`OccupancyGrid::build`]): square cells of
+//!    `resolution` over the bounding box of start, goal and obstacles grown by
+//!    `padding`. A cell is occupied when its centre is within `margin` of an
+//!    obstacle (signed distance `<= margin`): the obstacles inflated by the margin.
+//!    Everything outside the box counts as occupied.
+//! 2. **Clearance** ([`OccupancyGrid::clearance`]): an exact Euclidean distance
+//!    transform (Felzenszwalb-Huttenlocher, two 1-D passes) gives, for every
+//!    cell, the distance from its centre to the nearest occupied cell centre, m.
+//!    This is the clearance *beyond* the margin; the true obstacle is about
+//!    `margin` farther.
+//! 3. **RRT\***, `iterations` samples drawn by a ChaCha8 generator seeded by the
+//!    scenario's seed (same seed, same tree, on every platform): a sample is the
+//!    goal with probability `goal_bias`, else uniform in the box; the nearest
+//!    node is steered towards it by at most `step`; the new node `j` must be in a
+//!    free cell and joined by a free segment. Its parent is the node `i` within
+//!    `neighbor_radius` that minimises the report's edge cost
+//!    `cost(j) = cost(i) + dist(i, j) * exp(-clearance(j))` (clearance capped at
+//!    `clearance_cap`), and every neighbour `k` is rewired through `j` when
+//!    `cost(j) + dist(j, k) * exp(-clearance(k)) < cost(k)` (costs of `k`'s
+//!    subtree are updated). After all samples the goal is joined to the
+//!    cheapest reachable node within `neighbor_radius`.
+//! 4. **Subgoals**: the path's nodes after the start, the goal last. With
+//!    `shortcut`, a greedy pass keeps, from each kept node, the farthest later
+//!    node that the straight segment still reaches through free cells.
+//!
+//! A segment is free when points spaced at most `resolution / 4` along it all
+//! fall in free cells.
+//!
+//! # Following the subgoals
+//!
+//! The closed loop ([`crate::sim`]) hands the controller the current subgoal
+//! instead of the goal and switches to the next one when the CoM is within
+//! `switch_radius` of it (checked at each control cycle), so subgoals are
+//! reached in order; the last subgoal is the goal itself (reached at the
+//! scenario's `success_radius`). Progress, for the stuck detection, is the length
+//! of the rest of the path ([`remaining_length`]).
+
+use ldcbf_controller::closest_point_point_polygon;
+use ldcbf_controller::nalgebra::Vector2;
+use rand_chacha::ChaCha8Rng;
+use rand_chacha::rand_core::{Rng, SeedableRng};
+use serde::{Deserialize, Serialize};
+
+use crate::scenario::Polygon;
+
+/// RRT* settings: the scenario's `[rrt_star]` table. Lengths in metres.
+#[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct RrtParams {
+    /// Side of a grid cell, m.
+    pub resolution: f64,
+    /// Obstacle inflation of the occupancy grid, m.
+    pub margin: f64,
+    /// The planning box is the bounding box of start, goal and obstacles grown by
+    /// this much on every side, m.
+    pub padding: f64,
+    /// Number of samples (a fixed number: the result depends only on the seed).
+    pub iterations: u32,
+    /// Largest edge added towards a sample (steering distance), m.
+    pub step: f64,
+    /// Radius of the neighbourhood searched for the parent and for rewiring, m.
+    pub neighbor_radius: f64,
+    /// Probability that a sample is the goal, in [0, 1).
+    pub goal_bias: f64,
+    /// Clearance above this counts as this much in `exp(-clearance)`, m.
+    /// `inf` is the report's cost exactly; it rewards every metre of open space,
+    /// so paths swing out to the edges of the planning box. The default 0.5 m
+    /// keeps the report's preference for clearance near obstacles and the
+    /// shortest path elsewhere.
+    pub clearance_cap: f64,
+    /// Replace the path by its greedy shortcut through free cells.
+    pub shortcut: bool,
+    /// The next subgoal is taken when the CoM is within this of the current one, m.
+    pub switch_radius: f64,
+}
+
+impl Default for RrtParams {
+    fn default() -> Self {
+        RrtParams {
+            resolution: 0.1,
+            margin: 0.4,
+            padding: 1.0,
+            iterations: 3000,
+            step: 0.5,
+            neighbor_radius: 1.2,
+            goal_bias: 0.05,
+            clearance_cap: 0.5,
+            shortcut: true,
+            switch_radius: 0.4,
+        }
+    }
+}
+
+impl RrtParams {
+    /// Checks every field; the error names the bad one and says why.
+    pub fn validate(&self) -> Result<(), (&'static str, String)> {
+        let pos = |v: f64| v.is_finite() && v > 0.0;
+        if !(pos(self.resolution) && self.resolution <= 10.0) {
+            return Err(("resolution", "must be in (0, 10] m".into()));
+        }
+        if !(self.margin.is_finite() && self.margin >= 0.0) {
+            return Err(("margin", "must be finite and >= 0".into()));
+        }
+        if !(self.padding.is_finite() && self.padding >= 0.0) {
+            return Err(("padding", "must be finite and >= 0".into()));
+        }
+        if !(1..=1_000_000).contains(&self.iterations) {
+            return Err(("iterations", "must be in 1..=1000000".into()));
+        }
+        if !pos(self.step) {
+            return Err(("step", "must be finite and > 0".into()));
+        }
+        if !(pos(self.neighbor_radius) && self.neighbor_radius >= self.step) {
+            return Err(("neighbor_radius", "must be finite and >= step".into()));
+        }
+        if !(self.goal_bias >= 0.0 && self.goal_bias < 1.0) {
+            return Err(("goal_bias", "must be in [0, 1)".into()));
+        }
+        if self.clearance_cap.is_nan() || self.clearance_cap < 0.0 {
+            return Err(("clearance_cap", "must be >= 0 (inf allowed)".into()));
+        }
+        if !pos(self.switch_radius) {
+            return Err(("switch_radius", "must be finite and > 0".into()));
+        }
+        Ok(())
+    }
+}
+
+/// An occupancy grid of inflated obstacles with its distance transform.
+#[derive(Clone, Debug)]
+pub struct OccupancyGrid {
+    /// World position of the lower-left corner of cell `(0, 0)`, m.
+    pub origin: Vector2<f64>,
+    /// Cell side, m.
+    pub resolution: f64,
+    /// Cells along x.
+    pub width: usize,
+    /// Cells along y.
+    pub height: usize,
+    occupied: Vec<bool>,
+    clearance: Vec<f64>,
+}
+
+/// Largest number of cells a grid may have (a 1 km x 1 km map at 0.1 m is
+/// 10^8; this caps memory at a few hundred MB).
+pub const MAX_CELLS: usize = 20_000_000;
+
+impl OccupancyGrid {
+    /// Rasterises `obstacles` inflated by `margin` over the box
+    /// `[lo, hi]` (m) with square cells of side `resolution`, and computes the
+    /// distance transform.
+    pub fn build(
+        obstacles: &[Polygon],
+        margin: f64,
+        lo: Vector2<f64>,
+        hi: Vector2<f64>,
+        resolution: f64,
+    ) -> Result<Self, PlanError> {
+        let width = ((hi.x - lo.x) / resolution).ceil().max(1.0);
+        let height = ((hi.y - lo.y) / resolution).ceil().max(1.0);
+        if width * height > MAX_CELLS as f64 {
+            return Err(PlanError::GridTooLarge {
+                cells: width * height,
+            });
+        }
+        let (width, height) = (width as usize, height as usize);
+        let mut occupied = vec![false; width * height];
+        for poly in obstacles {
+            // Only the cells of the polygon's bounding box grown by the margin.
+            let (mut bl, mut tr) = (
+                Vector2::new(f64::INFINITY, f64::INFINITY),
+                Vector2::new(f64::NEG_INFINITY, f64::NEG_INFINITY),
+            );
+            for v in poly.vertices() {
+                bl = bl.inf(v);
+                tr = tr.sup(v);
+            }
+            let cell = |v: f64, o: f64, n: usize| {
+                (((v - o) / resolution).floor().max(0.0) as usize).min(n.saturating_sub(1))
+            };
+            let (i0, i1) = (
+                cell(bl.x - margin, lo.x, width),
+                cell(tr.x + margin, lo.x, width),
+            );
+            let (j0, j1) = (
+                cell(bl.y - margin, lo.y, height),
+                cell(tr.y + margin, lo.y, height),
+            );
+            for j in j0..=j1 {
+                for i in i0..=i1 {
+                    let c = Vector2::new(
+                        lo.x + (i as f64 + 0.5) * resolution,
+                        lo.y + (j as f64 + 0.5) * resolution,
+                    );
+                    if closest_point_point_polygon(&c, poly).signed_distance <= margin {
+                        occupied[j * width + i] = true;
+                    }
+                }
+            }
+        }
+        let clearance = distance_transform(&occupied, width, height, resolution);
+        Ok(OccupancyGrid {
+            origin: lo,
+            resolution,
+            width,
+            height,
+            occupied,
+            clearance,
+        })
+    }
+
+    /// The cell containing `p`, if inside the grid.
+    pub fn cell_of(&self, p: [f64; 2]) -> Option<(usize, usize)> {
+        let i = ((p[0] - self.origin.x) / self.resolution).floor();
+        let j = ((p[1] - self.origin.y) / self.resolution).floor();
+        (i >= 0.0 && j >= 0.0 && i < self.width as f64 && j < self.height as f64)
+            .then_some((i as usize, j as usize))
+    }
+
+    /// Whether cell `(i, j)` is occupied (inflated obstacle).
+    pub fn is_occupied(&self, i: usize, j: usize) -> bool {
+        self.occupied[j * self.width + i]
+    }
+
+    /// Whether `p` (m) is inside the grid and in a free cell.
+    pub fn is_free(&self, p: [f64; 2]) -> bool {
+        self.cell_of(p)
+            .is_some_and(|(i, j)| !self.is_occupied(i, j))
+    }
+
+    /// Distance from the centre of `p`'s cell to the nearest occupied cell centre,
+    /// m (`0` in an occupied cell or outside the grid, `inf` on an empty grid).
+    pub fn clearance(&self, p: [f64; 2]) -> f64 {
+        self.cell_of(p)
+            .map_or(0.0, |(i, j)| self.clearance[j * self.width + i])
+    }
+
+    /// Whether the straight segment `a -> b` (m) stays in free cells (points at
+    /// most `resolution / 4` apart are checked, both ends included).
+    pub fn segment_free(&self, a: [f64; 2], b: [f64; 2]) -> bool {
+        let len = dist(a, b);
+        let n = (len / (0.25 * self.resolution)).ceil().max(1.0) as usize;
+        (0..=n).all(|k| {
+            let t = k as f64 / n as f64;
+            self.is_free([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])])
+        })
+    }
+
+    /// Number of occupied cells.
+    pub fn occupied_count(&self) -> usize {
+        self.occupied.iter().filter(|&&o| o).count()
+    }
+}
+
+/// Exact Euclidean distance transform of a binary grid (distance from each cell
+/// centre to the nearest `true` cell centre, times `resolution`), by the
+/// Felzenszwalb-Huttenlocher lower envelope of parabolas, columns then rows.
+fn distance_transform(occ: &[bool], w: usize, h: usize, resolution: f64) -> Vec<f64> {
+    const BIG: f64 = 1e20;
+    let mut f: Vec<f64> = occ.iter().map(|&o| if o { 0.0 } else { BIG }).collect();
+    let mut buf_in = vec![0.0; w.max(h)];
+    let mut buf_out = vec![0.0; w.max(h)];
+    let mut v = vec![0usize; w.max(h)];
+    let mut z = vec![0.0; w.max(h) + 1];
+    // Columns (along y).
+    for i in 0..w {
+        for j in 0..h {
+            buf_in[j] = f[j * w + i];
+        }
+        edt_1d(&buf_in[..h], &mut buf_out[..h], &mut v, &mut z);
+        for j in 0..h {
+            f[j * w + i] = buf_out[j];
+        }
+    }
+    // Rows (along x).
+    for j in 0..h {
+        buf_in[..w].copy_from_slice(&f[j * w..(j + 1) * w]);
+        edt_1d(&buf_in[..w], &mut buf_out[..w], &mut v, &mut z);
+        f[j * w..(j + 1) * w].copy_from_slice(&buf_out[..w]);
+    }
+    f.iter()
+        .map(|&d2| {
+            if d2 >= BIG * 0.5 {
+                f64::INFINITY
+            } else {
+                d2.sqrt() * resolution
+            }
+        })
+        .collect()
+}
+
+/// One pass of the squared distance transform: `d[q] = min_p (q - p)^2 + f[p]`.
+fn edt_1d(f: &[f64], d: &mut [f64], v: &mut [usize], z: &mut [f64]) {
+    let n = f.len();
+    if n == 0 {
+        return;
+    }
+    let mut k = 0usize;
+    v[0] = 0;
+    z[0] = f64::NEG_INFINITY;
+    z[1] = f64::INFINITY;
+    let sq = |x: usize| (x * x) as f64;
+    for q in 1..n {
+        // z[0] = -inf and every s is finite, so k never goes below 0.
+        let mut s;
+        loop {
+            let p = v[k];
+            s = ((f[q] + sq(q)) - (f[p] + sq(p))) / (2.0 * (q as f64 - p as f64));
+            if s <= z[k] && k > 0 {
+                k -= 1;
+            } else {
+                break;
+            }
+        }
+        k += 1;
+        v[k] = q;
+        z[k] = s;
+        z[k + 1] = f64::INFINITY;
+    }
+    k = 0;
+    for q in 0..n {
+        while z[k + 1] < q as f64 {
+            k += 1;
+        }
+        let p = v[k];
+        let dq = q as f64 - p as f64;
+        d[q] = dq * dq + f[p];
+    }
+}
+
+fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
+    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()
+}
+
+/// The RRT* tree. Node 0 is the start.
+#[derive(Clone, Debug, Default)]
+pub struct Tree {
+    /// Node positions, m (world).
+    pub nodes: Vec<Vector2<f64>>,
+    /// Parent of each node (`None` for the start).
+    pub parent: Vec<Option<usize>>,
+    /// Cost of the path from the start to each node (the report's edge cost, m).
+    pub cost: Vec<f64>,
+}
+
+/// A finished plan.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// The grid it was planned on.
+    pub grid: OccupancyGrid,
+    /// The whole tree (for figure 8).
+    pub tree: Tree,
+    /// The RRT* path, start first, goal last, m.
+    pub path: Vec<Vector2<f64>>,
+    /// Cost of that path (report's edge cost), m.
+    pub cost: f64,
+    /// The subgoals handed to the controller in order (after the start; the goal
+    /// last), m: the path's nodes, shortcut when `shortcut` is set.
+    pub subgoals: Vec<Vector2<f64>>,
+}
+
+impl Plan {
+    /// Euclidean length of the subgoal polyline from `start`, m.
+    pub fn subgoal_length(&self, start: Vector2<f64>) -> f64 {
+        polyline_length(start, &self.subgoals)
+    }
+}
+
+/// Length of the polyline `from -> points[0] -> ... -> points[last]`, m.
+pub fn polyline_length(from: Vector2<f64>, points: &[Vector2<f64>]) -> f64 {
+    let mut prev = from;
+    let mut len = 0.0;
+    for p in points {
+        len += (p - prev).norm();
+        prev = *p;
+    }
+    len
+}
+
+/// Progress measure along a subgoal sequence: the distance from `p` to subgoal
+/// `current`, plus the length of the polyline from it through the later
+/// subgoals, m. With a single subgoal (the goal) it is the distance to the goal.
+/// Switching to the next subgoal never increases it (triangle inequality).
+pub fn remaining_length(p: Vector2<f64>, subgoals: &[Vector2<f64>], current: usize) -> f64 {
+    match subgoals.get(current) {
+        None => 0.0,
+        Some(s) => (p - s).norm() + polyline_length(*s, &subgoals[current + 1..]),
+    }
+}
+
+/// Why no plan was made.
+#[derive(Clone, Debug, PartialEq)]
+pub enum PlanError {
+    /// The settings are invalid (field, reason).
+    Settings(&'static str, String),
+    /// The grid would have more than [`MAX_CELLS`] cells.
+    GridTooLarge {
+        /// Cells requested.
+        cells: f64,
+    },
+    /// The start is in an inflated obstacle (or outside the grid).
+    StartBlocked,
+    /// The goal is in an inflated obstacle (or outside the grid).
+    GoalBlocked,
+    /// No node of the tree reaches the goal after all iterations.
+    NoPath {
+        /// Tree size at the end.
+        nodes: usize,
+    },
+}
+
+impl core::fmt::Display for PlanError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        match self {
+            PlanError::Settings(field, m) => write!(f, "rrt_star.{field}: {m}"),
+            PlanError::GridTooLarge { cells } => write!(
+                f,
+                "the occupancy grid would have {cells:.0} cells (max {MAX_CELLS}); raise rrt_star.resolution"
+            ),
+            PlanError::StartBlocked => {
+                f.write_str("the start is within rrt_star.margin of an obstacle (an occupied cell)")
+            }
+            PlanError::GoalBlocked => {
+                f.write_str("the goal is within rrt_star.margin of an obstacle (an occupied cell)")
+            }
+            PlanError::NoPath { nodes } => write!(
+                f,
+                "no path to the goal in a tree of {nodes} nodes (more rrt_star.iterations or a smaller margin may help)"
+            ),
+        }
+    }
+}
+
+impl std::error::Error for PlanError {}
+
+/// Plans from `start` to `goal` around `obstacles` (see the module docs). The
+/// same arguments always give the same plan.
+pub fn plan(
+    start: Vector2<f64>,
+    goal: Vector2<f64>,
+    obstacles: &[Polygon],
+    params: &RrtParams,
+    seed: u64,
+) -> Result<Plan, PlanError> {
+    params
+        .validate()
+        .map_err(|(f, m)| PlanError::Settings(f, m))?;
+    // Planning box.
+    let mut lo = start.inf(&goal);
+    let mut hi = start.sup(&goal);
+    for o in obstacles {
+        for v in o.vertices() {
+            lo = lo.inf(v);
+            hi = hi.sup(v);
+        }
+    }
+    let pad = Vector2::repeat(params.padding + params.margin);
+    let grid = OccupancyGrid::build(
+        obstacles,
+        params.margin,
+        lo - pad,
+        hi + pad,
+        params.resolution,
+    )?;
+    let s = [start.x, start.y];
+    let g = [goal.x, goal.y];
+    if !grid.is_free(s) {
+        return Err(PlanError::StartBlocked);
+    }
+    if !grid.is_free(g) {
+        return Err(PlanError::GoalBlocked);
+    }
+    let weight = |p: [f64; 2]| (-grid.clearance(p).min(params.clearance_cap)).exp();
+
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5252_545f_5354_4152); // "RRT_STAR"
+    let mut unif = move || (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
+    let (bx0, by0) = (grid.origin.x, grid.origin.y);
+    let (bw, bh) = (
+        grid.width as f64 * grid.resolution,
+        grid.height as f64 * grid.resolution,
+    );
+
+    let mut nodes: Vec<[f64; 2]> = vec![s];
+    let mut parent: Vec<Option<usize>> = vec![None];
+    let mut cost: Vec<f64> = vec![0.0];
+    let mut children: Vec<Vec<usize>> = vec![Vec::new()];
+    let r2 = params.neighbor_radius * params.neighbor_radius;
+    let mut near: Vec<usize> = Vec::new();
+
+    for _ in 0..params.iterations {
+        let sample = if unif() < params.goal_bias {
+            g
+        } else {
+            [bx0 + unif() * bw, by0 + unif() * bh]
+        };
+        // Nearest node (linear scan; trees have a few thousand nodes).
+        let mut best = 0usize;
+        let mut best_d2 = f64::INFINITY;
+        for (k, n) in nodes.iter().enumerate() {
+            let d2 = (n[0] - sample[0]).powi(2) + (n[1] - sample[1]).powi(2);
+            if d2 < best_d2 {
+                best_d2 = d2;
+                best = k;
+            }
+        }
+        let d = best_d2.sqrt();
+        if d < 1e-9 {
+            continue;
+        }
+        let from = nodes[best];
+        let t = (params.step / d).min(1.0);
+        let new = [
+            from[0] + t * (sample[0] - from[0]),
+            from[1] + t * (sample[1] - from[1]),
+        ];
+        if !grid.is_free(new) || !grid.segment_free(from, new) {
+            continue;
+        }
+        let w_new = weight(new);
+        // Neighbourhood.
+        near.clear();
+        for (k, n) in nodes.iter().enumerate() {
+            if (n[0] - new[0]).powi(2) + (n[1] - new[1]).powi(2) <= r2 {
+                near.push(k);
+            }
+        }
+        // Choose the parent.
+        let mut par = best;
+        let mut c_new = cost[best] + dist(from, new) * w_new;
+        for &k in &near {
+            let c = cost[k] + dist(nodes[k], new) * w_new;
+            if c < c_new && grid.segment_free(nodes[k], new) {
+                par = k;
+                c_new = c;
+            }
+        }
+        let j = nodes.len();
+        nodes.push(new);
+        parent.push(Some(par));
+        cost.push(c_new);
+        children.push(Vec::new());
+        children[par].push(j);
+        // Rewire.
+        for &k in &near {
+            if k == par || k == 0 {
+                continue;
+            }
+            let c = c_new + dist(new, nodes[k]) * weight(nodes[k]);
+            if c + 1e-12 < cost[k] && grid.segment_free(new, nodes[k]) {
+                let old = parent[k].expect("only the root has no parent");
+                children[old].retain(|&x| x != k);
+                children[j].push(k);
+                parent[k] = Some(j);
+                let delta = c - cost[k];
+                let mut stack = vec![k];
+                while let Some(x) = stack.pop() {
+                    cost[x] += delta;
+                    stack.extend(children[x].iter().copied());
+                }
+            }
+        }
+    }
+
+    // Join the goal to the cheapest node that reaches it.
+    let w_goal = weight(g);
+    let mut best: Option<(usize, f64)> = None;
+    for (k, n) in nodes.iter().enumerate() {
+        let d = dist(*n, g);
+        if d > params.neighbor_radius {
+            continue;
+        }
+        let c = cost[k] + d * w_goal;
+        if best.is_none_or(|(_, bc)| c < bc) && grid.segment_free(*n, g) {
+            best = Some((k, c));
+        }
+    }
+    let to_v = |p: [f64; 2]| Vector2::new(p[0], p[1]);
+    let tree = Tree {
+        nodes: nodes.iter().map(|&p| to_v(p)).collect(),
+        parent: parent.clone(),
+        cost: cost.clone(),
+    };
+    let Some((last, total)) = best else {
+        return Err(PlanError::NoPath { nodes: nodes.len() });
+    };
+    let mut idx = vec![last];
+    while let Some(p) = parent[*idx.last().expect("non-empty")] {
+        idx.push(p);
+    }
+    idx.reverse();
+    let mut path: Vec<[f64; 2]> = idx.iter().map(|&k| nodes[k]).collect();
+    if dist(*path.last().expect("non-empty"), g) > 1e-12 {
+        path.push(g);
+    }
+    let kept: Vec<[f64; 2]> = if params.shortcut {
+        let mut out = Vec::new();
+        let mut i = 0usize;
+        while i + 1 < path.len() {
+            let mut j = path.len() - 1;
+            while j > i + 1 && !grid.segment_free(path[i], path[j]) {
+                j -= 1;
+            }
+            out.push(path[j]);
+            i = j;
+        }
+        out
+    } else {
+        path[1..].to_vec()
+    };
+    Ok(Plan {
+        grid,
+        tree,
+        path: path.iter().map(|&p| to_v(p)).collect(),
+        cost: total,
+        subgoals: kept.iter().map(|&p| to_v(p)).collect(),
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square(c: [f64; 2], h: f64) -> Polygon {
+        Polygon::new(&[
+            [c[0] - h, c[1] - h],
+            [c[0] + h, c[1] - h],
+            [c[0] + h, c[1] + h],
+            [c[0] - h, c[1] + h],
+        ])
+        .unwrap()
+    }
+
+    #[test]
+    fn distance_transform_is_exact_on_a_small_grid() {
+        let (w, h) = (7, 5);
+        let mut occ = vec![false; w * h];
+        occ[2 * w + 3] = true;
+        occ[0] = true;
+        let d = distance_transform(&occ, w, h, 0.5);
+        for j in 0..h {
+            for i in 0..w {
+                let a = (((i as f64 - 3.0).powi(2) + (j as f64 - 2.0).powi(2)).sqrt()) * 0.5;
+                let b = ((i * i + j * j) as f64).sqrt() * 0.5;
+                assert!((d[j * w + i] - a.min(b)).abs() < 1e-12, "{i} {j}");
+            }
+        }
+        assert!(distance_transform(&[false; 4], 2, 2, 1.0)[3].is_infinite());
+    }
+
+    #[test]
+    fn grid_inflates_by_the_margin() {
+        let obs = [square([0.0, 0.0], 0.5)];
+        let g = OccupancyGrid::build(
+            &obs,
+            0.3,
+            Vector2::new(-2.0, -2.0),
+            Vector2::new(2.0, 2.0),
+            0.1,
+        )
+        .unwrap();
+        assert!(!g.is_free([0.0, 0.0]));
+        assert!(!g.is_free([0.75, 0.05]));
+        assert!(g.is_free([0.9, 0.05]));
+        assert!(!g.is_free([5.0, 0.0]), "outside the grid is blocked");
+        assert!((g.clearance([1.55, 0.05]) - 0.7).abs() < 0.11);
+        assert!(!g.segment_free([-1.5, 0.0], [1.5, 0.0]));
+        assert!(g.segment_free([-1.5, -1.5], [1.5, -1.5]));
+    }
+
+    #[test]
+    fn plan_goes_around_and_is_deterministic() {
+        let obs = [square([2.5, 0.0], 1.0)];
+        let p = RrtParams {
+            iterations: 1200,
+            ..RrtParams::default()
+        };
+        let (s, g) = (Vector2::new(0.0, 0.0), Vector2::new(5.0, 0.0));
+        let a = plan(s, g, &obs, &p, 3).unwrap();
+        let b = plan(s, g, &obs, &p, 3).unwrap();
+        assert_eq!(a.subgoals, b.subgoals);
+        assert_eq!(a.tree.nodes, b.tree.nodes);
+        assert_eq!(*a.subgoals.last().unwrap(), g);
+        let mut prev = s;
+        for q in &a.subgoals {
+            assert!(a.grid.segment_free([prev.x, prev.y], [q.x, q.y]));
+            prev = *q;
+        }
+        assert!(a.subgoal_length(s) > 5.0);
+        // Costs are consistent with parents after rewiring.
+        for k in 1..a.tree.nodes.len() {
+            let par = a.tree.parent[k].unwrap();
+            let w = (-a
+                .grid
+                .clearance([a.tree.nodes[k].x, a.tree.nodes[k].y])
+                .min(p.clearance_cap))
+            .exp();
+            let c = a.tree.cost[par] + (a.tree.nodes[k] - a.tree.nodes[par]).norm() * w;
+            assert!((c - a.tree.cost[k]).abs() < 1e-9, "node {k}");
+        }
+    }
+
+    #[test]
+    fn blocked_start_is_an_error() {
+        let obs = [square([0.0, 0.0], 1.0)];
+        let e = plan(
+            Vector2::new(0.0, 0.0),
+            Vector2::new(5.0, 0.0),
+            &obs,
+            &RrtParams::default(),
+            0,
+        )
+        .unwrap_err();
+        assert_eq!(e, PlanError::StartBlocked);
+    }
+
+    #[test]
+    fn remaining_length_never_grows_at_a_switch() {
+        let sg = [
+            Vector2::new(1.0, 0.0),
+            Vector2::new(1.0, 1.0),
+            Vector2::new(3.0, 1.0),
+        ];
+        let p = Vector2::new(0.8, 0.1);
+        assert!(remaining_length(p, &sg, 1) <= remaining_length(p, &sg, 0));
+        assert!((remaining_length(Vector2::new(0.0, 0.0), &sg, 0) - 4.0).abs() < 1e-12);
+    }
+}

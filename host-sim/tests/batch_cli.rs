@@ -1,0 +1,112 @@
+//! `ldcbf-sim batch`, `merge` and `table` from the command line: files, exit
+//! codes, and one clear error line (with nothing written) on bad input.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn sim(args: &[&str], cwd: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_ldcbf-sim"))
+        .args(args)
+        .current_dir(cwd)
+        .output()
+        .expect("binary runs")
+}
+
+fn text(b: &[u8]) -> String {
+    String::from_utf8_lossy(b).into_owned()
+}
+
+/// Runs a command that must fail: non-zero exit, exactly one `error:` line on
+/// stderr containing `needle`, and an empty working directory afterwards.
+fn fails(args: &[&str], needle: &str) {
+    let tmp = tempfile::tempdir().unwrap();
+    let o = sim(args, tmp.path());
+    let err = text(&o.stderr);
+    assert!(!o.status.success(), "{args:?} succeeded");
+    assert!(err.contains(needle), "{args:?}: {err}");
+    let errors = err.lines().filter(|l| l.starts_with("error")).count();
+    assert_eq!(errors, 1, "{args:?}: {err}");
+    assert_eq!(
+        std::fs::read_dir(tmp.path()).unwrap().count(),
+        0,
+        "{args:?} wrote something"
+    );
+}
+
+#[test]
+fn bad_batch_arguments_fail_cleanly() {
+    fails(&["batch", "--seeds", "0..3", "--shard", "3/2"], "3/2");
+    fails(&["batch", "--seeds", "0..3", "--shard", "0/2"], "0/2");
+    fails(&["batch", "--seeds", "0..3", "--shard", "two"], "two");
+    fails(&["batch", "--seeds", "5..2"], "5..2");
+    fails(&["batch", "--seeds", "x..3"], "seed range");
+    fails(&["batch", "--seeds", "0..3", "--planner", "astar"], "astar");
+    fails(&["batch", "--seeds", "0..3", "--jobs", "0"], "--jobs");
+    fails(
+        &["batch", "--seeds", "0..3", "--family", "simple"],
+        "no [generator]",
+    );
+    fails(&["batch", "--seeds", "0..3", "--set", "delta=-1"], "delta");
+    fails(&["merge", "nope", "--out", "m"], "nope");
+    fails(&["table", "nope"], "nope");
+}
+
+#[test]
+fn batch_shards_merge_and_table_from_the_command_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let p = tmp.path();
+    for (i, dir) in [(1, "s1"), (2, "s2")] {
+        let shard = format!("{i}/2");
+        let o = sim(
+            &[
+                "batch",
+                "--seeds",
+                "0..4",
+                "--shard",
+                &shard,
+                "--jobs",
+                "2",
+                "--out",
+                dir,
+                "--planner",
+                "rrt_star",
+                "--quiet",
+            ],
+            p,
+        );
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        let csv = std::fs::read_to_string(p.join(dir).join("runs.csv")).unwrap();
+        assert_eq!(csv.lines().count(), 3, "header + 2 rows: {csv}");
+    }
+    // Default output directory when --out is not given.
+    let o = sim(&["batch", "--seeds", "7", "--quiet"], p);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(p.join("out/batch-random-none-known/runs.csv").is_file());
+    // An incomplete merge fails and writes nothing; the complete one works.
+    let o = sim(&["merge", "s1", "--out", "m"], p);
+    assert!(!o.status.success());
+    assert!(text(&o.stderr).contains("--allow-partial"));
+    assert!(!p.join("m").exists());
+    let o = sim(&["merge", "s1", "s2", "--out", "m"], p);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(text(&o.stdout).contains("4 runs"), "{}", text(&o.stdout));
+    let csv = std::fs::read_to_string(p.join("m/runs.csv")).unwrap();
+    let seeds: Vec<&str> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap())
+        .collect();
+    assert_eq!(seeds, ["0", "1", "2", "3"]);
+    let o = sim(&["table", "m", "out/batch-random-none-known"], p);
+    assert!(o.status.success());
+    let md = text(&o.stdout);
+    assert!(md.contains("| | rrt_star / known | none / known |"), "{md}");
+    assert!(md.contains("| collisions"), "{md}");
+    // No temporary directories left behind.
+    let left: Vec<String> = std::fs::read_dir(p)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with('.'))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+}

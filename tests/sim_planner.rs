@@ -1,0 +1,153 @@
+//! Global planner (SPEC 5, report 5.1): the `trap` scenario stalls without
+//! subgoals and reaches the goal with RRT* subgoals; the maze reaches its goal
+//! with them; RRT* is deterministic for a seed and its subgoal path stays clear
+//! of the inflated obstacles.
+//!
+//! Runs in-process with the own QP solver at 20 Hz, no figures.
+
+use ldcbf_controller::closest_point_point_polygon;
+use ldcbf_controller::nalgebra::Vector2;
+use ldcbf_sim::planner::{RrtParams, plan};
+use ldcbf_sim::scenario::{LoadOptions, Planner, load};
+use ldcbf_sim::sim::{Outcome, SimOptions, SimResult, run};
+use ldcbf_sim::{Summary, summarize};
+
+fn simulate(name: &str, sets: &[(&str, &str)]) -> (SimResult, Summary) {
+    let opts = LoadOptions {
+        seed: None,
+        sets: sets
+            .iter()
+            .map(|(k, v)| (k.to_string(), v.to_string()))
+            .collect(),
+    };
+    let sc = load(name, &opts).expect("shipped scenario loads");
+    let r = run(&sc, SimOptions::default()).expect("simulation starts");
+    let s = summarize(&r);
+    (r, s)
+}
+
+fn assert_no_collision(s: &Summary) {
+    let c = s.min_com_clearance.expect("obstacles");
+    assert!(
+        !s.collision && c >= 0.0,
+        "{}: min CoM clearance {c}",
+        s.scenario
+    );
+}
+
+/// Report figure 7: the MPC alone walks into the cup and stalls at its back
+/// wall; the loop ends the run as stuck after `stuck_window` without progress.
+#[test]
+fn trap_stalls_without_the_planner() {
+    let (r, s) = simulate("trap", &[]);
+    assert_eq!(r.scenario.planner, Planner::None);
+    assert_eq!(r.outcome, Outcome::Stuck, "{s:#?}");
+    assert!(!s.reached_goal && !s.success);
+    assert_no_collision(&s);
+    // It stopped inside the cup, in front of the back wall (u in [2.2, 4.2] along
+    // the diagonal, |w| < 1.4 across it), well short of the goal.
+    let p = r.samples.last().unwrap().position;
+    let (u, w) = ((p.x + p.y) / 2f64.sqrt(), (p.y - p.x) / 2f64.sqrt());
+    assert!(u > 2.2 && u < 4.2 && w.abs() < 1.4, "stopped at {p:?}");
+    assert!(s.final_distance > 2.5, "{}", s.final_distance);
+    // "Stuck" is measured from the last 5 cm of progress.
+    assert!(s.sim_time >= r.scenario.stuck_window);
+}
+
+/// Report figures 8-9: with RRT* subgoals the same layout is solved, walking
+/// away from the goal first without being called stuck.
+#[test]
+fn trap_reaches_the_goal_with_rrt_star() {
+    let (r, s) = simulate("trap", &[("planner", "\"rrt_star\"")]);
+    assert_eq!(r.outcome, Outcome::GoalReached, "{s:#?}");
+    assert!(s.success);
+    assert_no_collision(&s);
+    assert!(s.planner_error.is_none());
+    assert!(s.subgoals >= 2, "at least one via point: {}", s.subgoals);
+    assert_eq!(
+        s.subgoals_reached, s.subgoals,
+        "every subgoal passed in order"
+    );
+    // The goal distance grew on the way (the detour), which is not "stuck".
+    let d0 = (r.scenario.start - r.scenario.goal).norm();
+    let dmax = r
+        .samples
+        .iter()
+        .map(|x| (x.position - r.scenario.goal).norm())
+        .fold(0.0, f64::max);
+    assert!(dmax > d0 - 0.2, "the path leads around the cup");
+    // The controller always chased the current subgoal.
+    for c in &r.cycles {
+        assert_eq!(c.goal, r.navigation.subgoals[c.subgoal]);
+    }
+}
+
+/// Report 4.2 + 5.1: the maze, a dead end for the MPC alone (see
+/// `sim_scenarios.rs`), is solved with subgoals.
+#[test]
+fn maze_reaches_the_goal_with_rrt_star() {
+    let (r, s) = simulate("maze", &[("planner", "\"rrt_star\"")]);
+    assert_eq!(r.outcome, Outcome::GoalReached, "{s:#?}");
+    assert!(s.success);
+    assert_no_collision(&s);
+    assert_eq!(s.subgoals_reached, s.subgoals);
+}
+
+#[test]
+fn rrt_star_is_deterministic_for_a_seed_and_stays_clear() {
+    let sc = load("trap", &LoadOptions::default()).unwrap();
+    let params = RrtParams {
+        iterations: 800,
+        ..sc.rrt.clone()
+    };
+    let a = plan(sc.start, sc.goal, &sc.obstacles, &params, 11).unwrap();
+    let b = plan(sc.start, sc.goal, &sc.obstacles, &params, 11).unwrap();
+    assert_eq!(a.tree.nodes, b.tree.nodes);
+    assert_eq!(a.tree.parent, b.tree.parent);
+    assert_eq!(a.path, b.path);
+    assert_eq!(a.subgoals, b.subgoals);
+    assert_eq!(a.cost, b.cost);
+    let c = plan(sc.start, sc.goal, &sc.obstacles, &params, 12).unwrap();
+    assert_ne!(a.tree.nodes, c.tree.nodes, "another seed, another tree");
+    // Every point of the subgoal polyline keeps the margin to the true
+    // obstacles, up to half a cell diagonal (the grid's resolution).
+    let tol = params.resolution * core::f64::consts::FRAC_1_SQRT_2;
+    let mut prev = sc.start;
+    for q in &a.subgoals {
+        for k in 0..=100 {
+            let p = prev + (q - prev) * (f64::from(k) / 100.0);
+            for o in &sc.obstacles {
+                let d = closest_point_point_polygon(&p, o).signed_distance;
+                assert!(d >= params.margin - tol, "{p:?} is {d} m from an obstacle");
+            }
+        }
+        prev = *q;
+    }
+    assert_eq!(*a.subgoals.last().unwrap(), sc.goal);
+    // The tree's costs follow the report's edge cost through the parents.
+    for k in 1..a.tree.nodes.len() {
+        let p = a.tree.parent[k].unwrap();
+        let n = a.tree.nodes[k];
+        let w = (-a.grid.clearance([n.x, n.y]).min(params.clearance_cap)).exp();
+        let expect = a.tree.cost[p] + (n - a.tree.nodes[p]).norm() * w;
+        assert!((a.tree.cost[k] - expect).abs() < 1e-9);
+    }
+}
+
+/// A goal the planner cannot reach is not an error of the run: it walks to
+/// the goal directly and says why.
+#[test]
+fn planner_failure_is_reported_and_the_run_goes_on() {
+    let (r, s) = simulate(
+        "trap",
+        &[
+            ("planner", "\"rrt_star\""),
+            ("goal", "[3.2, 3.2]"), // inside the inflated back wall
+            ("time_limit", "3.0"),
+        ],
+    );
+    assert!(r.navigation.plan.is_none());
+    let err = s.planner_error.clone().expect("planner failed");
+    assert!(err.contains("goal"), "{err}");
+    assert_eq!(r.navigation.subgoals, vec![Vector2::new(3.2, 3.2)]);
+}
