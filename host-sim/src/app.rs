@@ -33,6 +33,9 @@ pub struct RunRequest {
     pub gif: bool,
     /// Write every n-th 1 kHz sample to `trajectory.csv`.
     pub trajectory_every: usize,
+    /// Also write every cycle's QP as `cycle_NNNNN.npz` (`P, q, G, h`) into this
+    /// directory (created atomically like the output directory).
+    pub export_qps: Option<PathBuf>,
 }
 
 impl RunRequest {
@@ -49,6 +52,7 @@ impl RunRequest {
             plots: true,
             gif: true,
             trajectory_every: 10,
+            export_qps: None,
         }
     }
 }
@@ -91,8 +95,19 @@ pub fn execute_run(req: &RunRequest) -> Result<RunReport> {
             solver: req.solver,
             mpc_rate: req.mpc_rate,
             record_scans: req.plots,
+            record_qps: req.export_qps.is_some(),
         },
     )?;
+    if let Some(qdir) = &req.export_qps {
+        let qd = OutputDir::create(qdir)
+            .with_context(|| format!("cannot create QP export directory {}", qdir.display()))?;
+        for (cycle, p) in &result.qps {
+            p.write_npz(&qd.path().join(format!("cycle_{cycle:05}.npz")))
+                .map_err(|e| anyhow::anyhow!("{e}"))?;
+        }
+        qd.commit()
+            .with_context(|| format!("cannot move the QPs into {}", qdir.display()))?;
+    }
     let summary = summarize(&result);
     write_logs(&result, &summary, dir.path(), req.trajectory_every)
         .with_context(|| format!("writing logs into {}", dir.path().display()))?;

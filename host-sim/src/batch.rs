@@ -695,6 +695,7 @@ pub fn run_batch(req: &BatchRequest) -> Result<BatchReport> {
         solver: req.solver,
         mpc_rate: req.mpc_rate,
         record_scans: false,
+        record_qps: false,
     };
     let t0 = Instant::now();
     let rows: Vec<Result<RunRow>> = pool.install(|| {

@@ -18,6 +18,7 @@
 //! * [`plot`]: the map, state panels, LDCBF frames and the animated GIF, drawn
 //!   with plotters and an embedded font (no system font needed);
 //! * [`app`]: the `run` pipeline behind the `ldcbf-sim` binary;
+//! * [`qpbench`]: `ldcbf-sim qp solve`, our solver on npz QP files, timed;
 //! * [`batch`]: `ldcbf-sim batch` and `merge`: many seeds of a scenario family in
 //!   parallel, sharded across machines, one CSV row per run and a Markdown table.
 //!
@@ -29,6 +30,7 @@ pub mod perception;
 pub mod planner;
 pub mod plant;
 pub mod plot;
+pub mod qpbench;
 pub mod report;
 pub mod scenario;
 pub mod sim;

@@ -61,6 +61,15 @@ enum Command {
         /// Write every n-th 1 kHz sample to trajectory.csv (1 = all).
         #[arg(long, default_value_t = 10)]
         trajectory_every: usize,
+        /// Also write every cycle's QP as DIR/cycle_NNNNN.npz (P, q, G, h), the
+        /// layout `qp solve` reads.
+        #[arg(long, value_name = "DIR")]
+        export_qps: Option<PathBuf>,
+    },
+    /// Dense QPs in the npz layout of ../shared/qpbench (P, q, G, h).
+    Qp {
+        #[command(subcommand)]
+        command: QpCommand,
     },
     /// List the scenarios shipped in scenarios/.
     List,
@@ -119,6 +128,23 @@ enum Command {
         /// Batch directories (one column each).
         #[arg(required = true)]
         dirs: Vec<PathBuf>,
+    },
+}
+
+#[derive(Subcommand)]
+enum QpCommand {
+    /// Solve each file with our solver; print CSV: status, iterations, objective
+    /// and the minimum solve time over the repeats (ns, solver call only).
+    Solve {
+        /// npz files (P, q, G, h).
+        #[arg(required = true)]
+        files: Vec<PathBuf>,
+        /// Timed repeats per file (the minimum is printed).
+        #[arg(long, default_value_t = 1)]
+        repeat: usize,
+        /// Iteration budget per solve.
+        #[arg(long, default_value_t = 1000)]
+        max_iter: u32,
     },
 }
 
@@ -225,6 +251,28 @@ fn main() -> ExitCode {
             }
             ExitCode::SUCCESS
         }
+        Command::Qp {
+            command:
+                QpCommand::Solve {
+                    files,
+                    repeat,
+                    max_iter,
+                },
+        } => {
+            // Solve everything first: on any error nothing is printed but the error.
+            let mut rows = Vec::with_capacity(files.len());
+            for f in &files {
+                match ldcbf_sim::qpbench::solve_file(f, repeat, max_iter) {
+                    Ok(r) => rows.push(r),
+                    Err(e) => return fail(e),
+                }
+            }
+            println!("{}", ldcbf_sim::qpbench::CSV_HEADER);
+            for r in &rows {
+                println!("{}", r.csv());
+            }
+            ExitCode::SUCCESS
+        }
         Command::Run {
             scenario,
             out,
@@ -235,6 +283,7 @@ fn main() -> ExitCode {
             no_plots,
             no_gif,
             trajectory_every,
+            export_qps,
         } => {
             let req = RunRequest {
                 out,
@@ -245,12 +294,16 @@ fn main() -> ExitCode {
                 plots: !no_plots,
                 gif: !no_gif,
                 trajectory_every,
+                export_qps: export_qps.clone(),
                 ..RunRequest::new(&scenario)
             };
             match execute_run(&req) {
                 Ok(rep) => {
                     print!("{}", ldcbf_sim::report::human_summary(&rep.summary));
                     println!("wrote {}/: {}", rep.out_dir.display(), rep.files.join(" "));
+                    if let Some(d) = export_qps {
+                        println!("wrote {} QPs to {}/", rep.result.qps.len(), d.display());
+                    }
                     ExitCode::SUCCESS
                 }
                 Err(err) => {

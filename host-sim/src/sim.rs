@@ -119,6 +119,9 @@ pub struct SimOptions {
     /// Keep every LiDAR scan (points and inferred polygons) in
     /// [`SimResult::scans`] for the figures; batch runs turn it off.
     pub record_scans: bool,
+    /// Keep every cycle's QP (as the controller assembled it) in
+    /// [`SimResult::qps`], for `run --export-qps`.
+    pub record_qps: bool,
 }
 
 impl Default for SimOptions {
@@ -127,6 +130,7 @@ impl Default for SimOptions {
             solver: Solver::Own,
             mpc_rate: MpcRate::Hz(20),
             record_scans: true,
+            record_qps: false,
         }
     }
 }
@@ -285,6 +289,9 @@ pub struct SimResult {
     /// LiDAR scans, one per control cycle (with `perception = "lidar"` and
     /// [`SimOptions::record_scans`]).
     pub scans: Vec<ScanRecord>,
+    /// Each control cycle's QP, with its cycle index (with
+    /// [`SimOptions::record_qps`]; cycles with invalid input build none).
+    pub qps: Vec<(usize, ldcbf_reference::DenseProblem)>,
 }
 
 impl SimResult {
@@ -392,6 +399,7 @@ fn run_with<B: QpBackend<NV, NC>>(
         Perception::Known => None,
     };
     let mut scans: Vec<ScanRecord> = Vec::new();
+    let mut qps = Vec::new();
     // The inferred obstacles of the current cycle (LiDAR), borrowed by its input.
     let mut seen: Vec<Polygon>;
     let max_ticks = (scenario.time_limit / PLANT_DT).round() as u64;
@@ -468,6 +476,15 @@ fn run_with<B: QpBackend<NV, NC>>(
             let t0 = Instant::now();
             let output = controller.step_with(&input, backend);
             let compute_ns = u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX);
+            if options.record_qps && output.status.name() != "invalid_input" {
+                qps.push((
+                    cycles.len(),
+                    ldcbf_reference::DenseProblem::from_assembly(
+                        controller.solver(),
+                        controller.last_assembly(),
+                    ),
+                ));
+            }
             let half_planes = if output.status.name() == "invalid_input" {
                 Vec::new()
             } else {
@@ -544,5 +561,6 @@ fn run_with<B: QpBackend<NV, NC>>(
         samples,
         navigation,
         scans,
+        qps,
     })
 }

@@ -101,3 +101,53 @@ fn bad_arguments_fail() {
     assert!(!o.status.success());
     assert!(!tmp.path().join("out").exists());
 }
+
+/// `run --export-qps DIR` writes one npz per cycle, `qp solve` reads them back
+/// and prints one CSV row per file; a missing file fails with its name and
+/// prints no partial CSV.
+#[test]
+fn exported_qps_solve_again() {
+    let tmp = tempfile::tempdir().unwrap();
+    let o = sim(
+        &[
+            "run",
+            "simple",
+            "--no-plots",
+            "--out",
+            "o",
+            "--export-qps",
+            "qps",
+        ],
+        tmp.path(),
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let cycles = std::fs::read_to_string(tmp.path().join("o/cycles.csv")).unwrap();
+    let n_cycles = cycles.lines().count() - 1;
+    let mut files: Vec<String> = std::fs::read_dir(tmp.path().join("qps"))
+        .unwrap()
+        .map(|e| e.unwrap().path().display().to_string())
+        .collect();
+    files.sort();
+    assert_eq!(files.len(), n_cycles, "one QP per cycle");
+    let mut args = vec!["qp", "solve", "--repeat", "2"];
+    args.extend(files.iter().take(5).map(String::as_str));
+    let o = sim(&args, tmp.path());
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = text(&o.stdout);
+    let lines: Vec<&str> = out.lines().collect();
+    assert_eq!(
+        lines[0],
+        "file,n,m,status,iterations,objective,min_solve_ns"
+    );
+    assert_eq!(lines.len(), 6);
+    assert!(
+        lines[1..]
+            .iter()
+            .all(|l| l.contains(",6,") && l.contains(",solved,")),
+        "{out}"
+    );
+    let o = sim(&["qp", "solve", &files[0], "nope.npz"], tmp.path());
+    assert!(!o.status.success());
+    assert!(o.stdout.is_empty());
+    assert!(text(&o.stderr).contains("nope.npz"));
+}

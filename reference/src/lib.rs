@@ -147,6 +147,36 @@ impl DenseProblem {
         Ok(DenseProblem { n, m, P, q, G, h })
     }
 
+    /// Writes `P, q, G, h` (float64, C order, shapes `[n, n]`, `[n]`, `[m, n]`,
+    /// `[m]`) to an `.npz` file, the layout [`DenseProblem::from_npz`] reads and
+    /// `numpy.load` opens. (The mpc_qpbenchmark files also carry pickled `None`s
+    /// for `A, b, lb, ub`; they are not written.) Errors name the file.
+    pub fn write_npz(&self, path: &Path) -> Result<(), ProblemError> {
+        use npyz::WriterBuilder;
+        let name = path.display().to_string();
+        let err = |e: std::io::Error| ProblemError(format!("{name}: cannot write npz: {e}"));
+        let mut npz = npyz::npz::NpzWriter::create(path).map_err(err)?;
+        let (n, m) = (self.n as u64, self.m as u64);
+        let arrays: [(&str, Vec<u64>, &[f64]); 4] = [
+            ("P", vec![n, n], &self.P),
+            ("q", vec![n], &self.q),
+            ("G", vec![m, n], &self.G),
+            ("h", vec![m], &self.h),
+        ];
+        for (key, shape, data) in arrays {
+            let mut w = npz
+                .array::<f64>(key, Default::default())
+                .map_err(err)?
+                .default_dtype()
+                .shape(&shape)
+                .begin_nd()
+                .map_err(err)?;
+            w.extend(data.iter().copied()).map_err(err)?;
+            w.finish().map_err(err)?;
+        }
+        Ok(())
+    }
+
     /// Objective `1/2 x'Px + q'x`.
     pub fn objective(&self, x: &[f64]) -> f64 {
         let n = self.n;
@@ -635,6 +665,23 @@ mod tests {
         assert!(!compare(&p, &own, &r).holds());
         own.status = QpStatus::Infeasible;
         assert!(!compare(&p, &own, &r).feasibility_agrees);
+    }
+
+    #[test]
+    fn npz_round_trip() {
+        let p = DenseProblem {
+            n: 2,
+            m: 3,
+            P: vec![2.0, 0.5, 0.5, 1.0],
+            q: vec![-1.0, 0.25],
+            G: vec![1.0, 2.0, 3.0, 4.0, 5.0, 6.0],
+            h: vec![0.1, 0.2, 0.3],
+        };
+        let path = std::env::temp_dir().join(format!("ldcbf_ref_{}.npz", std::process::id()));
+        p.write_npz(&path).unwrap();
+        let back = DenseProblem::from_npz(&path).unwrap();
+        std::fs::remove_file(&path).unwrap();
+        assert_eq!(back, p);
     }
 
     #[test]

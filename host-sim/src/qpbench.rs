@@ -1,0 +1,185 @@
+//! `ldcbf-sim qp solve`: our dual active-set solver on dense QPs stored in the
+//! npz layout of `../shared/qpbench/` (`P, q, G, h` for
+//! `min 1/2 x'Px + q'x  s.t.  Gx <= h`), timed so that anyone can compare it with
+//! other solvers on identical problems (`run --export-qps DIR` writes every
+//! cycle's QP of a simulation in the same layout).
+//!
+//! The solver is sized at compile time; a file is solved at the smallest
+//! supported size `(NV, NC)` with `NV = n` and `NC >= m` (see [`SIZES`]). The
+//! Hessian is factored once per file, outside the timing, as the controller does
+//! once per configuration; the time is the minimum over `repeat` calls of
+//! [`DualActiveSet::solve`] alone (cold start), in nanoseconds.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{Result, anyhow};
+use ldcbf_controller::{DualActiveSet, QpSettings, QpStatus};
+use ldcbf_reference::DenseProblem;
+
+/// Supported `(n, max m)`: the controller's configurations (N = 3 with 8 or 16
+/// obstacles and with foot clearance, N = 5, N = 10) and the external LIPMWALK set.
+pub const SIZES: [(usize, usize); 7] = [
+    (6, 48),
+    (6, 72),
+    (6, 120),
+    (10, 80),
+    (16, 32),
+    (16, 128),
+    (20, 160),
+];
+
+/// One file's result.
+#[derive(Clone, Debug, PartialEq)]
+pub struct QpRow {
+    /// The file.
+    pub file: PathBuf,
+    /// Variables.
+    pub n: usize,
+    /// Rows.
+    pub m: usize,
+    /// Solver status.
+    pub status: QpStatus,
+    /// Adds plus drops.
+    pub iterations: u32,
+    /// Objective `1/2 x'Px + q'x` (NaN unless solved).
+    pub objective: f64,
+    /// Minimum solve time over the repeats, ns.
+    pub min_ns: u64,
+}
+
+/// The CSV header of [`QpRow::csv`].
+pub const CSV_HEADER: &str = "file,n,m,status,iterations,objective,min_solve_ns";
+
+impl QpRow {
+    /// One CSV line (no newline).
+    pub fn csv(&self) -> String {
+        let status = match self.status {
+            QpStatus::Solved => "solved",
+            QpStatus::Infeasible => "infeasible",
+            QpStatus::IterationLimit => "iteration_limit",
+            QpStatus::NumericalError => "numerical_error",
+        };
+        format!(
+            "{},{},{},{},{},{:.17e},{}",
+            self.file.display(),
+            self.n,
+            self.m,
+            status,
+            self.iterations,
+            self.objective,
+            self.min_ns
+        )
+    }
+}
+
+fn solve_fixed<const NV: usize, const NC: usize>(
+    file: &Path,
+    p: &DenseProblem,
+    repeat: usize,
+    max_iter: u32,
+) -> Result<QpRow> {
+    let (h, qp) = p
+        .to_fixed::<NV, NC>()
+        .map_err(|e| anyhow!("{}: {e}", file.display()))?;
+    let solver = DualActiveSet::<NV, NC>::new(&h, QpSettings::default())
+        .map_err(|e| anyhow!("{}: field `P`: {e}", file.display()))?;
+    let prefer = [false; NC];
+    let mut best = u64::MAX;
+    let mut sol = solver.solve(&qp, &prefer, max_iter);
+    for _ in 0..repeat.max(1) {
+        let t0 = Instant::now();
+        sol = std::hint::black_box(solver.solve(std::hint::black_box(&qp), &prefer, max_iter));
+        best = best.min(u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX));
+    }
+    Ok(QpRow {
+        file: file.to_path_buf(),
+        n: p.n,
+        m: p.m,
+        status: sol.status,
+        iterations: sol.iterations,
+        objective: if sol.status.is_solved() {
+            sol.objective
+        } else {
+            f64::NAN
+        },
+        min_ns: best,
+    })
+}
+
+/// Reads and solves one file (see the module docs).
+pub fn solve_file(file: &Path, repeat: usize, max_iter: u32) -> Result<QpRow> {
+    let p = DenseProblem::from_npz(file).map_err(|e| anyhow!("{e}"))?;
+    macro_rules! dispatch {
+        ($(($nv:literal, $nc:literal)),*) => {
+            $(if p.n == $nv && p.m <= $nc {
+                return solve_fixed::<$nv, $nc>(file, &p, repeat, max_iter);
+            })*
+        };
+    }
+    dispatch!(
+        (6, 48),
+        (6, 72),
+        (6, 120),
+        (10, 80),
+        (16, 32),
+        (16, 128),
+        (20, 160)
+    );
+    Err(anyhow!(
+        "{}: a QP with n = {}, m = {} has no compiled solver size (supported (n, max m): {:?})",
+        file.display(),
+        p.n,
+        p.m,
+        SIZES
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn solves_a_small_file_and_rejects_unsupported_sizes() {
+        let dir = tempfile::tempdir().unwrap();
+        // min sum (x_i - 1)^2 over 6 variables with x_0 + x_1 <= 1.
+        let mut p = DenseProblem {
+            n: 6,
+            m: 1,
+            P: vec![0.0; 36],
+            q: vec![-2.0; 6],
+            G: vec![1.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+            h: vec![1.0],
+        };
+        for i in 0..6 {
+            p.P[i * 6 + i] = 2.0;
+        }
+        let f = dir.path().join("a.npz");
+        p.write_npz(&f).unwrap();
+        let row = solve_file(&f, 3, 50).unwrap();
+        assert_eq!(row.status, QpStatus::Solved);
+        assert_eq!(row.iterations, 1);
+        // x = (0.5, 0.5, 1, 1, 1, 1): objective = 4 * (-1) + 2 * (0.25 - 1) = -5.5
+        assert!((row.objective + 5.5).abs() < 1e-12, "{}", row.objective);
+        assert!(
+            row.csv()
+                .starts_with(&format!("{},6,1,solved,1,", f.display()))
+        );
+        let q = DenseProblem {
+            n: 7,
+            m: 0,
+            P: vec![0.0; 49],
+            q: vec![0.0; 7],
+            G: vec![],
+            h: vec![],
+        };
+        let g = dir.path().join("b.npz");
+        q.write_npz(&g).unwrap();
+        let e = solve_file(&g, 1, 50).unwrap_err().to_string();
+        assert!(e.contains("b.npz") && e.contains("n = 7"), "{e}");
+        let e = solve_file(&dir.path().join("missing.npz"), 1, 50)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("missing.npz"), "{e}");
+    }
+}
