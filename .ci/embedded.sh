@@ -4,7 +4,8 @@
 #   1. the Cortex-M7 firmware (firmware/) in qemu-system-arm (mps2-an500):
 #      its commands equal the host's to 1e-9, instruction counts per cycle
 #      (deterministic, -icount), flash/RAM/stack budgets (tests/firmware_qemu.rs);
-#   2. the controller's tests cross-built for aarch64-unknown-linux-gnu and run
+#   2. the link-time no-panic proof (nopanic/check.sh);
+#   3. the controller's tests cross-built for aarch64-unknown-linux-gnu and run
 #      under qemu-aarch64.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -30,6 +31,9 @@ aarch64-linux-gnu-gcc --version | head -n 1
 
 section "firmware on qemu-system-arm mps2-an500 (Cortex-M7): equals host, instructions, memory"
 cargo test --locked --test firmware_qemu -- --ignored --exact firmware_matches_host_in_qemu --nocapture
+
+section "link-time proof that Controller::step cannot panic (nopanic/, panic-never)"
+bash nopanic/check.sh
 
 section "controller tests on aarch64-unknown-linux-gnu (qemu-aarch64)"
 CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc \

@@ -25,9 +25,10 @@ pub enum GeometryError {
     NotFinite,
     /// A coordinate exceeds [`MAX_COORDINATE`] in absolute value.
     OutOfRange,
-    /// Fewer than three distinct vertices.
+    /// Fewer than three distinct vertices (points closer than [`DUPLICATE_TOL`]
+    /// count once, wherever they are in the list).
     TooFewVertices,
-    /// All vertices are collinear (zero area).
+    /// At least three distinct vertices, but all collinear (zero area).
     ZeroArea,
     /// The vertices do not form a convex polygon in the given order (a reflex
     /// vertex, a spike, or a self-intersecting outline).
@@ -74,6 +75,38 @@ fn cross(a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
     a.x * b.y - a.y * b.x
 }
 
+/// The error for a degenerate (zero-area) point set: [`GeometryError::ZeroArea`]
+/// when it has three distinct points, [`GeometryError::TooFewVertices`] otherwise.
+fn degenerate(mut pts: impl Iterator<Item = Vector2<f64>> + Clone) -> GeometryError {
+    let far = |p: &Vector2<f64>, q: &Vector2<f64>| (p - q).norm() > DUPLICATE_TOL;
+    let three = pts.next().is_some_and(|a| {
+        pts.clone()
+            .find(|b| far(b, &a))
+            .is_some_and(|b| pts.any(|c| far(&c, &a) && far(&c, &b)))
+    });
+    if three {
+        GeometryError::ZeroArea
+    } else {
+        GeometryError::TooFewVertices
+    }
+}
+
+/// `(v[i + s], v[i + s + 1], v[i + s + 2])` for `i = 0..v.len()`, indices modulo
+/// `v.len()`: each vertex with its neighbours, cyclically, starting at `s`.
+fn triples<T>(v: &[T], s: usize) -> impl Iterator<Item = (&T, &T, &T)> {
+    let from = |k: usize| v.iter().cycle().skip(k);
+    from(s)
+        .zip(from(s + 1))
+        .zip(from(s + 2))
+        .take(v.len())
+        .map(|((a, b), c)| (a, b, c))
+}
+
+/// `(v[i], v[(i + 1) % n])` for `i = 0..n`: the edges of a closed outline.
+fn edges<T>(v: &[T]) -> impl Iterator<Item = (&T, &T)> {
+    v.iter().zip(v.iter().skip(1).chain(v.first()))
+}
+
 impl<const V: usize> ConvexPolygon<V> {
     /// Validates a vertex list (either orientation) as a convex polygon.
     /// Consecutive duplicates and collinear vertices are removed first.
@@ -83,43 +116,54 @@ impl<const V: usize> ConvexPolygon<V> {
         // 1. Drop consecutive duplicates (cyclically).
         let mut buf = [Vector2::zeros(); V];
         let mut n = 0usize;
+        let mut last: Option<Vector2<f64>> = None;
         for p in points {
             let v = Vector2::new(p[0], p[1]);
-            if n > 0 && (v - buf[n - 1]).norm() <= DUPLICATE_TOL {
+            if last.is_some_and(|l| (v - l).norm() <= DUPLICATE_TOL) {
                 continue;
             }
-            if n == V {
+            let Some(slot) = buf.get_mut(n) else {
                 return Err(GeometryError::TooManyVertices);
-            }
-            buf[n] = v;
+            };
+            *slot = v;
             n += 1;
+            last = Some(v);
         }
-        while n > 1 && (buf[n - 1] - buf[0]).norm() <= DUPLICATE_TOL {
-            n -= 1;
+        let mut pts = &buf[..n.min(V)];
+        while let Some((last, init)) = pts.split_last()
+            && init
+                .first()
+                .is_some_and(|first| (last - first).norm() <= DUPLICATE_TOL)
+        {
+            pts = init;
         }
+        let n = pts.len();
+        let Some(&first) = pts.first() else {
+            return Err(GeometryError::TooFewVertices);
+        };
         if n < 3 {
             return Err(GeometryError::TooFewVertices);
         }
         // 2. Orientation from the signed area; zero area means collinear.
-        let mut area2 = 0.0;
-        for i in 0..n {
-            area2 += cross(&buf[i], &buf[(i + 1) % n]);
-        }
-        let scale = buf[..n].iter().fold(0.0f64, |m, v| m.max(v.amax()));
-        let span = (0..n).fold(0.0f64, |m, i| m.max((buf[i] - buf[0]).norm()));
+        let area2 = edges(pts).fold(0.0, |s, (a, b)| s + cross(a, b));
+        let scale = pts.iter().fold(0.0f64, |m, v| m.max(v.amax()));
+        let span = pts.iter().fold(0.0f64, |m, v| m.max((v - first).norm()));
         if area2.abs() <= 1e-12 * span * span.max(scale.max(1.0)) {
-            return Err(GeometryError::ZeroArea);
+            return Err(degenerate(pts.iter().copied()));
         }
+        let pts = &mut buf[..n.min(V)];
         if area2 < 0.0 {
-            buf[..n].reverse();
+            // Reverse in place; `<[T]>::reverse` keeps a bounds check the
+            // optimiser cannot remove (see `nopanic/`).
+            let (front, back) = pts.split_at_mut(n / 2);
+            for (a, b) in front.iter_mut().zip(back.iter_mut().rev()) {
+                core::mem::swap(a, b);
+            }
         }
         // 3. Remove collinear vertices; reject reflex vertices and spikes.
         let mut out = [Vector2::zeros(); V];
         let mut len = 0usize;
-        for i in 0..n {
-            let prev = buf[(i + n - 1) % n];
-            let cur = buf[i];
-            let next = buf[(i + 1) % n];
+        for (prev, cur, next) in triples(pts, n - 1) {
             let e1 = cur - prev;
             let e2 = next - cur;
             let c = cross(&e1, &e2);
@@ -133,18 +177,22 @@ impl<const V: usize> ConvexPolygon<V> {
             if c < 0.0 {
                 return Err(GeometryError::NotConvex);
             }
-            out[len] = cur;
+            // At most `n <= V` corners: the slot always exists.
+            let Some(slot) = out.get_mut(len) else {
+                return Err(GeometryError::TooManyVertices);
+            };
+            *slot = *cur;
             len += 1;
         }
         if len < 3 {
-            return Err(GeometryError::ZeroArea);
+            return Err(degenerate(pts.iter().copied()));
         }
         // 4. All left turns could still wind twice (a pentagram): require the
         // exterior angles to add up to one turn.
         let mut turn = 0.0;
-        for i in 0..len {
-            let e1 = out[(i + 1) % len] - out[i];
-            let e2 = out[(i + 2) % len] - out[(i + 1) % len];
+        for (a, b, c) in triples(&out[..len.min(V)], 0) {
+            let e1 = b - a;
+            let e2 = c - b;
             turn += libm::atan2(cross(&e1, &e2), e1.dot(&e2));
         }
         if (turn - 2.0 * core::f64::consts::PI).abs() > 1e-6 {
@@ -155,58 +203,72 @@ impl<const V: usize> ConvexPolygon<V> {
 
     /// The convex hull of a point set (gift wrapping, at most `V` hull vertices,
     /// `O(n V)`). Fails like [`ConvexPolygon::new`] when the hull has fewer than 3
-    /// corners (one or two distinct points, or collinear points).
+    /// corners: [`GeometryError::TooFewVertices`] for one or two distinct points,
+    /// [`GeometryError::ZeroArea`] for three or more collinear ones.
     pub fn hull(points: &[[f64; 2]]) -> Result<Self, GeometryError> {
         check_points(points)?;
-        let pt = |i: usize| Vector2::new(points[i][0], points[i][1]);
-        if points.is_empty() {
-            return Err(GeometryError::TooFewVertices);
-        }
+        let pts = || points.iter().map(|p| Vector2::new(p[0], p[1])).enumerate();
         // Start at the lowest (then leftmost) point: it is a hull corner.
-        let mut start = 0;
-        for i in 1..points.len() {
-            let (a, b) = (pt(i), pt(start));
-            if a.y < b.y || (a.y == b.y && a.x < b.x) {
-                start = i;
-            }
-        }
+        let lower = |a: &Vector2<f64>, b: &Vector2<f64>| a.y < b.y || (a.y == b.y && a.x < b.x);
+        let Some((start, start_pt)) =
+            pts().reduce(|best, (i, a)| if lower(&a, &best.1) { (i, a) } else { best })
+        else {
+            return Err(GeometryError::TooFewVertices);
+        };
         let mut hull = [[0.0f64; 2]; V];
         let mut len = 0usize;
-        let mut cur = start;
+        let (mut cur, mut c) = (start, start_pt);
         // Each pass adds one corner; a closed hull has at most `points.len()`.
         for _ in 0..=points.len() {
-            if len == V {
+            let Some(slot) = hull.get_mut(len) else {
                 return Err(GeometryError::TooManyVertices);
-            }
-            hull[len] = points[cur];
+            };
+            *slot = [c.x, c.y];
             len += 1;
-            let c = pt(cur);
-            let mut cand = if cur == 0 { 1 % points.len() } else { 0 };
-            for i in 0..points.len() {
+            // The most clockwise point seen from `c` (collinear: the farthest),
+            // starting from the first point other than `c`.
+            let mut cand: Option<(usize, Vector2<f64>)> = None;
+            for (i, b_pt) in pts() {
                 if i == cur {
                     continue;
                 }
-                let (a, b) = (pt(cand) - c, pt(i) - c);
+                let Some((_, a_pt)) = cand else {
+                    cand = Some((i, b_pt));
+                    continue;
+                };
+                let (a, b) = (a_pt - c, b_pt - c);
                 let x = cross(&a, &b);
                 // Take i if it is clockwise of cand, or collinear and farther.
                 if x < 0.0 || (x == 0.0 && b.norm_squared() > a.norm_squared()) {
-                    cand = i;
+                    cand = Some((i, b_pt));
                 }
             }
-            if cand == start || (pt(cand) - pt(start)).norm() <= DUPLICATE_TOL {
+            // A single point has no candidate: the outline is closed.
+            let Some((next, next_pt)) = cand else {
+                break;
+            };
+            if next == start || (next_pt - start_pt).norm() <= DUPLICATE_TOL {
                 break;
             }
-            cur = cand;
+            (cur, c) = (next, next_pt);
         }
+        let points = || points.iter().map(|p| Vector2::new(p[0], p[1]));
         if len == 2 {
-            return Err(GeometryError::ZeroArea);
+            return Err(degenerate(points()));
         }
-        Self::new(&hull[..len])
+        match Self::new(&hull[..len.min(V)]) {
+            // Judged on all the points, not only the corners found.
+            Err(GeometryError::ZeroArea | GeometryError::TooFewVertices) => {
+                Err(degenerate(points()))
+            }
+            other => other,
+        }
     }
 
     /// The vertices, counter-clockwise.
     pub fn vertices(&self) -> &[Vector2<f64>] {
-        &self.vertices[..self.len]
+        // `len <= V` by construction; the `min` lets the compiler see it.
+        &self.vertices[..self.len.min(V)]
     }
 
     /// Number of vertices (>= 3).
@@ -261,14 +323,22 @@ pub fn closest_point_point_polygon<const V: usize>(
 ) -> ClosestPoint {
     let verts = poly.vertices();
     let n = verts.len();
+    // A polygon has at least three vertices; an empty one would be infinitely far.
+    let Some(&first) = verts.first() else {
+        return ClosestPoint {
+            point: *p,
+            normal: Vector2::zeros(),
+            signed_distance: f64::INFINITY,
+            location: PointLocation::Outside,
+        };
+    };
     let mut best_d2 = f64::INFINITY;
-    let mut best_c = verts[0];
+    let mut best_c = first;
     let mut best_edge = 0usize;
     let mut best_t = 0.0;
     let mut inside = true;
-    for i in 0..n {
-        let a = verts[i];
-        let b = verts[(i + 1) % n];
+    // Edge `i` runs from vertex `i` (`a`) to vertex `i + 1` (`b`).
+    let mut edge = |i: usize, a: Vector2<f64>, b: Vector2<f64>| {
         let ab = b - a;
         let ap = p - a;
         if cross(&ab, &ap) <= 0.0 {
@@ -283,10 +353,21 @@ pub fn closest_point_point_polygon<const V: usize>(
             best_edge = i;
             best_t = t;
         }
+    };
+    let mut a = first;
+    for (i, &b) in verts.iter().enumerate().skip(1) {
+        edge(i - 1, a, b);
+        a = b;
     }
+    edge(n - 1, a, first); // the closing edge
     let dist = libm::sqrt(best_d2);
+    // Edge `i` runs from vertex `i` to vertex `i + 1` (indices modulo `n >= 1`;
+    // both always exist, the zero vector is never used).
     let edge_normal = |i: usize| {
-        let e = verts[(i + 1) % n] - verts[i];
+        let e = match (verts.get(i % n), verts.get((i + 1) % n)) {
+            (Some(a), Some(b)) => b - a,
+            _ => Vector2::zeros(),
+        };
         Vector2::new(e.y, -e.x) / e.norm() // outward for counter-clockwise order
     };
     if dist <= ON_BOUNDARY_TOL {

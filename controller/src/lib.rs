@@ -47,6 +47,23 @@ pub mod relax;
 
 pub use nalgebra;
 
+/// `x` limited to `[lo, hi]`: `f64::clamp` without its `lo <= hi` assertion.
+///
+/// The controller's bounds come from a validated [`Config`], which the optimiser
+/// cannot see, so `f64::clamp` would keep a panicking branch in `step` (see
+/// `nopanic/`). Same steps as `f64::clamp`, so the same result whenever
+/// `lo <= hi`; a NaN `x` stays NaN; with `lo > hi` the result is `hi`.
+pub(crate) fn clamp(x: f64, lo: f64, hi: f64) -> f64 {
+    let mut x = x;
+    if x < lo {
+        x = lo;
+    }
+    if x > hi {
+        x = hi;
+    }
+    x
+}
+
 pub use constraints::{Condensed, HalfPlane, RowId, RowKind};
 pub use geometry::{
     ClosestPoint, ConvexPolygon, GeometryError, PointLocation, closest_point_point_polygon,

@@ -497,6 +497,15 @@ pub struct Assembly<const N: usize, const NV: usize, const NC: usize, const NOBS
     pub time_clamped: bool,
 }
 
+impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
+    Assembly<N, NV, NC, NOBS>
+{
+    /// The active obstacles, nearest first.
+    pub fn active_obstacles(&self) -> &[ActiveObstacle] {
+        &self.obstacles[..self.n_obstacles.min(NOBS)]
+    }
+}
+
 impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize> Default
     for Assembly<N, NV, NC, NOBS>
 {
@@ -711,7 +720,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             return Err(InputError::Goal);
         }
         let t_step = cfg.step_duration;
-        let t_in = input.time_in_step.clamp(0.0, t_step);
+        let t_in = crate::clamp(input.time_in_step, 0.0, t_step);
         out.time_clamped = t_in != input.time_in_step;
         let tau = t_step - t_in;
 
@@ -768,26 +777,34 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                     eta: cp.normal,
                 },
             };
-            // Insertion into the sorted list (bounded by NOBS).
-            let mut pos = out.n_obstacles;
-            while pos > 0 && out.obstacles[pos - 1].distance > cand.distance {
-                pos -= 1;
-            }
+            // Insertion into the sorted list (bounded by NOBS), after every kept
+            // obstacle that is not farther.
+            let n = out.n_obstacles.min(NOBS);
+            let pos = out.obstacles[..n]
+                .iter()
+                .rposition(|o| o.distance <= cand.distance)
+                .map_or(0, |i| i + 1);
             if pos >= NOBS {
-                out.obstacles_truncated = true;
+                out.obstacles_truncated = true; // full; not nearer than the farthest
                 continue;
             }
-            if out.n_obstacles == NOBS {
-                out.obstacles_truncated = true;
+            let len = if n == NOBS {
+                out.obstacles_truncated = true; // the farthest drops out
+                n
             } else {
-                out.n_obstacles += 1;
+                n + 1
+            };
+            // Put it at `pos`; each farther one moves one slot back (from the
+            // end, each slot takes its predecessor's obstacle).
+            let mut slots = out.obstacles[pos.min(len)..len].iter_mut().rev();
+            if let Some(mut dst) = slots.next() {
+                for src in slots {
+                    *dst = *src;
+                    dst = src;
+                }
+                *dst = cand;
             }
-            let mut i = out.n_obstacles - 1;
-            while i > pos {
-                out.obstacles[i] = out.obstacles[i - 1];
-                i -= 1;
-            }
-            out.obstacles[pos] = cand;
+            out.n_obstacles = len;
         }
 
         // 4-5. Cost and rows.
@@ -832,7 +849,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             }
             side = side.opposite();
         }
-        for ob in &out.obstacles[..out.n_obstacles] {
+        for ob in &out.obstacles[..out.n_obstacles.min(NOBS)] {
             for k in 0..N {
                 let i = out.qp.m;
                 ok &= push_ldcbf_row(
@@ -855,7 +872,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             }
         }
         if let Some(df) = cfg.foot_clearance {
-            for ob in &out.obstacles[..out.n_obstacles] {
+            for ob in &out.obstacles[..out.n_obstacles.min(NOBS)] {
                 for k in 0..N {
                     let i = out.qp.m;
                     ok &= push_foot_row::<N, NV, NC>(&mut out.qp, &ob.half_plane, df, k).is_ok();
@@ -896,9 +913,10 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                     kind: id.kind,
                     k: (k - shift) as u8,
                 };
-                for (i, r) in work.rows[..work.qp.m.min(NC)].iter().enumerate() {
+                let used = work.qp.m.min(NC);
+                for (p, r) in prefer.iter_mut().zip(&work.rows[..used]) {
                     if *r == target {
-                        prefer[i] = true;
+                        *p = true;
                         warm = true;
                         break;
                     }
@@ -906,11 +924,13 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             }
         }
         let sol = backend.solve_qp(&self.solver, &work.qp, &prefer, self.config.max_iter);
-        let min_h0 = work.obstacles[..work.n_obstacles]
+        let min_h0 = work
+            .active_obstacles()
             .iter()
             .map(|o| o.half_plane.h(&pred.p0, self.config.delta))
             .fold(f64::INFINITY, f64::min);
-        let inside = work.obstacles[..work.n_obstacles]
+        let inside = work
+            .active_obstacles()
             .first()
             .is_some_and(|o| o.distance <= 0.0);
         let mut info = CycleInfo {
@@ -1077,8 +1097,8 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             let th = pred.heading.theta[k];
             let (s, c) = (libm::sin(th), libm::cos(th));
             let xi = v / self.lip.beta;
-            let lon = (c * xi.x + s * xi.y).clamp(-l, l);
-            let lat = (-s * xi.x + c * xi.y).clamp(-l, l);
+            let lon = crate::clamp(c * xi.x + s * xi.y, -l, l);
+            let lat = crate::clamp(-s * xi.x + c * xi.y, -l, l);
             let f = p + Vector2::new(c * lon - s * lat, s * lon + c * lat);
             u[2 * k] = f.x;
             u[2 * k + 1] = f.y;

@@ -178,25 +178,49 @@ impl<const NV: usize, const NC: usize> DenseQp<NV, NC> {
     /// capacity `NC` is full.
     #[allow(clippy::result_unit_err)]
     pub fn push_row(&mut self, g: &SVector<f64, NV>, h: f64) -> Result<(), ()> {
-        if self.m >= NC {
+        // `gt` is column-major: `gt.data.0[i]` is column `i` of `gt`, row `i` of `G`.
+        let (Some(col), Some(rhs)) = (self.gt.data.0.get_mut(self.m), self.h.get_mut(self.m))
+        else {
             return Err(());
-        }
-        self.gt.set_column(self.m, g);
-        self.h[self.m] = h;
+        };
+        *col = (*g).into();
+        *rhs = h;
         self.m += 1;
         Ok(())
     }
 
     /// Row `i` of `G` (a column of `gt`).
+    ///
+    /// # Panics
+    ///
+    /// If `i >= NC`; see [`DenseQp::get_row`] for the non-panicking form.
     pub fn row(&self, i: usize) -> SVector<f64, NV> {
         self.gt.column(i).into_owned()
+    }
+
+    /// Row `i` as `(g_i, h_i)`, or `None` when `i >= NC` (rows `m..NC` are unused
+    /// but exist).
+    pub fn get_row(&self, i: usize) -> Option<(SVector<f64, NV>, f64)> {
+        let g = self.gt.data.0.get(i)?;
+        let h = self.h.get(i)?;
+        Some((SVector::from(*g), *h))
+    }
+
+    /// The rows in use, `(g_i, h_i)` for `i = 0..m`, in order.
+    pub fn rows(&self) -> impl Iterator<Item = (SVector<f64, NV>, f64)> + '_ {
+        let m = self.m.min(NC);
+        // `gt` is column-major: `gt.data.0[i]` is column `i` of `gt`, row `i` of `G`.
+        self.gt.data.0[..m]
+            .iter()
+            .zip(&self.h.as_slice()[..m])
+            .map(|(g, h)| (SVector::from(*g), *h))
     }
 
     /// Largest violation `max_i (g_i x - h_i)^+` over the used rows, unscaled.
     pub fn max_violation(&self, x: &SVector<f64, NV>) -> f64 {
         let mut worst: f64 = 0.0;
-        for i in 0..self.m.min(NC) {
-            let v = self.gt.column(i).dot(x) - self.h[i];
+        for (g, h) in self.rows() {
+            let v = g.dot(x) - h;
             if v > worst {
                 worst = v;
             }
@@ -349,7 +373,11 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
                 None => break QpStatus::Solved,
                 Some(p) => p,
             };
-            let np = -qp.gt.column(p).into_owned(); // GI normal: np'x >= -h_p
+            // `p < m <= NC`, so the row exists.
+            let Some((gp, hp)) = qp.get_row(p) else {
+                break QpStatus::NumericalError;
+            };
+            let np = -gp; // GI normal: np'x >= -h_p
             let mut u_new: f64 = 0.0; // multiplier of p
 
             // Step 2: move until p is satisfied (full step) or a row must be dropped.
@@ -357,19 +385,23 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
                 if iters >= max_iter {
                     break 'outer QpStatus::IterationLimit;
                 }
+                // Invariant: nact <= NV (a row is only added when `add_row` found
+                // room); the `min` states it for the compiler.
+                let nact_c = nact.min(NV);
                 let d = J.transpose() * np;
                 // z = J2 d2: component of the step outside the active span.
                 let mut z = SVector::<f64, NV>::zeros();
                 let mut d2sq = 0.0;
-                for j in nact..NV {
-                    z += J.column(j) * d[j];
-                    d2sq += d[j] * d[j];
+                for (col, &dj) in J.data.0.iter().zip(d.iter()).skip(nact_c) {
+                    z += SVector::from(*col) * dj; // column j of J, j >= nact
+                    d2sq += dj * dj;
                 }
-                // r = R^-1 d1 (back substitution on the active block).
+                // r = R^-1 d1 (back substitution on the active block). Counting
+                // down from the constant NV lets the compiler see every i < NV.
                 let mut r = [0.0f64; NV];
-                for i in (0..nact).rev() {
+                for i in (0..NV).rev().filter(|&i| i < nact_c) {
                     let mut acc = d[i];
-                    for k in (i + 1)..nact {
+                    for k in (i + 1)..nact_c {
                         acc -= R[(i, k)] * r[k];
                     }
                     r[i] = acc / R[(i, i)];
@@ -377,8 +409,8 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
                 // Partial (dual) step length t1 and the row to drop.
                 let mut t1 = f64::INFINITY;
                 let mut drop: Option<usize> = None;
-                let rmax = r[..nact].iter().fold(0.0f64, |a, b| a.max(b.abs()));
-                for i in 0..nact {
+                let rmax = r[..nact_c].iter().fold(0.0f64, |a, b| a.max(b.abs()));
+                for i in 0..nact_c {
                     if r[i] > 1e-14 * rmax.max(1.0) {
                         let t = u[i] / r[i];
                         if t < t1 {
@@ -390,7 +422,7 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
                 // Full (primal) step length t2.
                 let dn = d.norm();
                 let dependent = libm::sqrt(d2sq) <= self.settings.tol_dependence * dn;
-                let slack_p = qp.h[p] - qp.gt.column(p).dot(&x); // < 0 while violated
+                let slack_p = hp - gp.dot(&x); // < 0 while violated
                 let t2 = if dependent {
                     f64::INFINITY
                 } else {
@@ -405,7 +437,7 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
                 let t = t1.min(t2);
                 iters += 1;
                 // Multipliers move along (-r, 1).
-                for i in 0..nact {
+                for i in 0..nact_c {
                     u[i] -= t * r[i];
                 }
                 u_new += t;
@@ -414,33 +446,45 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
                 }
                 if t2 <= t1 {
                     // Full step: p becomes active.
-                    if !self.add_row(&mut J, &mut R, nact, &d) {
+                    // `add_row` fails when the active set is full (nact == NV).
+                    let (true, Some(a), Some(un), Some(flag)) = (
+                        self.add_row(&mut J, &mut R, nact_c, &d),
+                        act.get_mut(nact_c),
+                        u.get_mut(nact_c),
+                        is_active.get_mut(p),
+                    ) else {
                         break 'outer QpStatus::NumericalError;
-                    }
-                    act[nact] = p as u16;
-                    u[nact] = u_new;
-                    is_active[p] = true;
-                    nact += 1;
+                    };
+                    *a = p as u16;
+                    *un = u_new;
+                    *flag = true;
+                    nact = nact_c + 1;
                     continue 'outer;
                 }
-                // Partial step: drop row `l`, then retry the same p.
-                let l = match drop {
-                    Some(l) => l,
-                    None => break 'outer QpStatus::NumericalError,
+                // Partial step: drop row `l` (< nact), then retry the same p.
+                let Some((l, &row_l)) = drop.and_then(|l| Some((l, act.get(l)?))) else {
+                    break 'outer QpStatus::NumericalError;
                 };
-                is_active[act[l] as usize] = false;
-                Self::drop_row(&mut J, &mut R, nact, l);
-                for i in l..nact - 1 {
+                if let Some(flag) = is_active.get_mut(usize::from(row_l)) {
+                    *flag = false;
+                }
+                Self::drop_row(&mut J, &mut R, nact_c, l);
+                // Close the gap at `l` in the active list and its multipliers.
+                let last = nact_c.saturating_sub(1);
+                for i in l..last {
                     act[i] = act[i + 1];
                     u[i] = u[i + 1];
                 }
-                nact -= 1;
+                nact = last;
             }
         };
 
         sol.x = x;
-        for i in 0..nact {
-            sol.lambda[act[i] as usize] = u[i].max(0.0);
+        let nact = nact.min(NV);
+        for (&row, &ui) in act[..nact].iter().zip(&u[..nact]) {
+            if let Some(lambda) = sol.lambda.get_mut(usize::from(row)) {
+                *lambda = ui.max(0.0); // row < m <= NC: always there
+            }
         }
         sol.active = act;
         sol.n_active = nact;
@@ -475,7 +519,7 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
             let (c, s, rr) = givens(a, b);
             d[j - 1] = rr;
             d[j] = 0.0;
-            rotate_columns(J, j - 1, j, c, s);
+            rotate_columns(J, j - 1, c, s);
         }
         for i in 0..=nact {
             R[(i, nact)] = d[i];
@@ -486,6 +530,7 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
     /// Removes active row `l` (of `nact`): deletes column `l` of `R` and restores
     /// the triangle with Givens rotations, applied to `J` as well.
     fn drop_row(J: &mut SMatrix<f64, NV, NV>, R: &mut SMatrix<f64, NV, NV>, nact: usize, l: usize) {
+        let nact = nact.min(NV); // invariant of `solve`, stated for the compiler
         for col in l..nact.saturating_sub(1) {
             for i in 0..NV {
                 R[(i, col)] = R[(i, col + 1)];
@@ -510,7 +555,7 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
                 R[(col, k)] = c * ra + s * rb;
                 R[(col + 1, k)] = -s * ra + c * rb;
             }
-            rotate_columns(J, col, col + 1, c, s);
+            rotate_columns(J, col, c, s);
         }
     }
 }
@@ -556,18 +601,16 @@ fn givens(a: f64, b: f64) -> (f64, f64, f64) {
     (a / r, b / r, r)
 }
 
-/// `[Ji, Jj] <- [c Ji + s Jj, -s Ji + c Jj]`.
-fn rotate_columns<const NV: usize>(
-    J: &mut SMatrix<f64, NV, NV>,
-    i: usize,
-    j: usize,
-    c: f64,
-    s: f64,
-) {
-    for k in 0..NV {
-        let (a, b) = (J[(k, i)], J[(k, j)]);
-        J[(k, i)] = c * a + s * b;
-        J[(k, j)] = -s * a + c * b;
+/// `[Ji, Jj] <- [c Ji + s Jj, -s Ji + c Jj]` for the adjacent columns `i` and
+/// `j = i + 1` (the callers' only use); with `j >= NV` nothing happens.
+fn rotate_columns<const NV: usize>(J: &mut SMatrix<f64, NV, NV>, i: usize, c: f64, s: f64) {
+    // Column-major storage: `J.data.0[k]` is column `k`.
+    if let Some([ji, jj]) = J.data.0.get_mut(i..i.saturating_add(2)) {
+        for k in 0..NV {
+            let (a, b) = (ji[k], jj[k]);
+            ji[k] = c * a + s * b;
+            jj[k] = -s * a + c * b;
+        }
     }
 }
 

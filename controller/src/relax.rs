@@ -84,13 +84,12 @@ pub fn class_violation<const NV: usize, const NC: usize>(
         safety: 0.0,
         gait: 0.0,
     };
-    for (i, id) in rows.iter().enumerate().take(qp.m.min(NC)) {
-        let g = qp.gt.column(i);
+    for ((g, h), id) in qp.rows().zip(rows) {
         let n = g.norm();
         if n == 0.0 {
             continue;
         }
-        let e = (g.dot(u) - qp.h[i]) / n;
+        let e = (g.dot(u) - h) / n;
         let e = if e.is_nan() { f64::INFINITY } else { e };
         let slot = match RowClass::of(id.kind) {
             RowClass::Reach => &mut v.reach,
@@ -240,15 +239,11 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         }
         self.scratch.clear();
         self.scratch.q = self.qp.q;
-        let m = self.qp.m.min(NC);
-        for i in 0..m {
-            let class = RowClass::of(self.rows[i].kind);
-            if let Some(eps) = keep.eps(class) {
-                let g = self.qp.gt.column(i).into_owned();
-                let h = self.qp.h[i] + eps * g.norm();
+        for ((g, h), id) in self.qp.rows().zip(self.rows) {
+            if let Some(eps) = keep.eps(RowClass::of(id.kind)) {
                 // Capacity cannot be exceeded: the scratch QP has the same
                 // capacity and receives a subset of the rows.
-                let _ = self.scratch.push_row(&g, h);
+                let _ = self.scratch.push_row(&g, h + eps * g.norm());
             }
         }
         let sol = self.backend.solve_qp(
@@ -269,14 +264,13 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
     /// Largest violation of the rows of `class` at `u`, per unit row norm.
     fn violation(&self, class: RowClass, u: &SVector<f64, NV>) -> f64 {
         let mut worst: f64 = 0.0;
-        for i in 0..self.qp.m.min(NC) {
-            if RowClass::of(self.rows[i].kind) != class {
+        for ((g, h), id) in self.qp.rows().zip(self.rows) {
+            if RowClass::of(id.kind) != class {
                 continue;
             }
-            let g = self.qp.gt.column(i);
             let n = g.norm();
             if n > 0.0 {
-                worst = worst.max((g.dot(u) - self.qp.h[i]) / n);
+                worst = worst.max((g.dot(u) - h) / n);
             }
         }
         worst

@@ -1,0 +1,188 @@
+//! Link-time proof that the controller's public entry points cannot panic.
+//!
+//! Every input below comes from `read_volatile` on a static the optimiser knows
+//! nothing about, so no branch of the controller can be constant-folded away:
+//! configuration, sizes of the obstacle list and of every vertex list, every
+//! coordinate, and whether the warm-start memory is reset. The binary is linked
+//! with `panic-never`, whose panic handler calls an undefined symbol: if any
+//! panicking branch survives optimisation, the link fails. See `README.md`.
+#![no_std]
+#![no_main]
+
+use core::ptr::{addr_of, addr_of_mut, read_volatile, write_volatile};
+
+use cortex_m_rt::entry;
+use ldcbf_controller::nalgebra::Vector2;
+use ldcbf_controller::{
+    Config, Controller, ConvexPolygon, CycleInput, CycleOutput, PaperController, Side,
+    constraint_capacity,
+};
+
+#[cfg(not(feature = "never"))]
+use panic_halt as _;
+#[cfg(feature = "never")]
+use panic_never as _;
+
+/// Vertex capacity of the obstacles (the firmware's).
+const V: usize = 8;
+/// Obstacles handed to `step`: more than the controller's capacity (8), so the
+/// truncation path is live.
+const NPOLY: usize = 12;
+/// Points per obstacle vertex list: more than `V`, so `TooManyVertices` is live.
+const NPTS: usize = 10;
+
+/// Opaque input words. Nothing writes them: the optimiser must assume any bits.
+static mut RAW: [f64; 64] = [0.0; 64];
+/// Opaque obstacle point lists.
+static mut PTS: [[[f64; 2]; NPTS]; NPOLY] = [[[0.0; 2]; NPTS]; NPOLY];
+/// Outputs, written so that nothing is dead code.
+static mut OUT: [f64; 16] = [0.0; 16];
+
+fn raw() -> [f64; 64] {
+    // SAFETY: plain volatile read of a static that is never referenced.
+    unsafe { read_volatile(addr_of!(RAW)) }
+}
+
+fn points() -> [[[f64; 2]; NPTS]; NPOLY] {
+    // SAFETY: as above.
+    unsafe { read_volatile(addr_of!(PTS)) }
+}
+
+fn publish(v: [f64; 16]) {
+    // SAFETY: plain volatile write of a static that is never referenced.
+    unsafe { write_volatile(addr_of_mut!(OUT), v) }
+}
+
+/// Never reached (the default configuration and the triangle are valid).
+fn stop() -> ! {
+    loop {
+        core::hint::spin_loop();
+    }
+}
+
+/// An opaque length in `0..=max` (any bits: NaN and negative give 0).
+fn len(x: f64, max: usize) -> usize {
+    (x as usize).min(max)
+}
+
+/// A configuration in which every field is opaque. `Controller::new` validates
+/// it; when that fails the default is used, so both paths are linked.
+fn config(r: &[f64; 64]) -> Config {
+    Config {
+        gravity: r[30],
+        com_height: r[31],
+        step_duration: r[32],
+        vx_min: r[33],
+        vx_max: r[34],
+        vy_min: r[35],
+        vy_max: r[36],
+        l_max: r[37],
+        alpha: r[38],
+        omega_max: r[39],
+        gamma: r[40],
+        delta: r[41],
+        r_active: r[42],
+        foot_clearance: if r[43] > 0.0 { Some(r[44]) } else { None },
+        heading_freeze_radius: r[45],
+        max_iter: r[46] as u32,
+        max_iter_cycle: r[47] as u32,
+        relax_bisections: r[48] as u32,
+        warm_start: r[49] > 0.0,
+        tol_primal: r[50],
+    }
+}
+
+fn input<'a>(r: &[f64; 64], obstacles: &'a [ConvexPolygon<V>]) -> CycleInput<'a, V> {
+    CycleInput {
+        com_position: Vector2::new(r[0], r[1]),
+        com_velocity: Vector2::new(r[2], r[3]),
+        heading: r[4],
+        turning_rate: r[5],
+        stance_foot: Vector2::new(r[6], r[7]),
+        stance_side: if r[8] > 0.0 { Side::Right } else { Side::Left },
+        time_in_step: r[9],
+        goal: Vector2::new(r[10], r[11]),
+        obstacles,
+    }
+}
+
+fn summary<const N: usize>(o: &CycleOutput<N>) -> [f64; 16] {
+    let last = o.plan.states.last().map_or(0.0, |s| s.position.x);
+    [
+        o.foot_target.x,
+        o.foot_target.y,
+        o.turning_rate,
+        o.info.cost,
+        o.info.max_violation,
+        o.info.min_h0,
+        o.info.relax_gait,
+        o.info.relax_safety,
+        f64::from(o.info.iterations),
+        f64::from(o.info.active_obstacles),
+        o.status.name().len() as f64,
+        o.info.source.name().len() as f64,
+        last,
+        f64::from(u8::from(o.info.obstacles_truncated)),
+        f64::from(u8::from(o.info.time_clamped)),
+        f64::from(u8::from(o.info.inside_obstacle)),
+    ]
+}
+
+/// A controller with room for the foot-clearance rows (`PaperController` has none).
+type FootController = Controller<3, 6, { constraint_capacity(3, 8, true) }, 8>;
+
+#[entry]
+fn main() -> ! {
+    let r = raw();
+    let cfg = config(&r);
+    let mut paper = match PaperController::new(cfg) {
+        Ok(c) => c,
+        Err(_) => match PaperController::new(Config::default()) {
+            Ok(c) => c,
+            Err(_) => stop(),
+        },
+    };
+    let mut foot = match FootController::new(cfg) {
+        Ok(c) => c,
+        Err(_) => match FootController::new(Config::default()) {
+            Ok(c) => c,
+            Err(_) => stop(),
+        },
+    };
+    loop {
+        let r = raw();
+        let pts = points();
+        // Obstacles: validated vertex lists or hulls of point sets, opaque sizes.
+        let mut polys = [match ConvexPolygon::<V>::new(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]) {
+            Ok(p) => p,
+            Err(_) => stop(),
+        }; NPOLY];
+        let mut n = 0;
+        for (i, list) in pts.iter().enumerate() {
+            let k = len(r[12 + i % 8], NPTS);
+            let list = &list[..k];
+            let made = if r[20 + i % 8] > 0.0 {
+                ConvexPolygon::<V>::hull(list)
+            } else {
+                ConvexPolygon::<V>::new(list)
+            };
+            if let (Ok(p), Some(slot)) = (made, polys.get_mut(n)) {
+                *slot = p;
+                n += 1;
+            }
+        }
+        let obstacles = &polys[..n.min(len(r[28], NPOLY))];
+        if r[29] > 0.0 {
+            paper.reset();
+            foot.reset();
+        }
+        let inp = input(&r, obstacles);
+        let a = paper.step(&inp);
+        let b = foot.step(&inp);
+        let mut out = summary(&a);
+        for (o, x) in out.iter_mut().zip(summary(&b)) {
+            *o += x;
+        }
+        publish(out);
+    }
+}
