@@ -134,6 +134,10 @@ pub struct Config {
     /// Halvings of each bisection of the priority scheme (precision
     /// `violation / 2^relax_bisections`), at most 52.
     pub relax_bisections: u32,
+    /// Largest uniform relaxation of the gait (velocity, maneuverability) rows,
+    /// m/s, before the priority scheme relaxes the safety rows instead; keeps
+    /// the relaxed velocity limits capturable (see [`crate::relax`]).
+    pub max_gait_relaxation: f64,
     /// Prefer the previous cycle's active rows (shifted) when choosing rows to add.
     pub warm_start: bool,
     /// Primal feasibility tolerance of the solver (on unit-norm rows), m or m/s.
@@ -161,6 +165,7 @@ impl Default for Config {
             max_iter: 64,
             max_iter_cycle: 2048,
             relax_bisections: 12,
+            max_gait_relaxation: 0.1,
             warm_start: true,
             tol_primal: 1e-10,
         }
@@ -248,6 +253,9 @@ impl Config {
         }
         if self.relax_bisections > 52 {
             return err("relax_bisections", "must be <= 52");
+        }
+        if !(self.max_gait_relaxation.is_finite() && self.max_gait_relaxation >= 0.0) {
+            return err("max_gait_relaxation", "must be finite and >= 0");
         }
         if !(self.tol_primal.is_finite() && self.tol_primal > 0.0 && self.tol_primal < 1e-3) {
             return err("tol_primal", "must be in (0, 1e-3)");
@@ -423,8 +431,9 @@ pub struct CycleInfo {
     pub source: CommandSource,
     /// Cost `sum_k |p_k - g|^2` of the returned plan (m^2); NaN for `Hold`.
     pub cost: f64,
-    /// Largest violation of this cycle's QP rows by the returned plan (0 when all
-    /// hold); NaN for `Hold`.
+    /// Largest violation of this cycle's QP rows by the returned plan, per unit
+    /// row norm (m for reachability and safety rows, m/s for gait rows; 0 when all
+    /// hold; the same units as `relax_gait` and `relax_safety`); NaN for `Hold`.
     pub max_violation: f64,
     /// Smallest `h_j(p_0)` over the active obstacles (m), `+inf` if none.
     pub min_h0: f64,
@@ -971,6 +980,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                         self.config.max_iter,
                         self.config.max_iter_cycle.saturating_sub(sol.iterations),
                         self.config.relax_bisections,
+                        self.config.max_gait_relaxation,
                     )
                 } else {
                     Err(relax::RelaxFailure::Budget)
@@ -999,7 +1009,8 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             }
             _ => 0.0,
         };
-        info.max_violation = work.qp.max_violation(&u);
+        let v = relax::class_violation(&work.qp, &work.rows, &u);
+        info.max_violation = v.reach.max(v.safety).max(v.gait);
         info.cost = self.solver.objective(&work.qp.q, &u) + work.cost_constant;
         let plan = self.rollout(pred, &u, omega);
         let foot = Vector2::new(u[0], u[1]);

@@ -8,15 +8,29 @@
 //!
 //! 1. **Gait relaxed.** Keep reachability and safety; relax every gait row by the
 //!    same amount `eps_gait` (m/s, on unit-norm rows: `g_i u <= h_i + eps |g_i|`),
-//!    the smallest that makes the problem feasible; then minimise the nominal
-//!    cost under that relaxation.
-//! 2. **Safety relaxed** (only if reachability + safety alone are infeasible):
-//!    keep reachability; find the smallest uniform relaxation `eps_safety` (m) of
-//!    the safety rows, then, with safety relaxed by exactly that, the smallest
-//!    `eps_gait`, then minimise the cost. This is the least-violating reachable
-//!    step in the sense of the largest LDCBF violation.
+//!    the smallest that makes the problem feasible, but at most
+//!    [`crate::Config::max_gait_relaxation`]; then minimise the nominal cost
+//!    under that relaxation.
+//! 2. **Safety relaxed** (when stage 1 needs more than the cap): keep
+//!    reachability and the gait rows relaxed by the cap; find the smallest
+//!    uniform relaxation `eps_safety` (m) of the safety rows, then, with safety
+//!    relaxed by exactly that, the smallest `eps_gait` (<= cap), then minimise
+//!    the cost. This is the least-violating reachable step in the sense of the
+//!    largest LDCBF violation.
+//! 3. **Gait unbounded** (only when reachability and the capped gait rows alone
+//!    conflict, i.e. the robot already moves faster than the capped limits): as
+//!    stage 2 with no cap.
 //!
-//! Reachability alone is always feasible (each `f_k` may sit at `p_k`), so stage 2
+//! Why the cap: the gait rows bound the CoM velocity at the end of each step,
+//! which is what keeps the pendulum capturable with steps inside the
+//! reachability box. Relaxing them without bound let cycles that keep meeting
+//! an infeasible LDCBF (an obstacle appearing from behind another under LiDAR)
+//! speed the robot up, cycle after cycle, past about 0.96 m/s, where no
+//! reachable step can stop it, and it fell. With the cap (0.1 m/s by default,
+//! so at most 0.9 m/s forward) the safety rows give way first, by the least
+//! amount, and the robot stays capturable.
+//!
+//! Reachability alone is always feasible (each `f_k` may sit at `p_k`), so stage 3
 //! always has an answer up to numerical failure or budget exhaustion.
 //!
 //! Each smallest relaxation is found by bisection between 0 (infeasible) and the
@@ -154,7 +168,9 @@ pub enum RelaxFailure {
 
 /// Runs the priority scheme on the nominal QP `qp` (rows identified by `rows`),
 /// using `scratch` as workspace. `budget` is the number of solver iterations left
-/// in this cycle; `bisections` the number of halvings per relaxation.
+/// in this cycle; `bisections` the number of halvings per relaxation;
+/// `gait_cap` the largest relaxation of the gait rows (m/s) allowed before the
+/// safety rows give way.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     solver: &DualActiveSet<NV, NC>,
@@ -165,6 +181,7 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     max_iter: u32,
     budget: u32,
     bisections: u32,
+    gait_cap: f64,
 ) -> Result<Relaxed<NV>, RelaxFailure> {
     let mut ctx = Ctx {
         solver,
@@ -177,44 +194,57 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         used: 0,
         bisections,
     };
-    // Stage 1: safety hard, gait soft.
-    let hard = Keep {
+    // Stage 1: reachability and safety hard, gait soft up to the cap.
+    let safe = Keep {
         safety: Some(0.0),
         gait: None,
     };
-    match ctx.minimal(hard, RowClass::Gait)? {
-        Some((u, eps)) => Ok(Relaxed {
+    if let Some((u, eps)) = ctx.minimal(safe, RowClass::Gait, gait_cap)? {
+        return Ok(Relaxed {
             u,
             level: RelaxLevel::Gait,
             eps_gait: eps,
             eps_safety: 0.0,
             iterations: ctx.used,
-        }),
-        None => {
-            // Stage 2: reachability only is hard.
-            let reach = Keep {
-                safety: None,
-                gait: None,
-            };
-            let (_, eps_s) = ctx
-                .minimal(reach, RowClass::Safety)?
-                .ok_or(RelaxFailure::Numerical)?;
-            let fixed = Keep {
-                safety: Some(eps_s),
-                gait: None,
-            };
-            let (u, eps_g) = ctx
-                .minimal(fixed, RowClass::Gait)?
-                .ok_or(RelaxFailure::Numerical)?;
-            Ok(Relaxed {
-                u,
-                level: RelaxLevel::Safety,
-                eps_gait: eps_g,
-                eps_safety: eps_s,
-                iterations: ctx.used,
-            })
-        }
+        });
     }
+    // Stage 2: reachability and the capped gait rows hard, safety soft; then, with
+    // safety relaxed by exactly that much, the least gait relaxation (<= cap).
+    // Stage 3, when even reachability and the capped gait rows conflict (the
+    // robot already moves faster than the capped limits allow): the same with
+    // the gait rows unbounded.
+    for cap in [gait_cap, f64::INFINITY] {
+        let reach = Keep {
+            safety: None,
+            gait: if cap.is_finite() { Some(cap) } else { None },
+        };
+        let Some((_, eps_s)) = ctx.minimal(reach, RowClass::Safety, f64::INFINITY)? else {
+            continue;
+        };
+        let fixed = Keep {
+            safety: Some(eps_s),
+            gait: None,
+        };
+        let (u, eps_g) = ctx
+            .minimal(fixed, RowClass::Gait, cap)?
+            .ok_or(RelaxFailure::Numerical)?;
+        // Without any safety relaxation this is still a gait relaxation (beyond
+        // the cap: the robot moves too fast already).
+        let level = if eps_s > 0.0 {
+            RelaxLevel::Safety
+        } else {
+            RelaxLevel::Gait
+        };
+        return Ok(Relaxed {
+            u,
+            level,
+            eps_gait: eps_g,
+            eps_safety: eps_s,
+            iterations: ctx.used,
+        });
+    }
+    // Reachability alone is always feasible: only numerics get here.
+    Err(RelaxFailure::Numerical)
 }
 
 struct Ctx<'a, const NV: usize, const NC: usize, B> {
@@ -276,16 +306,15 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         worst
     }
 
-    /// With `fixed` kept, the smallest uniform relaxation of `soft` and the
-    /// optimal plan under it. `Ok(None)` when `fixed` alone is infeasible.
+    /// With `fixed` kept, the smallest uniform relaxation of `soft`, at most
+    /// `cap` (`f64::INFINITY`: unbounded), and the optimal plan under it.
+    /// `Ok(None)` when no relaxation up to `cap` is feasible.
     fn minimal(
         &mut self,
         fixed: Keep,
         soft: RowClass,
+        cap: f64,
     ) -> Result<Option<(SVector<f64, NV>, f64)>, RelaxFailure> {
-        let Some(u_free) = self.solve(fixed)? else {
-            return Ok(None);
-        };
         let with = |eps: f64| match soft {
             RowClass::Gait => Keep {
                 gait: Some(eps),
@@ -297,13 +326,19 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
             },
             RowClass::Reach => fixed,
         };
-        let mut hi = self.violation(soft, &u_free);
+        // The most relaxed problem first: the soft rows at `cap`, or left out.
+        let top = if cap.is_finite() { with(cap) } else { fixed };
+        let Some(u_top) = self.solve(top)? else {
+            return Ok(None);
+        };
+        let mut hi = self.violation(soft, &u_top).min(cap);
         if !hi.is_finite() {
             return Err(RelaxFailure::Numerical);
         }
         if hi <= 0.0 {
-            // The solution without the soft rows already satisfies them.
-            return Ok(Some((u_free, 0.0)));
+            // The most relaxed solution already satisfies the soft rows, so it is
+            // also optimal without relaxation.
+            return Ok(Some((u_top, 0.0)));
         }
         let mut lo = 0.0;
         let mut best: Option<SVector<f64, NV>> = None;
@@ -319,7 +354,7 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         }
         let u = match best {
             Some(u) => u,
-            // `hi` is still the violation of `u_free`, which is feasible there.
+            // `hi` is still where `u_top` is feasible.
             None => self.solve(with(hi))?.ok_or(RelaxFailure::Numerical)?,
         };
         Ok(Some((u, hi)))

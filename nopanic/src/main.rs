@@ -87,6 +87,7 @@ fn config(r: &[f64; 64]) -> Config {
         max_iter: r[46] as u32,
         max_iter_cycle: r[47] as u32,
         relax_bisections: r[48] as u32,
+        max_gait_relaxation: r[51],
         warm_start: r[49] > 0.0,
         tol_primal: r[50],
     }
