@@ -235,6 +235,22 @@ fn controller_qps_agree_with_clarabel() {
             prop_assert!((first.foot_target.x - own.x[0]).abs() <= 1e-12);
         } else {
             infeasible.set(infeasible.get() + 1);
+            // Our solver's Farkas certificate proves the infeasibility on its own:
+            // y >= 0, G'y = 0, h'y < 0.
+            let y = &own.lambda.as_slice()[..problem.m];
+            let ymax = y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            let mut gty = vec![0.0; problem.n];
+            let mut hty = 0.0;
+            for (i, yi) in y.iter().enumerate() {
+                prop_assert!(*yi >= 0.0);
+                for (j, g) in gty.iter_mut().enumerate() {
+                    *g += problem.G[i * problem.n + j] * yi;
+                }
+                hty += problem.h[i] * yi;
+            }
+            let gty_max = gty.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            prop_assert!(gty_max <= 1e-9 * (1.0 + ymax), "G'y = {gty:?}");
+            prop_assert!(hty < 0.0, "h'y = {hty}");
             // The priority scheme answers every infeasible cycle with a relaxed
             // optimal plan (never a blind fallback) on these inputs.
             let out = ctl.step(&input);

@@ -113,6 +113,10 @@ pub struct QpSolution<const NV: usize, const NC: usize> {
     /// Primal solution (or last iterate when not solved).
     pub x: SVector<f64, NV>,
     /// Lagrange multipliers, one per row, in the order of the rows of `G`.
+    /// When the status is [`QpStatus::Infeasible`] it holds instead a Farkas
+    /// certificate of infeasibility: `y >= 0` with `G'y = 0` and `h'y < 0` (up
+    /// to rounding), scaled so that the entry of the row that could not be
+    /// added is 1.
     pub lambda: SVector<f64, NC>,
     /// Objective `1/2 x'Hx + q'x` at `x`.
     pub objective: f64,
@@ -326,8 +330,11 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
                 inv_hnorm[i] = 1.0 / hn;
             }
             if n <= ZERO_ROW && qp.h[i] < -tol {
-                // 0'x <= h with h < 0: nothing satisfies it.
+                // 0'x <= h with h < 0: nothing satisfies it; y = e_i certifies it.
                 sol.status = QpStatus::Infeasible;
+                if let Some(y) = sol.lambda.get_mut(i) {
+                    *y = 1.0;
+                }
                 return sol;
             }
         }
@@ -341,6 +348,8 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         let mut is_active = [false; NC];
         let mut nact: usize = 0;
         let mut iters: u32 = 0;
+        // On infeasibility: the row `p` and `-r` of the active rows (see below).
+        let mut farkas: Option<(usize, [f64; NV])> = None;
 
         let status = 'outer: loop {
             // Step 1: choose a violated row (marked rows first).
@@ -432,6 +441,15 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
                     if t1.is_nan() || t2.is_nan() {
                         break 'outer QpStatus::NumericalError;
                     }
+                    // g_p = sum_j r_j g_act[j] with every r_j <= 0 (no row can be
+                    // dropped), and the active rows hold with equality while row
+                    // p is violated: y_p = 1, y_act[j] = -r_j is a Farkas
+                    // certificate (G'y = 0, h'y = h_p - g_p'x < 0).
+                    let mut neg_r = r;
+                    for y in neg_r.iter_mut() {
+                        *y = -*y;
+                    }
+                    farkas = Some((p, neg_r));
                     break 'outer QpStatus::Infeasible;
                 }
                 let t = t1.min(t2);
@@ -481,9 +499,19 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
 
         sol.x = x;
         let nact = nact.min(NV);
-        for (&row, &ui) in act[..nact].iter().zip(&u[..nact]) {
+        // Multipliers of the active rows, or the Farkas certificate.
+        let weights = match farkas {
+            Some((p, neg_r)) => {
+                if let Some(y) = sol.lambda.get_mut(p) {
+                    *y = 1.0;
+                }
+                neg_r
+            }
+            None => u,
+        };
+        for (&row, &w) in act[..nact].iter().zip(&weights[..nact]) {
             if let Some(lambda) = sol.lambda.get_mut(usize::from(row)) {
-                *lambda = ui.max(0.0); // row < m <= NC: always there
+                *lambda = w.max(0.0); // row < m <= NC: always there
             }
         }
         sol.active = act;
@@ -674,6 +702,22 @@ mod tests {
         assert!(stat.amax() < 1e-12);
     }
 
+    /// Checks a Farkas certificate: y >= 0, |G'y| small, h'y < 0.
+    fn assert_certificate<const NV: usize, const NC: usize>(
+        qp: &DenseQp<NV, NC>,
+        y: &SVector<f64, NC>,
+    ) {
+        let mut gty = SVector::<f64, NV>::zeros();
+        let mut hty = 0.0;
+        for i in 0..qp.m {
+            assert!(y[i] >= 0.0);
+            gty += qp.row(i) * y[i];
+            hty += qp.h[i] * y[i];
+        }
+        assert!(gty.amax() <= 1e-12 * (1.0 + y.amax()), "G'y = {gty:?}");
+        assert!(hty < 0.0, "h'y = {hty}");
+    }
+
     #[test]
     fn infeasible_detected() {
         let s = solver2();
@@ -682,6 +726,17 @@ mod tests {
         qp.push_row(&Vector2::new(-1.0, 0.0), -1.0).unwrap(); // x >= 1
         let sol = s.solve(&qp, &[false; 4], 20);
         assert_eq!(sol.status, QpStatus::Infeasible);
+        assert_certificate(&qp, &sol.lambda);
+        // Three rows, one of them irrelevant: x + y <= -1, x >= 0, y >= 0.
+        let mut qp = DenseQp::<2, 4>::default();
+        qp.push_row(&Vector2::new(0.0, 1.0), 5.0).unwrap();
+        qp.push_row(&Vector2::new(1.0, 1.0), -1.0).unwrap();
+        qp.push_row(&Vector2::new(-1.0, 0.0), 0.0).unwrap();
+        qp.push_row(&Vector2::new(0.0, -1.0), 0.0).unwrap();
+        let sol = s.solve(&qp, &[false; 4], 20);
+        assert_eq!(sol.status, QpStatus::Infeasible);
+        assert_certificate(&qp, &sol.lambda);
+        assert_eq!(sol.lambda[0], 0.0);
     }
 
     #[test]

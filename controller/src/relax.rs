@@ -33,11 +33,15 @@
 //! Reachability alone is always feasible (each `f_k` may sit at `p_k`), so stage 3
 //! always has an answer up to numerical failure or budget exhaustion.
 //!
-//! Each smallest relaxation is found by bisection between 0 (infeasible) and the
-//! violation of the solution without those rows (feasible), with a fixed number
-//! of halvings ([`crate::Config::relax_bisections`]); the reported `eps` is the
-//! feasible end of the final bracket, so it exceeds the true minimum by at most
-//! `violation / 2^bisections`. Every solve draws on one per-cycle iteration
+//! Each smallest relaxation is found by a bracketing search between 0 and the
+//! violation of the most relaxed solution (feasible): every infeasible probe
+//! returns the solver's Farkas certificate `y` (`G'y = 0`, `h'y < 0`), which
+//! proves infeasibility for every relaxation below
+//! `eps - y'h / (y' |g|_soft)`; the next probe goes just above that bound (and
+//! plain bisection takes over when a certificate is unusable). At most
+//! [`crate::Config::relax_bisections`] probes; usually two or three, and the
+//! reported `eps` is then within about 1e-9 (relative) of the true minimum.
+//! Every solve draws on one per-cycle iteration
 //! budget ([`crate::Config::max_iter_cycle`]); if it runs out the controller falls
 //! back to the previous plan or the capture step.
 
@@ -247,6 +251,15 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     Err(RelaxFailure::Numerical)
 }
 
+/// What one solve of a (relaxed) problem gave.
+enum Probe<const NV: usize> {
+    /// Feasible, with the optimal plan.
+    Feasible(SVector<f64, NV>),
+    /// Infeasible, with the certificate's lower bound on the soft relaxation
+    /// (`None` without a usable certificate).
+    Infeasible(Option<f64>),
+}
+
 struct Ctx<'a, const NV: usize, const NC: usize, B> {
     solver: &'a DualActiveSet<NV, NC>,
     backend: &'a mut B,
@@ -260,20 +273,32 @@ struct Ctx<'a, const NV: usize, const NC: usize, B> {
 }
 
 impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> {
-    /// Builds the problem `keep` into the scratch QP and solves it: `Ok(Some(u))`
-    /// feasible, `Ok(None)` infeasible.
-    fn solve(&mut self, keep: Keep) -> Result<Option<SVector<f64, NV>>, RelaxFailure> {
+    /// Builds the problem `keep` into the scratch QP and solves it. When it is
+    /// infeasible and `soft` names the class being relaxed, the solver's Farkas
+    /// certificate `y` gives a lower bound on the relaxation of that class: with
+    /// the soft rows at `h + eps |g|`, `y'h(eps) < 0` certifies infeasibility for
+    /// every `eps < eps_now - y'h(eps_now) / (y'|g|_soft)`.
+    fn solve(&mut self, keep: Keep, soft: Option<RowClass>) -> Result<Probe<NV>, RelaxFailure> {
         let left = self.budget.saturating_sub(self.used);
         if left == 0 {
             return Err(RelaxFailure::Budget);
         }
         self.scratch.clear();
         self.scratch.q = self.qp.q;
+        let mut soft_norm = [0.0f64; NC];
+        let mut k = 0usize;
         for ((g, h), id) in self.qp.rows().zip(self.rows) {
-            if let Some(eps) = keep.eps(RowClass::of(id.kind)) {
+            let class = RowClass::of(id.kind);
+            if let Some(eps) = keep.eps(class) {
+                let n = g.norm();
                 // Capacity cannot be exceeded: the scratch QP has the same
                 // capacity and receives a subset of the rows.
-                let _ = self.scratch.push_row(&g, h + eps * g.norm());
+                if self.scratch.push_row(&g, h + eps * n).is_ok() {
+                    if let Some(s) = soft_norm.get_mut(k) {
+                        *s = if Some(class) == soft { n } else { 0.0 };
+                    }
+                    k += 1;
+                }
             }
         }
         let sol = self.backend.solve_qp(
@@ -284,8 +309,19 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         );
         self.used = self.used.saturating_add(sol.iterations);
         match sol.status {
-            QpStatus::Solved => Ok(Some(sol.x)),
-            QpStatus::Infeasible => Ok(None),
+            QpStatus::Solved => Ok(Probe::Feasible(sol.x)),
+            QpStatus::Infeasible => {
+                let eps_now = soft.and_then(|c| keep.eps(c)).unwrap_or(0.0);
+                let (mut yh, mut yn) = (0.0, 0.0);
+                for ((y, (_, h)), n) in sol.lambda.iter().zip(self.scratch.rows()).zip(&soft_norm) {
+                    yh += y * h;
+                    yn += y * n;
+                }
+                let lb = eps_now - yh / yn;
+                Ok(Probe::Infeasible(
+                    (yn > 0.0 && lb.is_finite()).then_some(lb),
+                ))
+            }
             QpStatus::IterationLimit => Err(RelaxFailure::Budget),
             QpStatus::NumericalError => Err(RelaxFailure::Numerical),
         }
@@ -328,7 +364,7 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         };
         // The most relaxed problem first: the soft rows at `cap`, or left out.
         let top = if cap.is_finite() { with(cap) } else { fixed };
-        let Some(u_top) = self.solve(top)? else {
+        let Probe::Feasible(u_top) = self.solve(top, None)? else {
             return Ok(None);
         };
         let mut hi = self.violation(soft, &u_top).min(cap);
@@ -340,22 +376,53 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
             // also optimal without relaxation.
             return Ok(Some((u_top, 0.0)));
         }
-        let mut lo = 0.0;
+        // Search [lo, hi] (lo: proven infeasible below, hi: feasible). Each
+        // infeasible probe's certificate raises `lo` to a proven bound and the
+        // next probe goes just above it; without a certificate, bisection. The
+        // first probe, eps = 0, is exact when it is feasible.
+        let mut lo: f64 = 0.0;
         let mut best: Option<SVector<f64, NV>> = None;
+        let mut next: f64 = 0.0;
         for _ in 0..self.bisections {
-            let mid = 0.5 * (lo + hi);
-            match self.solve(with(mid))? {
-                Some(u) => {
-                    hi = mid;
+            let eps = crate::clamp(next, lo, hi);
+            match self.solve(with(eps), Some(soft))? {
+                Probe::Feasible(u) => {
+                    hi = eps;
                     best = Some(u);
+                    next = 0.5 * (lo + hi);
                 }
-                None => lo = mid,
+                Probe::Infeasible(bound) => {
+                    lo = lo.max(eps);
+                    next = match bound {
+                        Some(b) if b >= lo && b < hi => {
+                            lo = b;
+                            b * (1.0 + 1e-9) + 1e-12
+                        }
+                        _ => 0.5 * (lo + hi),
+                    };
+                }
+            }
+            if hi - lo <= 1e-9 * (1.0 + hi) {
+                break;
             }
         }
         let u = match best {
             Some(u) => u,
-            // `hi` is still where `u_top` is feasible.
-            None => self.solve(with(hi))?.ok_or(RelaxFailure::Numerical)?,
+            None => {
+                // No probe was feasible: `hi` is where `u_top` is feasible, but at
+                // the exact minimum the feasible set can shrink to a point that
+                // rounding declares empty, so widen it by a hair if needed.
+                let mut found = None;
+                for pad in [0.0, 1e-9, 1e-7, 1e-5] {
+                    let eps = hi * (1.0 + pad) + pad;
+                    if let Probe::Feasible(u) = self.solve(with(eps), None)? {
+                        hi = eps;
+                        found = Some(u);
+                        break;
+                    }
+                }
+                found.ok_or(RelaxFailure::Numerical)?
+            }
         };
         Ok(Some((u, hi)))
     }

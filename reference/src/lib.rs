@@ -593,6 +593,13 @@ impl<const NV: usize, const NC: usize> QpBackend<NV, NC> for ClarabelBackend {
             active: [0; NV],
             n_active: 0,
         };
+        if out.status == QpStatus::Infeasible {
+            // Clarabel's `z` is then its certificate of primal infeasibility
+            // (G'z = 0, h'z < 0): the same meaning as our solver's `lambda`.
+            for i in 0..p.m {
+                out.lambda[i] = r.z[i].max(0.0);
+            }
+        }
         if out.status == QpStatus::Solved {
             out.x = SVector::<f64, NV>::from_fn(|i, _| r.x[i]);
             out.objective = r.objective;
