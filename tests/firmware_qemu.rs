@@ -8,7 +8,10 @@
 //!   status is the host's, the host replaying the same recorded cycles in the
 //!   same order (the warm start carries across cycles); the instructions per
 //!   cycle, flash and RAM stay within the ceilings of [`budgets`], and it prints
-//!   which of the issue's targets are met. It needs `qemu-system-arm` and the
+//!   which of the issue's targets are met. It writes the instructions per
+//!   cycle to `firmware/target/instructions.csv` (header
+//!   `cycle,status,iterations,instructions`, read by `ldcbf-sim deadline
+//!   --instructions`). It needs `qemu-system-arm` and the
 //!   `thumbv7em-none-eabihf` target and fails if either is missing, so it is
 //!   `#[ignore]`d in the plain `cargo test` and run by `.ci/embedded.sh`.
 //! * `regenerate_recorded_cycles` rewrites `firmware/src/recorded.rs` from the
@@ -24,6 +27,7 @@ use ldcbf_controller::{
     Config, ConvexPolygon, CycleInput, CycleStatus, PaperController, Side, constraint_capacity,
 };
 use ldcbf_nav::fixtures::{PAPER_GOAL, PAPER_OBSTACLES, paper_obstacles, walk};
+use ldcbf_sim::deadline::INSTRUCTIONS_HEADER;
 
 mod recorded {
     include!("../firmware/src/recorded.rs");
@@ -544,6 +548,22 @@ fn firmware_matches_host_in_qemu() {
         };
         (v.len(), median, v.last().copied().unwrap_or(0))
     };
+    // The per-cycle counts for `ldcbf-sim deadline --instructions FILE`.
+    let csv_path = workspace_root().join("firmware/target/instructions.csv");
+    let mut csv = format!("{INSTRUCTIONS_HEADER}\n");
+    for c in &run.cycles {
+        writeln!(
+            csv,
+            "{},{},{},{}",
+            c.index,
+            c.status,
+            c.iterations,
+            instructions(c)
+        )
+        .unwrap();
+    }
+    std::fs::write(&csv_path, csv)
+        .unwrap_or_else(|e| panic!("cannot write {}: {e}", csv_path.display()));
     let (n_all, med_all, max_all) = stats(&|_| true);
     let (n_opt, med_opt, max_opt) = stats(&|c| c.status == "optimal");
     let (n_fb, med_fb, max_fb) = stats(&|c| c.status != "optimal");
@@ -567,6 +587,10 @@ fn firmware_matches_host_in_qemu() {
         host.len()
     );
     println!("determinism: two QEMU runs (-icount shift={ICOUNT_SHIFT}) printed identical output");
+    println!(
+        "wrote the instructions per cycle to {} (for `ldcbf-sim deadline --instructions`)",
+        csv_path.display()
+    );
     println!(
         "instructions per cycle: all {n_all}: median {med_all} max {max_all}; optimal \
          {n_opt}: median {med_opt} max {max_opt}; fallback {n_fb}: median {med_fb} max {max_fb}"

@@ -983,7 +983,10 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                         self.config.max_gait_relaxation,
                     )
                 } else {
-                    Err(relax::RelaxFailure::Budget)
+                    Err(relax::RelaxError {
+                        kind: relax::RelaxFailure::Budget,
+                        iterations: 0,
+                    })
                 };
                 if let Ok(r) = &relaxed {
                     info.iterations = info.iterations.saturating_add(r.iterations);
@@ -995,6 +998,10 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                     };
                     (r.u, status)
                 } else {
+                    // The iterations spent before the relaxation gave up count too.
+                    if let Err(e) = &relaxed {
+                        info.iterations = info.iterations.saturating_add(e.iterations);
+                    }
                     let (u, source) = self.fallback(memory, shift, work);
                     info.source = source;
                     (u, status)

@@ -161,6 +161,15 @@ pub struct Relaxed<const NV: usize> {
     pub iterations: u32,
 }
 
+/// A failed relaxation: why, and the solver iterations it spent.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RelaxError {
+    /// Why it gave up.
+    pub kind: RelaxFailure,
+    /// Solver iterations spent before giving up.
+    pub iterations: u32,
+}
+
 /// Why the relaxation gave up.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RelaxFailure {
@@ -186,7 +195,7 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     budget: u32,
     bisections: u32,
     gait_cap: f64,
-) -> Result<Relaxed<NV>, RelaxFailure> {
+) -> Result<Relaxed<NV>, RelaxError> {
     let mut ctx = Ctx {
         solver,
         backend,
@@ -198,6 +207,18 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         used: 0,
         bisections,
     };
+    let out = run_stages(&mut ctx, gait_cap);
+    out.map_err(|kind| RelaxError {
+        kind,
+        iterations: ctx.used,
+    })
+}
+
+/// The stages of the scheme (see the module docs).
+fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
+    ctx: &mut Ctx<'_, NV, NC, B>,
+    gait_cap: f64,
+) -> Result<Relaxed<NV>, RelaxFailure> {
     // Stage 1: reachability and safety hard, gait soft up to the cap.
     let safe = Keep {
         safety: Some(0.0),

@@ -96,6 +96,7 @@ pub fn execute_run(req: &RunRequest) -> Result<RunReport> {
             mpc_rate: req.mpc_rate,
             record_scans: req.plots,
             record_qps: req.export_qps.is_some(),
+            record_clearance: true,
         },
     )?;
     if let Some(qdir) = &req.export_qps {

@@ -696,6 +696,7 @@ pub fn run_batch(req: &BatchRequest) -> Result<BatchReport> {
         mpc_rate: req.mpc_rate,
         record_scans: false,
         record_qps: false,
+        record_clearance: true,
     };
     let t0 = Instant::now();
     let rows: Vec<Result<RunRow>> = pool.install(|| {

@@ -20,12 +20,15 @@
 //! * [`app`]: the `run` pipeline behind the `ldcbf-sim` binary;
 //! * [`qpbench`]: `ldcbf-sim qp solve`, our solver on npz QP files, timed;
 //! * [`batch`]: `ldcbf-sim batch` and `merge`: many seeds of a scenario family in
-//!   parallel, sharded across machines, one CSV row per run and a Markdown table.
+//!   parallel, sharded across machines, one CSV row per run and a Markdown table;
+//! * [`deadline`]: `ldcbf-sim deadline`: per-cycle compute time, solver
+//!   iterations and (from the firmware) instructions against a real-time deadline.
 //!
 //! Frames and units: world frame W, metres, seconds, radians, as in the controller.
 
 pub mod app;
 pub mod batch;
+pub mod deadline;
 pub mod perception;
 pub mod planner;
 pub mod plant;

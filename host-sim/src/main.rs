@@ -8,6 +8,8 @@
 //!                 [--perception known|lidar] [--jobs J] [--shard I/N] [--out DIR] [--set k=v ...]
 //! ldcbf-sim merge DIR... --out DIR [--allow-partial]
 //! ldcbf-sim table DIR...
+//! ldcbf-sim deadline [CASES...] [--random N] [--deadline-us D] [--clock-mhz F]
+//!                    [--set k=v ...] [--jobs J] [--instructions FILE]
 //! ```
 
 use std::path::PathBuf;
@@ -129,6 +131,38 @@ enum Command {
         #[arg(required = true)]
         dirs: Vec<PathBuf>,
     },
+    /// Deadline report: per-cycle compute time p50/p99/max (ns), solver
+    /// iterations (optimal / all cycles) and the margin to the deadline, per
+    /// case, as a Markdown table.
+    Deadline {
+        /// Cases `NAME[+rrt_star|+none][@SEED]` (a shipped scenario or a path),
+        /// e.g. `maze+rrt_star`, `crowded@0` [default: simple circles paper maze
+        /// maze+rrt_star trap trap+rrt_star crowded@0].
+        #[arg(value_name = "CASES")]
+        cases: Vec<ldcbf_sim::deadline::Case>,
+        /// Also run seeds 0..N of the `random` family (pooled into one row).
+        #[arg(long, default_value_t = 0, value_name = "N")]
+        random: u64,
+        /// Deadline per control cycle, µs (250 = the issue's 100,000
+        /// instructions at 400 MHz).
+        #[arg(long, default_value_t = ldcbf_sim::deadline::DEFAULT_DEADLINE_US, value_name = "D")]
+        deadline_us: f64,
+        /// Target clock, MHz, to turn instruction counts into time.
+        #[arg(long, default_value_t = ldcbf_sim::deadline::DEFAULT_CLOCK_MHZ, value_name = "F")]
+        clock_mhz: f64,
+        /// Override a scenario field for every case (as for `run`).
+        #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_set)]
+        sets: Vec<(String, String)>,
+        /// Worker threads (more than one shares the cores between runs, which
+        /// shows in the wall-clock times).
+        #[arg(long, default_value_t = 1)]
+        jobs: usize,
+        /// Per-cycle instruction counts of the firmware in QEMU (CSV
+        /// `cycle,status,iterations,instructions`, written by
+        /// tests/firmware_qemu.rs to firmware/target/instructions.csv).
+        #[arg(long, value_name = "FILE")]
+        instructions: Option<PathBuf>,
+    },
 }
 
 #[derive(Subcommand)]
@@ -242,6 +276,33 @@ fn main() -> ExitCode {
             }
             print!("{}", ldcbf_sim::batch::markdown_table(&cols));
             ExitCode::SUCCESS
+        }
+        Command::Deadline {
+            cases,
+            random,
+            deadline_us,
+            clock_mhz,
+            sets,
+            jobs,
+            instructions,
+        } => {
+            let mut req = ldcbf_sim::deadline::DeadlineRequest::new();
+            if !cases.is_empty() {
+                req.cases = cases;
+            }
+            req.random = random;
+            req.deadline_us = deadline_us;
+            req.clock_mhz = clock_mhz;
+            req.sets = sets;
+            req.jobs = jobs;
+            req.instructions = instructions;
+            match ldcbf_sim::deadline::run_deadline(&req) {
+                Ok(rep) => {
+                    print!("{}", ldcbf_sim::deadline::markdown(&rep));
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail(e),
+            }
         }
         Command::List => {
             let dir = ldcbf_sim::scenario::scenario_dir();

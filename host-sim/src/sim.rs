@@ -24,7 +24,8 @@
 //!    `perception = "lidar"` the obstacle list is the one inferred from a LiDAR
 //!    scan taken at that moment from the CoM ([`crate::perception`]); otherwise
 //!    it is the true map.
-//! 3. **Record** the 1 kHz sample (and its clearance to every TRUE obstacle), then
+//! 3. **Record** the 1 kHz sample (and its clearance to every TRUE obstacle,
+//!    unless [`SimOptions::record_clearance`] is off), then
 //!    check the end conditions: goal reached (`|p - goal| <= success_radius`),
 //!    time limit, or stuck: the remaining path length
 //!    ([`crate::planner::remaining_length`]: distance to the current subgoal plus
@@ -122,6 +123,12 @@ pub struct SimOptions {
     /// Keep every cycle's QP (as the controller assembled it) in
     /// [`SimResult::qps`], for `run --export-qps`.
     pub record_qps: bool,
+    /// Measure every 1 kHz CoM sample's clearance to the true obstacles
+    /// ([`Sample::clearance`]). Off, the samples' clearance is NaN, so the
+    /// summary's CoM clearance and collision flag mean nothing; the walk itself
+    /// is the same (the controller and the end conditions never read it). The
+    /// deadline study turns it off: in a debug build it is most of a run's time.
+    pub record_clearance: bool,
 }
 
 impl Default for SimOptions {
@@ -131,6 +138,7 @@ impl Default for SimOptions {
             mpc_rate: MpcRate::Hz(20),
             record_scans: true,
             record_qps: false,
+            record_clearance: true,
         }
     }
 }
@@ -265,7 +273,8 @@ pub struct Sample {
     /// Stance side.
     pub stance_side: Side,
     /// Signed distance from the CoM to the nearest obstacle, m (negative =
-    /// inside; `+inf` without obstacles).
+    /// inside; `+inf` without obstacles; NaN unless
+    /// [`SimOptions::record_clearance`]).
     pub clearance: f64,
 }
 
@@ -527,7 +536,11 @@ fn run_with<B: QpBackend<NV, NC>>(
             heading: plant.heading,
             turning_rate: plant.turning_rate,
             stance_side: plant.stance_side,
-            clearance: clearance(&plant.position, obstacles),
+            clearance: if options.record_clearance {
+                clearance(&plant.position, obstacles)
+            } else {
+                f64::NAN
+            },
         };
         samples.push(sample);
         let dist = (plant.position - scenario.goal).norm();

@@ -1,0 +1,209 @@
+//! Deterministic deadline check: the worst-case solver iteration count per
+//! control cycle, asserted against the configured budget.
+//!
+//! Wall-clock time per cycle depends on the machine and its load; the number of
+//! solver iterations (active-set adds plus drops, `CycleInfo::iterations`) does
+//! not: it is a pure function of the inputs, so it can be asserted in CI. (The
+//! other deterministic measure, instructions per cycle on the Cortex-M7 in
+//! QEMU, is `tests/firmware_qemu.rs`.)
+//!
+//! Closed loops: every shipped scenario (`ldcbf_sim::deadline::SHIPPED_CASES`:
+//! `simple`, `circles`, `paper`, `maze` and `trap` with and without RRT*
+//! subgoals, `crowded` seed 0 with LiDAR) and the 200 random environments
+//! (seeds 0..199 of `scenarios/random.toml`, known map, the paper's defaults),
+//! each run to its end in-process at 20 Hz with the own solver, 4 worker
+//! threads at most. Every cycle's iterations are collected and split into the
+//! cycles whose nominal QP was solved (`status == Optimal`: one QP solve) and
+//! the others (infeasible: the nominal solve plus the priority scheme's solves).
+//!
+//! # The budget
+//!
+//! `Config::default()`: `max_iter` = 64 iterations per QP solve and
+//! `max_iter_cycle` = 2048 per control cycle, the priority scheme's solves
+//! included. Both are hard limits in the controller (a solve that needs more
+//! ends `BudgetExhausted`; the priority scheme gives each of its solves at most
+//! what is left of the cycle's budget), so asserting `<=` them checks the
+//! contract; what the test adds is the measured worst case against them and the
+//! assertion that no cycle ever hits them (no `BudgetExhausted`, no fallback
+//! command, which is what a relaxation that ran out of budget returns).
+//!
+//! An upper bound for an infeasible cycle from the structure of
+//! `controller/src/relax.rs` (`relax_bisections` = 12): a smallest relaxation
+//! (`Ctx::minimal`) takes 1 solve when even the most relaxed problem is
+//! infeasible, else at most 1 + 12 + 1 = 14; the worst path is the nominal
+//! solve, stage 1 infeasible (1), stage 2 with the capped gait rows infeasible
+//! (1), stage 3 (14 + 14): 31 solves of at most 64 iterations, 1,984 <= 2,048.
+//! So `max_iter_cycle` is never the binding limit; `max_iter` is.
+//!
+//! Measured (2026-11-22, `cargo test --test deadline_iterations -- --nocapture`;
+//! `ldcbf-sim deadline --random 200` prints the same counts), 98,180 cycles in
+//! 208 runs:
+//!
+//! | cycles | worst | budget | margin |
+//! |---|---|---|---|
+//! | optimal (98,074) | 32: `random@46` cycle 72 | `max_iter` = 64 | 32 (50 %) |
+//! | all, incl. 106 infeasible | 60: `crowded@0` cycle 318 (infeasible) | `max_iter_cycle` = 2048 | 1,988 (97 %) |
+//!
+//! (shipped cases alone: 21 optimal, `paper`; 60 in all. The random seeds:
+//! 32 optimal, 51 in all, `random@152`.) No cycle ended `BudgetExhausted` or
+//! `NumericalFailure`, none returned a fallback command, none had invalid
+//! input. The optimal worst case is half the per-solve budget, not within
+//! 25 % of it (the test prints a NOTE if it gets there).
+//!
+//! Iterations are not the whole cost of an infeasible cycle: after the nominal
+//! solve the priority scheme runs up to 30 cold-started solves, each with its
+//! own set-up, which no iteration budget counts. The
+//! firmware's replay of 240 recorded `paper` cycles (`firmware/README.md`) has
+//! 15 infeasible cycles of 77 iterations (more than the 60 here: that recording
+//! comes from the fixture loop of `benches/`, not from these runs) that take
+//! ~594,000 instructions, against ~93,000 for its worst optimal cycle of 24
+//! iterations. So `max_iter` bounds the cost of an optimal cycle; the cost of
+//! an infeasible one is checked in instructions (`tests/firmware_qemu.rs`,
+//! where the 100,000-instruction target is not met for those cycles).
+
+use ldcbf_controller::{Config, CycleStatus};
+use ldcbf_sim::deadline::{
+    CaseRun, SHIPPED_CASES, cost_stats, random_cases, run_cases, shipped_cases,
+};
+
+/// Random environments of the paper's study.
+const RANDOM_SEEDS: u64 = 200;
+
+#[test]
+fn worst_case_iterations_stay_within_the_configured_budget() {
+    let mut cases = shipped_cases();
+    cases.extend(random_cases(RANDOM_SEEDS));
+    let jobs = std::thread::available_parallelism().map_or(2, |n| n.get().min(4));
+    let t0 = std::time::Instant::now();
+    let runs = run_cases(&cases, &[], jobs).expect("every case loads and runs");
+    let wall = t0.elapsed().as_secs_f64();
+    assert_eq!(runs.len(), SHIPPED_CASES.len() + RANDOM_SEEDS as usize);
+
+    let defaults = Config::default();
+    for r in &runs {
+        assert_eq!(
+            (r.max_iter, r.max_iter_cycle),
+            (defaults.max_iter, defaults.max_iter_cycle),
+            "{}: not the default budget",
+            r.label
+        );
+    }
+    let (max_iter, max_iter_cycle) = (defaults.max_iter, defaults.max_iter_cycle);
+
+    let all: Vec<&CaseRun> = runs.iter().collect();
+    let shipped: Vec<&CaseRun> = runs[..SHIPPED_CASES.len()].iter().collect();
+    let random: Vec<&CaseRun> = runs[SHIPPED_CASES.len()..].iter().collect();
+    let st = cost_stats(&all, u64::MAX);
+    for (name, group) in [("shipped", &shipped), ("random", &random), ("all", &all)] {
+        let g = cost_stats(group, u64::MAX);
+        println!(
+            "{name}: {} runs, {} cycles, {} non-optimal; worst optimal {}; worst cycle {}",
+            g.runs,
+            g.cycles,
+            g.non_optimal,
+            g.worst_optimal
+                .as_ref()
+                .map_or("none".to_string(), |w| w.to_string()),
+            g.worst_all
+                .as_ref()
+                .map_or("none".to_string(), |w| w.to_string()),
+        );
+    }
+    let wo = st.worst_optimal.clone().expect("some optimal cycle");
+    let wa = st.worst_all.clone().expect("some cycle");
+    let margin = |w: u32, b: u32| 100.0 * f64::from(b - w.min(b)) / f64::from(b);
+    println!(
+        "iterations: worst optimal {} of max_iter {max_iter} (margin {:.0} %), worst cycle {} of \
+         max_iter_cycle {max_iter_cycle} (margin {:.0} %); {} non-optimal cycles of {} in {} runs \
+         ({} budget_exhausted, {} numerical_failure, {} invalid_input, {} fallback commands); \
+         wall time {wall:.1} s with {jobs} jobs",
+        wo.value,
+        margin(wo.value, max_iter),
+        wa.value,
+        margin(wa.value, max_iter_cycle),
+        st.non_optimal,
+        st.cycles,
+        st.runs,
+        st.budget_exhausted,
+        st.numerical_failure,
+        st.invalid_input,
+        st.fallback
+    );
+    if 4 * wo.value > 3 * max_iter {
+        println!(
+            "NOTE: the worst optimal cycle ({}) is within 25 % of max_iter = {max_iter}: \
+             report it, do not silently raise the budget",
+            wo.value
+        );
+    }
+
+    // (i) No cycle ran out of budget or failed numerically, and no infeasible
+    // cycle fell back (a relaxation that ran out of budget falls back, and its
+    // iterations are not counted in CycleInfo::iterations).
+    let bad: Vec<String> = runs
+        .iter()
+        .flat_map(|r| {
+            r.cycles
+                .iter()
+                .filter(|c| {
+                    matches!(
+                        c.status,
+                        CycleStatus::BudgetExhausted
+                            | CycleStatus::NumericalFailure
+                            | CycleStatus::InvalidInput(_)
+                    ) || c.is_fallback()
+                })
+                .map(move |c| {
+                    format!(
+                        "{} cycle {} (t = {:.2} s): {} / {:?}, {} iterations",
+                        r.label,
+                        c.index,
+                        c.time,
+                        c.status.name(),
+                        c.source,
+                        c.iterations
+                    )
+                })
+        })
+        .collect();
+    assert!(
+        bad.is_empty(),
+        "{} cycles hit the budget, failed or fell back:\n{}",
+        bad.len(),
+        bad.join("\n")
+    );
+    // (ii) The worst cases within the configured budgets.
+    assert!(
+        wo.value <= max_iter,
+        "an optimal cycle took {wo} > max_iter = {max_iter}"
+    );
+    assert!(
+        wa.value <= max_iter_cycle,
+        "a cycle took {wa} > max_iter_cycle = {max_iter_cycle}"
+    );
+    // Every optimal cycle is one solve; the split is by status.
+    for r in &runs {
+        for c in r.cycles.iter().filter(|c| c.status.is_optimal()) {
+            assert!(c.iterations <= max_iter, "{} cycle {}", r.label, c.index);
+        }
+    }
+}
+
+/// The default set covers every shipped scenario but the `random` family
+/// (which the 200 seeds cover): a new scenario file must be added to
+/// `SHIPPED_CASES`.
+#[test]
+fn shipped_cases_cover_every_shipped_scenario() {
+    let names: Vec<String> = ldcbf_sim::scenario::list()
+        .into_iter()
+        .map(|(n, _, _)| n)
+        .collect();
+    assert!(names.len() >= 7, "{names:?}");
+    let cases = shipped_cases();
+    for n in names.iter().filter(|n| n.as_str() != "random") {
+        assert!(
+            cases.iter().any(|c| &c.scenario == n),
+            "scenario {n} is not in ldcbf_sim::deadline::SHIPPED_CASES"
+        );
+    }
+}
