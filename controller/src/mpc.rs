@@ -1016,8 +1016,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             }
             _ => 0.0,
         };
-        let v = relax::class_violation(&work.qp, &work.rows, &u);
-        info.max_violation = v.reach.max(v.safety).max(v.gait);
+        info.max_violation = relax::class_violation(&work.qp, &work.rows, &u).max();
         info.cost = self.solver.objective(&work.qp.q, &u) + work.cost_constant;
         let plan = self.rollout(pred, &u, omega);
         let foot = Vector2::new(u[0], u[1]);
@@ -1060,7 +1059,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             return (capture, CommandSource::CaptureStep);
         };
         let prev_v = relax::class_violation(&work.qp, &work.rows, &prev);
-        let all = |v: &relax::ClassViolation| v.reach.max(v.safety).max(v.gait) <= tol;
+        let all = |v: &relax::ClassViolation| v.max() <= tol;
         let use_prev = if all(&prev_v) {
             true
         } else if all(&cap_v) {
@@ -1354,12 +1353,7 @@ mod tests {
     /// of `out`, on the QP of the last step.
     fn class_violation(ctl: &Ctl, out: &CycleOutput<3>, class: relax::RowClass) -> f64 {
         let asm = ctl.last_assembly();
-        let v = relax::class_violation(&asm.qp, &asm.rows, &feet(out));
-        match class {
-            relax::RowClass::Reach => v.reach,
-            relax::RowClass::Safety => v.safety,
-            relax::RowClass::Gait => v.gait,
-        }
+        relax::class_violation(&asm.qp, &asm.rows, &feet(out)).of(class)
     }
 
     /// Feasibility of the last QP with the rows of `class` relaxed by `eps` and

@@ -220,6 +220,14 @@ impl<const NV: usize, const NC: usize> DenseQp<NV, NC> {
             .map(|(g, h)| (SVector::from(*g), *h))
     }
 
+    /// The used rows with their Euclidean norms: `(g_i, h_i, |g_i|)`.
+    pub fn rows_with_norm(&self) -> impl Iterator<Item = (SVector<f64, NV>, f64, f64)> + '_ {
+        self.rows().map(|(g, h)| {
+            let n = g.norm();
+            (g, h, n)
+        })
+    }
+
     /// Largest violation `max_i (g_i x - h_i)^+` over the used rows, unscaled.
     pub fn max_violation(&self, x: &SVector<f64, NV>) -> f64 {
         let mut worst: f64 = 0.0;
@@ -319,15 +327,14 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         // `s_i / |L^-1 g_i|` is the square root of the cost increase of enforcing
         // row i alone, which picks rows that matter and roughly halves the
         // add/drop count on the controller's QPs compared with the Euclidean rule.
+        // The H^-1 norm costs NV^2 per row, so it is computed only for rows
+        // found violated (0 = not computed yet).
         let mut inv_norm = [0.0f64; NC];
         let mut inv_hnorm = [0.0f64; NC];
         for i in 0..m {
-            let g = qp.gt.column(i);
-            let n = g.norm();
-            let hn = (self.J0.transpose() * g).norm();
-            if n > ZERO_ROW && hn > 0.0 {
+            let n = qp.gt.column(i).norm();
+            if n > ZERO_ROW {
                 inv_norm[i] = 1.0 / n;
-                inv_hnorm[i] = 1.0 / hn;
             }
             if n <= ZERO_ROW && qp.h[i] < -tol {
                 // 0'x <= h with h < 0: nothing satisfies it; y = e_i certifies it.
@@ -367,6 +374,11 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
                 }
                 if slack * inv_norm[i] >= -tol {
                     continue; // satisfied to tolerance
+                }
+                if inv_hnorm[i] == 0.0 {
+                    let hn = (self.J0.transpose() * qp.gt.column(i)).norm();
+                    // J0 is nonsingular, so hn > 0 for a non-zero row.
+                    inv_hnorm[i] = if hn > 0.0 { 1.0 / hn } else { inv_norm[i] };
                 }
                 let s = slack * inv_hnorm[i];
                 if s < best_v {

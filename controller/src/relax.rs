@@ -90,6 +90,22 @@ pub struct ClassViolation {
     pub gait: f64,
 }
 
+impl ClassViolation {
+    /// The violation of one class.
+    pub fn of(&self, class: RowClass) -> f64 {
+        match class {
+            RowClass::Reach => self.reach,
+            RowClass::Safety => self.safety,
+            RowClass::Gait => self.gait,
+        }
+    }
+
+    /// The largest over all classes.
+    pub fn max(&self) -> f64 {
+        self.reach.max(self.safety).max(self.gait)
+    }
+}
+
 /// Measures [`ClassViolation`] of the plan `u` on `qp` (rows identified by `rows`).
 /// A non-finite plan gets infinite violations.
 pub fn class_violation<const NV: usize, const NC: usize>(
@@ -102,8 +118,7 @@ pub fn class_violation<const NV: usize, const NC: usize>(
         safety: 0.0,
         gait: 0.0,
     };
-    for ((g, h), id) in qp.rows().zip(rows) {
-        let n = g.norm();
+    for ((g, h, n), id) in qp.rows_with_norm().zip(rows) {
         if n == 0.0 {
             continue;
         }
@@ -308,10 +323,9 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         self.scratch.q = self.qp.q;
         let mut soft_norm = [0.0f64; NC];
         let mut k = 0usize;
-        for ((g, h), id) in self.qp.rows().zip(self.rows) {
+        for ((g, h, n), id) in self.qp.rows_with_norm().zip(self.rows) {
             let class = RowClass::of(id.kind);
             if let Some(eps) = keep.eps(class) {
-                let n = g.norm();
                 // Capacity cannot be exceeded: the scratch QP has the same
                 // capacity and receives a subset of the rows.
                 if self.scratch.push_row(&g, h + eps * n).is_ok() {
@@ -350,17 +364,7 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
 
     /// Largest violation of the rows of `class` at `u`, per unit row norm.
     fn violation(&self, class: RowClass, u: &SVector<f64, NV>) -> f64 {
-        let mut worst: f64 = 0.0;
-        for ((g, h), id) in self.qp.rows().zip(self.rows) {
-            if RowClass::of(id.kind) != class {
-                continue;
-            }
-            let n = g.norm();
-            if n > 0.0 {
-                worst = worst.max((g.dot(u) - h) / n);
-            }
-        }
-        worst
+        class_violation(self.qp, self.rows, u).of(class)
     }
 
     /// With `fixed` kept, the smallest uniform relaxation of `soft`, at most

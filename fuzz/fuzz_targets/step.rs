@@ -89,14 +89,12 @@ fuzz_target!(|case: Case| {
                 u[2 * k] = out.plan.feet[k].x;
                 u[2 * k + 1] = out.plan.feet[k].y;
             }
-            for i in 0..asm.qp.m {
-                if RowClass::of(asm.rows[i].kind) != RowClass::Reach {
-                    continue;
+            for ((g, h, n), id) in asm.qp.rows_with_norm().zip(&asm.rows) {
+                if RowClass::of(id.kind) == RowClass::Reach {
+                    let viol = (g.dot(&u) - h) / n;
+                    let scale = 1.0 + h.abs();
+                    assert!(viol <= 1e-6 * scale, "reach row violated by {viol:e}: {out:?} for {c:?}");
                 }
-                let g = asm.qp.row(i);
-                let scale = 1.0 + asm.qp.h[i].abs();
-                let viol = (g.dot(&u) - asm.qp.h[i]) / g.norm();
-                assert!(viol <= 1e-6 * scale, "reach row {i} violated by {viol:e}: {out:?} for {c:?}");
             }
         }
     }

@@ -44,16 +44,8 @@ enum Command {
         /// Seed of the scenario's random generator (e.g. `run random --seed 7`).
         #[arg(long)]
         seed: Option<u64>,
-        /// Override a scenario field: `key=value` with a TOML value, e.g.
-        /// `delta=0.3`, `controller.gamma=0.5`, `time_limit=200`, `goal=[5,5]`.
-        #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_set)]
-        sets: Vec<(String, String)>,
-        /// QP solver inside the controller.
-        #[arg(long, value_enum, default_value = "own")]
-        solver: Solver,
-        /// Controller rate: a rate in Hz (20 = the paper's), or `step` (once per step).
-        #[arg(long, default_value = "20")]
-        mpc_rate: MpcRate,
+        #[command(flatten)]
+        closed_loop: LoopArgs,
         /// Do not render the figures (logs and summary only).
         #[arg(long)]
         no_plots: bool,
@@ -100,15 +92,8 @@ enum Command {
         /// Output directory [default: out/batch-<family>-<planner>-<perception>[-shard<I>of<N>]].
         #[arg(long)]
         out: Option<PathBuf>,
-        /// Override a scenario field for every run (as for `run`).
-        #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_set)]
-        sets: Vec<(String, String)>,
-        /// QP solver inside the controller.
-        #[arg(long, value_enum, default_value = "own")]
-        solver: Solver,
-        /// Controller rate: a rate in Hz, or `step`.
-        #[arg(long, default_value = "20")]
-        mpc_rate: MpcRate,
+        #[command(flatten)]
+        closed_loop: LoopArgs,
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
@@ -182,6 +167,21 @@ enum QpCommand {
     },
 }
 
+/// The closed-loop options shared by `run` and `batch`.
+#[derive(clap::Args)]
+struct LoopArgs {
+    /// Override a scenario field (for every run): `key=value` with a TOML value,
+    /// e.g. `delta=0.3`, `controller.gamma=0.5`, `time_limit=200`, `goal=[5,5]`.
+    #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_set)]
+    sets: Vec<(String, String)>,
+    /// QP solver inside the controller.
+    #[arg(long, value_enum, default_value = "own")]
+    solver: Solver,
+    /// Controller rate: a rate in Hz (20 = the paper's), or `step` (once per step).
+    #[arg(long, default_value = "20")]
+    mpc_rate: MpcRate,
+}
+
 fn parse_set(s: &str) -> Result<(String, String), String> {
     let (k, v) = s
         .split_once('=')
@@ -230,9 +230,12 @@ fn main() -> ExitCode {
             jobs,
             shard,
             out,
-            sets,
-            solver,
-            mpc_rate,
+            closed_loop:
+                LoopArgs {
+                    sets,
+                    solver,
+                    mpc_rate,
+                },
             quiet,
         } => {
             let mut req = BatchRequest::new(&family, seeds);
@@ -338,9 +341,12 @@ fn main() -> ExitCode {
             scenario,
             out,
             seed,
-            sets,
-            solver,
-            mpc_rate,
+            closed_loop:
+                LoopArgs {
+                    sets,
+                    solver,
+                    mpc_rate,
+                },
             no_plots,
             no_gif,
             trajectory_every,

@@ -17,17 +17,29 @@ use anyhow::{Result, anyhow};
 use ldcbf_controller::{DualActiveSet, QpSettings, QpStatus};
 use ldcbf_reference::DenseProblem;
 
+/// The compiled solver sizes, listed once: defines [`SIZES`] and the dispatch
+/// in [`solve_file`].
+macro_rules! with_sizes {
+    ($m:ident) => {
+        $m!(
+            (6, 48),
+            (6, 72),
+            (6, 120),
+            (10, 80),
+            (16, 32),
+            (16, 128),
+            (20, 160)
+        )
+    };
+}
+
+macro_rules! size_list {
+    ($(($nv:literal, $nc:literal)),*) => { [$(($nv, $nc)),*] };
+}
+
 /// Supported `(n, max m)`: the controller's configurations (N = 3 with 8 or 16
 /// obstacles and with foot clearance, N = 5, N = 10) and the external LIPMWALK set.
-pub const SIZES: [(usize, usize); 7] = [
-    (6, 48),
-    (6, 72),
-    (6, 120),
-    (10, 80),
-    (16, 32),
-    (16, 128),
-    (20, 160),
-];
+pub const SIZES: [(usize, usize); 7] = with_sizes!(size_list);
 
 /// One file's result.
 #[derive(Clone, Debug, PartialEq)]

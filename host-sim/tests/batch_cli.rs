@@ -1,37 +1,8 @@
 //! `ldcbf-sim batch`, `merge` and `table` from the command line: files, exit
 //! codes, and one clear error line (with nothing written) on bad input.
 
-use std::path::Path;
-use std::process::{Command, Output};
-
-fn sim(args: &[&str], cwd: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ldcbf-sim"))
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .expect("binary runs")
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
-
-/// Runs a command that must fail: non-zero exit, exactly one `error:` line on
-/// stderr containing `needle`, and an empty working directory afterwards.
-fn fails(args: &[&str], needle: &str) {
-    let tmp = tempfile::tempdir().unwrap();
-    let o = sim(args, tmp.path());
-    let err = text(&o.stderr);
-    assert!(!o.status.success(), "{args:?} succeeded");
-    assert!(err.contains(needle), "{args:?}: {err}");
-    let errors = err.lines().filter(|l| l.starts_with("error")).count();
-    assert_eq!(errors, 1, "{args:?}: {err}");
-    assert_eq!(
-        std::fs::read_dir(tmp.path()).unwrap().count(),
-        0,
-        "{args:?} wrote something"
-    );
-}
+mod common;
+use common::{fails, sim, text};
 
 #[test]
 fn bad_batch_arguments_fail_cleanly() {

@@ -1,19 +1,7 @@
 //! The `ldcbf-sim` binary: exit codes, messages, files.
 
-use std::path::Path;
-use std::process::{Command, Output};
-
-fn sim(args: &[&str], cwd: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ldcbf-sim"))
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .expect("binary runs")
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
+mod common;
+use common::{sim, text};
 
 #[test]
 fn list_shows_the_shipped_scenarios() {

@@ -3,23 +3,11 @@
 //! instruction CSV, and one clear error (non-zero exit, nothing written) on bad
 //! input.
 
-use std::path::Path;
-use std::process::{Command, Output};
+mod common;
+use common::{fails, sim, text};
 
 use ldcbf_sim::scenario::{LoadOptions, load};
 use ldcbf_sim::sim::{SimOptions, run};
-
-fn sim(args: &[&str], cwd: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_ldcbf-sim"))
-        .args(args)
-        .current_dir(cwd)
-        .output()
-        .expect("binary runs")
-}
-
-fn text(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
 
 /// The cells of the table row whose first cell is `label`.
 fn row(out: &str, label: &str) -> Vec<String> {
@@ -134,24 +122,6 @@ fn deadline_random_seeds_and_firmware_row() {
     assert!(
         out.contains("- instructions: instructions.csv (3 cycles"),
         "{out}"
-    );
-}
-
-/// Runs a command that must fail: non-zero exit, exactly one `error:` line on
-/// stderr containing `needle`, and an empty working directory afterwards.
-fn fails(args: &[&str], needle: &str) {
-    let tmp = tempfile::tempdir().unwrap();
-    let o = sim(args, tmp.path());
-    let (out, err) = (text(&o.stdout), text(&o.stderr));
-    assert!(!o.status.success(), "{args:?} succeeded");
-    assert!(out.is_empty(), "{args:?} printed {out}");
-    assert!(err.contains(needle), "{args:?}: {err}");
-    let errors = err.lines().filter(|l| l.starts_with("error")).count();
-    assert_eq!(errors, 1, "{args:?}: {err}");
-    assert_eq!(
-        std::fs::read_dir(tmp.path()).unwrap().count(),
-        0,
-        "{args:?} wrote something"
     );
 }
 
