@@ -4,7 +4,9 @@
 //! inferred obstacles and the CoM must stay out of the TRUE ones.
 
 use ldcbf_controller::nalgebra::Vector2;
-use ldcbf_sim::perception::{Lidar, LidarParams, cast_ray, cluster_polygon, clusters, dbscan};
+use ldcbf_sim::perception::{
+    Lidar, LidarParams, cast_ray, cluster_polygon, clusters, dbscan, infer_obstacles,
+};
 use ldcbf_sim::scenario::{LoadOptions, Perception, Polygon, load};
 use ldcbf_sim::sim::{Outcome, SimOptions, run};
 use ldcbf_sim::summarize;
@@ -163,6 +165,40 @@ fn lidar_hits_the_true_polygons_within_range() {
     let (_, polys) = Lidar::new(params, 0).unwrap().perceive(o, 0.0, &obs);
     assert_eq!(polys.len(), 1);
     contains_all(&polys[0], &pts);
+}
+
+/// A corridor 0.25 m wide (narrower than DBSCAN's `eps` = 0.3 m): its two
+/// walls are one cluster, whose hull covers the robot. The
+/// inferred obstacles must not: the cluster is split, the pieces still cover
+/// every point, none comes nearer to the robot than what the LiDAR saw, and a
+/// single obstacle in plain view stays one polygon (previous test).
+#[test]
+fn a_cluster_bridging_free_space_around_the_robot_is_split() {
+    let walls = [
+        Polygon::new(&[[-1.0, 0.125], [2.0, 0.125], [2.0, 0.4], [-1.0, 0.4]]).unwrap(),
+        Polygon::new(&[[-1.0, -0.4], [2.0, -0.4], [2.0, -0.125], [-1.0, -0.125]]).unwrap(),
+    ];
+    let params = LidarParams::default();
+    let o = v(0.0, 0.0);
+    let mut lidar = Lidar::new(params.clone(), 3).unwrap();
+    let pts = lidar.scan(o, 0.0, &walls);
+    let cl = clusters(&pts, params.eps, params.min_points);
+    assert_eq!(cl.len(), 1, "the two walls are one cluster");
+    let merged = cluster_polygon(&cl[0], params.min_thickness, params.max_vertices);
+    assert!(merged.contains(&o), "its plain hull covers the robot");
+    let polys = infer_obstacles(&pts, o, &params);
+    assert!(polys.len() >= 2, "{} polygons", polys.len());
+    let nearest_seen = pts
+        .iter()
+        .map(|p| (p - o).norm())
+        .fold(f64::INFINITY, f64::min);
+    for poly in &polys {
+        let d = ldcbf_controller::closest_point_point_polygon(&o, poly).signed_distance;
+        assert!(d > 0.0 && d > nearest_seen - 0.1, "{d} vs {nearest_seen}");
+    }
+    for p in &cl[0] {
+        assert!(polys.iter().any(|q| q.contains(p)), "{p:?} dropped");
+    }
 }
 
 #[test]

@@ -22,10 +22,14 @@
 //!   obstacle. A hull with more than `max_vertices` vertices is simplified
 //!   conservatively (edge collapse: two neighbouring edges are extended to meet,
 //!   smallest added area first), so the polygon still contains every point.
+//! * [`visible_polygons`]: a cluster whose polygon comes nearer to the sensor
+//!   than the nearest point seen (it joins two obstacles across free space) is
+//!   split at its widest seam, recursively, before it reaches the controller.
 //!
 //! The controller then sees only these inferred polygons; the simulator still
 //! measures clearance against the true ones.
 
+use ldcbf_controller::geometry::closest_point_point_polygon;
 use ldcbf_controller::nalgebra::Vector2;
 use rand_chacha::ChaCha8Rng;
 use rand_chacha::rand_core::SeedableRng;
@@ -159,7 +163,7 @@ impl Lidar {
         obstacles: &[Polygon],
     ) -> (Vec<Vector2<f64>>, Vec<Polygon>) {
         let points = self.scan(origin, heading, obstacles);
-        let polys = infer_obstacles(&points, &self.params);
+        let polys = infer_obstacles(&points, origin, &self.params);
         (points, polys)
     }
 }
@@ -259,12 +263,98 @@ pub fn clusters(points: &[Vector2<f64>], eps: f64, min_points: usize) -> Vec<Vec
     out
 }
 
-/// Inferred obstacles of a scan: one polygon per DBSCAN cluster.
-pub fn infer_obstacles(points: &[Vector2<f64>], params: &LidarParams) -> Vec<Polygon> {
-    clusters(points, params.eps, params.min_points)
-        .iter()
-        .map(|c| cluster_polygon(c, params.min_thickness, params.max_vertices))
-        .collect()
+/// Inferred obstacles of a scan taken from `origin` (m, world frame): one
+/// polygon per DBSCAN cluster, split where its polygon would come nearer to
+/// the sensor than anything it saw (see [`visible_polygons`]).
+pub fn infer_obstacles(
+    points: &[Vector2<f64>],
+    origin: Vector2<f64>,
+    params: &LidarParams,
+) -> Vec<Polygon> {
+    let mut out = Vec::new();
+    for c in clusters(points, params.eps, params.min_points) {
+        visible_polygons(c, origin, params, &mut out);
+    }
+    out
+}
+
+/// Largest number of times a cluster is halved by [`visible_polygons`].
+pub const MAX_SPLIT_DEPTH: u32 = 6;
+
+/// The polygons of one cluster that are consistent with what the sensor saw.
+///
+/// Every hit point was seen from `origin` along a free ray, so no part of a
+/// true obstacle is nearer to the sensor than the nearest point seen on it
+/// (up to the noise and the sampling between rays). A cluster that joins the
+/// points of two obstacles (their gap is below `eps`) can have a hull that
+/// fills the free space between them, up to reaching around the robot, and
+/// the controller would then be told that the robot stands in an obstacle
+/// (seed 38 of `random` with LiDAR did exactly that before this check).
+/// So the cluster's polygon ([`cluster_polygon`]) is kept only if it comes no
+/// nearer to `origin` than its nearest point minus `3 noise_sigma +
+/// min_thickness`; otherwise the cluster is cut in two where its points,
+/// ordered by bearing from `origin`, are farthest apart (the seam between two
+/// surfaces), and each half is treated the same way, at most
+/// [`MAX_SPLIT_DEPTH`] times (then the pieces are kept as they are).
+pub fn visible_polygons(
+    points: Vec<Vector2<f64>>,
+    origin: Vector2<f64>,
+    params: &LidarParams,
+    out: &mut Vec<Polygon>,
+) {
+    let mut stack = vec![(points, 0u32)];
+    let slack = 3.0 * params.noise_sigma + params.min_thickness;
+    while let Some((pts, depth)) = stack.pop() {
+        let poly = cluster_polygon(&pts, params.min_thickness, params.max_vertices);
+        let hides = || {
+            let nearest_seen = pts
+                .iter()
+                .map(|p| (p - origin).norm())
+                .fold(f64::INFINITY, f64::min);
+            closest_point_point_polygon(&origin, &poly).signed_distance < nearest_seen - slack
+        };
+        if depth >= MAX_SPLIT_DEPTH || pts.len() < 2 || !hides() {
+            out.push(poly);
+            continue;
+        }
+        let (a, b) = split_at_seam(pts, origin);
+        stack.push((a, depth + 1));
+        stack.push((b, depth + 1));
+    }
+}
+
+/// Two non-empty halves of `pts` (>= 2 points): ordered by bearing from
+/// `origin` (measured from the direction of the points' mean, so a cluster
+/// around the origin does not wrap), cut at the largest distance between
+/// neighbours.
+fn split_at_seam(
+    mut pts: Vec<Vector2<f64>>,
+    origin: Vector2<f64>,
+) -> (Vec<Vector2<f64>>, Vec<Vector2<f64>>) {
+    let mean = pts.iter().fold(Vector2::zeros(), |s, p| s + p) / pts.len() as f64 - origin;
+    let base = mean.y.atan2(mean.x);
+    let bearing = |p: &Vector2<f64>| {
+        let d = p - origin;
+        let a = d.y.atan2(d.x) - base;
+        wrap_pi(a)
+    };
+    pts.sort_by(|p, q| bearing(p).total_cmp(&bearing(q)));
+    let cut = (1..pts.len())
+        .max_by(|&i, &j| {
+            (pts[i] - pts[i - 1])
+                .norm_squared()
+                .total_cmp(&(pts[j] - pts[j - 1]).norm_squared())
+        })
+        .unwrap_or(pts.len() / 2);
+    let b = pts.split_off(cut);
+    (pts, b)
+}
+
+/// `a` wrapped into (-pi, pi].
+fn wrap_pi(a: f64) -> f64 {
+    use core::f64::consts::{PI, TAU};
+    let w = a - TAU * (a / TAU).round();
+    if w <= -PI { w + TAU } else { w }
 }
 
 fn cross3(o: Vector2<f64>, a: Vector2<f64>, b: Vector2<f64>) -> f64 {
