@@ -37,6 +37,7 @@ use anyhow::{Result, anyhow};
 use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_controller::{HalfPlane, Side};
 use plotters::coord::Shift;
+use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
@@ -248,34 +249,29 @@ struct Moment<'a> {
     scan: Option<&'a ScanRecord>,
 }
 
-/// Draws a map-like scene into `area`: title, axes, (half-planes of `cycle`),
-/// obstacles, path and footsteps up to `until` (s), robot, start and goal.
-fn draw_scene<DB: DrawingBackend>(
-    area: &DrawingArea<DB, Shift>,
-    scene: &Scene<'_>,
-    layout: MapLayout,
-    moment: Moment<'_>,
-    title: &str,
-    legend: bool,
-) -> Result<()> {
-    let Moment { until, cycle, scan } = moment;
-    let r = scene.r;
-    let lidar = sc_perception(r) == Perception::Lidar;
-    let sc = &r.scenario;
-    let (x0, x1, y0, y1) = scene.bounds;
-    let (w, _) = area.dim_in_pixel();
-    let (title_area, chart_area) = area.split_vertically(layout.title_h);
+/// A map chart in metres (x right, y up) on `chart_area`, with `title`
+/// (text, size relative to the layout's font) centred in `title_area`: the
+/// axes, the labels and the grid of `layout` (`bold`: the major grid colour).
+fn map_chart<'a, DB: DrawingBackend>(
+    title_area: &DrawingArea<DB, Shift>,
+    chart_area: &'a DrawingArea<DB, Shift>,
+    layout: &MapLayout,
+    (title, scale): (&str, f64),
+    (x0, x1, y0, y1): (f64, f64, f64, f64),
+    bold: RGBColor,
+) -> Result<ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>> {
+    let (w, _) = title_area.dim_in_pixel();
     title_area
         .draw_text(
             title,
-            &(FONT, layout.font as f64 * 1.2)
+            &(FONT, layout.font as f64 * scale)
                 .into_font()
                 .color(&BLACK)
                 .pos(Pos::new(HPos::Center, VPos::Center)),
             (w as i32 / 2, layout.title_h as i32 / 2),
         )
         .map_err(e)?;
-    let mut chart = ChartBuilder::on(&chart_area)
+    let mut chart = ChartBuilder::on(chart_area)
         .margin(layout.margin)
         .x_label_area_size(layout.x_label)
         .y_label_area_size(layout.y_label)
@@ -292,9 +288,36 @@ fn draw_scene<DB: DrawingBackend>(
         } else {
             TRANSPARENT.stroke_width(0)
         })
-        .bold_line_style(RGBColor(210, 210, 210))
+        .bold_line_style(bold)
         .draw()
         .map_err(e)?;
+    Ok(chart)
+}
+
+/// Draws a map-like scene into `area`: title, axes, (half-planes of `cycle`),
+/// obstacles, path and footsteps up to `until` (s), robot, start and goal.
+fn draw_scene<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    scene: &Scene<'_>,
+    layout: MapLayout,
+    moment: Moment<'_>,
+    title: &str,
+    legend: bool,
+) -> Result<()> {
+    let Moment { until, cycle, scan } = moment;
+    let r = scene.r;
+    let lidar = sc_perception(r) == Perception::Lidar;
+    let sc = &r.scenario;
+    let (x0, x1, y0, y1) = scene.bounds;
+    let (title_area, chart_area) = area.split_vertically(layout.title_h);
+    let mut chart = map_chart(
+        &title_area,
+        &chart_area,
+        &layout,
+        (title, 1.2),
+        (x0, x1, y0, y1),
+        RGBColor(210, 210, 210),
+    )?;
 
     // LDCBF half-planes of the cycle: each safe side light, intersection dark.
     if let Some(c) = cycle {
@@ -991,32 +1014,17 @@ pub fn planner_png(r: &SimResult, path: &Path) -> Result<()> {
         sc.rrt.resolution,
         sc.rrt.margin
     );
-    title_area
-        .draw_text(
-            &title,
-            &(FONT, layout.font as f64 * 1.1)
-                .into_font()
-                .color(&BLACK)
-                .pos(Pos::new(HPos::Center, VPos::Center)),
-            (cw as i32 / 2, layout.title_h as i32 / 2),
-        )
-        .map_err(e)?;
-    let mut chart = ChartBuilder::on(&chart_area)
-        .margin(layout.margin)
-        .x_label_area_size(layout.x_label)
-        .y_label_area_size(layout.y_label)
-        .build_cartesian_2d(x0..x1, y0..y1)
-        .map_err(e)?;
-    chart
-        .configure_mesh()
-        .x_desc("x [m]")
-        .y_desc("y [m]")
-        .label_style((FONT, layout.font))
-        .axis_desc_style((FONT, layout.font))
-        .light_line_style(TRANSPARENT.stroke_width(0))
-        .bold_line_style(RGBColor(225, 225, 225))
-        .draw()
-        .map_err(e)?;
+    let mut chart = map_chart(
+        &title_area,
+        &chart_area,
+        &MapLayout {
+            fine_grid: false,
+            ..layout
+        },
+        (&title, 1.1),
+        (x0, x1, y0, y1),
+        RGBColor(225, 225, 225),
+    )?;
     // Planning box and occupied cells (row runs as rectangles).
     let (gx0, gy0) = (g.origin.x, g.origin.y);
     let gx1 = gx0 + g.width as f64 * g.resolution;
