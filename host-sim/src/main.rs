@@ -11,6 +11,10 @@
 //! ldcbf-sim deadline [CASES...] [--random N] [--deadline-us D] [--clock-mhz F]
 //!                    [--set k=v ...] [--jobs J] [--instructions FILE]
 //! ```
+//!
+//! Exit status: 0 success; 1 error, with one `error: ...` line on stderr and no
+//! partial output (docs/cli-errors.md); 2 bad arguments (clap); 141 stdout
+//! closed by the reader (no message).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -351,11 +355,10 @@ fn main() -> ExitCode {
         }
         Command::List => {
             let dir = ldcbf_sim::scenario::scenario_dir();
-            let mut text = format!("scenarios in {}:\n", dir.display());
+            outln!("scenarios in {}:", dir.display());
             for (name, desc, _) in ldcbf_sim::scenario::list() {
-                text += &format!("  {name:<10} {desc}\n");
+                outln!("  {name:<10} {desc}");
             }
-            emit(&text);
             ExitCode::SUCCESS
         }
         Command::Qp {
@@ -374,11 +377,10 @@ fn main() -> ExitCode {
                     Err(e) => return fail(e),
                 }
             }
-            let mut text = format!("{}\n", ldcbf_sim::qpbench::CSV_HEADER);
+            outln!("{}", ldcbf_sim::qpbench::CSV_HEADER);
             for r in &rows {
-                text += &format!("{}\n", r.csv());
+                outln!("{}", r.csv());
             }
-            emit(&text);
             ExitCode::SUCCESS
         }
         Command::Run {
@@ -410,17 +412,11 @@ fn main() -> ExitCode {
             };
             match execute_run(&req) {
                 Ok(rep) => {
-                    let mut text = ldcbf_sim::report::human_summary(&rep.summary);
-                    text += &format!(
-                        "wrote {}/: {}\n",
-                        rep.out_dir.display(),
-                        rep.files.join(" ")
-                    );
+                    out!("{}", ldcbf_sim::report::human_summary(&rep.summary));
+                    outln!("wrote {}/: {}", rep.out_dir.display(), rep.files.join(" "));
                     if let Some(d) = export_qps {
-                        text +=
-                            &format!("wrote {} QPs to {}/\n", rep.result.qps.len(), d.display());
+                        outln!("wrote {} QPs to {}/", rep.result.qps.len(), d.display());
                     }
-                    emit(&text);
                     ExitCode::SUCCESS
                 }
                 Err(err) => fail(err),
