@@ -352,10 +352,6 @@ fn merge_and_table_reject_bad_batch_directories() {
             vec!["b/summary.json: field `meta.kind`"],
         ),
         (
-            batch_with("summary.json", Some(b"")),
-            vec!["b/summary.json: empty file"],
-        ),
-        (
             vec![
                 ("b/summary.json/".into(), Vec::new()),
                 ("b/runs.csv".into(), runs.clone()),
