@@ -1,5 +1,6 @@
-//! A malformed scenario gives one clear error (file, field, line) and leaves no
-//! output directory behind.
+//! A malformed scenario or an unusable output location gives one clear error
+//! (file, field, line; or the option and path) and leaves no output directory
+//! behind.
 
 use std::path::Path;
 
@@ -137,4 +138,41 @@ fn bad_planner_and_lidar_settings_are_named() {
         "time_limit = 5.0\n[lidar]\nrays = 360\neps = 0.0",
     ));
     assert!(msg.contains("lidar.eps") && msg.contains(":7:"), "{msg}");
+}
+
+/// An unusable output location fails before the simulation, names the option
+/// and the path, and creates nothing (not even a parent directory).
+#[test]
+fn unusable_output_locations_fail_before_anything_is_written() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("good.toml");
+    std::fs::write(&file, GOOD).unwrap();
+    let taken = tmp.path().join("taken");
+    std::fs::write(&taken, "x").unwrap();
+    let new = tmp.path().join("new/res");
+    let cases: [(Option<std::path::PathBuf>, Option<std::path::PathBuf>, &str); 4] = [
+        (Some(taken.clone()), None, "is a file, not a directory"),
+        (Some(taken.join("sub")), None, "taken is a file"),
+        (Some(new.clone()), Some(taken.clone()), "--export-qps"),
+        (
+            Some(new.clone()),
+            Some(new.join("qps")),
+            "apart from the output directory",
+        ),
+    ];
+    for (out, qps, needle) in cases {
+        let mut req = RunRequest::new(file.to_str().unwrap());
+        req.out = out;
+        req.export_qps = qps;
+        req.plots = false;
+        let msg = format!("{:#}", execute_run(&req).expect_err("must fail"));
+        assert!(msg.contains(needle), "{msg}");
+        let mut left: Vec<_> = std::fs::read_dir(tmp.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect();
+        left.sort();
+        assert_eq!(left, ["good.toml", "taken"], "{msg}");
+        assert_eq!(std::fs::read(&taken).unwrap(), b"x");
+    }
 }

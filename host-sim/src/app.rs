@@ -2,9 +2,9 @@
 //! simulate, write the logs and figures into a temporary directory, and move it
 //! into place only when everything succeeded (see [`crate::report::OutputDir`]).
 
-use std::path::PathBuf;
+use std::path::{Component, Path, PathBuf};
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 
 use crate::plot::PlotOptions;
 use crate::report::{OutputDir, Summary, summarize, write_logs};
@@ -70,7 +70,31 @@ pub struct RunReport {
     pub result: SimResult,
 }
 
-/// Runs the request. Errors (bad scenario, I/O) leave no output directory.
+/// `a` and `b` name the same directory or one lies inside the other (compared
+/// lexically after making them absolute; `..` is resolved lexically too).
+fn overlapping(a: &Path, b: &Path) -> bool {
+    let norm = |p: &Path| -> PathBuf {
+        let abs = std::path::absolute(p).unwrap_or_else(|_| p.to_path_buf());
+        let mut out = PathBuf::new();
+        for c in abs.components() {
+            match c {
+                Component::CurDir => {}
+                Component::ParentDir => {
+                    out.pop();
+                }
+                c => out.push(c),
+            }
+        }
+        out
+    };
+    let (a, b) = (norm(a), norm(b));
+    a.starts_with(&b) || b.starts_with(&a)
+}
+
+/// Runs the request. Errors (bad scenario, an unusable output location, I/O)
+/// leave no output directory: both output directories are checked and created
+/// (as temporary siblings) before the simulation and moved into place only at
+/// the end.
 pub fn execute_run(req: &RunRequest) -> Result<RunReport> {
     let scenario = load(
         &req.scenario,
@@ -87,8 +111,24 @@ pub fn execute_run(req: &RunRequest) -> Result<RunReport> {
         };
         PathBuf::from("out").join(name)
     });
-    let dir = OutputDir::create(&out)
-        .with_context(|| format!("cannot create output directory {}", out.display()))?;
+    if let Some(qdir) = &req.export_qps {
+        if overlapping(qdir, &out) {
+            bail!(
+                "--export-qps {}: must be a directory apart from the output directory {} \
+                 (neither inside the other)",
+                qdir.display(),
+                out.display()
+            );
+        }
+        OutputDir::preflight(qdir).with_context(|| format!("--export-qps {}", qdir.display()))?;
+    }
+    let dir = OutputDir::create(&out).with_context(|| format!("--out {}", out.display()))?;
+    let qd = match &req.export_qps {
+        Some(qdir) => Some(
+            OutputDir::create(qdir).with_context(|| format!("--export-qps {}", qdir.display()))?,
+        ),
+        None => None,
+    };
     let result = run(
         &scenario,
         SimOptions {
@@ -99,19 +139,15 @@ pub fn execute_run(req: &RunRequest) -> Result<RunReport> {
             record_clearance: true,
         },
     )?;
-    if let Some(qdir) = &req.export_qps {
-        let qd = OutputDir::create(qdir)
-            .with_context(|| format!("cannot create QP export directory {}", qdir.display()))?;
+    if let Some(qd) = &qd {
         for (cycle, p) in &result.qps {
             p.write_npz(&qd.path().join(format!("cycle_{cycle:05}.npz")))
                 .map_err(|e| anyhow::anyhow!("{e}"))?;
         }
-        qd.commit()
-            .with_context(|| format!("cannot move the QPs into {}", qdir.display()))?;
     }
     let summary = summarize(&result);
     write_logs(&result, &summary, dir.path(), req.trajectory_every)
-        .with_context(|| format!("writing logs into {}", dir.path().display()))?;
+        .with_context(|| format!("--out {}: cannot write the logs", out.display()))?;
     let mut files: Vec<String> = [
         "summary.json",
         "cycles.csv",
@@ -127,6 +163,11 @@ pub fn execute_run(req: &RunRequest) -> Result<RunReport> {
             ..PlotOptions::default()
         };
         files.extend(crate::plot::render_all(&result, dir.path(), &opts)?);
+    }
+    // Everything is written: move the QPs, then the results, into place.
+    if let (Some(qd), Some(qdir)) = (qd, &req.export_qps) {
+        qd.commit()
+            .with_context(|| format!("cannot move the QPs into {}", qdir.display()))?;
     }
     let out_dir = dir
         .commit()

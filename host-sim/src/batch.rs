@@ -609,8 +609,7 @@ struct SummaryFile {
 }
 
 fn write_dir(out: &Path, meta: &BatchMeta, rows: &[RunRow], agg: &Aggregate) -> Result<PathBuf> {
-    let dir = OutputDir::create(out)
-        .with_context(|| format!("cannot create output directory {}", out.display()))?;
+    let dir = OutputDir::create(out).with_context(|| format!("--out {}", out.display()))?;
     let mut csv = String::from(CSV_HEADER);
     csv.push('\n');
     for r in rows {
@@ -673,6 +672,7 @@ pub fn run_batch(req: &BatchRequest) -> Result<BatchReport> {
         .out
         .clone()
         .unwrap_or_else(|| req.default_out(&first.name, first.planner, first.perception));
+    OutputDir::preflight(&out).with_context(|| format!("--out {}", out.display()))?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(req.jobs)
         .build()
@@ -780,25 +780,62 @@ pub fn run_batch(req: &BatchRequest) -> Result<BatchReport> {
     })
 }
 
-/// Reads a batch directory written by [`run_batch`] or [`merge`].
+/// Reads a batch directory written by [`run_batch`] or [`merge`]. Errors name
+/// the directory or file (and line) and say what is wrong: not a directory, no
+/// `summary.json`, not a batch summary (another schema, a truncated or binary
+/// file), a `runs.csv` with a foreign header, a malformed or truncated row.
 pub fn read_dir(dir: &Path) -> Result<(BatchMeta, Aggregate, Vec<RunRow>)> {
-    if !dir.is_dir() {
-        bail!("{}: no such batch directory", dir.display());
+    match std::fs::metadata(dir) {
+        Ok(m) if m.is_dir() => {}
+        Ok(_) => bail!(
+            "{}: is a file, not a batch directory (give the directory written by `batch` or `merge`)",
+            dir.display()
+        ),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            bail!("{}: no such batch directory", dir.display())
+        }
+        Err(e) => bail!("{}: {e}", dir.display()),
     }
-    let sj = dir.join("summary.json");
-    let text =
-        std::fs::read_to_string(&sj).with_context(|| format!("{}: cannot read", sj.display()))?;
+    let read = |name: &str| -> Result<(PathBuf, String)> {
+        let p = dir.join(name);
+        if !p.exists() {
+            bail!(
+                "{}: not a batch directory (no {name}; give the directory written by `batch` or `merge`)",
+                dir.display()
+            );
+        }
+        let bytes = std::fs::read(&p).map_err(|e| anyhow!("{}: cannot read: {e}", p.display()))?;
+        let text = String::from_utf8(bytes)
+            .map_err(|_| anyhow!("{}: not a text file (invalid UTF-8)", p.display()))?;
+        if text.trim().is_empty() {
+            bail!("{}: empty file", p.display());
+        }
+        Ok((p, text))
+    };
+    let (sj, text) = read("summary.json")?;
     let sf: SummaryFile = serde_json::from_str(&text)
         .map_err(|e| anyhow!("{}: not a batch summary: {e}", sj.display()))?;
     if sf.meta.kind != "ldcbf-sim batch" {
-        bail!("{}: not written by ldcbf-sim batch", sj.display());
+        bail!(
+            "{}: field `meta.kind` is {:?}, not \"ldcbf-sim batch\"",
+            sj.display(),
+            sf.meta.kind
+        );
     }
-    let csv = dir.join("runs.csv");
-    let text =
-        std::fs::read_to_string(&csv).with_context(|| format!("{}: cannot read", csv.display()))?;
+    let (csv, text) = read("runs.csv")?;
     let mut lines = text.lines();
     if lines.next() != Some(CSV_HEADER) {
-        bail!("{}: unexpected header", csv.display());
+        bail!(
+            "{}:1: unexpected header (not a runs.csv written by ldcbf-sim batch)",
+            csv.display()
+        );
+    }
+    if !text.ends_with('\n') {
+        bail!(
+            "{}:{}: the last line ends without a newline (truncated file?)",
+            csv.display(),
+            text.lines().count()
+        );
     }
     let mut rows = Vec::new();
     for (i, l) in lines.enumerate() {

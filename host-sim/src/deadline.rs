@@ -438,8 +438,33 @@ pub struct FirmwareInstructions {
 /// `tests/firmware_qemu.rs`). Any malformed line is an error naming the file
 /// and line.
 pub fn read_instructions(path: &Path) -> Result<FirmwareInstructions> {
-    let text = std::fs::read_to_string(path)
+    if path.is_dir() {
+        bail!(
+            "{}: is a directory, not an instruction CSV (firmware/target/instructions.csv)",
+            path.display()
+        );
+    }
+    let bytes = std::fs::read(path)
         .with_context(|| format!("{}: cannot read the instruction counts", path.display()))?;
+    let text = String::from_utf8(bytes).map_err(|_| {
+        anyhow!(
+            "{}: not a text file (invalid UTF-8), expected the instruction CSV",
+            path.display()
+        )
+    })?;
+    if text.trim().is_empty() {
+        bail!(
+            "{}: empty file, expected the header {INSTRUCTIONS_HEADER:?}",
+            path.display()
+        );
+    }
+    if !text.ends_with('\n') {
+        bail!(
+            "{}:{}: the last line ends without a newline (truncated file?)",
+            path.display(),
+            text.lines().count()
+        );
+    }
     let mut lines = text.lines();
     let header = lines.next().unwrap_or("").trim();
     if header != INSTRUCTIONS_HEADER {

@@ -11,6 +11,10 @@
 //! ldcbf-sim deadline [CASES...] [--random N] [--deadline-us D] [--clock-mhz F]
 //!                    [--set k=v ...] [--jobs J] [--instructions FILE]
 //! ```
+//!
+//! Exit status: 0 success; 1 error, with one `error: ...` line on stderr and no
+//! partial output (docs/cli-errors.md); 2 bad arguments (clap); 141 stdout
+//! closed by the reader (no message).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -193,14 +197,56 @@ fn parse_set(s: &str) -> Result<(String, String), String> {
     Ok((k.to_string(), v.trim().to_string()))
 }
 
+/// Exit status when stdout is closed early (`ldcbf-sim list | head -1`): the
+/// shell's status of a process killed by SIGPIPE (128 + 13), without a message,
+/// as `cat`, `grep` and friends end; the output directories are complete by the
+/// time anything is printed.
+const EXIT_BROKEN_PIPE: u8 = 141;
+
+/// Writes `text` to stdout. A closed stdout (broken pipe) ends the process
+/// quietly with [`EXIT_BROKEN_PIPE`]; any other write error ends it with one
+/// error line and status 1. (`print!` would panic instead.)
+fn emit(text: &str) {
+    use std::io::Write as _;
+    let mut out = std::io::stdout().lock();
+    if let Err(e) = out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        if e.kind() == std::io::ErrorKind::BrokenPipe {
+            std::process::exit(i32::from(EXIT_BROKEN_PIPE));
+        }
+        drop(out);
+        let _ = fail(anyhow::anyhow!("cannot write to stdout: {e}"));
+        std::process::exit(1);
+    }
+}
+
+/// `print!` through [`emit`].
+macro_rules! out {
+    ($($t:tt)*) => { emit(&format!($($t)*)) };
+}
+
+/// `println!` through [`emit`].
+macro_rules! outln {
+    ($($t:tt)*) => { emit(&format!("{}\n", format_args!($($t)*))) };
+}
+
+/// Prints the error as one line `error: ...` on stderr (the causes joined with
+/// `: `; line breaks inside a message become `; `) and returns status 1. A
+/// closed stderr is ignored.
 fn fail(err: anyhow::Error) -> ExitCode {
-    eprintln!("error: {err:#}");
+    use std::io::Write as _;
+    let msg = format!("{err:#}");
+    let one_line: Vec<&str> = msg
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.is_empty())
+        .collect();
+    let _ = writeln!(std::io::stderr().lock(), "error: {}", one_line.join("; "));
     ExitCode::FAILURE
 }
 
 fn print_batch(rep: &ldcbf_sim::batch::BatchReport) {
     let a = &rep.aggregate;
-    println!(
+    outln!(
         "{} seeds {} shard {}: {} runs, {} successful, {} collisions, {} stuck, {} time limit, {} diverged; wall time {:.1} s",
         rep.meta.scenario,
         rep.meta.seeds,
@@ -213,7 +259,7 @@ fn print_batch(rep: &ldcbf_sim::batch::BatchReport) {
         a.diverged,
         rep.meta.wall_time_s
     );
-    println!(
+    outln!(
         "wrote {}/: runs.csv summary.json summary.md",
         rep.out_dir.display()
     );
@@ -277,7 +323,7 @@ fn main() -> ExitCode {
                     Err(e) => return fail(e),
                 }
             }
-            print!("{}", ldcbf_sim::batch::markdown_table(&cols));
+            out!("{}", ldcbf_sim::batch::markdown_table(&cols));
             ExitCode::SUCCESS
         }
         Command::Deadline {
@@ -301,7 +347,7 @@ fn main() -> ExitCode {
             req.instructions = instructions;
             match ldcbf_sim::deadline::run_deadline(&req) {
                 Ok(rep) => {
-                    print!("{}", ldcbf_sim::deadline::markdown(&rep));
+                    out!("{}", ldcbf_sim::deadline::markdown(&rep));
                     ExitCode::SUCCESS
                 }
                 Err(e) => fail(e),
@@ -309,9 +355,9 @@ fn main() -> ExitCode {
         }
         Command::List => {
             let dir = ldcbf_sim::scenario::scenario_dir();
-            println!("scenarios in {}:", dir.display());
+            outln!("scenarios in {}:", dir.display());
             for (name, desc, _) in ldcbf_sim::scenario::list() {
-                println!("  {name:<10} {desc}");
+                outln!("  {name:<10} {desc}");
             }
             ExitCode::SUCCESS
         }
@@ -331,9 +377,9 @@ fn main() -> ExitCode {
                     Err(e) => return fail(e),
                 }
             }
-            println!("{}", ldcbf_sim::qpbench::CSV_HEADER);
+            outln!("{}", ldcbf_sim::qpbench::CSV_HEADER);
             for r in &rows {
-                println!("{}", r.csv());
+                outln!("{}", r.csv());
             }
             ExitCode::SUCCESS
         }
@@ -366,17 +412,14 @@ fn main() -> ExitCode {
             };
             match execute_run(&req) {
                 Ok(rep) => {
-                    print!("{}", ldcbf_sim::report::human_summary(&rep.summary));
-                    println!("wrote {}/: {}", rep.out_dir.display(), rep.files.join(" "));
+                    out!("{}", ldcbf_sim::report::human_summary(&rep.summary));
+                    outln!("wrote {}/: {}", rep.out_dir.display(), rep.files.join(" "));
                     if let Some(d) = export_qps {
-                        println!("wrote {} QPs to {}/", rep.result.qps.len(), d.display());
+                        outln!("wrote {} QPs to {}/", rep.result.qps.len(), d.display());
                     }
                     ExitCode::SUCCESS
                 }
-                Err(err) => {
-                    eprintln!("error: {err:#}");
-                    ExitCode::FAILURE
-                }
+                Err(err) => fail(err),
             }
         }
     }

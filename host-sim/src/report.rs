@@ -504,51 +504,104 @@ status,source,iterations,active_set,compute_ns,max_violation,cost,min_h0,relax_g
 /// An output directory written atomically: files go into a hidden temporary
 /// sibling (`.<name>.tmp-<pid>`), which [`OutputDir::commit`] renames onto the
 /// final path. An existing final path is replaced only if it is empty or holds a
-/// previous run (a `summary.json`); any other existing path is refused by
+/// previous output (a `summary.json`, or only `cycle_NNNNN.npz` files of a
+/// previous `run --export-qps`); any other existing path is refused by
 /// [`OutputDir::create`], before anything is written. Dropped without `commit`,
-/// the temporary directory is removed, so a failed run leaves nothing behind.
+/// the temporary directory is removed, and so are the parent directories that
+/// `create` made, so a failed command leaves nothing behind.
+///
+/// Errors of `create` and [`OutputDir::preflight`] do not repeat the path; the
+/// caller names it (e.g. `--out DIR: ...`).
 #[derive(Debug)]
 pub struct OutputDir {
     final_path: PathBuf,
     tmp: PathBuf,
+    /// Parent directories made by `create`, innermost first.
+    made: Vec<PathBuf>,
     committed: bool,
 }
 
 impl OutputDir {
-    /// Creates the temporary directory for `final_path` (and its parents).
-    pub fn create(final_path: &Path) -> std::io::Result<Self> {
-        let name = final_path
+    /// Checks, without creating anything, that [`OutputDir::create`] can make
+    /// `final_path`: it has a usable last component, it is not an existing file
+    /// or a directory that is not a previous output, and its nearest existing
+    /// ancestor is a directory. Commands that run for long call this first.
+    pub fn preflight(final_path: &Path) -> std::io::Result<()> {
+        Self::plan(final_path).map(|_| ())
+    }
+
+    /// The checks of [`OutputDir::preflight`]; returns the parent and the
+    /// parent directories that do not exist yet (innermost first).
+    fn plan(final_path: &Path) -> std::io::Result<(PathBuf, String, Vec<PathBuf>)> {
+        let err = |m: String| Err(std::io::Error::other(m));
+        let Some(name) = final_path
             .file_name()
             .and_then(|s| s.to_str())
             .filter(|s| !s.is_empty() && *s != "." && *s != "..")
-            .ok_or_else(|| {
-                std::io::Error::other(format!(
-                    "output directory {} has no usable final component",
-                    final_path.display()
-                ))
-            })?;
+        else {
+            return err("has no usable last component (give a directory name)".into());
+        };
         let parent = final_path
             .parent()
             .filter(|p| !p.as_os_str().is_empty())
-            .unwrap_or(Path::new("."));
-        if final_path.exists() && !replaceable(final_path) {
-            return Err(std::io::Error::other(format!(
-                "refusing to replace {}: it exists and is not a previous ldcbf-sim output \
-                 (no summary.json); choose another --out",
-                final_path.display()
-            )));
+            .unwrap_or(Path::new("."))
+            .to_path_buf();
+        match std::fs::metadata(final_path) {
+            Ok(m) if !m.is_dir() => return err("exists and is a file, not a directory".into()),
+            Ok(_) if !replaceable(final_path) => {
+                return err(
+                    "exists and is not a previous ldcbf-sim output (no summary.json); \
+                     refusing to replace it"
+                        .into(),
+                );
+            }
+            _ => {}
         }
-        std::fs::create_dir_all(parent)?;
-        let tmp = parent.join(format!(".{name}.tmp-{}", std::process::id()));
-        if tmp.exists() {
-            std::fs::remove_dir_all(&tmp)?;
+        let mut missing = Vec::new();
+        let mut p = parent.as_path();
+        loop {
+            match std::fs::metadata(p) {
+                Ok(m) if m.is_dir() => break,
+                Ok(_) => return err(format!("{} is a file, not a directory", p.display())),
+                Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                    missing.push(p.to_path_buf());
+                    match p.parent().filter(|q| !q.as_os_str().is_empty()) {
+                        Some(q) => p = q,
+                        None => break,
+                    }
+                }
+                Err(e) => return err(format!("{}: {e}", p.display())),
+            }
         }
-        std::fs::create_dir(&tmp)?;
-        Ok(OutputDir {
+        Ok((parent, name.to_string(), missing))
+    }
+
+    /// Creates the temporary directory for `final_path` (and its parents).
+    pub fn create(final_path: &Path) -> std::io::Result<Self> {
+        let (parent, name, missing) = Self::plan(final_path)?;
+        let mut dir = OutputDir {
             final_path: final_path.to_path_buf(),
-            tmp,
+            tmp: parent.join(format!(".{name}.tmp-{}", std::process::id())),
+            made: Vec::new(),
             committed: false,
-        })
+        };
+        // Outermost first, remembered so that `drop` can remove them again.
+        for p in missing.iter().rev() {
+            std::fs::create_dir(p).map_err(|e| {
+                std::io::Error::other(format!("cannot create {}: {e}", p.display()))
+            })?;
+            dir.made.insert(0, p.clone());
+        }
+        if dir.tmp.exists() {
+            std::fs::remove_dir_all(&dir.tmp)?;
+        }
+        std::fs::create_dir(&dir.tmp).map_err(|e| {
+            std::io::Error::other(format!(
+                "cannot create the temporary directory {}: {e}",
+                dir.tmp.display()
+            ))
+        })?;
+        Ok(dir)
     }
 
     /// Where to write the files now.
@@ -561,10 +614,9 @@ impl OutputDir {
         let mut old = None;
         if self.final_path.exists() {
             if !replaceable(&self.final_path) {
-                return Err(std::io::Error::other(format!(
-                    "refusing to replace {}: not a previous ldcbf-sim output",
-                    self.final_path.display()
-                )));
+                return Err(std::io::Error::other(
+                    "appeared meanwhile and is not a previous ldcbf-sim output; refusing to replace it",
+                ));
             }
             let trash = self.tmp.with_extension("old");
             std::fs::rename(&self.final_path, &trash)?;
@@ -579,17 +631,32 @@ impl OutputDir {
     }
 }
 
-/// An existing output path may be replaced: an empty directory or a previous run.
+/// An existing output path may be replaced: an empty directory, a previous run
+/// or batch (a `summary.json`) or a previous QP export (only `cycle_NNNNN.npz`).
 fn replaceable(p: &Path) -> bool {
+    let is_qp = |n: &std::ffi::OsStr| {
+        n.to_str().is_some_and(|n| {
+            n.strip_prefix("cycle_")
+                .and_then(|r| r.strip_suffix(".npz"))
+                .is_some_and(|d| !d.is_empty() && d.bytes().all(|b| b.is_ascii_digit()))
+        })
+    };
     p.is_dir()
         && (p.join("summary.json").is_file()
-            || std::fs::read_dir(p).is_ok_and(|mut d| d.next().is_none()))
+            || std::fs::read_dir(p).is_ok_and(|d| {
+                d.into_iter()
+                    .all(|e| e.is_ok_and(|e| is_qp(&e.file_name()) && e.path().is_file()))
+            }))
 }
 
 impl Drop for OutputDir {
     fn drop(&mut self) {
         if !self.committed {
             let _ = std::fs::remove_dir_all(&self.tmp);
+            // Only empty directories go (`remove_dir` refuses others).
+            for p in &self.made {
+                let _ = std::fs::remove_dir(p);
+            }
         }
     }
 }
@@ -619,7 +686,7 @@ mod tests {
             std::fs::write(d.path().join("x"), "1").unwrap();
         }
         assert!(!target.exists());
-        assert_eq!(std::fs::read_dir(&base).unwrap().count(), 0);
+        assert!(!base.exists(), "the parent made for it is gone too");
         let d = OutputDir::create(&target).unwrap();
         std::fs::write(d.path().join("x"), "1").unwrap();
         let p = d.commit().unwrap();
@@ -633,5 +700,41 @@ mod tests {
         assert!(p.join("y").is_file() && !p.join("x").exists());
         assert_eq!(std::fs::read_dir(&base).unwrap().count(), 1);
         std::fs::remove_dir_all(&base).unwrap();
+    }
+
+    #[test]
+    fn failed_outputs_leave_no_parent_and_files_are_refused() {
+        let base = tempfile::tempdir().unwrap();
+        let b = base.path();
+        // Parents made for an output that is never committed are removed again.
+        {
+            let d = OutputDir::create(&b.join("a/b/c")).unwrap();
+            std::fs::write(d.path().join("x"), "1").unwrap();
+        }
+        assert_eq!(std::fs::read_dir(b).unwrap().count(), 0);
+        // A parent that already existed stays.
+        std::fs::create_dir(b.join("keep")).unwrap();
+        drop(OutputDir::create(&b.join("keep/new/run")).unwrap());
+        assert_eq!(std::fs::read_dir(b.join("keep")).unwrap().count(), 0);
+        // Files are never replaced, nor used as parents; nothing is created.
+        std::fs::write(b.join("f"), "data").unwrap();
+        for (p, msg) in [
+            ("f", "is a file"),
+            ("f/x", "is a file, not a directory"),
+            ("keep/..", "no usable last component"),
+        ] {
+            let e = OutputDir::create(&b.join(p)).unwrap_err().to_string();
+            assert!(e.contains(msg), "{p}: {e}");
+            assert!(OutputDir::preflight(&b.join(p)).is_err());
+        }
+        assert_eq!(std::fs::read(b.join("f")).unwrap(), b"data");
+        assert_eq!(std::fs::read_dir(b).unwrap().count(), 2);
+        // A previous QP export (only cycle_NNNNN.npz) is replaced; with another
+        // file in it, it is not.
+        std::fs::create_dir(b.join("qps")).unwrap();
+        std::fs::write(b.join("qps/cycle_00001.npz"), "").unwrap();
+        OutputDir::preflight(&b.join("qps")).unwrap();
+        std::fs::write(b.join("qps/notes.txt"), "").unwrap();
+        assert!(OutputDir::preflight(&b.join("qps")).is_err());
     }
 }

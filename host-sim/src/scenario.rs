@@ -702,7 +702,9 @@ pub fn resolve(spec: &str) -> Result<PathBuf, ScenarioError> {
             file: path.display().to_string(),
             field: "(file)".into(),
             line: None,
-            message: if is_path {
+            message: if path.is_dir() {
+                "is a directory, not a scenario file".into()
+            } else if is_path {
                 "no such file".into()
             } else {
                 format!(
