@@ -11,6 +11,8 @@
 //!   the subgoals (SPEC 5);
 //! * [`perception`]: simulated 2D LiDAR, DBSCAN and one convex obstacle per
 //!   cluster, for unknown maps (SPEC 6);
+//! * [`disturbance`]: pushes, CoM height mismatch, foot placement error and
+//!   state estimation noise (the `[disturbance]` table);
 //! * [`sim`]: the closed loop (controller at 20 Hz or once per step, with the own
 //!   QP solver or Clarabel);
 //! * [`report`]: `cycles.csv`, `footsteps.csv`, `trajectory.csv`, `summary.json`
@@ -29,6 +31,7 @@
 pub mod app;
 pub mod batch;
 pub mod deadline;
+pub mod disturbance;
 pub mod perception;
 pub mod planner;
 pub mod plant;
