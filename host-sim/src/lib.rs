@@ -23,6 +23,8 @@
 //! * [`qpbench`]: `ldcbf-sim qp solve`, our solver on npz QP files, timed;
 //! * [`batch`]: `ldcbf-sim batch` and `merge`: many seeds of a scenario family in
 //!   parallel, sharded across machines, one CSV row per run and a Markdown table;
+//! * [`robustness`]: `ldcbf-sim robustness`: success and true CoM clearance
+//!   under each disturbance, with and without the safety margin `delta`;
 //! * [`deadline`]: `ldcbf-sim deadline`: per-cycle compute time, solver
 //!   iterations and (from the firmware) instructions against a real-time deadline.
 //!
@@ -38,6 +40,7 @@ pub mod plant;
 pub mod plot;
 pub mod qpbench;
 pub mod report;
+pub mod robustness;
 pub mod scenario;
 pub mod sim;
 

@@ -10,6 +10,7 @@
 //! ldcbf-sim table DIR...
 //! ldcbf-sim deadline [CASES...] [--random N] [--deadline-us D] [--clock-mhz F]
 //!                    [--set k=v ...] [--jobs J] [--instructions FILE]
+//! ldcbf-sim robustness [CASES...] [--random N] [--delta D,D,...] [--jobs J] [--out DIR]
 //! ```
 
 use std::path::PathBuf;
@@ -147,6 +148,36 @@ enum Command {
         /// tests/firmware_qemu.rs to firmware/target/instructions.csv).
         #[arg(long, value_name = "FILE")]
         instructions: Option<PathBuf>,
+    },
+    /// Robustness study: success, falls and true CoM clearance under pushes,
+    /// CoM height mismatch, foot placement error and state estimation noise
+    /// (two magnitudes each, see docs/robustness.md), for each safety margin
+    /// delta, as Markdown tables. Disturbances of a single run are set with
+    /// `run --set disturbance.<field>=value`; fields (body frame = x along the
+    /// heading, y to its left): seed; push_time [s], push_period [s, 0 = once],
+    /// push_forward, push_lateral [m/s, body frame], push_alternate [bool];
+    /// plant_com_height [m]; foot_sigma [m, per world axis]; noise_position [m],
+    /// noise_velocity [m/s], noise_heading [rad].
+    Robustness {
+        /// Cases `NAME[+rrt_star|+none][@SEED]` [default: the deadline study's
+        /// shipped cases].
+        #[arg(value_name = "CASES")]
+        cases: Vec<ldcbf_sim::deadline::Case>,
+        /// Also run seeds 0..N of the `random` family.
+        #[arg(long, default_value_t = 200, value_name = "N")]
+        random: u64,
+        /// Safety margins delta, m, comma separated (each replaces the files' own).
+        #[arg(long = "delta", value_delimiter = ',', default_values_t = ldcbf_sim::robustness::DEFAULT_DELTAS)]
+        deltas: Vec<f64>,
+        /// Worker threads [default: one per core].
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Also write DIR/runs.csv (every run) and DIR/table.md.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
     },
 }
 
@@ -302,6 +333,33 @@ fn main() -> ExitCode {
             match ldcbf_sim::deadline::run_deadline(&req) {
                 Ok(rep) => {
                     print!("{}", ldcbf_sim::deadline::markdown(&rep));
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail(e),
+            }
+        }
+        Command::Robustness {
+            cases,
+            random,
+            deltas,
+            jobs,
+            out,
+            quiet,
+        } => {
+            let mut req = ldcbf_sim::robustness::RobustnessRequest::new();
+            if !cases.is_empty() {
+                req.cases = cases;
+            }
+            req.random = random;
+            req.deltas = deltas;
+            if let Some(j) = jobs {
+                req.jobs = j;
+            }
+            req.out = out;
+            req.progress = !quiet;
+            match ldcbf_sim::robustness::run_robustness(&req) {
+                Ok(rep) => {
+                    print!("{}", ldcbf_sim::robustness::markdown(&rep));
                     ExitCode::SUCCESS
                 }
                 Err(e) => fail(e),
