@@ -27,7 +27,11 @@ fn a_moderate_push_on_simple_is_recovered_from() {
     let rep = execute_run(&req).unwrap();
     let s = &rep.summary;
     assert_eq!(s.outcome, "goal_reached");
-    assert!(s.success, "collision: min clearance {:?}", s.min_com_clearance);
+    assert!(
+        s.success,
+        "collision: min clearance {:?}",
+        s.min_com_clearance
+    );
     let clearance = s.min_com_clearance.expect("simple has obstacles");
     assert!(clearance.is_finite() && clearance >= 0.0, "{clearance}");
     let d = s.disturbance.as_ref().expect("a push is a disturbance");
@@ -37,8 +41,14 @@ fn a_moderate_push_on_simple_is_recovered_from() {
     assert!(((dv[0] * dv[0] + dv[1] * dv[1]).sqrt() - 0.1).abs() < 1e-12);
     // summary.json on disk carries the push event and the true clearance.
     let json = std::fs::read_to_string(rep.out_dir.join("summary.json")).unwrap();
-    assert!(json.contains("\"pushes\": [") && json.contains("\"tick\": 3010"), "{json}");
-    assert!(json.contains(&format!("\"min_com_clearance\": {clearance}")), "{json}");
+    assert!(
+        json.contains("\"pushes\": [") && json.contains("\"tick\": 3010"),
+        "{json}"
+    );
+    assert!(
+        json.contains(&format!("\"min_com_clearance\": {clearance}")),
+        "{json}"
+    );
     // The undisturbed walk is a different one (the push mattered).
     let mut base = RunRequest::new("simple");
     base.out = Some(tmp.path().join("base"));
@@ -53,7 +63,11 @@ fn a_moderate_push_on_simple_is_recovered_from() {
 fn a_bad_disturbance_field_is_refused_by_name() {
     for (k, v, field) in [
         ("disturbance.foot_sigma", "-0.01", "disturbance.foot_sigma"),
-        ("disturbance.noise_position", "inf", "disturbance.noise_position"),
+        (
+            "disturbance.noise_position",
+            "inf",
+            "disturbance.noise_position",
+        ),
         ("disturbance.push_forward", "0.2", "disturbance.push_time"),
         ("disturbance.pushh_time", "1.0", "pushh_time"),
     ] {
@@ -89,7 +103,10 @@ fn robustness_study_counts_a_small_grid() {
         assert_eq!(st.runs, 2);
         assert!(st.min_clearance.is_finite());
         assert_eq!(
-            st.success + st.falls + st.stuck + st.time_limit
+            st.success
+                + st.falls
+                + st.stuck
+                + st.time_limit
                 + cell
                     .iter()
                     .filter(|r| !r.success && r.fall_time.is_none() && r.collision)
@@ -99,5 +116,5 @@ fn robustness_study_counts_a_small_grid() {
         );
     }
     let md = ldcbf_sim::robustness::markdown(&rep);
-    assert!(md.contains("| foot | sigma 5 mm | 0.1 |"), "{md}");
+    assert!(md.contains("| foot | sigma 5 mm | 0.1 | "), "{md}");
 }

@@ -157,9 +157,7 @@ impl DisturbanceParams {
         self.has_push()
             || self.has_noise()
             || self.foot_sigma > 0.0
-            || self
-                .plant_com_height
-                .is_some_and(|h| h != model_com_height)
+            || self.plant_com_height.is_some_and(|h| h != model_com_height)
     }
 }
 

@@ -10,7 +10,8 @@
 //! ldcbf-sim table DIR...
 //! ldcbf-sim deadline [CASES...] [--random N] [--deadline-us D] [--clock-mhz F]
 //!                    [--set k=v ...] [--jobs J] [--instructions FILE]
-//! ldcbf-sim robustness [CASES...] [--random N] [--delta D,D,...] [--jobs J] [--out DIR]
+//! ldcbf-sim robustness [CASES...] [--random N] [--delta D,D,...] [--set k=v ...]
+//!                      [--jobs J] [--out DIR]
 //! ```
 
 use std::path::PathBuf;
@@ -169,6 +170,9 @@ enum Command {
         /// Safety margins delta, m, comma separated (each replaces the files' own).
         #[arg(long = "delta", value_delimiter = ',', default_values_t = ldcbf_sim::robustness::DEFAULT_DELTAS)]
         deltas: Vec<f64>,
+        /// Override a scenario field for every run (as for `run`), e.g. `l_max=0.3`.
+        #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_set)]
+        sets: Vec<(String, String)>,
         /// Worker threads [default: one per core].
         #[arg(long)]
         jobs: Option<usize>,
@@ -202,7 +206,8 @@ enum QpCommand {
 #[derive(clap::Args)]
 struct LoopArgs {
     /// Override a scenario field (for every run): `key=value` with a TOML value,
-    /// e.g. `delta=0.3`, `controller.gamma=0.5`, `time_limit=200`, `goal=[5,5]`.
+    /// e.g. `delta=0.3`, `controller.gamma=0.5`, `time_limit=200`, `goal=[5,5]`,
+    /// `disturbance.push_lateral=0.1` (disturbance fields: `robustness --help`).
     #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_set)]
     sets: Vec<(String, String)>,
     /// QP solver inside the controller.
@@ -342,6 +347,7 @@ fn main() -> ExitCode {
             cases,
             random,
             deltas,
+            sets,
             jobs,
             out,
             quiet,
@@ -352,6 +358,7 @@ fn main() -> ExitCode {
             }
             req.random = random;
             req.deltas = deltas;
+            req.sets = sets;
             if let Some(j) = jobs {
                 req.jobs = j;
             }

@@ -15,15 +15,17 @@
 //! range (100 m/s, `Outcome::Diverged`), tens of metres later, so the study
 //! declares the robot **fallen** at the first 1 kHz sample where the horizontal
 //! CoM offset from the stance foot exceeds [`FALL_OFFSET_RATIO`] times the
-//! plant's CoM height (a 45 degree lean: far outside the LIP's validity), or on
-//! divergence; clearance and collisions are counted up to the fall only (what
-//! the CoM crosses while flying away says nothing about the barrier).
+//! plant's CoM height (a 27 degree lean, 1.7 times the largest offset of the
+//! undisturbed walks: outside the LIP's validity), or on divergence; clearance
+//! and collisions are counted up to the fall only (what the CoM crosses while
+//! flying away says nothing about the barrier).
 //!
 //! Per cell (condition x delta x group, the groups being the shipped cases and
-//! the random seeds): runs, success (goal reached, no collision), collisions
-//! (some CoM sample inside a true obstacle before any fall), falls, stuck, time
-//! limit, and the minimum, 5th percentile (nearest rank) and median over runs of
-//! each run's minimum true CoM clearance (m).
+//! the random seeds): runs, success (goal reached, no collision, no fall),
+//! collisions (some CoM sample inside a true obstacle before any fall), of them
+//! in runs that never fell, falls, stuck, time limit, the minimum over all runs
+//! of each run's minimum true CoM clearance before any fall (m), and the minimum
+//! and 5th percentile (nearest rank) over the runs that never fell.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -39,8 +41,9 @@ use crate::scenario::Scenario;
 use crate::sim::{Outcome, SimOptions, SimResult, run};
 
 /// Fall threshold: horizontal CoM offset from the stance foot over the plant's
-/// CoM height (1 = 45 degrees of lean).
-pub const FALL_OFFSET_RATIO: f64 = 1.0;
+/// CoM height (0.5: 27 degrees of lean; the undisturbed walks of the shipped
+/// scenarios stay below 0.3).
+pub const FALL_OFFSET_RATIO: f64 = 0.5;
 
 /// The margins of the default study, m: the paper's 0 and two positive ones.
 pub const DEFAULT_DELTAS: [f64; 3] = [0.0, 0.05, 0.1];
@@ -87,8 +90,16 @@ pub fn default_conditions() -> Vec<Condition> {
         cond("none", "-", &[]),
         cond("push", "0.1 m/s every 2 s", &push("0.1")),
         cond("push", "0.3 m/s every 2 s", &push("0.3")),
-        cond("height", "H = 0.95 m (-5 %)", &[("plant_com_height", "0.95")]),
-        cond("height", "H = 0.90 m (-10 %)", &[("plant_com_height", "0.9")]),
+        cond(
+            "height",
+            "H = 0.95 m (-5 %)",
+            &[("plant_com_height", "0.95")],
+        ),
+        cond(
+            "height",
+            "H = 0.90 m (-10 %)",
+            &[("plant_com_height", "0.9")],
+        ),
         cond("foot", "sigma 5 mm", &[("foot_sigma", "0.005")]),
         cond("foot", "sigma 2 cm", &[("foot_sigma", "0.02")]),
         cond(
@@ -123,6 +134,9 @@ pub struct RobustnessRequest {
     pub conditions: Vec<Condition>,
     /// Margins `delta`, m.
     pub deltas: Vec<f64>,
+    /// Overrides for every run (`--set`), applied before the condition's and
+    /// the delta.
+    pub sets: Vec<(String, String)>,
     /// Worker threads (>= 1).
     pub jobs: usize,
     /// Progress bar on stderr.
@@ -140,6 +154,7 @@ impl RobustnessRequest {
             random: 200,
             conditions: default_conditions(),
             deltas: DEFAULT_DELTAS.to_vec(),
+            sets: Vec::new(),
             jobs: std::thread::available_parallelism().map_or(1, |n| n.get()),
             progress: false,
             out: None,
@@ -201,7 +216,13 @@ pub fn fall_and_clearance(r: &SimResult, plant_com_height: f64) -> (Option<f64>,
     (fall, min_c)
 }
 
-fn one_run(sc: &Scenario, condition: usize, delta: f64, group: &'static str, label: String) -> Result<RobustRun> {
+fn one_run(
+    sc: &Scenario,
+    condition: usize,
+    delta: f64,
+    group: &'static str,
+    label: String,
+) -> Result<RobustRun> {
     let opts = SimOptions {
         record_scans: false,
         ..SimOptions::default()
@@ -238,23 +259,36 @@ pub struct CellStats {
     pub success: usize,
     /// Runs with a collision before any fall.
     pub collisions: usize,
+    /// Runs that never fell and had a collision.
+    pub collisions_upright: usize,
     /// Runs that fell.
     pub falls: usize,
     /// Runs that ended stuck.
     pub stuck: usize,
     /// Runs that hit the time limit.
     pub time_limit: usize,
-    /// Minimum over runs of the minimum clearance, m.
+    /// Minimum over all runs of the minimum clearance before any fall, m.
     pub min_clearance: f64,
-    /// 5th percentile (nearest rank) over runs of the minimum clearance, m.
-    pub p5_clearance: f64,
-    /// Median over runs of the minimum clearance, m.
-    pub median_clearance: f64,
+    /// Minimum over the runs that never fell of the minimum clearance, m (NaN
+    /// if every run fell).
+    pub min_clearance_upright: f64,
+    /// 5th percentile (nearest rank) of the same, m.
+    pub p5_clearance_upright: f64,
+    /// Median of the same, m.
+    pub median_clearance_upright: f64,
 }
 
 /// Statistics of a set of runs.
 pub fn cell_stats(runs: &[&RobustRun]) -> CellStats {
-    let mut c: Vec<f64> = runs.iter().map(|r| r.min_clearance).collect();
+    let min_all = runs
+        .iter()
+        .map(|r| r.min_clearance)
+        .fold(f64::INFINITY, f64::min);
+    let mut c: Vec<f64> = runs
+        .iter()
+        .filter(|r| r.fall_time.is_none())
+        .map(|r| r.min_clearance)
+        .collect();
     c.sort_by(f64::total_cmp);
     let rank = |p: f64| {
         if c.is_empty() {
@@ -269,12 +303,14 @@ pub fn cell_stats(runs: &[&RobustRun]) -> CellStats {
         runs: runs.len(),
         success: count(&|r| r.success),
         collisions: count(&|r| r.collision),
+        collisions_upright: count(&|r| r.collision && r.fall_time.is_none()),
         falls: count(&|r| r.fall_time.is_some()),
         stuck: count(&|r| r.fall_time.is_none() && r.outcome == Outcome::Stuck),
         time_limit: count(&|r| r.fall_time.is_none() && r.outcome == Outcome::TimeLimit),
-        min_clearance: c.first().copied().unwrap_or(f64::NAN),
-        p5_clearance: rank(5.0),
-        median_clearance: rank(50.0),
+        min_clearance: if runs.is_empty() { f64::NAN } else { min_all },
+        min_clearance_upright: c.first().copied().unwrap_or(f64::NAN),
+        p5_clearance_upright: rank(5.0),
+        median_clearance_upright: rank(50.0),
     }
 }
 
@@ -291,6 +327,8 @@ pub struct RobustnessReport {
     pub wall_time_s: f64,
     /// Worker threads.
     pub jobs: usize,
+    /// The overrides applied to every run.
+    pub sets: Vec<(String, String)>,
 }
 
 /// Runs the study (all scenarios are loaded, and all errors reported, before
@@ -308,11 +346,15 @@ pub fn run_robustness(req: &RobustnessRequest) -> Result<RobustnessReport> {
     let mut jobs = Vec::new();
     for (ci, cond) in req.conditions.iter().enumerate() {
         for &delta in &req.deltas {
-            let mut sets = cond.sets.clone();
+            let mut sets = req.sets.clone();
+            sets.extend(cond.sets.iter().cloned());
             sets.push(("delta".into(), format!("{delta}")));
             for (group, case) in &cases {
                 let sc = case.load(&sets).with_context(|| {
-                    format!("condition {} {}, delta {delta}", cond.disturbance, cond.magnitude)
+                    format!(
+                        "condition {} {}, delta {delta}",
+                        cond.disturbance, cond.magnitude
+                    )
                 })?;
                 jobs.push((ci, delta, *group, case.label(), sc));
             }
@@ -357,6 +399,7 @@ pub fn run_robustness(req: &RobustnessRequest) -> Result<RobustnessReport> {
         runs,
         wall_time_s: t0.elapsed().as_secs_f64(),
         jobs: req.jobs,
+        sets: req.sets.clone(),
     };
     if let Some(out) = &req.out {
         let dir = OutputDir::create(out)
@@ -432,8 +475,8 @@ pub fn markdown(rep: &RobustnessReport) -> String {
                 "Random environments"
             }
         );
-        s += "| disturbance | magnitude | delta [m] | success | collision | fell | stuck | time limit | min clearance [mm] | p5 [mm] | median [mm] |\n";
-        s += "|---|---|---|---|---|---|---|---|---|---|---|\n";
+        s += "| disturbance | magnitude | delta [m] | success | fell | collision (upright) | stuck / time limit | min clearance before fall [mm] | upright: min / p5 / median [mm] |\n";
+        s += "|---|---|---|---|---|---|---|---|---|\n";
         for (ci, c) in rep.conditions.iter().enumerate() {
             for &d in &rep.deltas {
                 let cell: Vec<&RobustRun> = in_group
@@ -444,29 +487,37 @@ pub fn markdown(rep: &RobustnessReport) -> String {
                 let st = cell_stats(&cell);
                 let _ = writeln!(
                     s,
-                    "| {} | {} | {} | {}/{} | {} | {} | {} | {} | {} | {} | {} |",
+                    "| {} | {} | {} | {}/{} | {} | {} ({}) | {} / {} | {} | {} / {} / {} |",
                     c.disturbance,
                     c.magnitude,
                     d,
                     st.success,
                     st.runs,
-                    st.collisions,
                     st.falls,
+                    st.collisions,
+                    st.collisions_upright,
                     st.stuck,
                     st.time_limit,
                     mm(st.min_clearance),
-                    mm(st.p5_clearance),
-                    mm(st.median_clearance)
+                    mm(st.min_clearance_upright),
+                    mm(st.p5_clearance_upright),
+                    mm(st.median_clearance_upright)
                 );
             }
         }
     }
+    let extra: Vec<String> = rep.sets.iter().map(|(k, v)| format!("{k}={v}")).collect();
     let _ = writeln!(
         s,
-        "\n{} runs, {} jobs, wall time {:.1} s",
+        "\n{} runs, {} jobs, wall time {:.1} s{}",
         rep.runs.len(),
         rep.jobs,
-        rep.wall_time_s
+        rep.wall_time_s,
+        if extra.is_empty() {
+            String::new()
+        } else {
+            format!("; every run with {}", extra.join(", "))
+        }
     );
     s
 }
@@ -505,11 +556,13 @@ mod tests {
         assert_eq!(st.runs, 20);
         assert_eq!(st.success, 18);
         assert_eq!(st.collisions, 2);
+        assert_eq!(st.collisions_upright, 1);
         assert_eq!(st.falls, 1);
         assert!((st.min_clearance + 0.015).abs() < 1e-12);
-        // Nearest rank: the 1st of 20 values is the 5th percentile.
-        assert_eq!(st.p5_clearance, st.min_clearance);
-        assert!((st.median_clearance - 0.075).abs() < 1e-12);
+        // Upright: the 19 runs from -0.005 m; nearest rank 1 of 19 is the p5.
+        assert!((st.min_clearance_upright + 0.005).abs() < 1e-12);
+        assert_eq!(st.p5_clearance_upright, st.min_clearance_upright);
+        assert!((st.median_clearance_upright - 0.085).abs() < 1e-12);
     }
 
     #[test]
