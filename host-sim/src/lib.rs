@@ -11,6 +11,8 @@
 //!   the subgoals (SPEC 5);
 //! * [`perception`]: simulated 2D LiDAR, DBSCAN and one convex obstacle per
 //!   cluster, for unknown maps (SPEC 6);
+//! * [`disturbance`]: pushes, CoM height mismatch, foot placement error and
+//!   state estimation noise (the `[disturbance]` table);
 //! * [`sim`]: the closed loop (controller at 20 Hz or once per step, with the own
 //!   QP solver or Clarabel);
 //! * [`report`]: `cycles.csv`, `footsteps.csv`, `trajectory.csv`, `summary.json`
@@ -21,6 +23,8 @@
 //! * [`qpbench`]: `ldcbf-sim qp solve`, our solver on npz QP files, timed;
 //! * [`batch`]: `ldcbf-sim batch` and `merge`: many seeds of a scenario family in
 //!   parallel, sharded across machines, one CSV row per run and a Markdown table;
+//! * [`robustness`]: `ldcbf-sim robustness`: success and true CoM clearance
+//!   under each disturbance, with and without the safety margin `delta`;
 //! * [`deadline`]: `ldcbf-sim deadline`: per-cycle compute time, solver
 //!   iterations and (from the firmware) instructions against a real-time deadline.
 //!
@@ -29,12 +33,14 @@
 pub mod app;
 pub mod batch;
 pub mod deadline;
+pub mod disturbance;
 pub mod perception;
 pub mod planner;
 pub mod plant;
 pub mod plot;
 pub mod qpbench;
 pub mod report;
+pub mod robustness;
 pub mod scenario;
 pub mod sim;
 

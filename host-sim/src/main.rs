@@ -10,6 +10,8 @@
 //! ldcbf-sim table DIR...
 //! ldcbf-sim deadline [CASES...] [--random N] [--deadline-us D] [--clock-mhz F]
 //!                    [--set k=v ...] [--jobs J] [--instructions FILE]
+//! ldcbf-sim robustness [CASES...] [--random N] [--delta D,D,...] [--set k=v ...]
+//!                      [--jobs J] [--out DIR]
 //! ```
 //!
 //! Exit status: 0 success; 1 error, with one `error: ...` line on stderr and no
@@ -152,6 +154,39 @@ enum Command {
         #[arg(long, value_name = "FILE")]
         instructions: Option<PathBuf>,
     },
+    /// Robustness study: success, falls and true CoM clearance under pushes,
+    /// CoM height mismatch, foot placement error and state estimation noise
+    /// (two magnitudes each, see docs/robustness.md), for each safety margin
+    /// delta, as Markdown tables. Disturbances of a single run are set with
+    /// `run --set disturbance.<field>=value`; fields (body frame = x along the
+    /// heading, y to its left): seed; push_time [s], push_period [s, 0 = once],
+    /// push_forward, push_lateral [m/s, body frame], push_alternate [bool];
+    /// plant_com_height [m]; foot_sigma [m, per world axis]; noise_position [m],
+    /// noise_velocity [m/s], noise_heading [rad].
+    Robustness {
+        /// Cases `NAME[+rrt_star|+none][@SEED]` [default: the deadline study's
+        /// shipped cases].
+        #[arg(value_name = "CASES")]
+        cases: Vec<ldcbf_sim::deadline::Case>,
+        /// Also run seeds 0..N of the `random` family.
+        #[arg(long, default_value_t = 200, value_name = "N")]
+        random: u64,
+        /// Safety margins delta, m, comma separated (each replaces the files' own).
+        #[arg(long = "delta", value_delimiter = ',', default_values_t = ldcbf_sim::robustness::DEFAULT_DELTAS)]
+        deltas: Vec<f64>,
+        /// Override a scenario field for every run (as for `run`), e.g. `l_max=0.3`.
+        #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_set)]
+        sets: Vec<(String, String)>,
+        /// Worker threads [default: one per core].
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Also write DIR/runs.csv (every run) and DIR/table.md.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// No progress bar.
+        #[arg(long)]
+        quiet: bool,
+    },
 }
 
 #[derive(Subcommand)]
@@ -175,7 +210,8 @@ enum QpCommand {
 #[derive(clap::Args)]
 struct LoopArgs {
     /// Override a scenario field (for every run): `key=value` with a TOML value,
-    /// e.g. `delta=0.3`, `controller.gamma=0.5`, `time_limit=200`, `goal=[5,5]`.
+    /// e.g. `delta=0.3`, `controller.gamma=0.5`, `time_limit=200`, `goal=[5,5]`,
+    /// `disturbance.push_lateral=0.1` (disturbance fields: `robustness --help`).
     #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_set)]
     sets: Vec<(String, String)>,
     /// QP solver inside the controller.
@@ -348,6 +384,35 @@ fn main() -> ExitCode {
             match ldcbf_sim::deadline::run_deadline(&req) {
                 Ok(rep) => {
                     out!("{}", ldcbf_sim::deadline::markdown(&rep));
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail(e),
+            }
+        }
+        Command::Robustness {
+            cases,
+            random,
+            deltas,
+            sets,
+            jobs,
+            out,
+            quiet,
+        } => {
+            let mut req = ldcbf_sim::robustness::RobustnessRequest::new();
+            if !cases.is_empty() {
+                req.cases = cases;
+            }
+            req.random = random;
+            req.deltas = deltas;
+            req.sets = sets;
+            if let Some(j) = jobs {
+                req.jobs = j;
+            }
+            req.out = out;
+            req.progress = !quiet;
+            match ldcbf_sim::robustness::run_robustness(&req) {
+                Ok(rep) => {
+                    print!("{}", ldcbf_sim::robustness::markdown(&rep));
                     ExitCode::SUCCESS
                 }
                 Err(e) => fail(e),

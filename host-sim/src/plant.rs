@@ -166,6 +166,12 @@ impl Plant {
         self.tick_in_step += 1;
     }
 
+    /// A push: adds `delta_v` (m/s, world) to the CoM velocity at once (the
+    /// position is continuous). Used by [`crate::disturbance`].
+    pub fn push(&mut self, delta_v: Vector2<f64>) {
+        self.velocity += delta_v;
+    }
+
     /// Ends the current step: the swing foot lands at `foot` (m, world) and becomes
     /// the stance foot, the stance side flips, the step clock restarts and
     /// `turning_rate` (rad/s) is in force during the new step.
@@ -227,6 +233,46 @@ mod tests {
         assert_eq!(p.stance_side, Side::Right);
         assert_eq!(p.tick_in_step, 0);
         assert_eq!(p.steps, 1);
+    }
+
+    #[test]
+    fn push_adds_the_impulse_and_the_flow_goes_on_from_it() {
+        let mut p = Plant::new(params(), Vector2::new(0.0, 0.0), 0.0, Side::Left).unwrap();
+        p.velocity = Vector2::new(0.2, 0.1);
+        let before = (p.position, p.velocity);
+        p.push(Vector2::new(0.0, 0.3));
+        assert_eq!(p.position, before.0);
+        assert_eq!(p.velocity, before.1 + Vector2::new(0.0, 0.3));
+        // Same as a plant started with the pushed velocity.
+        let mut q = Plant::new(params(), Vector2::new(0.0, 0.0), 0.0, Side::Left).unwrap();
+        q.velocity = Vector2::new(0.2, 0.1) + Vector2::new(0.0, 0.3);
+        for _ in 0..100 {
+            p.tick();
+            q.tick();
+        }
+        assert_eq!(p.position, q.position);
+        assert_eq!(p.velocity, q.velocity);
+    }
+
+    #[test]
+    fn com_height_sets_beta() {
+        let low = PlantParams {
+            com_height: 0.8,
+            ..params()
+        };
+        let p = Plant::new(low, Vector2::zeros(), 0.0, Side::Left).unwrap();
+        assert_eq!(p.beta(), (9.81f64 / 0.8).sqrt());
+        let q = Plant::new(params(), Vector2::zeros(), 0.0, Side::Left).unwrap();
+        assert!(p.beta() > q.beta());
+        // A lower CoM diverges faster from the same offset over the foot.
+        let (mut p, mut q) = (p, q);
+        p.position.x = 0.05;
+        q.position.x = 0.05;
+        for _ in 0..400 {
+            p.tick();
+            q.tick();
+        }
+        assert!(p.position.x > q.position.x);
     }
 
     #[test]

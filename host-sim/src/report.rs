@@ -130,6 +130,10 @@ pub struct Summary {
     pub overrides: BTreeMap<String, serde_json::Value>,
     /// The scenario's note.
     pub note: String,
+    /// The disturbances and what they did (every push with its tick and world
+    /// velocity change, foot and estimation error sizes); null when the
+    /// scenario has none ([`crate::disturbance`]).
+    pub disturbance: Option<crate::disturbance::DisturbanceLog>,
 }
 
 /// Nearest-rank percentile `p` (0..=100) of `sorted` (ascending), 0 if empty.
@@ -313,6 +317,10 @@ pub fn summarize(r: &SimResult) -> Summary {
         config: config_map(&sc.config),
         overrides: crate::scenario::overrides_map(&sc.controller),
         note: sc.note.clone(),
+        disturbance: sc
+            .disturbance
+            .is_active(sc.config.com_height)
+            .then(|| r.disturbance.clone()),
     }
 }
 

@@ -47,7 +47,23 @@
 //! [lidar]                  # optional: perception settings (crate::perception::LidarParams)
 //! range = 3.0
 //! min_points = 3
+//!
+//! [disturbance]            # optional, all off by default (crate::disturbance)
+//! seed = 0                 # seed of the foot-error and noise draws (with `seed` above)
+//! push_time = 2.0          # s, first push (none when absent)
+//! push_period = 0.0        # s between pushes (0 = one push; else >= 0.01)
+//! push_forward = 0.0       # m/s, CoM velocity change along the heading (body frame)
+//! push_lateral = 0.3       # m/s, CoM velocity change to the left of the heading
+//! push_alternate = false   # reverse every second push
+//! plant_com_height = 1.0   # m, the plant's true CoM height (default: controller.com_height)
+//! foot_sigma = 0.0         # m, std. dev. of the landing error per world axis
+//! noise_position = 0.0     # m, std. dev. of the measured CoM position per world axis
+//! noise_velocity = 0.0     # m/s, std. dev. of the measured CoM velocity per world axis
+//! noise_heading = 0.0      # rad, std. dev. of the measured heading
 //! ```
+//!
+//! `--set disturbance.<field>=value` sets one of them (e.g.
+//! `--set disturbance.push_time=2.0 --set disturbance.push_lateral=0.3`).
 //!
 //! `planner = "rrt_star"` needs a known map: it is refused together with
 //! `perception = "lidar"` (planning on the perceived map is not implemented).
@@ -80,6 +96,7 @@ use rand_chacha::rand_core::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
 use toml::Spanned;
 
+use crate::disturbance::DisturbanceParams;
 use crate::perception::LidarParams;
 use crate::planner::RrtParams;
 
@@ -477,6 +494,7 @@ pub fn random_scenario(seed: u64) -> Scenario {
         config: Config::default(),
         rrt: RrtParams::default(),
         lidar: LidarParams::default(),
+        disturbance: DisturbanceParams::default(),
         obstacles,
     }
 }
@@ -525,6 +543,9 @@ pub struct Scenario {
     /// LiDAR and clustering settings (the `[lidar]` table; used with
     /// `perception = "lidar"`).
     pub lidar: LidarParams,
+    /// Disturbances of the plant and of the measured state (the `[disturbance]`
+    /// table; all off by default, [`crate::disturbance`]).
+    pub disturbance: DisturbanceParams,
     /// Obstacles, world frame: the file's, then the generated ones (the TRUE map).
     pub obstacles: Vec<Polygon>,
 }
@@ -599,6 +620,8 @@ struct RawScenario {
     rrt_star: Spanned<RrtParams>,
     #[serde(default = "spanned_default")]
     lidar: Spanned<LidarParams>,
+    #[serde(default = "spanned_default")]
+    disturbance: Spanned<DisturbanceParams>,
 }
 
 fn spanned_default<T: Default>() -> Spanned<T> {
@@ -817,6 +840,7 @@ fn apply_set(table: &mut toml::Table, key: &str, value: &str) -> Result<(), Stri
         "generator",
         "rrt_star",
         "lidar",
+        "disturbance",
     ];
     let mut parts: Vec<&str> = key.split('.').collect();
     if parts.iter().any(|p| p.is_empty()) {
@@ -1073,6 +1097,15 @@ fn validate(
             message: m,
         });
     }
+    if let Err((f, m)) = raw.disturbance.get_ref().validate() {
+        let line = text.and_then(|t| find_key_line(t, "disturbance", f));
+        return Err(ScenarioError {
+            file: file.into(),
+            field: format!("disturbance.{f}"),
+            line,
+            message: m,
+        });
+    }
     let overrides = raw.controller.get_ref().clone();
     let config = overrides.apply(Config::default());
     if let Err(e) = config.validate() {
@@ -1188,6 +1221,7 @@ fn validate(
         config,
         rrt: raw.rrt_star.get_ref().clone(),
         lidar: raw.lidar.get_ref().clone(),
+        disturbance: raw.disturbance.get_ref().clone(),
         obstacles,
     })
 }
@@ -1308,6 +1342,45 @@ regular = { center = [4.0, 2.0], radius = 1.0, sides = 25 }
         };
         let e = parse_str(OK, "t.toml", &o).unwrap_err();
         assert_eq!(e.field, "bogus");
+    }
+
+    #[test]
+    fn disturbance_table_parses_and_is_validated() {
+        let text = format!(
+            "{OK}\n[disturbance]\nseed = 4\npush_time = 2.0\npush_lateral = 0.3\nfoot_sigma = 0.02\n"
+        );
+        let s = parse_str(&text, "t.toml", &LoadOptions::default()).unwrap();
+        assert_eq!(s.disturbance.seed, 4);
+        assert_eq!(s.disturbance.push_time, Some(2.0));
+        assert_eq!(s.disturbance.push_lateral, 0.3);
+        assert_eq!(s.disturbance.foot_sigma, 0.02);
+        assert!(s.disturbance.is_active(1.0));
+        // Absent: all off.
+        let s = parse_str(OK, "t.toml", &LoadOptions::default()).unwrap();
+        assert_eq!(s.disturbance, DisturbanceParams::default());
+        // A negative sigma names the field and its line.
+        let bad = text.replace("foot_sigma = 0.02", "foot_sigma = -0.02");
+        let e = parse_str(&bad, "t.toml", &LoadOptions::default()).unwrap_err();
+        assert_eq!(e.field, "disturbance.foot_sigma");
+        assert_eq!(e.line, Some(19), "{e}");
+        // Unknown field.
+        let bad = text.replace("foot_sigma", "foot_sgima");
+        let e = parse_str(&bad, "t.toml", &LoadOptions::default()).unwrap_err();
+        assert!(e.field.starts_with("disturbance"), "{e}");
+        assert!(e.message.contains("foot_sgima"), "{e}");
+        // Through --set, including a non-finite value.
+        let o = |k: &str, v: &str| LoadOptions {
+            seed: None,
+            sets: vec![(k.into(), v.into())],
+        };
+        let s = parse_str(OK, "t.toml", &o("disturbance.plant_com_height", "0.9")).unwrap();
+        assert_eq!(s.disturbance.plant_com_height, Some(0.9));
+        let e = parse_str(OK, "t.toml", &o("disturbance.noise_velocity", "nan")).unwrap_err();
+        assert_eq!(e.field, "disturbance.noise_velocity", "{e}");
+        let e = parse_str(OK, "t.toml", &o("disturbance.push_lateral", "0.3")).unwrap_err();
+        assert_eq!(e.field, "disturbance.push_time", "{e}");
+        let e = parse_str(OK, "t.toml", &o("disturbance.bogus", "1")).unwrap_err();
+        assert!(e.message.contains("bogus"), "{e}");
     }
 
     #[test]

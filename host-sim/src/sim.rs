@@ -1,18 +1,23 @@
 //! The closed loop: the 1 kHz [`Plant`] and the controller, called as an onboard
 //! loop would call it.
 //!
-//! Each tick, in this order:
-//!
 //! Before the first tick, with `planner = "rrt_star"`, [`crate::planner::plan`]
 //! turns the known map into subgoals (the goal last; without a planner the goal
 //! is the only subgoal). If planning fails the run goes on towards the goal
 //! directly and the error is kept in [`Navigation::error`].
 //!
+//! Each tick, in this order:
+//!
+//! 0. **Push.** A push of the scenario's `[disturbance]` due at this tick is
+//!    added to the plant's CoM velocity ([`crate::disturbance`]), so everything
+//!    below sees the pushed state.
 //! 1. **Step end.** When the current step has lasted `T`, the swing foot lands at
 //!    the `foot_target` of the most recent controller cycle, the stance side
 //!    flips, and the `turning_rate` of that cycle takes effect for the new step
 //!    (the controller plans `omega_bar` for the step that starts at `x_0`,
-//!    [`ldcbf_controller::CycleOutput::turning_rate`]).
+//!    [`ldcbf_controller::CycleOutput::turning_rate`]). With a foot placement
+//!    error (`disturbance.foot_sigma`) the foot lands off the target by a seeded
+//!    Gaussian draw; the landed position is the stance foot from then on.
 //! 2. **Control.** At 20 Hz (every 50 ticks; `MpcRate::Hz`) or once at the start of
 //!    every step (`MpcRate::PerStep`), a [`CycleInput`] is built from the plant's
 //!    true state (CoM position, velocity, heading, the turning rate in force, stance
@@ -23,7 +28,10 @@
 //!    goal), and the controller's goal is the current subgoal. With
 //!    `perception = "lidar"` the obstacle list is the one inferred from a LiDAR
 //!    scan taken at that moment from the CoM ([`crate::perception`]); otherwise
-//!    it is the true map.
+//!    it is the true map. With state estimation noise (`disturbance.noise_*`)
+//!    the CoM position, velocity and heading in the input (and the position
+//!    used to advance the subgoal) are the true ones plus a seeded Gaussian
+//!    draw; the LiDAR scans from the true pose.
 //! 3. **Record** the 1 kHz sample (and its clearance to every TRUE obstacle,
 //!    unless [`SimOptions::record_clearance`] is off), then
 //!    check the end conditions: goal reached (`|p - goal| <= success_radius`),
@@ -34,7 +42,8 @@
 //!    around an obstacle towards a subgoal is progress; circling is not. A
 //!    cycle whose input the controller rejects as invalid (a state out of
 //!    range: the pendulum is falling) ends the run as `diverged`.
-//! 4. **Integrate** one tick.
+//! 4. **Integrate** one tick (with `disturbance.plant_com_height`, the plant's
+//!    `beta` is that height's, not the controller model's).
 //!
 //! The simulator never reaches inside the controller: it uses the returned
 //! [`ldcbf_controller::CycleOutput`] to drive the plant and reads
@@ -50,6 +59,7 @@ use ldcbf_controller::{
 };
 use ldcbf_reference::ClarabelBackend;
 
+use crate::disturbance::{DisturbanceLog, Disturber};
 use crate::perception::Lidar;
 use crate::planner::{Plan, remaining_length};
 use crate::plant::{Plant, PlantParams};
@@ -301,6 +311,9 @@ pub struct SimResult {
     /// Each control cycle's QP, with its cycle index (with
     /// [`SimOptions::record_qps`]; cycles with invalid input build none).
     pub qps: Vec<(usize, ldcbf_reference::DenseProblem)>,
+    /// What the scenario's disturbances did (pushes applied, foot errors,
+    /// estimation errors; empty when none is configured).
+    pub disturbance: DisturbanceLog,
 }
 
 impl SimResult {
@@ -358,10 +371,16 @@ fn run_with<B: QpBackend<NV, NC>>(
     let cfg = scenario.config;
     let mut controller =
         PaperController::new(cfg).map_err(|e| SimError(format!("controller: {e}")))?;
+    let mut disturber = Disturber::new(
+        &scenario.disturbance,
+        scenario.seed,
+        PLANT_DT,
+        cfg.com_height,
+    );
     let mut plant = Plant::new(
         PlantParams {
             gravity: cfg.gravity,
-            com_height: cfg.com_height,
+            com_height: disturber.plant_com_height(),
             step_duration: cfg.step_duration,
             dt: PLANT_DT,
         },
@@ -427,13 +446,18 @@ fn run_with<B: QpBackend<NV, NC>>(
     let mut best_tick = 0u64;
 
     let outcome = loop {
+        // 0. Push.
+        if let Some(dv) = disturber.push_at(plant.tick, plant.heading) {
+            plant.push(dv);
+        }
         // 1. Step end: land the swing foot at the latest target.
         if plant.step_over() {
             let last = cycles
                 .last_mut()
                 .expect("a cycle runs at t = 0, before the first step ends");
             last.landed = true;
-            let (foot, omega) = (last.output.foot_target, last.output.turning_rate);
+            let (target, omega) = (last.output.foot_target, last.output.turning_rate);
+            let foot = disturber.land(target);
             plant.land(foot, omega);
             footsteps.push(Footstep {
                 index: plant.steps,
@@ -449,8 +473,10 @@ fn run_with<B: QpBackend<NV, NC>>(
             None => plant.tick_in_step == 0,
         };
         if due {
+            let (position, velocity, heading) =
+                disturber.measure(plant.position, plant.velocity, plant.heading);
             while current + 1 < subgoals.len()
-                && (plant.position - subgoals[current]).norm() <= switch_radius
+                && (position - subgoals[current]).norm() <= switch_radius
             {
                 navigation.reached_at.push(plant.time());
                 current += 1;
@@ -472,9 +498,9 @@ fn run_with<B: QpBackend<NV, NC>>(
                 None => obstacles,
             };
             let input = CycleInput {
-                com_position: plant.position,
-                com_velocity: plant.velocity,
-                heading: plant.heading,
+                com_position: position,
+                com_velocity: velocity,
+                heading,
                 turning_rate: plant.turning_rate,
                 stance_foot: plant.stance_foot,
                 stance_side: plant.stance_side,
@@ -575,5 +601,144 @@ fn run_with<B: QpBackend<NV, NC>>(
         navigation,
         scans,
         qps,
+        disturbance: disturber.log,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::{LoadOptions, load};
+
+    /// `simple`, cut to `time_limit` s, with `--set` overrides.
+    fn simple(time_limit: f64, sets: &[(&str, &str)]) -> Scenario {
+        let mut all = vec![("time_limit".to_string(), time_limit.to_string())];
+        all.extend(sets.iter().map(|(k, v)| (k.to_string(), v.to_string())));
+        load(
+            "simple",
+            &LoadOptions {
+                seed: None,
+                sets: all,
+            },
+        )
+        .unwrap()
+    }
+
+    fn go(sc: &Scenario) -> SimResult {
+        let opts = SimOptions {
+            record_scans: false,
+            ..SimOptions::default()
+        };
+        run(sc, opts).unwrap()
+    }
+
+    fn same_walk(a: &SimResult, b: &SimResult) -> bool {
+        a.samples == b.samples
+            && a.footsteps == b.footsteps
+            && a.cycles.len() == b.cycles.len()
+            && a.cycles
+                .iter()
+                .zip(&b.cycles)
+                .all(|(x, y)| x.output.foot_target == y.output.foot_target)
+    }
+
+    #[test]
+    fn zero_disturbance_is_the_undisturbed_run_bit_for_bit() {
+        let base = go(&simple(3.0, &[]));
+        let zero = go(&simple(
+            3.0,
+            &[
+                ("disturbance.seed", "9"),
+                ("disturbance.push_time", "1.0"),
+                ("disturbance.push_period", "0.5"),
+                ("disturbance.plant_com_height", "1.0"),
+                ("disturbance.foot_sigma", "0.0"),
+                ("disturbance.noise_position", "0.0"),
+            ],
+        ));
+        assert!(same_walk(&base, &zero));
+        assert!(zero.disturbance.pushes.is_empty());
+        assert_eq!(zero.disturbance.foot_errors, 0);
+        assert!(crate::report::summarize(&zero).disturbance.is_none());
+    }
+
+    #[test]
+    fn a_push_changes_the_velocity_by_the_impulse_at_its_tick() {
+        let base = go(&simple(2.0, &[]));
+        let pushed = go(&simple(
+            2.0,
+            &[
+                ("disturbance.push_time", "1.234"),
+                ("disturbance.push_forward", "0.1"),
+                ("disturbance.push_lateral", "0.3"),
+            ],
+        ));
+        let log = &pushed.disturbance;
+        assert_eq!(log.pushes.len(), 1);
+        assert_eq!(log.pushes[0].tick, 1234);
+        let n = 1234;
+        assert_eq!(base.samples[..n], pushed.samples[..n]);
+        let dv = Vector2::new(log.pushes[0].delta_v[0], log.pushes[0].delta_v[1]);
+        // The impulse in the body frame, rotated by the heading at the push.
+        let (s, c) = base.samples[n].heading.sin_cos();
+        let expected = Vector2::new(c * 0.1 - s * 0.3, s * 0.1 + c * 0.3);
+        assert!((dv - expected).amax() < 1e-15);
+        assert_eq!(pushed.samples[n].position, base.samples[n].position);
+        assert_eq!(pushed.samples[n].velocity, base.samples[n].velocity + dv);
+        assert_ne!(pushed.samples[n + 1], base.samples[n + 1]);
+        let summary = crate::report::summarize(&pushed);
+        assert_eq!(summary.disturbance.unwrap().pushes.len(), 1);
+    }
+
+    #[test]
+    fn height_mismatch_changes_the_plant_only() {
+        let base = go(&simple(2.0, &[]));
+        let low = go(&simple(2.0, &[("disturbance.plant_com_height", "0.9")]));
+        assert_eq!(low.disturbance.plant_com_height, 0.9);
+        assert_eq!(low.disturbance.model_com_height, 1.0);
+        assert_eq!(low.scenario.config.com_height, 1.0);
+        // The first cycle sees the same (rest) state, so plans the same step.
+        assert_eq!(
+            low.cycles[0].output.foot_target,
+            base.cycles[0].output.foot_target
+        );
+        assert_ne!(low.samples[1500], base.samples[1500]);
+    }
+
+    #[test]
+    fn foot_errors_and_noise_are_seeded() {
+        let sets = |seed: &'static str| {
+            vec![
+                ("disturbance.seed", seed),
+                ("disturbance.foot_sigma", "0.02"),
+                ("disturbance.noise_position", "0.01"),
+                ("disturbance.noise_velocity", "0.02"),
+                ("disturbance.noise_heading", "0.01"),
+            ]
+        };
+        let a = go(&simple(2.0, &sets("1")));
+        let b = go(&simple(2.0, &sets("1")));
+        let c = go(&simple(2.0, &sets("2")));
+        assert!(same_walk(&a, &b));
+        assert!(!same_walk(&a, &c));
+        let log = &a.disturbance;
+        assert_eq!(log.foot_errors, a.steps());
+        assert!(log.max_foot_error > 0.0 && log.noisy_cycles == a.cycles.len());
+        // Every landed foot is its target plus an error no larger than the largest.
+        let targets: Vec<Vector2<f64>> = a
+            .cycles
+            .iter()
+            .filter(|c| c.landed)
+            .map(|c| c.output.foot_target)
+            .collect();
+        assert_eq!(targets.len(), a.steps());
+        for (f, t) in a.footsteps[1..].iter().zip(&targets) {
+            let e = (f.position - t).norm();
+            assert!(e > 0.0 && e <= log.max_foot_error + 1e-15);
+        }
+        // The controller saw a noisy state: its x0 is not the true sample.
+        let c0 = &a.cycles[1];
+        let tick = (c0.time / PLANT_DT).round() as usize;
+        assert_ne!(c0.output.plan.x0.position, a.samples[tick].position);
+    }
 }

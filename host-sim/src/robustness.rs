@@ -1,0 +1,579 @@
+//! `ldcbf-sim robustness`: the closed loop under disturbances
+//! ([`crate::disturbance`]), with and without the LDCBF safety margin `delta`.
+//!
+//! A study runs every case (by default the deadline study's shipped cases,
+//! [`crate::deadline::SHIPPED_CASES`], and seeds `0..200` of the `random`
+//! family) under every [`Condition`] (the undisturbed baseline, then each
+//! disturbance at a moderate and a severe magnitude, [`default_conditions`]) and
+//! every `delta` (m; `--set delta=...` for every case, replacing the files' own
+//! margins; [`DEFAULT_DELTAS`]). Every run is simulated as `ldcbf-sim run`
+//! would (own solver, 20 Hz, true clearance at 1 kHz) with a rayon pool; the
+//! results do not depend on the number of threads.
+//!
+//! Per run it keeps the outcome and the true CoM clearance. A falling LIP is
+//! stopped by the simulator only when its speed exceeds the controller's input
+//! range (100 m/s, `Outcome::Diverged`), tens of metres later, so the study
+//! declares the robot **fallen** at the first 1 kHz sample where the horizontal
+//! CoM offset from the stance foot exceeds [`FALL_OFFSET_RATIO`] times the
+//! plant's CoM height (a 27 degree lean, 1.7 times the largest offset of the
+//! undisturbed walks: outside the LIP's validity), or on divergence; clearance
+//! and collisions are counted up to the fall only (what the CoM crosses while
+//! flying away says nothing about the barrier).
+//!
+//! Per cell (condition x delta x group, the groups being the shipped cases and
+//! the random seeds): runs, success (goal reached, no collision, no fall),
+//! collisions (some CoM sample inside a true obstacle before any fall), of them
+//! in runs that never fell, falls, stuck, time limit, the minimum over all runs
+//! of each run's minimum true CoM clearance before any fall (m), and the minimum
+//! and 5th percentile (nearest rank) over the runs that never fell.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+use anyhow::{Context, Result, bail};
+use rayon::prelude::*;
+
+use crate::deadline::{Case, random_cases, shipped_cases};
+use crate::report::OutputDir;
+use crate::scenario::Scenario;
+use crate::sim::{Outcome, SimOptions, SimResult, run};
+
+/// Fall threshold: horizontal CoM offset from the stance foot over the plant's
+/// CoM height (0.5: 27 degrees of lean; the undisturbed walks of the shipped
+/// scenarios stay below 0.3).
+pub const FALL_OFFSET_RATIO: f64 = 0.5;
+
+/// The margins of the default study, m: the paper's 0 and two positive ones.
+pub const DEFAULT_DELTAS: [f64; 3] = [0.0, 0.05, 0.1];
+
+/// One disturbance setting of a study.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Condition {
+    /// Which disturbance (`none`, `push`, `height`, `foot`, `noise`).
+    pub disturbance: String,
+    /// Its magnitude in words and units, e.g. `0.1 m/s`.
+    pub magnitude: String,
+    /// The `--set` overrides that produce it (`disturbance.*` fields).
+    pub sets: Vec<(String, String)>,
+}
+
+fn cond(disturbance: &str, magnitude: &str, sets: &[(&str, &str)]) -> Condition {
+    Condition {
+        disturbance: disturbance.into(),
+        magnitude: magnitude.into(),
+        sets: sets
+            .iter()
+            .map(|(k, v)| (format!("disturbance.{k}"), (*v).to_string()))
+            .collect(),
+    }
+}
+
+/// The default conditions (the choice of magnitudes is argued in
+/// `docs/robustness.md`): no disturbance; a lateral push every 2 s from
+/// t = 1.51 s (10 ms after a control cycle), alternating left and right, of
+/// 0.1 and 0.3 m/s; a plant CoM 5 % and 10 % lower than the model's 1 m
+/// (0.95 and 0.9 m); foot placement error sigma 5 mm and 2 cm per axis; state
+/// estimation noise (sigma position / velocity / heading) 5 mm / 0.02 m/s /
+/// 0.01 rad and 2 cm / 0.1 m/s / 0.03 rad.
+pub fn default_conditions() -> Vec<Condition> {
+    let push = |v: &'static str| {
+        [
+            ("push_time", "1.51"),
+            ("push_period", "2.0"),
+            ("push_alternate", "true"),
+            ("push_lateral", v),
+        ]
+    };
+    vec![
+        cond("none", "-", &[]),
+        cond("push", "0.1 m/s every 2 s", &push("0.1")),
+        cond("push", "0.3 m/s every 2 s", &push("0.3")),
+        cond(
+            "height",
+            "H = 0.95 m (-5 %)",
+            &[("plant_com_height", "0.95")],
+        ),
+        cond(
+            "height",
+            "H = 0.90 m (-10 %)",
+            &[("plant_com_height", "0.9")],
+        ),
+        cond("foot", "sigma 5 mm", &[("foot_sigma", "0.005")]),
+        cond("foot", "sigma 2 cm", &[("foot_sigma", "0.02")]),
+        cond(
+            "noise",
+            "5 mm, 0.02 m/s, 0.01 rad",
+            &[
+                ("noise_position", "0.005"),
+                ("noise_velocity", "0.02"),
+                ("noise_heading", "0.01"),
+            ],
+        ),
+        cond(
+            "noise",
+            "2 cm, 0.1 m/s, 0.03 rad",
+            &[
+                ("noise_position", "0.02"),
+                ("noise_velocity", "0.1"),
+                ("noise_heading", "0.03"),
+            ],
+        ),
+    ]
+}
+
+/// What `ldcbf-sim robustness` runs.
+#[derive(Clone, Debug)]
+pub struct RobustnessRequest {
+    /// Shipped (or any) cases, the first group.
+    pub cases: Vec<Case>,
+    /// Seeds `0..random` of the `random` family, the second group.
+    pub random: u64,
+    /// Disturbance conditions.
+    pub conditions: Vec<Condition>,
+    /// Margins `delta`, m.
+    pub deltas: Vec<f64>,
+    /// Overrides for every run (`--set`), applied before the condition's and
+    /// the delta.
+    pub sets: Vec<(String, String)>,
+    /// Worker threads (>= 1).
+    pub jobs: usize,
+    /// Progress bar on stderr.
+    pub progress: bool,
+    /// Directory for `runs.csv` and `table.md` (none: nothing written).
+    pub out: Option<PathBuf>,
+}
+
+impl RobustnessRequest {
+    /// The default study: shipped cases, 200 random seeds, the default
+    /// conditions and margins, one job per core.
+    pub fn new() -> Self {
+        RobustnessRequest {
+            cases: shipped_cases(),
+            random: 200,
+            conditions: default_conditions(),
+            deltas: DEFAULT_DELTAS.to_vec(),
+            sets: Vec::new(),
+            jobs: std::thread::available_parallelism().map_or(1, |n| n.get()),
+            progress: false,
+            out: None,
+        }
+    }
+}
+
+impl Default for RobustnessRequest {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// One run of a study.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RobustRun {
+    /// Index into the request's conditions.
+    pub condition: usize,
+    /// The margin, m.
+    pub delta: f64,
+    /// `shipped` or `random`.
+    pub group: &'static str,
+    /// The case label (`maze+rrt_star`, `random@17`).
+    pub label: String,
+    /// Why the simulation ended.
+    pub outcome: Outcome,
+    /// Time of the fall, s, if the robot fell (see the module docs).
+    pub fall_time: Option<f64>,
+    /// Goal reached and no collision.
+    pub success: bool,
+    /// Some CoM sample before any fall was inside a true obstacle.
+    pub collision: bool,
+    /// Minimum true CoM clearance before any fall, m (`+inf` without obstacles).
+    pub min_clearance: f64,
+    /// Footsteps landed.
+    pub steps: usize,
+    /// Cycles whose command is not the QP's optimum (relaxed or fallback).
+    pub non_optimal_cycles: usize,
+}
+
+/// When the robot fell (first sample whose CoM is farther than
+/// `FALL_OFFSET_RATIO * H` from its stance foot, or the end of a diverged run),
+/// and the minimum clearance up to then.
+pub fn fall_and_clearance(r: &SimResult, plant_com_height: f64) -> (Option<f64>, f64) {
+    let limit = FALL_OFFSET_RATIO * plant_com_height;
+    let mut k = 0usize;
+    let mut min_c = f64::INFINITY;
+    for s in &r.samples {
+        while k + 1 < r.footsteps.len() && r.footsteps[k + 1].time <= s.time {
+            k += 1;
+        }
+        let foot = r.footsteps[k].position;
+        if (s.position - foot).norm() > limit {
+            return (Some(s.time), min_c);
+        }
+        min_c = min_c.min(s.clearance);
+    }
+    let fall = (r.outcome == Outcome::Diverged).then(|| r.sim_time());
+    (fall, min_c)
+}
+
+fn one_run(
+    sc: &Scenario,
+    condition: usize,
+    delta: f64,
+    group: &'static str,
+    label: String,
+) -> Result<RobustRun> {
+    let opts = SimOptions {
+        record_scans: false,
+        ..SimOptions::default()
+    };
+    let r = run(sc, opts).with_context(|| label.clone())?;
+    let (fall_time, min_clearance) = fall_and_clearance(&r, r.disturbance.plant_com_height);
+    let collision = !sc.obstacles.is_empty() && min_clearance < 0.0;
+    let reached = r.outcome == Outcome::GoalReached;
+    Ok(RobustRun {
+        condition,
+        delta,
+        group,
+        label,
+        outcome: r.outcome,
+        fall_time,
+        success: reached && !collision && fall_time.is_none(),
+        collision,
+        min_clearance,
+        steps: r.steps(),
+        non_optimal_cycles: r
+            .cycles
+            .iter()
+            .filter(|c| !c.output.status.is_optimal())
+            .count(),
+    })
+}
+
+/// The statistics of one cell.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CellStats {
+    /// Runs.
+    pub runs: usize,
+    /// Successful runs.
+    pub success: usize,
+    /// Runs with a collision before any fall.
+    pub collisions: usize,
+    /// Runs that never fell and had a collision.
+    pub collisions_upright: usize,
+    /// Runs that fell.
+    pub falls: usize,
+    /// Runs that ended stuck.
+    pub stuck: usize,
+    /// Runs that hit the time limit.
+    pub time_limit: usize,
+    /// Minimum over all runs of the minimum clearance before any fall, m.
+    pub min_clearance: f64,
+    /// Minimum over the runs that never fell of the minimum clearance, m (NaN
+    /// if every run fell).
+    pub min_clearance_upright: f64,
+    /// 5th percentile (nearest rank) of the same, m.
+    pub p5_clearance_upright: f64,
+    /// Median of the same, m.
+    pub median_clearance_upright: f64,
+}
+
+/// Statistics of a set of runs.
+pub fn cell_stats(runs: &[&RobustRun]) -> CellStats {
+    let min_all = runs
+        .iter()
+        .map(|r| r.min_clearance)
+        .fold(f64::INFINITY, f64::min);
+    let mut c: Vec<f64> = runs
+        .iter()
+        .filter(|r| r.fall_time.is_none())
+        .map(|r| r.min_clearance)
+        .collect();
+    c.sort_by(f64::total_cmp);
+    let rank = |p: f64| {
+        if c.is_empty() {
+            f64::NAN
+        } else {
+            let i = ((p / 100.0) * c.len() as f64).ceil() as usize;
+            c[i.clamp(1, c.len()) - 1]
+        }
+    };
+    let count = |f: &dyn Fn(&RobustRun) -> bool| runs.iter().filter(|r| f(r)).count();
+    CellStats {
+        runs: runs.len(),
+        success: count(&|r| r.success),
+        collisions: count(&|r| r.collision),
+        collisions_upright: count(&|r| r.collision && r.fall_time.is_none()),
+        falls: count(&|r| r.fall_time.is_some()),
+        stuck: count(&|r| r.fall_time.is_none() && r.outcome == Outcome::Stuck),
+        time_limit: count(&|r| r.fall_time.is_none() && r.outcome == Outcome::TimeLimit),
+        min_clearance: if runs.is_empty() { f64::NAN } else { min_all },
+        min_clearance_upright: c.first().copied().unwrap_or(f64::NAN),
+        p5_clearance_upright: rank(5.0),
+        median_clearance_upright: rank(50.0),
+    }
+}
+
+/// A finished study.
+#[derive(Clone, Debug)]
+pub struct RobustnessReport {
+    /// The conditions, as requested.
+    pub conditions: Vec<Condition>,
+    /// The margins, m.
+    pub deltas: Vec<f64>,
+    /// Every run, in request order (condition, delta, shipped cases, random seeds).
+    pub runs: Vec<RobustRun>,
+    /// Wall-clock time of the whole study, s.
+    pub wall_time_s: f64,
+    /// Worker threads.
+    pub jobs: usize,
+    /// The overrides applied to every run.
+    pub sets: Vec<(String, String)>,
+}
+
+/// Runs the study (all scenarios are loaded, and all errors reported, before
+/// any simulation).
+pub fn run_robustness(req: &RobustnessRequest) -> Result<RobustnessReport> {
+    if req.jobs == 0 {
+        bail!("--jobs must be >= 1");
+    }
+    if req.deltas.iter().any(|d| !(d.is_finite() && *d >= 0.0)) {
+        bail!("every delta must be finite and >= 0");
+    }
+    let mut cases: Vec<(&'static str, Case)> =
+        req.cases.iter().map(|c| ("shipped", c.clone())).collect();
+    cases.extend(random_cases(req.random).into_iter().map(|c| ("random", c)));
+    let mut jobs = Vec::new();
+    for (ci, cond) in req.conditions.iter().enumerate() {
+        for &delta in &req.deltas {
+            let mut sets = req.sets.clone();
+            sets.extend(cond.sets.iter().cloned());
+            sets.push(("delta".into(), format!("{delta}")));
+            for (group, case) in &cases {
+                let sc = case.load(&sets).with_context(|| {
+                    format!(
+                        "condition {} {}, delta {delta}",
+                        cond.disturbance, cond.magnitude
+                    )
+                })?;
+                jobs.push((ci, delta, *group, case.label(), sc));
+            }
+        }
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(req.jobs)
+        .build()
+        .context("cannot start the worker threads")?;
+    let bar = if req.progress {
+        let b = indicatif::ProgressBar::new(jobs.len() as u64);
+        b.set_style(
+            indicatif::ProgressStyle::with_template(
+                "robustness [{elapsed_precise}] {wide_bar} {pos}/{len} (eta {eta}) {msg}",
+            )
+            .expect("valid template"),
+        );
+        b
+    } else {
+        indicatif::ProgressBar::hidden()
+    };
+    let failed = AtomicUsize::new(0);
+    let t0 = Instant::now();
+    let runs: Vec<Result<RobustRun>> = pool.install(|| {
+        jobs.par_iter()
+            .map(|(ci, delta, group, label, sc)| {
+                let r = one_run(sc, *ci, *delta, group, label.clone());
+                if r.as_ref().is_ok_and(|r| !r.success) {
+                    let n = failed.fetch_add(1, Ordering::Relaxed) + 1;
+                    bar.set_message(format!("{n} not successful"));
+                }
+                bar.inc(1);
+                r
+            })
+            .collect()
+    });
+    bar.finish_and_clear();
+    let runs: Vec<RobustRun> = runs.into_iter().collect::<Result<_>>()?;
+    let rep = RobustnessReport {
+        conditions: req.conditions.clone(),
+        deltas: req.deltas.clone(),
+        runs,
+        wall_time_s: t0.elapsed().as_secs_f64(),
+        jobs: req.jobs,
+        sets: req.sets.clone(),
+    };
+    if let Some(out) = &req.out {
+        let dir = OutputDir::create(out)
+            .with_context(|| format!("cannot create output directory {}", out.display()))?;
+        std::fs::write(dir.path().join("runs.csv"), runs_csv(&rep))?;
+        std::fs::write(dir.path().join("table.md"), markdown(&rep))?;
+        dir.commit()
+            .with_context(|| format!("cannot move the results into {}", out.display()))?;
+    }
+    Ok(rep)
+}
+
+/// Header of `runs.csv`.
+pub const RUNS_HEADER: &str = "disturbance,magnitude,delta,group,case,outcome,fell,fall_time,\
+success,collision,min_clearance,steps,non_optimal_cycles";
+
+/// Every run as CSV (with [`RUNS_HEADER`]).
+pub fn runs_csv(rep: &RobustnessReport) -> String {
+    let mut s = String::from(RUNS_HEADER);
+    s.push('\n');
+    for r in &rep.runs {
+        let c = &rep.conditions[r.condition];
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            c.disturbance,
+            c.magnitude.replace(',', ";"),
+            r.delta,
+            r.group,
+            r.label,
+            r.outcome.name(),
+            u8::from(r.fall_time.is_some()),
+            r.fall_time.map_or(String::new(), |t| format!("{t:.3}")),
+            u8::from(r.success),
+            u8::from(r.collision),
+            r.min_clearance,
+            r.steps,
+            r.non_optimal_cycles
+        );
+    }
+    s
+}
+
+/// The study as Markdown: one table per group, a row per condition and delta.
+pub fn markdown(rep: &RobustnessReport) -> String {
+    let mut s = String::new();
+    let mm = |v: f64| {
+        if v.is_finite() {
+            format!("{:.0}", v * 1e3)
+        } else {
+            "n/a".into()
+        }
+    };
+    for group in ["shipped", "random"] {
+        let in_group: Vec<&RobustRun> = rep.runs.iter().filter(|r| r.group == group).collect();
+        if in_group.is_empty() {
+            continue;
+        }
+        let n = cell_stats(
+            &in_group
+                .iter()
+                .copied()
+                .filter(|r| r.condition == 0 && r.delta == rep.deltas[0])
+                .collect::<Vec<_>>(),
+        )
+        .runs;
+        let _ = writeln!(
+            s,
+            "\n{} ({n} runs per row)\n",
+            if group == "shipped" {
+                "Shipped cases"
+            } else {
+                "Random environments"
+            }
+        );
+        s += "| disturbance | magnitude | delta [m] | success | fell | collision (upright) | stuck / time limit | min clearance before fall [mm] | upright: min / p5 / median [mm] |\n";
+        s += "|---|---|---|---|---|---|---|---|---|\n";
+        for (ci, c) in rep.conditions.iter().enumerate() {
+            for &d in &rep.deltas {
+                let cell: Vec<&RobustRun> = in_group
+                    .iter()
+                    .copied()
+                    .filter(|r| r.condition == ci && r.delta == d)
+                    .collect();
+                let st = cell_stats(&cell);
+                let _ = writeln!(
+                    s,
+                    "| {} | {} | {} | {}/{} | {} | {} ({}) | {} / {} | {} | {} / {} / {} |",
+                    c.disturbance,
+                    c.magnitude,
+                    d,
+                    st.success,
+                    st.runs,
+                    st.falls,
+                    st.collisions,
+                    st.collisions_upright,
+                    st.stuck,
+                    st.time_limit,
+                    mm(st.min_clearance),
+                    mm(st.min_clearance_upright),
+                    mm(st.p5_clearance_upright),
+                    mm(st.median_clearance_upright)
+                );
+            }
+        }
+    }
+    let extra: Vec<String> = rep.sets.iter().map(|(k, v)| format!("{k}={v}")).collect();
+    let _ = writeln!(
+        s,
+        "\n{} runs, {} jobs, wall time {:.1} s{}",
+        rep.runs.len(),
+        rep.jobs,
+        rep.wall_time_s,
+        if extra.is_empty() {
+            String::new()
+        } else {
+            format!("; every run with {}", extra.join(", "))
+        }
+    );
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn run_of(c: f64, success: bool, fell: bool) -> RobustRun {
+        RobustRun {
+            condition: 0,
+            delta: 0.0,
+            group: "random",
+            label: "x".into(),
+            outcome: if fell {
+                Outcome::Diverged
+            } else {
+                Outcome::GoalReached
+            },
+            fall_time: fell.then_some(1.0),
+            success,
+            collision: c < 0.0,
+            min_clearance: c,
+            steps: 1,
+            non_optimal_cycles: 0,
+        }
+    }
+
+    #[test]
+    fn cell_statistics() {
+        let runs: Vec<RobustRun> = (0..20)
+            .map(|i| run_of(f64::from(i) * 0.01 - 0.015, i >= 2, i == 0))
+            .collect();
+        let refs: Vec<&RobustRun> = runs.iter().collect();
+        let st = cell_stats(&refs);
+        assert_eq!(st.runs, 20);
+        assert_eq!(st.success, 18);
+        assert_eq!(st.collisions, 2);
+        assert_eq!(st.collisions_upright, 1);
+        assert_eq!(st.falls, 1);
+        assert!((st.min_clearance + 0.015).abs() < 1e-12);
+        // Upright: the 19 runs from -0.005 m; nearest rank 1 of 19 is the p5.
+        assert!((st.min_clearance_upright + 0.005).abs() < 1e-12);
+        assert_eq!(st.p5_clearance_upright, st.min_clearance_upright);
+        assert!((st.median_clearance_upright - 0.085).abs() < 1e-12);
+    }
+
+    #[test]
+    fn default_conditions_parse_as_scenario_overrides() {
+        for c in default_conditions() {
+            let sc = Case::new("simple").load(&c.sets).unwrap();
+            assert_eq!(
+                sc.disturbance.is_active(sc.config.com_height),
+                c.disturbance != "none",
+                "{c:?}"
+            );
+        }
+    }
+}
