@@ -412,7 +412,7 @@ fn main() -> ExitCode {
             req.progress = !quiet;
             match ldcbf_sim::robustness::run_robustness(&req) {
                 Ok(rep) => {
-                    print!("{}", ldcbf_sim::robustness::markdown(&rep));
+                    out!("{}", ldcbf_sim::robustness::markdown(&rep));
                     ExitCode::SUCCESS
                 }
                 Err(e) => fail(e),
