@@ -44,17 +44,22 @@
 //!
 //! | N | foot variables | these variables |
 //! |---|---|---|
-//! | 3 | 4.1e3 | 1 |
-//! | 5 | 4.6e5 | 1 |
+//! | 3 | 2.7e4 | 1 |
+//! | 5 | 1.4e7 | 1 |
 //! | 10 | 1.8e13 | 1 |
-//! | 20 | not positive definite in floating point (Cholesky fails from N = 14) | 1 |
+//! | 14 | 8.3e17 | 1 |
+//! | 20 | 6.9e18, a computed eigenvalue of -2.5e2: not positive definite in floating point (Cholesky fails) | 1 |
 //!
 //! In the new variables `H = 2 I` for every `N`, and the rows' normals stay of
 //! moderate size (`|kappa| = 5.6` 1/s), so the dual active-set solver works at
-//! `N = 10` and `N = 20` as at `N = 3`. Alternatives considered: footsteps as
-//! offsets from the capture point (DCM) also remove the growth, but give a
-//! triangular, non-diagonal cost; the positions make the cost diagonal and the
-//! LDCBF rows (which act on positions) two-term.
+//! `N = 10` and `N = 20` as at `N = 3`. Alternative considered: footsteps as
+//! offsets `d_k = f_k - xi_k` from the capture point (DCM) `xi = p + v/beta`
+//! also remove the growth (`xi_{k+1} = xi_k - (e^{beta T} - 1) d_k`), but each
+//! `p_k` is then a cumulative sum of all earlier `d_j`, so the cost's Hessian is
+//! dense and its condition number still grows with `N` (like `N^2` for such sums);
+//! the positions make the cost diagonal (nothing to factor), keep the LDCBF rows
+//! (which act on positions) two-term, and the inverse map is only marginally
+//! stable (weights at most `2 |kappa|`).
 //!
 //! ## Rows
 //!
