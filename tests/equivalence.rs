@@ -177,7 +177,11 @@ fn check_case<const N: usize, const NV: usize, const NC: usize>(
         heading: c.heading,
         turning_rate: c.omega,
         stance_foot: foot,
-        stance_side: if c.right_stance { Side::Right } else { Side::Left },
+        stance_side: if c.right_stance {
+            Side::Right
+        } else {
+            Side::Left
+        },
         time_in_step: c.t_in,
         goal: Vector2::new(
             c.p.0 + c.goal_dist * c.goal_bearing.cos(),
@@ -188,7 +192,8 @@ fn check_case<const N: usize, const NV: usize, const NC: usize>(
     let mut ctl =
         Controller::<N, NV, NC, 8>::new(cfg).map_err(|e| TestCaseError::fail(e.to_string()))?;
     let mut asm = Assembly::default();
-    ctl.assemble(&input, &mut asm).map_err(|e| TestCaseError::fail(e.to_string()))?;
+    ctl.assemble(&input, &mut asm)
+        .map_err(|e| TestCaseError::fail(e.to_string()))?;
     if asm.n_obstacles > 0 {
         st.with_obstacles.set(st.with_obstacles.get() + 1);
     }
@@ -207,7 +212,11 @@ fn check_case<const N: usize, const NV: usize, const NC: usize>(
         "{a:?}: ours {:?}, Clarabel {:?}; KKT ours {:?}, KKT Clarabel {:?}, x ours {:?} x ref {:?}",
         own.status,
         reference.raw_status,
-        kkt(&problem, own.x.as_slice(), &own.lambda.as_slice()[..problem.m]),
+        kkt(
+            &problem,
+            own.x.as_slice(),
+            &own.lambda.as_slice()[..problem.m]
+        ),
         kkt(&problem, &reference.x, &reference.z),
         own.x.as_slice(),
         reference.x
@@ -222,7 +231,11 @@ fn check_case<const N: usize, const NV: usize, const NC: usize>(
         st.worst_raw.set(st.worst_raw.get().max(raw / (1.0 + xr)));
         st.worst_primal.set(st.worst_primal.get().max(a.primal));
         st.worst_obj.set(st.worst_obj.get().max(a.objective));
-        let k = kkt(&problem, own.x.as_slice(), &own.lambda.as_slice()[..problem.m]);
+        let k = kkt(
+            &problem,
+            own.x.as_slice(),
+            &own.lambda.as_slice()[..problem.m],
+        );
         prop_assert!(k.max() <= 1e-8, "KKT {k:?}");
         st.worst_kkt.set(st.worst_kkt.get().max(k.max()));
         // Cold `step`, then the same input again: warm start from the first
@@ -260,7 +273,10 @@ fn check_case<const N: usize, const NV: usize, const NC: usize>(
         let out = ctl.step(&input);
         prop_assert_eq!(out.status, CycleStatus::Infeasible);
         prop_assert!(
-            matches!(out.info.source, CommandSource::RelaxedGait | CommandSource::RelaxedSafety),
+            matches!(
+                out.info.source,
+                CommandSource::RelaxedGait | CommandSource::RelaxedSafety
+            ),
             "source {:?}",
             out.info.source
         );

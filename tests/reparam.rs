@@ -49,7 +49,10 @@ fn beta() -> f64 {
 fn flow(p: V2, v: V2, f: V2, tau: f64) -> (V2, V2) {
     let b = beta();
     let (c, s) = ((b * tau).cosh(), (b * tau).sinh());
-    (c * p + (s / b) * v + (1.0 - c) * f, b * s * p + c * v - b * s * f)
+    (
+        c * p + (s / b) * v + (1.0 - c) * f,
+        b * s * p + c * v - b * s * f,
+    )
 }
 
 /// `(-pi, pi]`.
@@ -232,7 +235,11 @@ fn spec_foot_qp(n: usize, c: &Cycle, cfg: &Config) -> DenseProblem {
         let (s, co) = theta[k].sin_cos();
         let lon = V2::new(co, s);
         let lat = V2::new(-s, co);
-        let s_k = if first_right == (k % 2 == 0) { 1.0 } else { -1.0 };
+        let s_k = if first_right == (k % 2 == 0) {
+            1.0
+        } else {
+            -1.0
+        };
         let v1 = vel(k + 1);
         row(lon, &v1, cfg.vx_max);
         row(-lon, &v1, -cfg.vx_min);
@@ -367,7 +374,10 @@ fn compare_with_spec<const N: usize, const NV: usize, const NC: usize>(
                 ));
                 tally.infeasible += 1;
             }
-            other => panic!("N = {N}, case {case}: Clarabel {other:?} ({:?})", r.raw_status),
+            other => panic!(
+                "N = {N}, case {case}: Clarabel {other:?} ({:?})",
+                r.raw_status
+            ),
         }
     }
     tally

@@ -476,13 +476,7 @@ pub fn push_foot_row<const N: usize, const NV: usize, const NC: usize>(
     v0: &Vector2<f64>,
 ) -> Result<(), ()> {
     let (w, f_const) = model.foot(k, p0, v0);
-    push_row(
-        qp,
-        &hp.eta,
-        &-w,
-        &-f_const,
-        -hp.eta.dot(&hp.c) - delta_foot,
-    )
+    push_row(qp, &hp.eta, &-w, &-f_const, -hp.eta.dot(&hp.c) - delta_foot)
 }
 
 #[cfg(test)]

@@ -930,16 +930,8 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             for ob in &out.obstacles[..out.n_obstacles.min(NOBS)] {
                 for k in 0..N {
                     let i = out.qp.m;
-                    ok &= push_foot_row(
-                        &mut out.qp,
-                        &self.model,
-                        &ob.half_plane,
-                        df,
-                        k,
-                        &p0,
-                        &v0,
-                    )
-                    .is_ok();
+                    ok &= push_foot_row(&mut out.qp, &self.model, &ob.half_plane, df, k, &p0, &v0)
+                        .is_ok();
                     if let Some(slot) = out.rows.get_mut(i) {
                         *slot = RowId {
                             kind: RowKind::FootClearance(ob.index),
