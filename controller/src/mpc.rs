@@ -628,6 +628,16 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
         }
         let lip = Lip::new(config.gravity, config.com_height, config.step_duration);
         let model = Condensed::<N>::new(&lip);
+        // The QP's variables need the step map to be invertible for the foot:
+        // `1 - cosh(beta T)` away from 0 (and everything finite). Rejects
+        // `beta T < 1.4e-3` (sub-millisecond steps) and overflowing `cosh`.
+        let c_minus_1 = lip.cosh_bt - 1.0;
+        if !(c_minus_1 >= 1e-6 && lip.cosh_bt.is_finite() && model.kappa.is_finite()) {
+            return Err(ConfigError {
+                field: "step_duration",
+                requirement: "gives a step map that cannot be inverted for the foot (beta T must be in [1.4e-3, 700])",
+            });
+        }
         let settings = QpSettings {
             tol_primal: config.tol_primal,
             ..QpSettings::default()
@@ -1359,6 +1369,20 @@ mod tests {
         };
         assert_eq!(Ctl::new(c).unwrap_err().field, "foot_clearance");
         assert!(Controller::<3, 6, { constraint_capacity(3, 8, true) }, 8>::new(c).is_ok());
+        // Valid fields whose step map cannot be inverted for the foot.
+        for t in [1e-6, 1e3] {
+            let c = Config {
+                step_duration: t,
+                ..Config::default()
+            };
+            assert!(c.validate().is_ok());
+            assert_eq!(Ctl::new(c).unwrap_err().field, "step_duration", "T = {t}");
+        }
+        let c = Config {
+            step_duration: 1e-3,
+            ..Config::default()
+        };
+        assert!(Ctl::new(c).is_ok());
     }
 
     #[test]
