@@ -9,11 +9,10 @@
 //!   to (10, 10) among the six obstacles of the SPEC's `paper` scenario:
 //!   `step/warm` (in order, warm start as on the robot), `step/cold` (memory reset
 //!   before each cycle), `solve/cold` (the QP solve alone on the recorded QPs).
-//! * `horizon/N`: the same walk with horizon N in {3, 5, 10} (capacity 8). N = 20
-//!   is not benchmarked: in the condensed formulation the footstep weights grow
-//!   like cosh(beta T)^N, the Hessian's condition number passes 1e13 at N = 10 and
-//!   the Hessian is numerically indefinite from N = 14, so `Controller::new`
-//!   rejects N = 20 (see the README's open points).
+//! * `horizon/N`: the same walk with horizon N in {3, 5, 10, 20} (capacity 8,
+//!   iteration budgets scaled by `Config::with_budgets_for_horizon`, i.e.
+//!   unchanged at N = 3). The QP is solved in the predicted positions (Hessian
+//!   `2 I` at every N, see `controller/src/constraints.rs`), so N = 20 works.
 //! * `obstacles/K`: N = 3, obstacle capacity K in {0, 4, 8, 16, 32}, walking
 //!   through a field of 0.2 m square posts on a 1 m grid (so that at least 32
 //!   are within `r_active` = 4 m), warm-started.
@@ -69,7 +68,8 @@ fn bench_step<const N: usize, const NV: usize, const NC: usize, const NOBS: usiz
 ) {
     let cycles = record::<N, NV, NC, NOBS>(obs, goal);
     group.bench_function(id, |b| {
-        let mut ctl = Controller::<N, NV, NC, NOBS>::new(Config::default()).unwrap();
+        let config = Config::default().with_budgets_for_horizon(N);
+        let mut ctl = Controller::<N, NV, NC, NOBS>::new(config).unwrap();
         let mut i = 0;
         b.iter(|| {
             let c = &cycles[i % cycles.len()];
@@ -145,6 +145,12 @@ fn horizon(cr: &mut Criterion) {
     bench_step::<10, 20, { constraint_capacity(10, 8, false) }, 8>(
         &mut group,
         BenchmarkId::from_parameter(10),
+        &obs,
+        goal,
+    );
+    bench_step::<20, 40, { constraint_capacity(20, 8, false) }, 8>(
+        &mut group,
+        BenchmarkId::from_parameter(20),
         &obs,
         goal,
     );

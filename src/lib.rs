@@ -89,7 +89,8 @@ pub mod fixtures {
     }
 
     /// Walks from [`Recorded::START`] toward `goal` with a fresh controller of
-    /// the given sizes (default configuration), for at most `max_steps` steps or
+    /// the given sizes (default configuration, iteration budgets scaled by
+    /// `Config::with_budgets_for_horizon`), for at most `max_steps` steps or
     /// until the CoM is within 0.15 m of the goal; returns every cycle's input and
     /// output, in order.
     pub fn walk<
@@ -103,7 +104,9 @@ pub mod fixtures {
         goal: Vector2<f64>,
         max_steps: usize,
     ) -> Vec<(Recorded, CycleOutput<N>)> {
-        let mut ctl = Controller::<N, NV, NC, NOBS>::new(Config::default()).expect("valid config");
+        // Budgets scaled for the horizon (unchanged at N = 3).
+        let config = Config::default().with_budgets_for_horizon(N);
+        let mut ctl = Controller::<N, NV, NC, NOBS>::new(config).expect("valid config");
         let lip = *ctl.lip();
         let t_step = ctl.config().step_duration;
         let dt = t_step / 8.0;

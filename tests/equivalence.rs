@@ -6,14 +6,16 @@
 //! Checked per case: feasibility agrees; when solved, primal within 1e-6 (scaled),
 //! objective within 1e-8 (relative), KKT residuals of our solution <= 1e-8; the
 //! warm-started `step` (second call with the same input) returns the same plan as
-//! the cold solve.
+//! the cold solve. At the paper's horizon N = 3 (10 000 cases) and at N = 10 and
+//! N = 20 (fewer cases).
 
 use std::cell::Cell;
 use std::f64::consts::PI;
 
 use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_controller::{
-    Assembly, CommandSource, Config, ConvexPolygon, CycleInput, CycleStatus, PaperController, Side,
+    Assembly, CommandSource, Config, Controller, ConvexPolygon, CycleInput, CycleStatus, Side,
+    constraint_capacity,
 };
 use ldcbf_reference::{DenseProblem, RefStatus, compare, kkt, solve_clarabel};
 use proptest::prelude::*;
@@ -126,12 +128,172 @@ fn polygon(c: &Case, o: &Obstacle) -> ConvexPolygon<16> {
     ConvexPolygon::new(&pts).expect("generated polygons are convex")
 }
 
-#[test]
-fn controller_qps_agree_with_clarabel() {
+/// Figures gathered over the cases of one run.
+#[derive(Default)]
+struct Stats {
+    solved: Cell<u32>,
+    infeasible: Cell<u32>,
+    worst_primal: Cell<f64>,
+    worst_obj: Cell<f64>,
+    worst_kkt: Cell<f64>,
+    worst_iter: Cell<u32>,
+    worst_iter_solved: Cell<u32>,
+    worst_raw: Cell<f64>,
+    with_obstacles: Cell<u32>,
+    relaxed_safety: Cell<u32>,
+}
+
+/// One case at horizon `N` (obstacle capacity 8): the controller's QP solved by
+/// both solvers, and the controller's `step` on it.
+fn check_case<const N: usize, const NV: usize, const NC: usize>(
+    c: &Case,
+    st: &Stats,
+) -> Result<(), TestCaseError> {
+    let cfg = Config {
+        gamma: c.gamma,
+        delta: c.delta,
+        // The default budgets are sized for N = 3; longer horizons have more
+        // rows and need more iterations (reported below).
+        max_iter: if N > 3 { 1000 } else { 64 },
+        max_iter_cycle: if N > 3 { 20_000 } else { 2048 },
+        ..Config::default()
+    };
+    let polys: Vec<ConvexPolygon<16>> = c.obstacles.iter().map(|o| polygon(c, o)).collect();
+    // The state is drawn where walking puts it: at the END of the current step
+    // the CoM is at `p`, with body-frame velocity (v.0 forward, v.1 lateral
+    // towards the swing side) and the stance foot on its own side of the CoM;
+    // the measured state is that one flowed back by the remaining time.
+    let (sh, ch) = c.heading.sin_cos();
+    let body = |lon: f64, lat: f64| Vector2::new(ch * lon - sh * lat, sh * lon + ch * lat);
+    let side_sign = if c.right_stance { -1.0 } else { 1.0 }; // right foot is on the right
+    let p_end = Vector2::new(c.p.0, c.p.1);
+    let v_end = body(c.v.0, -side_sign * c.v.1);
+    let foot = p_end + body(c.foot.0, side_sign * c.foot.1);
+    let lip = ldcbf_controller::Lip::new(9.81, 1.0, 0.4);
+    let (p_now, v_now) = lip.propagate(&p_end, &v_end, &foot, -(0.4 - c.t_in));
+    let input = CycleInput {
+        com_position: p_now,
+        com_velocity: v_now,
+        heading: c.heading,
+        turning_rate: c.omega,
+        stance_foot: foot,
+        stance_side: if c.right_stance {
+            Side::Right
+        } else {
+            Side::Left
+        },
+        time_in_step: c.t_in,
+        goal: Vector2::new(
+            c.p.0 + c.goal_dist * c.goal_bearing.cos(),
+            c.p.1 + c.goal_dist * c.goal_bearing.sin(),
+        ),
+        obstacles: &polys,
+    };
+    let mut ctl =
+        Controller::<N, NV, NC, 8>::new(cfg).map_err(|e| TestCaseError::fail(e.to_string()))?;
+    let mut asm = Assembly::default();
+    ctl.assemble(&input, &mut asm)
+        .map_err(|e| TestCaseError::fail(e.to_string()))?;
+    if asm.n_obstacles > 0 {
+        st.with_obstacles.set(st.with_obstacles.get() + 1);
+    }
+    let problem = DenseProblem::from_assembly(ctl.solver(), &asm);
+    let own = ctl.solver().solve(&asm.qp, &[false; NC], 1000);
+    let reference = solve_clarabel(&problem);
+    prop_assert!(
+        reference.status != RefStatus::Failed,
+        "Clarabel failed ({:?}) on {:?}",
+        reference.raw_status,
+        c
+    );
+    let a = compare(&problem, &own, &reference);
+    prop_assert!(
+        a.holds(),
+        "{a:?}: ours {:?}, Clarabel {:?}; KKT ours {:?}, KKT Clarabel {:?}, x ours {:?} x ref {:?}",
+        own.status,
+        reference.raw_status,
+        kkt(
+            &problem,
+            own.x.as_slice(),
+            &own.lambda.as_slice()[..problem.m]
+        ),
+        kkt(&problem, &reference.x, &reference.z),
+        own.x.as_slice(),
+        reference.x
+    );
+    st.worst_iter.set(st.worst_iter.get().max(own.iterations));
+    if a.both_solved {
+        st.solved.set(st.solved.get() + 1);
+        st.worst_iter_solved
+            .set(st.worst_iter_solved.get().max(own.iterations));
+        let xr = reference.x_raw.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let raw = (0..problem.n).fold(0.0f64, |a, i| a.max((own.x[i] - reference.x_raw[i]).abs()));
+        st.worst_raw.set(st.worst_raw.get().max(raw / (1.0 + xr)));
+        st.worst_primal.set(st.worst_primal.get().max(a.primal));
+        st.worst_obj.set(st.worst_obj.get().max(a.objective));
+        let k = kkt(
+            &problem,
+            own.x.as_slice(),
+            &own.lambda.as_slice()[..problem.m],
+        );
+        prop_assert!(k.max() <= 1e-8, "KKT {k:?}");
+        st.worst_kkt.set(st.worst_kkt.get().max(k.max()));
+        // Cold `step`, then the same input again: warm start from the first
+        // active set must reproduce the plan.
+        let first = ctl.step(&input);
+        let second = ctl.step(&input);
+        prop_assert_eq!(first.status, CycleStatus::Optimal);
+        prop_assert!(second.info.warm_started || first.info.active_set_size == 0);
+        let d = (first.foot_target - second.foot_target).amax();
+        prop_assert!(d <= 1e-9, "warm start moved f_0 by {d:e}");
+        // The command is the footstep of the QP's solution (the QP's variables
+        // are the positions p_1..p_N; f_0 follows by the inverse LIP map).
+        let f0 = ctl.feet_of(&asm.prediction, &own.x)[0];
+        prop_assert!((first.foot_target - f0).amax() <= 1e-12);
+    } else {
+        st.infeasible.set(st.infeasible.get() + 1);
+        // Our solver's Farkas certificate proves the infeasibility on its own:
+        // y >= 0, G'y = 0, h'y < 0.
+        let y = &own.lambda.as_slice()[..problem.m];
+        let ymax = y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        let mut gty = vec![0.0; problem.n];
+        let mut hty = 0.0;
+        for (i, yi) in y.iter().enumerate() {
+            prop_assert!(*yi >= 0.0);
+            for (j, g) in gty.iter_mut().enumerate() {
+                *g += problem.G[i * problem.n + j] * yi;
+            }
+            hty += problem.h[i] * yi;
+        }
+        let gty_max = gty.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        prop_assert!(gty_max <= 1e-9 * (1.0 + ymax), "G'y = {gty:?}");
+        prop_assert!(hty < 0.0, "h'y = {hty}");
+        // The priority scheme answers every infeasible cycle with a relaxed
+        // optimal plan (never a blind fallback) on these inputs.
+        let out = ctl.step(&input);
+        prop_assert_eq!(out.status, CycleStatus::Infeasible);
+        prop_assert!(
+            matches!(
+                out.info.source,
+                CommandSource::RelaxedGait | CommandSource::RelaxedSafety
+            ),
+            "source {:?}",
+            out.info.source
+        );
+        if out.info.source == CommandSource::RelaxedSafety {
+            st.relaxed_safety.set(st.relaxed_safety.get() + 1);
+        }
+    }
+    Ok(())
+}
+
+/// Runs `default_cases` cases (env `LDCBF_PROPTEST_CASES` overrides) at horizon
+/// `N`, prints the figures and checks the contract.
+fn run<const N: usize, const NV: usize, const NC: usize>(default_cases: u32) {
     let cases: u32 = std::env::var("LDCBF_PROPTEST_CASES")
         .ok()
         .and_then(|s| s.parse().ok())
-        .unwrap_or(10_000);
+        .unwrap_or(default_cases);
     // A fixed seed keeps CI reproducible; LDCBF_PROPTEST_RANDOM=1 draws a new one.
     let config = PtConfig {
         cases,
@@ -143,152 +305,43 @@ fn controller_qps_agree_with_clarabel() {
     } else {
         TestRunner::new_with_rng(config, TestRng::deterministic_rng(RngAlgorithm::ChaCha))
     };
-    let solved = Cell::new(0u32);
-    let infeasible = Cell::new(0u32);
-    let worst_primal = Cell::new(0.0f64);
-    let worst_obj = Cell::new(0.0f64);
-    let worst_kkt = Cell::new(0.0f64);
-    let worst_iter = Cell::new(0u32);
-    let worst_iter_solved = Cell::new(0u32);
-    let worst_raw = Cell::new(0.0f64);
-    let with_obstacles = Cell::new(0u32);
-    let relaxed_safety = Cell::new(0u32);
-    let result = runner.run(&case(), |c| {
-        let cfg = Config {
-            gamma: c.gamma,
-            delta: c.delta,
-            ..Config::default()
-        };
-        let polys: Vec<ConvexPolygon<16>> = c.obstacles.iter().map(|o| polygon(&c, o)).collect();
-        // The state is drawn where walking puts it: at the END of the current step
-        // the CoM is at `p`, with body-frame velocity (v.0 forward, v.1 lateral
-        // towards the swing side) and the stance foot on its own side of the CoM;
-        // the measured state is that one flowed back by the remaining time.
-        let (sh, ch) = c.heading.sin_cos();
-        let body = |lon: f64, lat: f64| Vector2::new(ch * lon - sh * lat, sh * lon + ch * lat);
-        let side_sign = if c.right_stance { -1.0 } else { 1.0 }; // right foot is on the right
-        let p_end = Vector2::new(c.p.0, c.p.1);
-        let v_end = body(c.v.0, -side_sign * c.v.1);
-        let foot = p_end + body(c.foot.0, side_sign * c.foot.1);
-        let lip = ldcbf_controller::Lip::new(9.81, 1.0, 0.4);
-        let (p_now, v_now) = lip.propagate(&p_end, &v_end, &foot, -(0.4 - c.t_in));
-        let input = CycleInput {
-            com_position: p_now,
-            com_velocity: v_now,
-            heading: c.heading,
-            turning_rate: c.omega,
-            stance_foot: foot,
-            stance_side: if c.right_stance { Side::Right } else { Side::Left },
-            time_in_step: c.t_in,
-            goal: Vector2::new(
-                c.p.0 + c.goal_dist * c.goal_bearing.cos(),
-                c.p.1 + c.goal_dist * c.goal_bearing.sin(),
-            ),
-            obstacles: &polys,
-        };
-        let mut ctl = PaperController::new(cfg).map_err(|e| TestCaseError::fail(e.to_string()))?;
-        let mut asm = Assembly::default();
-        ctl.assemble(&input, &mut asm).map_err(|e| TestCaseError::fail(e.to_string()))?;
-        if asm.n_obstacles > 0 {
-            with_obstacles.set(with_obstacles.get() + 1);
-        }
-        let problem = DenseProblem::from_assembly(ctl.solver(), &asm);
-        let own = ctl.solver().solve(&asm.qp, &[false; 48], 1000);
-        let reference = solve_clarabel(&problem);
-        prop_assert!(
-            reference.status != RefStatus::Failed,
-            "Clarabel failed ({:?}) on {:?}",
-            reference.raw_status,
-            c
-        );
-        let a = compare(&problem, &own, &reference);
-        prop_assert!(
-            a.holds(),
-            "{a:?}: ours {:?}, Clarabel {:?}; KKT ours {:?}, KKT Clarabel {:?}, x ours {:?} x ref {:?}",
-            own.status,
-            reference.raw_status,
-            kkt(&problem, own.x.as_slice(), &own.lambda.as_slice()[..problem.m]),
-            kkt(&problem, &reference.x, &reference.z),
-            own.x.as_slice(),
-            reference.x
-        );
-        worst_iter.set(worst_iter.get().max(own.iterations));
-        if a.both_solved {
-            solved.set(solved.get() + 1);
-            worst_iter_solved.set(worst_iter_solved.get().max(own.iterations));
-            let xr = reference.x_raw.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            let raw = (0..problem.n).fold(0.0f64, |a, i| a.max((own.x[i] - reference.x_raw[i]).abs()));
-            worst_raw.set(worst_raw.get().max(raw / (1.0 + xr)));
-            worst_primal.set(worst_primal.get().max(a.primal));
-            worst_obj.set(worst_obj.get().max(a.objective));
-            let k = kkt(&problem, own.x.as_slice(), &own.lambda.as_slice()[..problem.m]);
-            prop_assert!(k.max() <= 1e-8, "KKT {k:?}");
-            worst_kkt.set(worst_kkt.get().max(k.max()));
-            // Cold `step`, then the same input again: warm start from the first
-            // active set must reproduce the plan.
-            let first = ctl.step(&input);
-            let second = ctl.step(&input);
-            prop_assert_eq!(first.status, CycleStatus::Optimal);
-            prop_assert!(second.info.warm_started || first.info.active_set_size == 0);
-            let d = (first.foot_target - second.foot_target).amax();
-            prop_assert!(d <= 1e-9, "warm start moved f_0 by {d:e}");
-            prop_assert!((first.foot_target.x - own.x[0]).abs() <= 1e-12);
-        } else {
-            infeasible.set(infeasible.get() + 1);
-            // Our solver's Farkas certificate proves the infeasibility on its own:
-            // y >= 0, G'y = 0, h'y < 0.
-            let y = &own.lambda.as_slice()[..problem.m];
-            let ymax = y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            let mut gty = vec![0.0; problem.n];
-            let mut hty = 0.0;
-            for (i, yi) in y.iter().enumerate() {
-                prop_assert!(*yi >= 0.0);
-                for (j, g) in gty.iter_mut().enumerate() {
-                    *g += problem.G[i * problem.n + j] * yi;
-                }
-                hty += problem.h[i] * yi;
-            }
-            let gty_max = gty.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-            prop_assert!(gty_max <= 1e-9 * (1.0 + ymax), "G'y = {gty:?}");
-            prop_assert!(hty < 0.0, "h'y = {hty}");
-            // The priority scheme answers every infeasible cycle with a relaxed
-            // optimal plan (never a blind fallback) on these inputs.
-            let out = ctl.step(&input);
-            prop_assert_eq!(out.status, CycleStatus::Infeasible);
-            prop_assert!(
-                matches!(out.info.source, CommandSource::RelaxedGait | CommandSource::RelaxedSafety),
-                "source {:?}",
-                out.info.source
-            );
-            if out.info.source == CommandSource::RelaxedSafety {
-                relaxed_safety.set(relaxed_safety.get() + 1);
-            }
-        }
-        Ok(())
-    });
+    let st = Stats::default();
+    let result = runner.run(&case(), |c| check_case::<N, NV, NC>(&c, &st));
     println!(
-        "{cases} cycles: {} solved, {} infeasible ({} needed the safety rows relaxed), {} with \
+        "N = {N}, {cases} cycles: {} solved, {} infeasible ({} needed the safety rows relaxed), {} with \
          obstacles; worst scaled primal \
          difference {:.3e}, worst relative objective difference {:.3e}, worst KKT residual \
          {:.3e}, worst iterations {} ({} on solved QPs); unpolished Clarabel iterate: worst \
          scaled primal difference {:.3e}",
-        solved.get(),
-        infeasible.get(),
-        relaxed_safety.get(),
-        with_obstacles.get(),
-        worst_primal.get(),
-        worst_obj.get(),
-        worst_kkt.get(),
-        worst_iter.get(),
-        worst_iter_solved.get(),
-        worst_raw.get()
+        st.solved.get(),
+        st.infeasible.get(),
+        st.relaxed_safety.get(),
+        st.with_obstacles.get(),
+        st.worst_primal.get(),
+        st.worst_obj.get(),
+        st.worst_kkt.get(),
+        st.worst_iter.get(),
+        st.worst_iter_solved.get(),
+        st.worst_raw.get()
     );
     if let Err(e) = result {
         panic!("{e}");
     }
     assert!(
-        solved.get() > 0 && infeasible.get() > 0,
+        st.solved.get() > 0 && st.infeasible.get() > 0,
         "both outcomes must be exercised"
     );
-    assert!(with_obstacles.get() > cases / 2);
+    assert!(st.with_obstacles.get() > cases / 2);
+}
+
+#[test]
+fn controller_qps_agree_with_clarabel() {
+    run::<3, 6, { constraint_capacity(3, 8, false) }>(10_000);
+}
+
+/// The long horizons of issue 5 (fewer cases: each is larger).
+#[test]
+fn long_horizon_qps_agree_with_clarabel() {
+    run::<10, 20, { constraint_capacity(10, 8, false) }>(1_000);
+    run::<20, 40, { constraint_capacity(20, 8, false) }>(300);
 }

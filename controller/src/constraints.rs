@@ -1,13 +1,73 @@
-//! The condensed MPC: predictions as affine functions of the footsteps, the cost,
-//! and every constraint row of SPEC 2.5.
+//! The condensed MPC in pre-stabilised variables: predictions, footsteps, the
+//! cost, and every constraint row of SPEC 2.5 as affine functions of the
+//! predicted CoM positions.
 //!
-//! Decision vector (`NV = 2N` entries, metres, world frame W), interleaved:
-//! `u = [f_0x, f_0y, f_1x, f_1y, ..., f_{N-1}x, f_{N-1}y]`.
+//! ## Decision variables
 //!
-//! Both axes share the same LIP coefficients, so every predicted world vector
-//! `Q` (a position `p_k`, a velocity `v_k`, a foot offset `f_k - p_k`) is
-//! `Q = sum_j w_j f_j + Q0` with scalar weights `w_j`, and a row `a' Q <= b` with a
-//! world direction `a` becomes `sum_j w_j (a_x f_jx + a_y f_jy) <= b - a' Q0`.
+//! `NV = 2N` entries, metres, world frame W, interleaved:
+//! `z = [p_1x, p_1y, p_2x, p_2y, ..., p_Nx, p_Ny]`: the predicted CoM positions
+//! at the ends of the planned steps (`p_k` = position of `x_k`, the state at the
+//! start of step `k`). This is an exact, invertible change of variables of the
+//! QP of SPEC 2 item 3 (whose variables are the footsteps `f_0 .. f_{N-1}`):
+//! both QPs have the same feasible set and cost under the map below, so they
+//! have the same optimal footsteps, which the controller recovers exactly
+//! (`tests/reparam.rs` checks this against the foot-variable QP built from the
+//! spec's formulas and solved by Clarabel).
+//!
+//! ## The map (per axis, both axes share it)
+//!
+//! With `c = cosh(beta T)`, `s = sinh(beta T)`, the step map
+//! `p_{k+1} = c p_k + (s/beta) v_k + (1-c) f_k`,
+//! `v_{k+1} = beta s p_k + c v_k - beta s f_k` solved for the foot gives
+//!
+//! ```text
+//! f_k     = (p_{k+1} - c p_k - (s/beta) v_k) / (1 - c)
+//! v_{k+1} = -v_k + kappa (p_k - p_{k+1}),      kappa = beta s / (1 - c) = -beta coth(beta T / 2)
+//! ```
+//!
+//! (substituting: `c + s^2/(1-c) = (c - c^2 + s^2)/(1-c) = -1`, and
+//! `beta s (1 + c/(1-c)) = beta s / (1-c)`). So, from the fixed `(p_0, v_0)`,
+//! `v_k` is `(-1)^k`-alternating sums of `kappa (p_j - p_{j+1})`: every weight of
+//! `z` in `v_k` is `0`, `+-kappa` or `+-2 kappa`, whatever `N`. Every row (velocity
+//! on `v_{k+1}`, reachability on `f_k - p_k`, LDCBF on `p_{k+1}` and `p_k`, foot
+//! clearance on `f_k`) is thus an affine function of `z` with weights bounded
+//! independently of the horizon, and the cost `sum_{k=1..N} |p_k - g|^2` is
+//! `sum_k |z_k - g|^2`: Hessian exactly `2 I`.
+//!
+//! ## Why (conditioning)
+//!
+//! With the footsteps as variables the CoM depends on `f_j` through
+//! `A_d^(k-1-j) B_d`, whose entries grow like `e^{beta T k}` (`e^{beta T} = 3.50`
+//! for the paper's `T = 0.4 s`, `H = 1 m`), so the Hessian `2 S_p' S_p` of the
+//! cost is ill-conditioned. Measured (`cargo test --release --test reparam --
+//! --nocapture`, 2-norm condition number of the per-axis Hessian):
+//!
+//! | N | foot variables | these variables |
+//! |---|---|---|
+//! | 3 | 2.7e4 | 1 |
+//! | 5 | 1.4e7 | 1 |
+//! | 10 | 1.8e13 | 1 |
+//! | 14 | 8.3e17 | 1 |
+//! | 20 | 6.9e18, a computed eigenvalue of -2.5e2: not positive definite in floating point (Cholesky fails) | 1 |
+//!
+//! In the new variables `H = 2 I` for every `N`, and the rows' normals stay of
+//! moderate size (`|kappa| = 5.6` 1/s), so the dual active-set solver works at
+//! `N = 10` and `N = 20` as at `N = 3`. Alternative considered: footsteps as
+//! offsets `d_k = f_k - xi_k` from the capture point (DCM) `xi = p + v/beta`
+//! also remove the growth (`xi_{k+1} = xi_k - (e^{beta T} - 1) d_k`), but each
+//! `p_k` is then a cumulative sum of all earlier `d_j`, so the cost's Hessian is
+//! dense and its condition number still grows with `N` (like `N^2` for such sums);
+//! the positions make the cost diagonal (nothing to factor), keep the LDCBF rows
+//! (which act on positions) two-term, and the inverse map is only marginally
+//! stable (weights at most `2 |kappa|`).
+//!
+//! ## Rows
+//!
+//! A predicted world vector `Q` (a position `p_k`, a velocity `v_k`, a foot `f_k`
+//! or foot offset `f_k - p_k`) is `Q = sum_j w_j z_j + Q0` with scalar weights
+//! `w_j` (`z_j = p_{j+1}` as a world vector) and a constant `Q0` from `(p_0, v_0)`,
+//! and a row `a' Q <= b` with a world direction `a` becomes
+//! `sum_j w_j (a_x z_jx + a_y z_jy) <= b - a' Q0`.
 //! [`Condensed`] produces the weights and constants; [`push_row`] writes the row.
 //!
 //! Rows for step `k = 0..N-1`, in this order (8 per step), with
@@ -30,6 +90,10 @@
 //! same left-hand side as the upper walking-velocity bound, so the two are one row
 //! with the smaller right-hand side: identical feasible set, no duplicated
 //! (linearly dependent) rows for the solver.
+//!
+//! Row norms (the unit in which the solver's tolerance and the priority scheme's
+//! relaxations of [`crate::relax`] are measured) are those of these variables:
+//! e.g. `1` for the `k = 0` LDCBF rows, `sqrt(1 + (1 - gamma)^2)` for the others.
 #![allow(non_snake_case)]
 
 use nalgebra::{SMatrix, SVector, Vector2};
@@ -99,139 +163,203 @@ impl Default for RowId {
     }
 }
 
-/// The LIP predictions over the horizon as affine maps of the footsteps.
+/// The LIP predictions over the horizon as affine maps of the decision vector
+/// `z = (p_1, .., p_N)` (see the module docs).
 ///
-/// `p_k = P_p[k-1] (p0, v0) + sum_j S_p[k-1, j] f_j` (per axis, `k = 1..N`), and the
-/// same for velocities with `P_v`, `S_v`. `S_p`, `S_v` are lower triangular.
-/// Depends only on `(T, H, g, N)`: built once.
+/// Per axis, `v_k = V0[k-1] . (p0, v0) + sum_j V_w[k-1, j] z_j` for `k = 1..N`
+/// (`z_j = p_{j+1}`), and the feet follow from positions and velocities by
+/// `f_k = (p_{k+1} - c p_k - (s/beta) v_k) / (1 - c)`. Depends only on
+/// `(T, H, g, N)`: built once.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Condensed<const N: usize> {
-    /// Row `k-1`: coefficients of `(p0, v0)` in `p_k` (first row of `A_d^k`).
-    pub P_p: [Vector2<f64>; N],
-    /// Row `k-1`: coefficients of `(p0, v0)` in `v_k` (second row of `A_d^k`).
-    pub P_v: [Vector2<f64>; N],
-    /// `S_p[k-1, j]`: weight of `f_j` in `p_k`.
-    pub S_p: SMatrix<f64, N, N>,
-    /// `S_v[k-1, j]`: weight of `f_j` in `v_k`.
-    pub S_v: SMatrix<f64, N, N>,
+    /// `c = cosh(beta T)`.
+    pub c: f64,
+    /// `s / beta = sinh(beta T) / beta`, s.
+    pub s_over_beta: f64,
+    /// `beta s = beta sinh(beta T)`, 1/s.
+    pub beta_s: f64,
+    /// `kappa = beta s / (1 - c)`, 1/s: `v_{k+1} = -v_k + kappa (p_k - p_{k+1})`.
+    pub kappa: f64,
+    /// Row `k-1`: coefficients of `(p0, v0)` in `v_k` (1/s, 1).
+    pub V0: [Vector2<f64>; N],
+    /// `V_w[k-1, j]`: weight (1/s) of `z_j = p_{j+1}` in `v_k`; zero for `j >= k`.
+    pub V_w: SMatrix<f64, N, N>,
 }
 
 impl<const N: usize> Condensed<N> {
-    /// Builds the prediction matrices from the step model.
+    /// Builds the maps from the step model.
     pub fn new(lip: &Lip) -> Self {
-        let a = lip.A_d();
-        let b = lip.B_d();
-        // gam[m] = A^m B
-        let mut gam = [Vector2::zeros(); N];
-        let mut g = b;
-        for gm in gam.iter_mut() {
-            *gm = g;
-            g = a * g;
+        let c = lip.cosh_bt;
+        let beta_s = lip.beta * lip.sinh_bt;
+        let kappa = beta_s / (1.0 - c);
+        let mut V0 = [Vector2::zeros(); N];
+        let mut V_w = SMatrix::<f64, N, N>::zeros();
+        // v_1 = kappa p0 - v0 - kappa p_1.
+        if N >= 1 {
+            V0[0] = Vector2::new(kappa, -1.0);
+            V_w[(0, 0)] = -kappa;
         }
-        let mut P_p = [Vector2::zeros(); N];
-        let mut P_v = [Vector2::zeros(); N];
-        let mut ak = a;
-        for k in 0..N {
-            P_p[k] = Vector2::new(ak[(0, 0)], ak[(0, 1)]);
-            P_v[k] = Vector2::new(ak[(1, 0)], ak[(1, 1)]);
-            ak = a * ak;
-        }
-        let mut S_p = SMatrix::<f64, N, N>::zeros();
-        let mut S_v = SMatrix::<f64, N, N>::zeros();
-        for k in 1..=N {
+        // v_{k+1} = -v_k + kappa p_k - kappa p_{k+1}, k = 1..N-1.
+        for k in 1..N {
+            V0[k] = -V0[k - 1];
             for j in 0..k {
-                S_p[(k - 1, j)] = gam[k - 1 - j][0];
-                S_v[(k - 1, j)] = gam[k - 1 - j][1];
+                V_w[(k, j)] = -V_w[(k - 1, j)];
             }
+            V_w[(k, k - 1)] += kappa;
+            V_w[(k, k)] -= kappa;
         }
-        Condensed { P_p, P_v, S_p, S_v }
-    }
-
-    /// Free response (all feet zero) of `p_k`, `k = 1..=N`, from `(p0, v0)`.
-    pub fn free_position(&self, k: usize, p0: &Vector2<f64>, v0: &Vector2<f64>) -> Vector2<f64> {
-        let c = self.P_p[k - 1];
-        p0 * c[0] + v0 * c[1]
-    }
-
-    /// Free response of `v_k`, `k = 1..=N`.
-    pub fn free_velocity(&self, k: usize, p0: &Vector2<f64>, v0: &Vector2<f64>) -> Vector2<f64> {
-        let c = self.P_v[k - 1];
-        p0 * c[0] + v0 * c[1]
-    }
-
-    /// Weights of the footsteps in `p_k` (zero for `k = 0`).
-    pub fn position_weights(&self, k: usize) -> SVector<f64, N> {
-        if k == 0 {
-            SVector::zeros()
-        } else {
-            self.S_p.row(k - 1).transpose()
+        Condensed {
+            c,
+            s_over_beta: lip.sinh_bt / lip.beta,
+            beta_s,
+            kappa,
+            V0,
+            V_w,
         }
     }
 
-    /// Weights of the footsteps in `v_k`, `k >= 1`.
-    pub fn velocity_weights(&self, k: usize) -> SVector<f64, N> {
-        self.S_v.row(k - 1).transpose()
-    }
-
-    /// `(weights, constant)` of `p_k` for `k = 0..=N` (`p_0` is the constant itself).
+    /// `(weights, constant)` of `p_k`, `k = 0..=N` (`p_0` is the constant itself,
+    /// `p_k` for `k >= 1` is the variable `z_{k-1}`).
     pub fn position(
+        &self,
+        k: usize,
+        p0: &Vector2<f64>,
+        _v0: &Vector2<f64>,
+    ) -> (SVector<f64, N>, Vector2<f64>) {
+        let mut w = SVector::<f64, N>::zeros();
+        if k == 0 {
+            return (w, *p0);
+        }
+        if let Some(e) = w.get_mut(k - 1) {
+            *e = 1.0;
+        }
+        (w, Vector2::zeros())
+    }
+
+    /// `(weights, constant)` of `v_k`, `k = 0..=N`.
+    pub fn velocity(
         &self,
         k: usize,
         p0: &Vector2<f64>,
         v0: &Vector2<f64>,
     ) -> (SVector<f64, N>, Vector2<f64>) {
-        if k == 0 {
-            (SVector::zeros(), *p0)
-        } else {
-            (self.position_weights(k), self.free_position(k, p0, v0))
+        if k == 0 || k > N {
+            return (SVector::zeros(), *v0);
         }
+        let c = self.V0[k - 1];
+        (self.V_w.row(k - 1).transpose(), p0 * c[0] + v0 * c[1])
     }
 
-    /// Per-axis Hessian of `sum_k |p_k - g|^2` in `1/2 u'Hu` form: `2 S_p' S_p`.
+    /// `(weights, constant)` of the foot `f_k`, `k = 0..N-1`:
+    /// `(p_{k+1} - c p_k - (s/beta) v_k) / (1 - c)`.
+    pub fn foot(
+        &self,
+        k: usize,
+        p0: &Vector2<f64>,
+        v0: &Vector2<f64>,
+    ) -> (SVector<f64, N>, Vector2<f64>) {
+        let (w1, c1) = self.position(k + 1, p0, v0);
+        let (wp, cp) = self.position(k, p0, v0);
+        let (wv, cv) = self.velocity(k, p0, v0);
+        let d = 1.0 / (1.0 - self.c);
+        (
+            (w1 - wp * self.c - wv * self.s_over_beta) * d,
+            (c1 - cp * self.c - cv * self.s_over_beta) * d,
+        )
+    }
+
+    /// `(weights, constant)` of the foot offset `f_k - p_k`, `k = 0..N-1`:
+    /// `(p_{k+1} - p_k - (s/beta) v_k) / (1 - c)`.
+    pub fn foot_offset(
+        &self,
+        k: usize,
+        p0: &Vector2<f64>,
+        v0: &Vector2<f64>,
+    ) -> (SVector<f64, N>, Vector2<f64>) {
+        let (w1, c1) = self.position(k + 1, p0, v0);
+        let (wp, cp) = self.position(k, p0, v0);
+        let (wv, cv) = self.velocity(k, p0, v0);
+        let d = 1.0 / (1.0 - self.c);
+        (
+            (w1 - wp - wv * self.s_over_beta) * d,
+            (c1 - cp - cv * self.s_over_beta) * d,
+        )
+    }
+
+    /// Per-axis Hessian of `sum_k |p_k - g|^2` in `1/2 z'Hz` form: `2 I`.
     pub fn axis_hessian(&self) -> SMatrix<f64, N, N> {
-        self.S_p.transpose() * self.S_p * 2.0
+        SMatrix::<f64, N, N>::identity() * 2.0
     }
 
-    /// Full Hessian for the interleaved decision vector (`NV = 2N`).
+    /// Full Hessian for the interleaved decision vector (`NV = 2N`): `2 I`.
     pub fn hessian<const NV: usize>(&self) -> SMatrix<f64, NV, NV> {
         const { assert!(NV == 2 * N, "NV must equal 2 N") };
-        let ha = self.axis_hessian();
-        let mut h = SMatrix::<f64, NV, NV>::zeros();
-        for i in 0..N {
-            for j in 0..N {
-                h[(2 * i, 2 * j)] = ha[(i, j)];
-                h[(2 * i + 1, 2 * j + 1)] = ha[(i, j)];
-            }
-        }
-        h
+        SMatrix::<f64, NV, NV>::identity() * 2.0
     }
 
-    /// Gradient `q = 2 S_p' (P_p x0 - g)` (interleaved) of the cost
-    /// `sum_{k=1..N} |p_k - g|^2` in `1/2 u'Hu + q'u` form. Also returns the constant
-    /// `sum_k |free p_k - g|^2` so that cost = `1/2 u'Hu + q'u + constant`.
-    pub fn gradient<const NV: usize>(
+    /// Gradient `q = -2 (g, .., g)` (interleaved) of the cost
+    /// `sum_{k=1..N} |p_k - g|^2` in `1/2 z'Hz + q'z` form, and the constant
+    /// `N |g|^2`, so that cost = `1/2 z'Hz + q'z + constant`.
+    pub fn gradient<const NV: usize>(&self, goal: &Vector2<f64>) -> (SVector<f64, NV>, f64) {
+        const { assert!(NV == 2 * N, "NV must equal 2 N") };
+        let mut q = SVector::<f64, NV>::zeros();
+        for k in 0..N {
+            q[2 * k] = -2.0 * goal.x;
+            q[2 * k + 1] = -2.0 * goal.y;
+        }
+        (q, N as f64 * goal.norm_squared())
+    }
+
+    /// The decision vector of a plan given by its feet: the LIP rolled forward
+    /// from `(p0, v0)` over the feet `f_0 .. f_{N-1}` (interleaved, m), keeping
+    /// the positions `p_1 .. p_N`.
+    pub fn variables_from_feet<const NV: usize>(
         &self,
         p0: &Vector2<f64>,
         v0: &Vector2<f64>,
-        goal: &Vector2<f64>,
-    ) -> (SVector<f64, NV>, f64) {
+        feet: &SVector<f64, NV>,
+    ) -> SVector<f64, NV> {
         const { assert!(NV == 2 * N, "NV must equal 2 N") };
-        let mut q = SVector::<f64, NV>::zeros();
-        let mut constant = 0.0;
-        for k in 1..=N {
-            let e = self.free_position(k, p0, v0) - goal;
-            constant += e.norm_squared();
-            for j in 0..k {
-                let w = 2.0 * self.S_p[(k - 1, j)];
-                q[2 * j] += w * e.x;
-                q[2 * j + 1] += w * e.y;
-            }
+        let (mut p, mut v) = (*p0, *v0);
+        let mut z = SVector::<f64, NV>::zeros();
+        for k in 0..N {
+            let f = Vector2::new(feet[2 * k], feet[2 * k + 1]);
+            let pn = p * self.c + v * self.s_over_beta + f * (1.0 - self.c);
+            v = (p - f) * self.beta_s + v * self.c;
+            p = pn;
+            z[2 * k] = p.x;
+            z[2 * k + 1] = p.y;
         }
-        (q, constant)
+        z
+    }
+
+    /// The feet `f_0 .. f_{N-1}` and velocities `v_1 .. v_N` of the decision
+    /// vector `z` from `(p0, v0)`, by the inverse map of the module docs (each
+    /// foot from `p_k`, `v_k`, `p_{k+1}`; no forward propagation, so no growth of
+    /// rounding errors along the horizon).
+    pub fn feet_from_variables<const NV: usize>(
+        &self,
+        p0: &Vector2<f64>,
+        v0: &Vector2<f64>,
+        z: &SVector<f64, NV>,
+    ) -> ([Vector2<f64>; N], [Vector2<f64>; N]) {
+        const { assert!(NV == 2 * N, "NV must equal 2 N") };
+        let mut feet = [Vector2::zeros(); N];
+        let mut vel = [Vector2::zeros(); N];
+        let (mut p, mut v) = (*p0, *v0);
+        let d = 1.0 / (1.0 - self.c);
+        for k in 0..N {
+            let pn = Vector2::new(z[2 * k], z[2 * k + 1]);
+            feet[k] = (pn - p * self.c - v * self.s_over_beta) * d;
+            v = -v + (p - pn) * self.kappa;
+            vel[k] = v;
+            p = pn;
+        }
+        (feet, vel)
     }
 }
 
-/// Appends the row `a' Q <= ub` with `Q = sum_j w_j f_j + q0` to `qp`. Returns
+/// Appends the row `a' Q <= ub` with `Q = sum_j w_j z_j + q0` (`z_j = p_{j+1}`) to `qp`. Returns
 /// `Err(())` when the QP is full (nothing written).
 #[allow(clippy::result_unit_err)]
 pub fn push_row<const N: usize, const NV: usize, const NC: usize>(
@@ -285,8 +413,7 @@ pub fn push_gait_rows<const N: usize, const NV: usize, const NC: usize>(
     let (s, c) = (libm::sin(theta_k), libm::cos(theta_k));
     let lon = Vector2::new(c, s);
     let lat = Vector2::new(-s, c);
-    let wv = model.velocity_weights(k + 1);
-    let v_free = model.free_velocity(k + 1, p0, v0);
+    let (wv, v_free) = model.velocity(k + 1, p0, v0);
     let lon_upper = b
         .vx_max
         .min(b.vx_max - b.alpha / core::f64::consts::PI * omega_bar.abs());
@@ -294,11 +421,7 @@ pub fn push_gait_rows<const N: usize, const NV: usize, const NC: usize>(
     push_row(qp, &-lon, &wv, &v_free, -b.vx_min)?;
     push_row(qp, &(lat * s_k), &wv, &v_free, b.vy_max)?;
     push_row(qp, &(lat * -s_k), &wv, &v_free, -b.vy_min)?;
-    // f_k - p_k
-    let (wp, p_const) = model.position(k, p0, v0);
-    let mut wd = -wp;
-    wd[k] += 1.0;
-    let d_const = -p_const;
+    let (wd, d_const) = model.foot_offset(k, p0, v0);
     push_row(qp, &lon, &wd, &d_const, b.l_max)?;
     push_row(qp, &-lon, &wd, &d_const, b.l_max)?;
     push_row(qp, &lat, &wd, &d_const, b.l_max)?;
@@ -342,22 +465,18 @@ pub fn push_ldcbf_row<const N: usize, const NV: usize, const NC: usize>(
 }
 
 /// Appends the foot-clearance row `eta'(f_k - c) >= delta_foot` for step `k`.
-#[allow(clippy::result_unit_err)]
+#[allow(clippy::result_unit_err, clippy::too_many_arguments)]
 pub fn push_foot_row<const N: usize, const NV: usize, const NC: usize>(
     qp: &mut DenseQp<NV, NC>,
+    model: &Condensed<N>,
     hp: &HalfPlane,
     delta_foot: f64,
     k: usize,
+    p0: &Vector2<f64>,
+    v0: &Vector2<f64>,
 ) -> Result<(), ()> {
-    let mut w = SVector::<f64, N>::zeros();
-    w[k] = -1.0;
-    push_row(
-        qp,
-        &hp.eta,
-        &w,
-        &Vector2::zeros(),
-        -hp.eta.dot(&hp.c) - delta_foot,
-    )
+    let (w, f_const) = model.foot(k, p0, v0);
+    push_row(qp, &hp.eta, &-w, &-f_const, -hp.eta.dot(&hp.c) - delta_foot)
 }
 
 #[cfg(test)]
@@ -388,6 +507,21 @@ mod tests {
         SVector::<f64, 6>::from([f[0].x, f[0].y, f[1].x, f[1].y, f[2].x, f[2].y])
     }
 
+    /// The decision vector `z = (p_1, p_2, p_3)` of a rollout.
+    fn z_of(traj: &[(Vector2<f64>, Vector2<f64>); 4]) -> SVector<f64, 6> {
+        let p = |k: usize| traj[k].0;
+        SVector::<f64, 6>::from([p(1).x, p(1).y, p(2).x, p(2).y, p(3).x, p(3).y])
+    }
+
+    fn eval<const N: usize>(
+        (w, c): (SVector<f64, N>, Vector2<f64>),
+        z: &SVector<f64, 6>,
+    ) -> Vector2<f64> {
+        (0..N).fold(c, |acc, j| {
+            acc + Vector2::new(z[2 * j], z[2 * j + 1]) * w[j]
+        })
+    }
+
     const P0: [f64; 2] = [0.3, -0.2];
     const V0: [f64; 2] = [0.4, 0.15];
 
@@ -405,24 +539,55 @@ mod tests {
         let (p0, v0) = (Vector2::from(P0), Vector2::from(V0));
         let f = feet();
         let traj = rollout(&lip, p0, v0, &f);
-        for k in 1..=3 {
-            let (w, c) = m.position(k, &p0, &v0);
-            let p = c + f
-                .iter()
-                .enumerate()
-                .fold(Vector2::zeros(), |acc, (j, fj)| acc + fj * w[j]);
+        let z = m.variables_from_feet(&p0, &v0, &u_of(&f));
+        assert!((z - z_of(&traj)).amax() < 1e-14);
+        for k in 0..=3 {
+            let p = eval(m.position(k, &p0, &v0), &z);
             assert!((p - traj[k].0).amax() < 1e-14, "p_{k}");
-            let wv = m.velocity_weights(k);
-            let v = m.free_velocity(k, &p0, &v0)
-                + f.iter()
-                    .enumerate()
-                    .fold(Vector2::zeros(), |acc, (j, fj)| acc + fj * wv[j]);
+            let v = eval(m.velocity(k, &p0, &v0), &z);
             assert!((v - traj[k].1).amax() < 1e-13, "v_{k}");
         }
-        // Lower triangular with (1 - c) on the diagonal.
-        assert_eq!(m.S_p[(0, 1)], 0.0);
-        assert!((m.S_p[(1, 1)] - (1.0 - lip.cosh_bt)).abs() < 1e-15);
-        assert!((m.S_v[(2, 2)] + lip.beta * lip.sinh_bt).abs() < 1e-15);
+        for k in 0..3 {
+            let fk = eval(m.foot(k, &p0, &v0), &z);
+            assert!((fk - f[k]).amax() < 1e-13, "f_{k}");
+            let d = eval(m.foot_offset(k, &p0, &v0), &z);
+            assert!((d - (f[k] - traj[k].0)).amax() < 1e-13, "f_{k} - p_{k}");
+        }
+        let (fs, vs) = m.feet_from_variables(&p0, &v0, &z);
+        for k in 0..3 {
+            assert!((fs[k] - f[k]).amax() < 1e-13);
+            assert!((vs[k] - traj[k + 1].1).amax() < 1e-13);
+        }
+        // kappa = -beta coth(beta T / 2).
+        let x = 0.5 * lip.beta * 0.4;
+        let coth = libm::cosh(x) / libm::sinh(x);
+        assert!((m.kappa + lip.beta * coth).abs() < 1e-13);
+    }
+
+    #[test]
+    fn weights_stay_bounded_over_long_horizons() {
+        // The point of the variables: no weight grows with the horizon.
+        let lip = Lip::new(9.81, 1.0, 0.4);
+        let m = Condensed::<20>::new(&lip);
+        let bound = 2.0 * m.kappa.abs() * (1.0 + 1e-15);
+        assert!(m.V_w.amax() <= bound, "{}", m.V_w.amax());
+        assert!(m.V0.iter().all(|c| c.amax() <= m.kappa.abs()));
+        // Round trip over 20 steps of a capture-like walk: exact to rounding.
+        let (p0, v0) = (Vector2::new(0.3, -0.2), Vector2::new(0.4, 0.15));
+        let mut feet = SVector::<f64, 40>::zeros();
+        let (mut p, mut v) = (p0, v0);
+        for k in 0..20 {
+            let f = p + v / lip.beta + Vector2::new(0.05, if k % 2 == 0 { 0.1 } else { -0.1 });
+            feet[2 * k] = f.x;
+            feet[2 * k + 1] = f.y;
+            (p, v) = lip.propagate(&p, &v, &f, 0.4);
+        }
+        let z = m.variables_from_feet(&p0, &v0, &feet);
+        let (fs, _) = m.feet_from_variables(&p0, &v0, &z);
+        for (k, fk) in fs.iter().enumerate() {
+            assert!((fk.x - feet[2 * k]).abs() < 1e-12 && (fk.y - feet[2 * k + 1]).abs() < 1e-12);
+        }
+        assert_eq!(m.hessian::<40>(), SMatrix::<f64, 40, 40>::identity() * 2.0);
     }
 
     #[test]
@@ -434,9 +599,9 @@ mod tests {
         let traj = rollout(&lip, p0, v0, &f);
         let direct: f64 = (1..=3).map(|k| (traj[k].0 - goal).norm_squared()).sum();
         let h = m.hessian::<6>();
-        let (q, c) = m.gradient::<6>(&p0, &v0, &goal);
-        let u = u_of(&f);
-        let quad = 0.5 * (h * u).dot(&u) + q.dot(&u) + c;
+        let (q, c) = m.gradient::<6>(&goal);
+        let z = z_of(&traj);
+        let quad = 0.5 * (h * z).dot(&z) + q.dot(&z) + c;
         assert!((quad - direct).abs() < 1e-12 * direct.max(1.0));
         assert!(h.cholesky().is_some());
     }
@@ -451,7 +616,7 @@ mod tests {
         let (p0, v0) = (Vector2::from(P0), Vector2::from(V0));
         let f = feet();
         let traj = rollout(&lip, p0, v0, &f);
-        let u = u_of(&f);
+        let u = z_of(&traj);
         let b = GaitBounds {
             vx_min: -0.1,
             vx_max: 0.8,
@@ -489,15 +654,16 @@ mod tests {
                 row_value(&qp, i, &u)
             );
         }
-        // k = 0: reachability involves f_0 and the fixed p_0 only.
+        // k = 0: reachability involves p_1 and the fixed (p_0, v_0) only:
+        // f_0 - p_0 = (p_1 - p_0 - (s/beta) v_0) / (1 - c).
         let mut qp0 = DenseQp::<6, 16>::default();
         push_gait_rows(&mut qp0, &m, &b, 0, 0.0, 1.0, 0.0, &p0, &v0).unwrap();
         let r = qp0.row(4);
-        assert_eq!(
-            (r[0], r[1], r[2], r[3], r[4], r[5]),
-            (1.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-        );
-        assert!((qp0.h[4] - (b.l_max + p0.x)).abs() < 1e-15);
+        let d = 1.0 / (1.0 - lip.cosh_bt);
+        assert_eq!((r[1], r[2], r[3], r[4], r[5]), (0.0, 0.0, 0.0, 0.0, 0.0));
+        assert!((r[0] - d).abs() < 1e-15);
+        let h4 = b.l_max + d * (p0.x + lip.sinh_bt / lip.beta * v0.x);
+        assert!((qp0.h[4] - h4).abs() < 1e-15);
         // omega = 0: the merged row is the plain velocity bound.
         assert!((row_value(&qp0, 0, &u) - (traj[1].1.x - 0.8)).abs() < 1e-13);
     }
@@ -508,7 +674,7 @@ mod tests {
         let (p0, v0) = (Vector2::from(P0), Vector2::from(V0));
         let f = feet();
         let traj = rollout(&lip, p0, v0, &f);
-        let u = u_of(&f);
+        let u = z_of(&traj);
         let hp = HalfPlane {
             c: Vector2::new(1.0, 1.0),
             eta: Vector2::new(-0.6, -0.8),
@@ -528,9 +694,9 @@ mod tests {
         push_ldcbf_row(&mut qp1, &m, &hp, 1.0, delta, 1, &p0, &v0).unwrap();
         assert!((row_value(&qp1, 0, &u) + hp.h(&traj[2].0, delta)).abs() < 1e-13);
         let mut qpf = DenseQp::<6, 16>::default();
-        push_foot_row::<3, 6, 16>(&mut qpf, &hp, 0.05, 2).unwrap();
+        push_foot_row(&mut qpf, &m, &hp, 0.05, 2, &p0, &v0).unwrap();
         let e = -(hp.eta.dot(&(f[2] - hp.c)) - 0.05);
-        assert!((row_value(&qpf, 0, &u) - e).abs() < 1e-14);
+        assert!((row_value(&qpf, 0, &u) - e).abs() < 1e-13);
     }
 
     #[test]

@@ -12,16 +12,18 @@
 //! 2. fixes the turning rate `omega_bar` and the headings `theta_k` ([`heading`]);
 //! 3. selects the obstacles within `r_active`, nearest first, and linearises each
 //!    as a half-plane at the boundary point closest to `p_0` ([`geometry`]);
-//! 4. builds the condensed QP over the next `N` footsteps
-//!    `u = [f_0x, f_0y, ..., f_{N-1}x, f_{N-1}y]` ([`constraints`]):
+//! 4. builds the condensed QP over the next `N` footsteps `f_0 .. f_{N-1}`
+//!    ([`constraints`]), solved in the equivalent, well-conditioned variables
+//!    `z = [p_1x, p_1y, ..., p_Nx, p_Ny]` (the predicted CoM positions, from which
+//!    the footsteps follow exactly):
 //!
 //!    ```text
-//!    minimise    sum_{k=1..N} |p_k - g|^2  =  1/2 u'Hu + q'u + const
+//!    minimise    sum_{k=1..N} |p_k - g|^2  =  1/2 z'Hz + q'z + const,  H = 2 I
 //!    subject to  walking velocity, leg reachability, maneuverability (k = 0..N-1)
 //!                h_j(p_{k+1}) >= (1 - gamma) h_j(p_k)   for each active obstacle j
 //!    ```
 //!
-//!    `H` depends only on `(g, H_com, T, N)` and is factored once;
+//!    `H` is constant and factored once;
 //! 5. solves it with the dense dual active-set method of [`qp`] and returns the
 //!    swing-foot target `f_0`, `omega_bar`, the predicted plan, a status and
 //!    diagnostics ([`mpc`]). An infeasible QP is answered by the priority

@@ -14,6 +14,11 @@
 //! | `NOBS` | obstacle capacity (active obstacles used per cycle) | `NOBS >= 0` |
 //!
 //! [`PaperController`] is the paper's configuration (`N = 3`, 8 obstacles).
+//! Horizons up to `N = 20` (and beyond) work: the QP is solved in the
+//! well-conditioned variables `z = (p_1, .., p_N)` of [`crate::constraints`]
+//! (Hessian `2 I` for every `N`), an exact reformulation of SPEC 2 item 3; the
+//! command and the plan are footsteps and states in the world frame, as the
+//! spec defines them.
 //!
 //! ## Status and commands
 //!
@@ -194,6 +199,21 @@ impl core::fmt::Display for ConfigError {
 impl core::error::Error for ConfigError {}
 
 impl Config {
+    /// This configuration with the iteration budgets (`max_iter`,
+    /// `max_iter_cycle`) multiplied by `ceil(n / 3)`, for a controller of horizon
+    /// `n`. The defaults are sized for the paper's `N = 3`; the rows and the
+    /// active sets grow linearly with the horizon (closed loops on the shipped
+    /// layouts needed at most 112 iterations per cycle at `N = 10` and 326 at
+    /// `N = 20`, `tests/horizon.rs`). Saturates instead of overflowing.
+    pub fn with_budgets_for_horizon(self, n: usize) -> Config {
+        let scale = u32::try_from(n.div_ceil(3)).unwrap_or(u32::MAX).max(1);
+        Config {
+            max_iter: self.max_iter.saturating_mul(scale),
+            max_iter_cycle: self.max_iter_cycle.saturating_mul(scale),
+            ..self
+        }
+    }
+
     /// Checks every field; the error names the first bad one.
     pub fn validate(&self) -> Result<(), ConfigError> {
         let err = |field, requirement| Err(ConfigError { field, requirement });
@@ -488,9 +508,11 @@ pub struct Prediction<const N: usize> {
 /// Public so that the reference crate can solve exactly the same problem.
 #[derive(Clone, Debug)]
 pub struct Assembly<const N: usize, const NV: usize, const NC: usize, const NOBS: usize> {
-    /// The QP: `min 1/2 u'Hu + q'u, G u <= h` (H from [`Controller::solver`]).
+    /// The QP: `min 1/2 z'Hz + q'z, G z <= h` (H from [`Controller::solver`]) in
+    /// the variables `z = (p_1, .., p_N)` of [`crate::constraints`];
+    /// [`Controller::feet_of`] gives the footsteps of a solution.
     pub qp: DenseQp<NV, NC>,
-    /// Constant of the cost: cost = `1/2 u'Hu + q'u + cost_constant`.
+    /// Constant of the cost: cost = `1/2 z'Hz + q'z + cost_constant`.
     pub cost_constant: f64,
     /// Identity of each row.
     pub rows: [RowId; NC],
@@ -556,7 +578,8 @@ struct Memory<const NV: usize> {
     /// Active rows of the last solved QP.
     active: [RowId; NV],
     n_active: usize,
-    /// Last planned footsteps (interleaved), valid when `has_plan`.
+    /// Last planned footsteps `f_0 .. f_{N-1}` (interleaved, m, world; not the QP
+    /// variables, which depend on the cycle's `x_0`), valid when `has_plan`.
     plan: SVector<f64, NV>,
     has_plan: bool,
     /// Stance side when that plan was made.
@@ -605,6 +628,16 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
         }
         let lip = Lip::new(config.gravity, config.com_height, config.step_duration);
         let model = Condensed::<N>::new(&lip);
+        // The QP's variables need the step map to be invertible for the foot:
+        // `1 - cosh(beta T)` away from 0 (and everything finite). Rejects
+        // `beta T < 1.4e-3` (sub-millisecond steps) and overflowing `cosh`.
+        let c_minus_1 = lip.cosh_bt - 1.0;
+        if !(c_minus_1 >= 1e-6 && lip.cosh_bt.is_finite() && model.kappa.is_finite()) {
+            return Err(ConfigError {
+                field: "step_duration",
+                requirement: "gives a step map that cannot be inverted for the foot (beta T must be in [1.4e-3, 700])",
+            });
+        }
         let settings = QpSettings {
             tol_primal: config.tol_primal,
             ..QpSettings::default()
@@ -643,7 +676,8 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
         &self.core.lip
     }
 
-    /// The condensed prediction matrices.
+    /// The condensed model: predictions, feet and rows as affine maps of the QP
+    /// variables.
     pub fn model(&self) -> &Condensed<N> {
         &self.core.model
     }
@@ -651,6 +685,28 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
     /// The QP solver (holds the constant Hessian `H`).
     pub fn solver(&self) -> &DualActiveSet<NV, NC> {
         &self.core.solver
+    }
+
+    /// The QP's decision vector `z = (p_1, .., p_N)` (interleaved, m, world) of a
+    /// plan: its predicted positions. For the plan of an optimal or relaxed cycle
+    /// this is exactly the solution of that cycle's QP; use it to evaluate the
+    /// rows of [`Controller::last_assembly`] at a returned plan.
+    pub fn variables_of(&self, plan: &Plan<N>) -> SVector<f64, NV> {
+        let mut z = SVector::<f64, NV>::zeros();
+        for (k, s) in plan.states.iter().enumerate() {
+            z[2 * k] = s.position.x;
+            z[2 * k + 1] = s.position.y;
+        }
+        z
+    }
+
+    /// The footsteps `f_0 .. f_{N-1}` (m, world) of a decision vector `z` of the
+    /// QP assembled with `prediction` (inverse map of [`crate::constraints`]).
+    pub fn feet_of(&self, prediction: &Prediction<N>, z: &SVector<f64, NV>) -> [Vector2<f64>; N] {
+        self.core
+            .model
+            .feet_from_variables(&prediction.p0, &prediction.v0, z)
+            .0
     }
 
     /// The assembly of the last `step` (its QP, rows and obstacles).
@@ -818,7 +874,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
 
         // 4-5. Cost and rows.
         out.qp.clear();
-        let (q, c) = self.model.gradient::<NV>(&p0, &v0, &input.goal);
+        let (q, c) = self.model.gradient::<NV>(&input.goal);
         out.qp.q = q;
         out.cost_constant = c;
         let bounds = GaitBounds {
@@ -884,7 +940,8 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             for ob in &out.obstacles[..out.n_obstacles.min(NOBS)] {
                 for k in 0..N {
                     let i = out.qp.m;
-                    ok &= push_foot_row::<N, NV, NC>(&mut out.qp, &ob.half_plane, df, k).is_ok();
+                    ok &= push_foot_row(&mut out.qp, &self.model, &ob.half_plane, df, k, &p0, &v0)
+                        .is_ok();
                     if let Some(slot) = out.rows.get_mut(i) {
                         *slot = RowId {
                             kind: RowKind::FootClearance(ob.index),
@@ -958,10 +1015,12 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             relax_gait: 0.0,
             relax_safety: 0.0,
         };
-        let (u, status) = match sol.status {
+        // `z`: this cycle's decision vector (positions); `feet`: set for the
+        // fallbacks, which are defined by their footsteps.
+        let (z, fallback_feet, status) = match sol.status {
             QpStatus::Solved => {
                 remember_active(memory, &sol, work);
-                (sol.x, CycleStatus::Optimal)
+                (sol.x, None, CycleStatus::Optimal)
             }
             other => {
                 let status = match other {
@@ -996,15 +1055,15 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                         relax::RelaxLevel::Gait => CommandSource::RelaxedGait,
                         relax::RelaxLevel::Safety => CommandSource::RelaxedSafety,
                     };
-                    (r.u, status)
+                    (r.u, None, status)
                 } else {
                     // The iterations spent before the relaxation gave up count too.
                     if let Err(e) = &relaxed {
                         info.iterations = info.iterations.saturating_add(e.iterations);
                     }
-                    let (u, source) = self.fallback(memory, shift, work);
+                    let (feet, z, source) = self.fallback(memory, shift, work);
                     info.source = source;
-                    (u, status)
+                    (z, Some(feet), status)
                 }
             }
         };
@@ -1016,11 +1075,17 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             }
             _ => 0.0,
         };
-        info.max_violation = relax::class_violation(&work.qp, &work.rows, &u).max();
-        info.cost = self.solver.objective(&work.qp.q, &u) + work.cost_constant;
-        let plan = self.rollout(pred, &u, omega);
-        let foot = Vector2::new(u[0], u[1]);
-        memory.plan = u;
+        info.max_violation = relax::class_violation(&work.qp, &work.rows, &z).max();
+        info.cost = self.solver.objective(&work.qp.q, &z) + work.cost_constant;
+        let plan = match &fallback_feet {
+            Some(feet) => self.rollout(pred, feet, omega),
+            None => self.plan_from_variables(pred, &z, omega),
+        };
+        let foot = plan.feet[0];
+        for (k, f) in plan.feet.iter().enumerate() {
+            memory.plan[2 * k] = f.x;
+            memory.plan[2 * k + 1] = f.y;
+        }
         memory.has_plan = true;
         memory.stance = input.stance_side;
         memory.last_target = Some(foot);
@@ -1051,14 +1116,17 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         memory: &Memory<NV>,
         shift: usize,
         work: &Assembly<N, NV, NC, NOBS>,
-    ) -> (SVector<f64, NV>, CommandSource) {
+    ) -> (SVector<f64, NV>, SVector<f64, NV>, CommandSource) {
         let tol = 10.0 * self.config.tol_primal;
-        let capture = self.capture_step(&work.prediction);
-        let cap_v = relax::class_violation(&work.qp, &work.rows, &capture);
+        let pred = &work.prediction;
+        let capture = self.capture_step(pred);
+        let cap_z = self.model.variables_from_feet(&pred.p0, &pred.v0, &capture);
+        let cap_v = relax::class_violation(&work.qp, &work.rows, &cap_z);
         let Some(prev) = self.previous_plan(memory, shift) else {
-            return (capture, CommandSource::CaptureStep);
+            return (capture, cap_z, CommandSource::CaptureStep);
         };
-        let prev_v = relax::class_violation(&work.qp, &work.rows, &prev);
+        let prev_z = self.model.variables_from_feet(&pred.p0, &pred.v0, &prev);
+        let prev_v = relax::class_violation(&work.qp, &work.rows, &prev_z);
         let all = |v: &relax::ClassViolation| v.max() <= tol;
         let use_prev = if all(&prev_v) {
             true
@@ -1070,9 +1138,9 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             prev_v.safety <= cap_v.safety
         };
         if use_prev {
-            (prev, CommandSource::PreviousPlan)
+            (prev, prev_z, CommandSource::PreviousPlan)
         } else {
-            (capture, CommandSource::CaptureStep)
+            (capture, cap_z, CommandSource::CaptureStep)
         }
     }
 
@@ -1124,6 +1192,40 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         u
     }
 
+    /// The plan of a QP solution `z` (positions): positions are `z` itself,
+    /// velocities and feet come from the inverse map of [`crate::constraints`]
+    /// (exact for the QP, no forward propagation of rounding errors).
+    fn plan_from_variables(
+        &self,
+        pred: &Prediction<N>,
+        z: &SVector<f64, NV>,
+        omega: f64,
+    ) -> Plan<N> {
+        let (feet, vel) = self.model.feet_from_variables(&pred.p0, &pred.v0, z);
+        let mut states = [LipState::default(); N];
+        let mut th = pred.heading.theta[0];
+        for (k, st) in states.iter_mut().enumerate() {
+            th += omega * self.config.step_duration;
+            *st = LipState {
+                position: Vector2::new(z[2 * k], z[2 * k + 1]),
+                velocity: vel[k],
+                heading: th,
+            };
+        }
+        Plan {
+            x0: LipState {
+                position: pred.p0,
+                velocity: pred.v0,
+                heading: pred.heading.theta[0],
+            },
+            states,
+            feet,
+            first_side: pred.first_side,
+        }
+    }
+
+    /// The plan of a fallback given by its feet `u` (interleaved): the LIP rolled
+    /// forward from `x_0`.
     fn rollout(&self, pred: &Prediction<N>, u: &SVector<f64, NV>, omega: f64) -> Plan<N> {
         let mut states = [LipState::default(); N];
         let mut feet = [Vector2::zeros(); N];
@@ -1267,6 +1369,20 @@ mod tests {
         };
         assert_eq!(Ctl::new(c).unwrap_err().field, "foot_clearance");
         assert!(Controller::<3, 6, { constraint_capacity(3, 8, true) }, 8>::new(c).is_ok());
+        // Valid fields whose step map cannot be inverted for the foot.
+        for t in [1e-6, 1e3] {
+            let c = Config {
+                step_duration: t,
+                ..Config::default()
+            };
+            assert!(c.validate().is_ok());
+            assert_eq!(Ctl::new(c).unwrap_err().field, "step_duration", "T = {t}");
+        }
+        let c = Config {
+            step_duration: 1e-3,
+            ..Config::default()
+        };
+        assert!(Ctl::new(c).is_ok());
     }
 
     #[test]
@@ -1353,7 +1469,7 @@ mod tests {
     /// of `out`, on the QP of the last step.
     fn class_violation(ctl: &Ctl, out: &CycleOutput<3>, class: relax::RowClass) -> f64 {
         let asm = ctl.last_assembly();
-        relax::class_violation(&asm.qp, &asm.rows, &feet(out)).of(class)
+        relax::class_violation(&asm.qp, &asm.rows, &ctl.variables_of(&out.plan)).of(class)
     }
 
     /// Feasibility of the last QP with the rows of `class` relaxed by `eps` and
@@ -1477,24 +1593,54 @@ mod tests {
         let v = relax::class_violation(
             &ctl.last_assembly().qp,
             &ctl.last_assembly().rows,
-            &feet(&out),
+            &ctl.variables_of(&out.plan),
         );
         assert!(v.safety <= 1e-9 && v.reach <= 1e-9, "{v:?}");
         // A remembered plan that satisfies every row is used as it is.
         let asm = ctl.last_assembly().clone();
         let good = ctl.solver().solve(&asm.qp, &[false; 48], 100);
         assert!(good.status.is_solved());
+        let good_feet = ctl.feet_of(&asm.prediction, &good.x);
         ctl.memory.has_plan = true;
         ctl.memory.stance = inp.stance_side;
-        ctl.memory.plan = good.x;
+        for (k, f) in good_feet.iter().enumerate() {
+            ctl.memory.plan[2 * k] = f.x;
+            ctl.memory.plan[2 * k + 1] = f.y;
+        }
         let out = ctl.step(&inp);
         assert_eq!(out.info.source, CommandSource::PreviousPlan);
-        assert!((feet(&out) - good.x).amax() < 1e-15);
+        assert_eq!(out.plan.feet, good_feet);
+        assert!((ctl.variables_of(&out.plan) - good.x).amax() < 1e-12);
     }
 
-    fn feet(out: &CycleOutput<3>) -> SVector<f64, 6> {
-        let f = &out.plan.feet;
-        SVector::<f64, 6>::from([f[0].x, f[0].y, f[1].x, f[1].y, f[2].x, f[2].y])
+    #[test]
+    fn long_horizons_are_accepted_and_their_plans_are_lip_rollouts() {
+        fn check<const N: usize, const NV: usize, const NC: usize>() {
+            let mut ctl = Controller::<N, NV, NC, 8>::new(Config::default()).unwrap();
+            let wall = [Poly::new(&[[1.5, -2.0], [2.5, -2.0], [2.5, 0.3], [1.5, 0.3]]).unwrap()];
+            let mut inp = input(&wall);
+            inp.com_velocity = Vector2::new(0.4, 0.1);
+            let out = ctl.step(&inp);
+            assert_eq!(out.status, CycleStatus::Optimal, "N = {N}");
+            assert!(out.info.max_violation <= 1e-9);
+            // The returned feet, rolled forward through the LIP, give the
+            // returned states (the plan is the spec's, in world frame).
+            let lip = *ctl.lip();
+            let (mut p, mut v) = (out.plan.x0.position, out.plan.x0.velocity);
+            for k in 0..N {
+                (p, v) = lip.propagate(&p, &v, &out.plan.feet[k], 0.4);
+                let s = out.plan.states[k];
+                assert!((s.position - p).amax() <= 1e-12, "N = {N}, p_{}", k + 1);
+                assert!((s.velocity - v).amax() <= 1e-12, "N = {N}, v_{}", k + 1);
+                // Restart from the plan's own state so the check stays local
+                // (a forward rollout over many steps amplifies rounding by
+                // cosh(beta T)^k).
+                (p, v) = (s.position, s.velocity);
+            }
+            assert_eq!(out.foot_target, out.plan.feet[0]);
+        }
+        check::<10, 20, { constraint_capacity(10, 8, false) }>();
+        check::<20, 40, { constraint_capacity(20, 8, false) }>();
     }
 
     #[test]

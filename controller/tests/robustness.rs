@@ -10,7 +10,7 @@
 //! form, sampled at 1 kHz, the controller at 20 Hz, the swing foot landing at the
 //! latest `f_0` at the end of each 0.4 s step.
 
-use ldcbf_controller::nalgebra::{SVector, Vector2};
+use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_controller::relax::{ClassViolation, class_violation};
 use ldcbf_controller::{
     Assembly, CommandSource, Config, ConvexPolygon, CycleInput, CycleOutput, CycleStatus,
@@ -54,11 +54,6 @@ fn at_rest<'a>(p: Vector2<f64>, goal: Vector2<f64>, obstacles: &'a [Poly]) -> Cy
     }
 }
 
-fn feet(out: &CycleOutput<N>) -> SVector<f64, 6> {
-    let f = &out.plan.feet;
-    SVector::<f64, 6>::from([f[0].x, f[0].y, f[1].x, f[1].y, f[2].x, f[2].y])
-}
-
 fn finite(out: &CycleOutput<N>) -> bool {
     let f2 = |p: &Vector2<f64>| p.x.is_finite() && p.y.is_finite();
     f2(&out.foot_target)
@@ -82,7 +77,8 @@ fn check_contract(ctl: &Ctl, out: &CycleOutput<N>) -> ClassViolation {
         "unexpected invalid input: {out:?}"
     );
     let asm = ctl.last_assembly();
-    let viol = class_violation(&asm.qp, &asm.rows, &feet(out));
+    // The QP's variables are the planned positions (see `constraints`).
+    let viol = class_violation(&asm.qp, &asm.rows, &ctl.variables_of(&out.plan));
     assert!(viol.reach <= TOL, "leg reachability violated: {viol:?}");
     let within = |x: f64, eps: f64| x <= eps * (1.0 + 1e-9) + TOL;
     let (rg, rs) = (out.info.relax_gait, out.info.relax_safety);

@@ -84,11 +84,8 @@ fuzz_target!(|case: Case| {
         if out.info.source != CommandSource::Hold {
             // Reachability rows of this cycle's QP hold for the returned plan.
             let asm = ctl.last_assembly();
-            let mut u = ldcbf_controller::nalgebra::SVector::<f64, 6>::zeros();
-            for k in 0..3 {
-                u[2 * k] = out.plan.feet[k].x;
-                u[2 * k + 1] = out.plan.feet[k].y;
-            }
+            // The QP's variables are the planned positions (see `constraints`).
+            let u = ctl.variables_of(&out.plan);
             for ((g, h, n), id) in asm.qp.rows_with_norm().zip(&asm.rows) {
                 if RowClass::of(id.kind) == RowClass::Reach {
                     let viol = (g.dot(&u) - h) / n;
