@@ -248,7 +248,12 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     probes: u32,
     gait_cap: f64,
 ) -> Result<Relaxed<NV>, RelaxError> {
+    let mut norms = [0.0f64; NC];
+    for (n, g) in norms.iter_mut().zip(qp.gt.column_iter().take(qp.m)) {
+        *n = g.norm();
+    }
     let mut ctx = Ctx {
+        norms,
         solver,
         backend,
         qp,
@@ -409,6 +414,8 @@ enum Probe<const NV: usize> {
 }
 
 struct Ctx<'a, const NV: usize, const NC: usize, B> {
+    /// Euclidean norms of the nominal rows.
+    norms: [f64; NC],
     solver: &'a DualActiveSet<NV, NC>,
     backend: &'a mut B,
     qp: &'a DenseQp<NV, NC>,
@@ -447,7 +454,7 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         // Scratch row -> nominal row, and the scratch rows' warm-start marks.
         let mut orig = [0u16; NC];
         let mut prefer = [false; NC];
-        for (i, ((g, h, n), id)) in self.qp.rows_with_norm().zip(self.rows).enumerate() {
+        for (i, (((g, h), &n), id)) in self.qp.rows().zip(&self.norms).zip(self.rows).enumerate() {
             let Some(eps) = keep.eps(RowClass::of(id.kind)) else {
                 continue;
             };
@@ -484,7 +491,9 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
                 let floor = 1e-12 * sol.lambda.amax();
                 for (&y, &o) in sol.lambda.iter().zip(&orig[..m]) {
                     let o = usize::from(o);
-                    let (Some((g, h)), Some(id)) = (self.qp.get_row(o), self.rows.get(o)) else {
+                    let (Some(&h), Some(&n), Some(id)) =
+                        (self.qp.h.get(o), self.norms.get(o), self.rows.get(o))
+                    else {
                         continue;
                     };
                     // (NaN weights are skipped too.)
@@ -494,7 +503,7 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
                     if let Some(mk) = self.marks.get_mut(o) {
                         *mk = true;
                     }
-                    let yn = y * g.norm();
+                    let yn = y * n;
                     c.yh += y * h;
                     c.yn += yn;
                     match RowClass::of(id.kind) {
@@ -502,6 +511,22 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
                         RowClass::Safety => c.ys += yn,
                         RowClass::Reach => {}
                     }
+                }
+                // The support's normals are linearly dependent (`G'y = 0`):
+                // marking all of them makes the next solve add one too many
+                // and drop it again. Leave out the lightest.
+                let mut lightest: Option<(usize, f64)> = None;
+                for (&y, &o) in sol.lambda.iter().zip(&orig[..m]) {
+                    let o = usize::from(o);
+                    let w = y * self.norms.get(o).copied().unwrap_or(0.0);
+                    if self.marks.get(o).copied().unwrap_or(false)
+                        && lightest.is_none_or(|(_, lw)| w < lw)
+                    {
+                        lightest = Some((o, w));
+                    }
+                }
+                if let Some(mk) = lightest.and_then(|(o, _)| self.marks.get_mut(o)) {
+                    *mk = false;
                 }
                 self.cert = (c.yh.is_finite() && c.yn.is_finite()).then_some(c);
                 Ok(Probe::Infeasible)
@@ -604,5 +629,229 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
             }
             Probe::Infeasible => Ok(None),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    use super::*;
+    use crate::{Assembly, Config, ConvexPolygon, CycleInput, PaperController, Side};
+    use nalgebra::Vector2;
+
+    const NC: usize = crate::constraint_capacity(3, 8, false);
+    /// Random cycles (about 4 in 5 are infeasible).
+    const CASES: usize = 1000;
+
+    /// Counts the solves of the priority scheme.
+    struct Counting(usize);
+    impl QpBackend<6, NC> for Counting {
+        fn solve_qp(
+            &mut self,
+            solver: &DualActiveSet<6, NC>,
+            qp: &DenseQp<6, NC>,
+            prefer: &[bool; NC],
+            max_iter: u32,
+        ) -> crate::qp::QpSolution<6, NC> {
+            self.0 += 1;
+            solver.solve(qp, prefer, max_iter)
+        }
+    }
+
+    /// Deterministic uniform numbers in [0, 1) (64-bit LCG, top bits).
+    struct Lcg(u64);
+    impl Lcg {
+        fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+        fn range(&mut self, a: f64, b: f64) -> f64 {
+            a + (b - a) * self.next()
+        }
+    }
+
+    /// The nominal QP with the gait and safety rows relaxed by `gait` and
+    /// `safety` (`None`: left out) is empty, as proven by a Farkas
+    /// certificate checked here independently of the solver (`y >= 0`,
+    /// `G'y = 0` to 1e-9, `h'y < 0`).
+    fn certified_empty(
+        solver: &DualActiveSet<6, NC>,
+        asm: &Assembly<3, 6, NC, 8>,
+        gait: Option<f64>,
+        safety: Option<f64>,
+    ) -> bool {
+        let keep = Keep {
+            safety,
+            gait,
+            first_step: false,
+        };
+        let mut qp = DenseQp::<6, NC>::with_q(asm.qp.q);
+        for ((g, h, n), id) in asm.qp.rows_with_norm().zip(&asm.rows) {
+            if let Some(e) = keep.eps(RowClass::of(id.kind)) {
+                qp.push_row(&g, h + e * n).unwrap();
+            }
+        }
+        let sol = solver.solve(&qp, &[false; NC], 500);
+        if sol.status != QpStatus::Infeasible {
+            return false;
+        }
+        let y = &sol.lambda;
+        let mut gty = SVector::<f64, 6>::zeros();
+        let mut hty = 0.0;
+        for (i, (g, h)) in qp.rows().enumerate() {
+            assert!(y[i] >= 0.0);
+            gty += g * y[i];
+            hty += h * y[i];
+        }
+        gty.amax() <= 1e-9 * (1.0 + y.amax()) && hty < 0.0
+    }
+
+    /// On random cycles of a robot walking into nearby boxes, every infeasible
+    /// nominal QP gets a relaxed plan that keeps reachability and each class
+    /// within its reported relaxation, and each reported relaxation is
+    /// minimal in the priority order: 1e-6 (relative, plus 1e-6 absolute) less
+    /// is certified infeasible, and a safety relaxation comes only when the
+    /// gait rows at the cap cannot make the problem feasible.
+    #[test]
+    fn relaxations_are_minimal_in_priority_order() {
+        let mut rng = Lcg(0x5eed_0f_5a_fe);
+        let mut ctl = PaperController::new(Config::default()).unwrap();
+        let cap = ctl.config().max_gait_relaxation;
+        let mut asm = Assembly::default();
+        let mut scratch = DenseQp::<6, NC>::default();
+        let (mut infeasible, mut stage1, mut stage2, mut stage3) = (0, 0, 0, 0);
+        let less = |e: f64| e - 1e-6 * (1.0 + e);
+        let mut solves = [0usize; 32];
+        for case in 0..CASES {
+            let delta = if rng.next() < 0.5 { 0.0 } else { 0.2 };
+            ctl = PaperController::new(Config {
+                delta,
+                ..Config::default()
+            })
+            .unwrap();
+            let th = rng.range(-3.0, 3.0);
+            let dir = Vector2::new(libm::cos(th), libm::sin(th));
+            let side = Vector2::new(-dir.y, dir.x);
+            let speed = rng.range(0.2, 1.2);
+            let v = dir * speed + side * rng.range(-0.3, 0.3);
+            let mut obstacles =
+                [ConvexPolygon::<8>::new(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]).unwrap(); 3];
+            let n_obs = 1 + (rng.next() * 3.0) as usize;
+            for o in obstacles.iter_mut().take(n_obs) {
+                let c = dir * rng.range(0.3, 1.6) + side * rng.range(-0.8, 0.8);
+                let (a, b) = (rng.range(0.1, 0.8), rng.range(0.1, 0.8));
+                *o = ConvexPolygon::hull(&[
+                    [c.x - a, c.y - b],
+                    [c.x + a, c.y - b],
+                    [c.x + a, c.y + b],
+                    [c.x - a, c.y + b],
+                ])
+                .unwrap();
+            }
+            let input = CycleInput {
+                com_position: Vector2::zeros(),
+                com_velocity: v,
+                heading: th + rng.range(-0.3, 0.3),
+                turning_rate: rng.range(-0.3, 0.3),
+                stance_foot: dir * rng.range(-0.2, 0.2) + side * rng.range(-0.15, 0.15),
+                stance_side: if rng.next() < 0.5 {
+                    Side::Left
+                } else {
+                    Side::Right
+                },
+                time_in_step: rng.range(0.0, 0.4),
+                goal: dir * 10.0,
+                obstacles: &obstacles[..n_obs],
+            };
+            ctl.assemble(&input, &mut asm).unwrap();
+            let solver = ctl.solver();
+            if !solver
+                .solve(&asm.qp, &[false; NC], 64)
+                .status
+                .is_infeasible()
+            {
+                continue;
+            }
+            infeasible += 1;
+            let mut count = Counting(0);
+            let r = relax(
+                solver,
+                &mut count,
+                &asm.qp,
+                &asm.rows,
+                &mut scratch,
+                64,
+                2048,
+                12,
+                cap,
+            )
+            .unwrap_or_else(|e| panic!("case {case}: {e:?}"));
+            solves[count.0.min(31)] += 1;
+            let v = class_violation(&asm.qp, &asm.rows, &r.u);
+            let (eg, es) = (r.eps_gait, r.eps_safety);
+            assert!(v.reach <= 1e-9, "case {case}: {v:?}");
+            assert!(
+                v.gait <= eg * (1.0 + 1e-9) + 1e-9,
+                "case {case}: {v:?} {r:?}"
+            );
+            assert!(
+                v.safety <= es * (1.0 + 1e-9) + 1e-9,
+                "case {case}: {v:?} {r:?}"
+            );
+            if es == 0.0 {
+                // Stage 1 (or stage 3 without a safety relaxation): the least
+                // gait relaxation with safety kept.
+                assert_eq!(r.level, RelaxLevel::Gait);
+                assert!(eg > 0.0, "case {case}: the nominal QP is infeasible");
+                assert!(
+                    certified_empty(solver, &asm, Some(less(eg)), Some(0.0)),
+                    "case {case}: {r:?} not minimal"
+                );
+                stage1 += 1;
+                continue;
+            }
+            assert_eq!(r.level, RelaxLevel::Safety);
+            // Safety gives way only when the capped gait rows cannot help.
+            assert!(
+                certified_empty(solver, &asm, Some(cap), Some(0.0)),
+                "case {case}"
+            );
+            // The least safety relaxation with the gait rows at the cap
+            // (stage 2) or left out (stage 3).
+            let gait_bound = (eg <= cap * (1.0 + 1e-9)).then_some(cap);
+            assert!(
+                certified_empty(solver, &asm, gait_bound, Some(less(es))),
+                "case {case}: {r:?}: safety not minimal"
+            );
+            // Then the least gait relaxation under that safety relaxation.
+            if eg > 1e-6 {
+                assert!(
+                    certified_empty(solver, &asm, Some(less(eg)), Some(es)),
+                    "case {case}: {r:?}: gait not minimal"
+                );
+            }
+            if gait_bound.is_some() {
+                stage2 += 1;
+            } else {
+                stage3 += 1;
+            }
+        }
+        std::println!(
+            "{infeasible} infeasible: {stage1} stage 1, {stage2} stage 2, {stage3} stage 3; \
+             solves of the priority scheme (count: cycles): {:?}",
+            solves
+                .iter()
+                .enumerate()
+                .filter(|(_, n)| **n > 0)
+                .collect::<std::vec::Vec<_>>()
+        );
+        assert!(
+            stage1 >= 20 && stage2 >= 50 && stage3 >= 20,
+            "{stage1} {stage2} {stage3}"
+        );
     }
 }
