@@ -718,7 +718,7 @@ mod tests {
     /// gait rows at the cap cannot make the problem feasible.
     #[test]
     fn relaxations_are_minimal_in_priority_order() {
-        let mut rng = Lcg(0x5eed_0f_5a_fe);
+        let mut rng = Lcg(0x005e_ed0f_5afe);
         let mut ctl = PaperController::new(Config::default()).unwrap();
         let cap = ctl.config().max_gait_relaxation;
         let mut asm = Assembly::default();
