@@ -61,8 +61,8 @@
 //!   usually proves at once that less than the cap is infeasible.
 //!
 //! On the firmware's recorded infeasible cycles (all stage 1) this is three
-//! solves per cycle, the nominal one included (it was 8 to 14 with the
-//! bisection this replaces); see `docs/fallback.md`.
+//! solves per cycle, the nominal one included (4 or 15 with the bisection this
+//! replaces); see `docs/fallback.md`.
 //!
 //! Tolerance: a reported `eps` is at most `b (1 + 1e-9) + 1e-9`, `b` the lower
 //! bound its certificate proves (up to rounding in `y'h`). At a degenerate
