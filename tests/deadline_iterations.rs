@@ -28,38 +28,40 @@
 //! command, which is what a relaxation that ran out of budget returns).
 //!
 //! An upper bound for an infeasible cycle from the structure of
-//! `controller/src/relax.rs` (`relax_bisections` = 12): a smallest relaxation
-//! (`Ctx::minimal`) takes 1 solve when even the most relaxed problem is
-//! infeasible, else at most 1 + 12 + 1 = 14; the worst path is the nominal
-//! solve, stage 1 infeasible (1), stage 2 with the capped gait rows infeasible
-//! (1), stage 3 (14 + 14): 31 solves of at most 64 iterations, 1,984 <= 2,048.
+//! `controller/src/relax.rs` (`relax_bisections` = 12): each search for a
+//! smallest relaxation makes at most 12 probes, the whole scheme at most
+//! 2 x 12 = 24 (a shared count), plus one last solve of the most relaxed
+//! problem per search that runs out, at most 4 searches (stage 1, the safety
+//! searches of stages 2 and 3, one gait search): the nominal solve and at
+//! most 24 + 4 = 28 more, 29 solves of at most 64 iterations, 1,856 <= 2,048.
 //! So `max_iter_cycle` is never the binding limit; `max_iter` is.
 //!
-//! Measured (2026-11-22, `cargo test --test deadline_iterations -- --nocapture`;
-//! `ldcbf-sim deadline --random 200` prints the same counts), 98,180 cycles in
-//! 208 runs:
+//! Measured (2026-11-22, `cargo test --release --test deadline_iterations --
+//! --nocapture`; `ldcbf-sim deadline --random 200` prints the same counts),
+//! 98,180 cycles in 208 runs:
 //!
 //! | cycles | worst | budget | margin |
 //! |---|---|---|---|
-//! | optimal (98,074) | 32: `random@46` cycle 72 | `max_iter` = 64 | 32 (50 %) |
-//! | all, incl. 106 infeasible | 60: `crowded@0` cycle 318 (infeasible) | `max_iter_cycle` = 2048 | 1,988 (97 %) |
+//! | optimal (98,090) | 32: `random@46` cycle 72 | `max_iter` = 64 | 32 (50 %) |
+//! | all, incl. 90 infeasible | 40: `random@152` cycle 401 (infeasible) | `max_iter_cycle` = 2048 | 2,008 (98 %) |
 //!
-//! (shipped cases alone: 21 optimal, `paper`; 60 in all. The random seeds:
-//! 32 optimal, 51 in all, `random@152`.) No cycle ended `BudgetExhausted` or
-//! `NumericalFailure`, none returned a fallback command, none had invalid
-//! input. The optimal worst case is half the per-solve budget, not within
-//! 25 % of it (the test prints a NOTE if it gets there).
+//! (shipped cases alone: 21 optimal, `paper`; 32 in all, `crowded@0` cycle
+//! 318.) No cycle ended `BudgetExhausted` or `NumericalFailure`, none returned
+//! a fallback command, none had invalid input. The optimal worst case is half
+//! the per-solve budget, not within 25 % of it (the test prints a NOTE if it
+//! gets there). Before the certificate-guided search from below
+//! (`docs/fallback.md`) the worst infeasible cycle took 60 iterations.
 //!
 //! Iterations are not the whole cost of an infeasible cycle: after the nominal
-//! solve the priority scheme runs up to 30 cold-started solves, each with its
-//! own set-up, which no iteration budget counts. The
-//! firmware's replay of 240 recorded `paper` cycles (`firmware/README.md`) has
-//! 15 infeasible cycles of 77 iterations (more than the 60 here: that recording
-//! comes from the fixture loop of `benches/`, not from these runs) that take
-//! ~594,000 instructions, against ~93,000 for its worst optimal cycle of 24
-//! iterations. So `max_iter` bounds the cost of an optimal cycle; the cost of
-//! an infeasible one is checked in instructions (`tests/firmware_qemu.rs`,
-//! where the 100,000-instruction target is not met for those cycles).
+//! solve the priority scheme runs its own cold-started solves (usually two:
+//! the first step's rows for a certificate, then the problem at the bound),
+//! each with its own set-up, which no iteration budget counts. The firmware's
+//! replay of 240 recorded `paper` cycles (`firmware/README.md`) has 15
+//! infeasible cycles of 12 to 15 iterations that take 97,600 to 104,500
+//! instructions (569,000 before), against 93,200 for its worst optimal cycle
+//! of 24 iterations. So `max_iter` bounds the cost of an optimal cycle; the
+//! cost of an infeasible one is checked in instructions
+//! (`tests/firmware_qemu.rs`).
 
 use ldcbf_controller::{Config, CycleStatus};
 use ldcbf_sim::deadline::{

@@ -33,17 +33,51 @@
 //! Reachability alone is always feasible (each `f_k` may sit at `p_k`), so stage 3
 //! always has an answer up to numerical failure or budget exhaustion.
 //!
-//! Each smallest relaxation is found by a bracketing search between 0 and the
-//! violation of the most relaxed solution (feasible): every infeasible probe
-//! returns the solver's Farkas certificate `y` (`G'y = 0`, `h'y < 0`), which
-//! proves infeasibility for every relaxation below
-//! `eps - y'h / (y' |g|_soft)`; the next probe goes just above that bound (and
-//! plain bisection takes over when a certificate is unusable). At most
-//! [`crate::Config::relax_bisections`] probes; usually two or three, and the
-//! reported `eps` is then within about 1e-9 (relative) of the true minimum.
-//! Every solve draws on one per-cycle iteration
-//! budget ([`crate::Config::max_iter_cycle`]); if it runs out the controller falls
-//! back to the previous plan or the capture step.
+//! # Finding the smallest relaxation
+//!
+//! Each smallest uniform relaxation is the optimal value of a linear program
+//! (minimise `t` subject to the soft rows at `h + t |g|` and the others as
+//! fixed), whose dual is: maximise `-y'h` over Farkas certificates `y >= 0`,
+//! `G'y = 0`, normalised by `y'|g|_soft = 1`. The dual active-set solver
+//! returns such a certificate with every infeasible solve, and one certificate
+//! holds for every relaxation of the same rows: with the gait rows at `e_g`
+//! and the safety rows at `e_s`, `y'h + e_g y'|g|_gait + e_s y'|g|_safety < 0`
+//! proves the relaxed problem empty. So each search runs from below:
+//!
+//! * the last certificate gives a lower bound `b` on `t` (none yet in the
+//!   first search: its first solve is the unrelaxed problem restricted to the
+//!   rows of the first step, `k = 0`, which is usually already infeasible and
+//!   about a third of the rows; a certificate of a subset of the rows is one
+//!   of all of them; only if it is feasible is the whole unrelaxed problem
+//!   solved);
+//! * the next solve goes just above the bound, at `b (1 + 1e-9) + 1e-9`, with
+//!   the certificate's rows marked as the warm start (they are the tight rows
+//!   at the minimum); the first feasible solve ends the search with the
+//!   optimal plan under that relaxation; an infeasible one brings a new
+//!   certificate and a higher bound;
+//! * a bound that proves every `t` (up to the cap) infeasible ends the stage
+//!   without a solve: stage 2 starts from the certificate stage 1 ended with,
+//!   and its gait search from the one its safety search ended with, which
+//!   usually proves at once that less than the cap is infeasible.
+//!
+//! On the firmware's recorded infeasible cycles (all stage 1) this is three
+//! solves per cycle, the nominal one included (4 or 15 with the bisection this
+//! replaces); see `docs/fallback.md`.
+//!
+//! Tolerance: a reported `eps` is at most `b (1 + 1e-9) + 1e-9`, `b` the lower
+//! bound its certificate proves (up to rounding in `y'h`). At a degenerate
+//! minimum, where the relaxed feasible set is a single point that rounding can
+//! declare empty, a probe at the padded bound can come back infeasible with no
+//! higher bound: the padding then grows a hundredfold per probe. A search
+//! makes at most [`crate::Config::relax_bisections`] probes (the name is
+//! historical: it now counts probes, not halvings) and the whole scheme at
+//! most twice that many; a search that runs out solves the most relaxed
+//! problem once more and reports that plan with its own violation (feasible,
+//! not minimal). So one infeasible cycle makes at most `2 relax_bisections +
+//! 4` solves after the nominal one (four searches at most: stage 1, the safety
+//! searches of stages 2 and 3, one gait search), each drawing on the cycle's
+//! iteration budget ([`crate::Config::max_iter_cycle`]); if that runs out the
+//! controller falls back to the previous plan or the capture step.
 
 use nalgebra::SVector;
 
@@ -135,11 +169,13 @@ pub fn class_violation<const NV: usize, const NC: usize>(
 }
 
 /// Which rows a relaxed problem keeps, and by how much each class is relaxed
-/// (`None`: the class is left out).
+/// (`None`: the class is left out); `first_step`: only the rows of the first
+/// step (`k = 0`).
 #[derive(Clone, Copy, Debug)]
 struct Keep {
     safety: Option<f64>,
     gait: Option<f64>,
+    first_step: bool,
 }
 
 impl Keep {
@@ -196,9 +232,10 @@ pub enum RelaxFailure {
 
 /// Runs the priority scheme on the nominal QP `qp` (rows identified by `rows`),
 /// using `scratch` as workspace. `budget` is the number of solver iterations left
-/// in this cycle; `bisections` the number of halvings per relaxation;
-/// `gait_cap` the largest relaxation of the gait rows (m/s) allowed before the
-/// safety rows give way.
+/// in this cycle; `probes` the largest number of solves of one search for a
+/// smallest relaxation (the scheme makes at most `2 probes + 4` solves in all,
+/// see the module docs); `gait_cap` the largest relaxation of the gait rows
+/// (m/s) allowed before the safety rows give way.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     solver: &DualActiveSet<NV, NC>,
@@ -208,10 +245,15 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     scratch: &mut DenseQp<NV, NC>,
     max_iter: u32,
     budget: u32,
-    bisections: u32,
+    probes: u32,
     gait_cap: f64,
 ) -> Result<Relaxed<NV>, RelaxError> {
+    let mut norms = [0.0f64; NC];
+    for (n, g) in norms.iter_mut().zip(qp.gt.column_iter().take(qp.m)) {
+        *n = g.norm();
+    }
     let mut ctx = Ctx {
+        norms,
         solver,
         backend,
         qp,
@@ -220,7 +262,10 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         max_iter,
         budget,
         used: 0,
-        bisections,
+        probes,
+        probes_left: probes.saturating_mul(2),
+        cert: None,
+        marks: [false; NC],
     };
     let out = run_stages(&mut ctx, gait_cap);
     out.map_err(|kind| RelaxError {
@@ -238,8 +283,9 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     let safe = Keep {
         safety: Some(0.0),
         gait: None,
+        first_step: false,
     };
-    if let Some((u, eps)) = ctx.minimal(safe, RowClass::Gait, gait_cap)? {
+    if let Some((u, eps)) = ctx.minimal(safe, RowClass::Gait, gait_cap, None)? {
         return Ok(Relaxed {
             u,
             level: RelaxLevel::Gait,
@@ -257,16 +303,25 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         let reach = Keep {
             safety: None,
             gait: if cap.is_finite() { Some(cap) } else { None },
+            first_step: false,
         };
-        let Some((_, eps_s)) = ctx.minimal(reach, RowClass::Safety, f64::INFINITY)? else {
+        let Some((u_s, eps_s)) = ctx.minimal(reach, RowClass::Safety, f64::INFINITY, None)? else {
             continue;
         };
         let fixed = Keep {
             safety: Some(eps_s),
             gait: None,
+            first_step: false,
+        };
+        // The plan just found is feasible with the gait rows at the cap (or
+        // without them: then at its own gait violation).
+        let known = if cap.is_finite() {
+            cap
+        } else {
+            ctx.violation(RowClass::Gait, &u_s).max(0.0)
         };
         let (u, eps_g) = ctx
-            .minimal(fixed, RowClass::Gait, cap)?
+            .minimal(fixed, RowClass::Gait, cap, Some((known, u_s)))?
             .ok_or(RelaxFailure::Numerical)?;
         // Without any safety relaxation this is still a gait relaxation (beyond
         // the cap: the robot moves too fast already).
@@ -287,16 +342,80 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     Err(RelaxFailure::Numerical)
 }
 
+/// The sums of a Farkas certificate `y` (`y >= 0`, `G'y = 0`) that matter for
+/// every relaxation of the same rows: with the gait rows at `h + e_g |g|` and
+/// the safety rows at `h + e_s |g|`, `y'h(e) = yh + e_g yg + e_s ys`, and the
+/// relaxed problem is infeasible whenever that is negative.
+#[derive(Clone, Copy, Debug)]
+struct Certificate {
+    /// `y'h` at no relaxation.
+    yh: f64,
+    /// `y' |g|` over the gait rows (0: the gait rows take no part).
+    yg: f64,
+    /// `y' |g|` over the safety rows.
+    ys: f64,
+    /// `y' |g|` over all rows (scale for "zero").
+    yn: f64,
+}
+
+/// What a certificate says about the relaxation `t` of one class, the others
+/// fixed.
+enum Bound {
+    /// Infeasible for every `t` below this (m or m/s).
+    Below(f64),
+    /// Infeasible for every `t`: relaxing this class cannot help.
+    Never,
+    /// Nothing (the certificate uses rows the problem leaves out, or does not
+    /// prove anything here).
+    Unknown,
+}
+
+impl Certificate {
+    /// The bound on the relaxation of `soft` when the other classes are as in
+    /// `fixed` (`None`: left out).
+    fn bound(&self, fixed: Keep, soft: RowClass) -> Bound {
+        let mut a = self.yh;
+        let mut b = 0.0;
+        for (class, y) in [(RowClass::Gait, self.yg), (RowClass::Safety, self.ys)] {
+            if class == soft {
+                b = y;
+            } else {
+                match fixed.eps(class) {
+                    Some(e) => a += e * y,
+                    // Leaving rows out is fine only if `y` does not use them.
+                    None if y > 0.0 => return Bound::Unknown,
+                    None => {}
+                }
+            }
+        }
+        // Rounding leaves `y'|g|` of unused rows at ~1e-16 of the whole.
+        let zero = 1e-12 * self.yn;
+        if b > zero {
+            let t = -a / b;
+            if t.is_finite() {
+                Bound::Below(t)
+            } else {
+                Bound::Unknown
+            }
+        } else if a < 0.0 {
+            Bound::Never
+        } else {
+            Bound::Unknown
+        }
+    }
+}
+
 /// What one solve of a (relaxed) problem gave.
 enum Probe<const NV: usize> {
     /// Feasible, with the optimal plan.
     Feasible(SVector<f64, NV>),
-    /// Infeasible, with the certificate's lower bound on the soft relaxation
-    /// (`None` without a usable certificate).
-    Infeasible(Option<f64>),
+    /// Infeasible (the certificate is kept in [`Ctx::cert`]).
+    Infeasible,
 }
 
 struct Ctx<'a, const NV: usize, const NC: usize, B> {
+    /// Euclidean norms of the nominal rows.
+    norms: [f64; NC],
     solver: &'a DualActiveSet<NV, NC>,
     backend: &'a mut B,
     qp: &'a DenseQp<NV, NC>,
@@ -305,57 +424,112 @@ struct Ctx<'a, const NV: usize, const NC: usize, B> {
     max_iter: u32,
     budget: u32,
     used: u32,
-    bisections: u32,
+    /// Probes per search.
+    probes: u32,
+    /// Probes left for the whole scheme.
+    probes_left: u32,
+    /// The certificate of the last infeasible probe.
+    cert: Option<Certificate>,
+    /// Rows of the nominal QP in the support of the last certificate: the rows
+    /// that are tight at the smallest relaxation, tried first by the next solve.
+    marks: [bool; NC],
 }
 
+/// Relative and absolute padding of a probe above a proven lower bound.
+const PAD: f64 = 1e-9;
+
 impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> {
-    /// Builds the problem `keep` into the scratch QP and solves it. When it is
-    /// infeasible and `soft` names the class being relaxed, the solver's Farkas
-    /// certificate `y` gives a lower bound on the relaxation of that class: with
-    /// the soft rows at `h + eps |g|`, `y'h(eps) < 0` certifies infeasibility for
-    /// every `eps < eps_now - y'h(eps_now) / (y'|g|_soft)`.
-    fn solve(&mut self, keep: Keep, soft: Option<RowClass>) -> Result<Probe<NV>, RelaxFailure> {
+    /// Builds the problem `keep` into the scratch QP and solves it, the marked
+    /// rows first. An infeasible solve leaves its certificate in `self.cert`
+    /// and its support in `self.marks`. Not inlined: one copy of the solver
+    /// call in flash.
+    #[inline(never)]
+    fn solve(&mut self, keep: Keep) -> Result<Probe<NV>, RelaxFailure> {
         let left = self.budget.saturating_sub(self.used);
         if left == 0 {
             return Err(RelaxFailure::Budget);
         }
         self.scratch.clear();
         self.scratch.q = self.qp.q;
-        let mut soft_norm = [0.0f64; NC];
-        let mut k = 0usize;
-        for ((g, h, n), id) in self.qp.rows_with_norm().zip(self.rows) {
-            let class = RowClass::of(id.kind);
-            if let Some(eps) = keep.eps(class) {
-                // Capacity cannot be exceeded: the scratch QP has the same
-                // capacity and receives a subset of the rows.
-                if self.scratch.push_row(&g, h + eps * n).is_ok() {
-                    if let Some(s) = soft_norm.get_mut(k) {
-                        *s = if Some(class) == soft { n } else { 0.0 };
-                    }
-                    k += 1;
-                }
+        // Scratch row -> nominal row, and the scratch rows' warm-start marks.
+        let mut orig = [0u16; NC];
+        let mut prefer = [false; NC];
+        for (i, (((g, h), &n), id)) in self.qp.rows().zip(&self.norms).zip(self.rows).enumerate() {
+            let Some(eps) = keep.eps(RowClass::of(id.kind)) else {
+                continue;
+            };
+            if keep.first_step && id.k != 0 {
+                continue;
+            }
+            let k = self.scratch.m;
+            // Capacity cannot be exceeded: the scratch QP has the same capacity
+            // and receives a subset of the rows.
+            if self.scratch.push_row(&g, h + eps * n).is_ok()
+                && let (Some(o), Some(p)) = (orig.get_mut(k), prefer.get_mut(k))
+            {
+                *o = i as u16;
+                *p = self.marks.get(i).copied().unwrap_or(false);
             }
         }
-        let sol = self.backend.solve_qp(
-            self.solver,
-            self.scratch,
-            &[false; NC],
-            self.max_iter.min(left),
-        );
+        let sol =
+            self.backend
+                .solve_qp(self.solver, self.scratch, &prefer, self.max_iter.min(left));
         self.used = self.used.saturating_add(sol.iterations);
         match sol.status {
             QpStatus::Solved => Ok(Probe::Feasible(sol.x)),
             QpStatus::Infeasible => {
-                let eps_now = soft.and_then(|c| keep.eps(c)).unwrap_or(0.0);
-                let (mut yh, mut yn) = (0.0, 0.0);
-                for ((y, (_, h)), n) in sol.lambda.iter().zip(self.scratch.rows()).zip(&soft_norm) {
-                    yh += y * h;
-                    yn += y * n;
+                let mut c = Certificate {
+                    yh: 0.0,
+                    yg: 0.0,
+                    ys: 0.0,
+                    yn: 0.0,
+                };
+                self.marks = [false; NC];
+                let m = self.scratch.m.min(NC);
+                // Weights at rounding level (~1e-17 of the largest) are not
+                // part of the certificate's support.
+                let floor = 1e-12 * sol.lambda.amax();
+                for (&y, &o) in sol.lambda.iter().zip(&orig[..m]) {
+                    let o = usize::from(o);
+                    let (Some(&h), Some(&n), Some(id)) =
+                        (self.qp.h.get(o), self.norms.get(o), self.rows.get(o))
+                    else {
+                        continue;
+                    };
+                    // (NaN weights are skipped too.)
+                    if y.partial_cmp(&floor) != Some(core::cmp::Ordering::Greater) {
+                        continue;
+                    }
+                    if let Some(mk) = self.marks.get_mut(o) {
+                        *mk = true;
+                    }
+                    let yn = y * n;
+                    c.yh += y * h;
+                    c.yn += yn;
+                    match RowClass::of(id.kind) {
+                        RowClass::Gait => c.yg += yn,
+                        RowClass::Safety => c.ys += yn,
+                        RowClass::Reach => {}
+                    }
                 }
-                let lb = eps_now - yh / yn;
-                Ok(Probe::Infeasible(
-                    (yn > 0.0 && lb.is_finite()).then_some(lb),
-                ))
+                // The support's normals are linearly dependent (`G'y = 0`):
+                // marking all of them makes the next solve add one too many
+                // and drop it again. Leave out the lightest.
+                let mut lightest: Option<(usize, f64)> = None;
+                for (&y, &o) in sol.lambda.iter().zip(&orig[..m]) {
+                    let o = usize::from(o);
+                    let w = y * self.norms.get(o).copied().unwrap_or(0.0);
+                    if self.marks.get(o).copied().unwrap_or(false)
+                        && lightest.is_none_or(|(_, lw)| w < lw)
+                    {
+                        lightest = Some((o, w));
+                    }
+                }
+                if let Some(mk) = lightest.and_then(|(o, _)| self.marks.get_mut(o)) {
+                    *mk = false;
+                }
+                self.cert = (c.yh.is_finite() && c.yn.is_finite()).then_some(c);
+                Ok(Probe::Infeasible)
             }
             QpStatus::IterationLimit => Err(RelaxFailure::Budget),
             QpStatus::NumericalError => Err(RelaxFailure::Numerical),
@@ -369,12 +543,23 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
 
     /// With `fixed` kept, the smallest uniform relaxation of `soft`, at most
     /// `cap` (`f64::INFINITY`: unbounded), and the optimal plan under it.
-    /// `Ok(None)` when no relaxation up to `cap` is feasible.
+    /// `Ok(None)` when no relaxation up to `cap` is feasible. `known`: a
+    /// relaxation already known feasible, with its optimal plan.
+    ///
+    /// Search from below: each infeasible probe's certificate proves a lower
+    /// bound (and the last certificate of an earlier search often proves one
+    /// before any probe); the next probe goes just above it (`PAD`), so the
+    /// first feasible probe is the answer. When a probe at the padded bound is
+    /// still infeasible without raising the bound (rounding at a degenerate
+    /// minimum, where the feasible set is a single point), the padding grows
+    /// a hundredfold per probe. After `probes` probes, the most relaxed
+    /// problem is solved and its plan returned with its own violation.
     fn minimal(
         &mut self,
         fixed: Keep,
         soft: RowClass,
         cap: f64,
+        known: Option<(f64, SVector<f64, NV>)>,
     ) -> Result<Option<(SVector<f64, NV>, f64)>, RelaxFailure> {
         let with = |eps: f64| match soft {
             RowClass::Gait => Keep {
@@ -387,68 +572,286 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
             },
             RowClass::Reach => fixed,
         };
-        // The most relaxed problem first: the soft rows at `cap`, or left out.
-        let top = if cap.is_finite() { with(cap) } else { fixed };
-        let Probe::Feasible(u_top) = self.solve(top, None)? else {
-            return Ok(None);
-        };
-        let mut hi = self.violation(soft, &u_top).min(cap);
-        if !hi.is_finite() {
-            return Err(RelaxFailure::Numerical);
-        }
-        if hi <= 0.0 {
-            // The most relaxed solution already satisfies the soft rows, so it is
-            // also optimal without relaxation.
-            return Ok(Some((u_top, 0.0)));
-        }
-        // Search [lo, hi] (lo: proven infeasible below, hi: feasible). Each
-        // infeasible probe's certificate raises `lo` to a proven bound and the
-        // next probe goes just above it; without a certificate, bisection. The
-        // first probe, eps = 0, is exact when it is feasible.
+        // `lo`: proven infeasible below; `pad`: the margin of the next probe.
         let mut lo: f64 = 0.0;
-        let mut best: Option<SVector<f64, NV>> = None;
-        let mut next: f64 = 0.0;
-        for _ in 0..self.bisections {
-            let eps = crate::clamp(next, lo, hi);
-            match self.solve(with(eps), Some(soft))? {
-                Probe::Feasible(u) => {
-                    hi = eps;
-                    best = Some(u);
-                    next = 0.5 * (lo + hi);
+        let mut pad = 0.0;
+        for i in 0..=self.probes {
+            match self.cert.map_or(Bound::Unknown, |c| c.bound(fixed, soft)) {
+                Bound::Never => return Ok(None),
+                Bound::Below(b) if b > cap => return Ok(None),
+                Bound::Below(b) if b > lo => {
+                    lo = b;
+                    pad = PAD;
                 }
-                Probe::Infeasible(bound) => {
-                    lo = lo.max(eps);
-                    next = match bound {
-                        Some(b) if b >= lo && b < hi => {
-                            lo = b;
-                            b * (1.0 + 1e-9) + 1e-12
-                        }
-                        _ => 0.5 * (lo + hi),
-                    };
-                }
+                // No progress from the last probe: widen (not before the first).
+                _ if i > 0 => pad = if pad == 0.0 { PAD } else { pad * 100.0 },
+                _ => {}
             }
-            if hi - lo <= 1e-9 * (1.0 + hi) {
+            let eps = (lo * (1.0 + pad) + pad).min(cap);
+            if let Some((k, u)) = known
+                && k <= eps
+            {
+                return Ok(Some((u, k)));
+            }
+            if i == self.probes || self.probes_left == 0 || !eps.is_finite() {
                 break;
             }
-        }
-        let u = match best {
-            Some(u) => u,
-            None => {
-                // No probe was feasible: `hi` is where `u_top` is feasible, but at
-                // the exact minimum the feasible set can shrink to a point that
-                // rounding declares empty, so widen it by a hair if needed.
-                let mut found = None;
-                for pad in [0.0, 1e-9, 1e-7, 1e-5] {
-                    let eps = hi * (1.0 + pad) + pad;
-                    if let Probe::Feasible(u) = self.solve(with(eps), None)? {
-                        hi = eps;
-                        found = Some(u);
-                        break;
-                    }
+            self.probes_left -= 1;
+            if self.cert.is_none() && eps == 0.0 {
+                // No certificate yet: the rows of the first step alone are
+                // often already infeasible, and any certificate of a subset
+                // is one of the whole; a smaller problem is cheaper to solve.
+                let first = Keep {
+                    first_step: true,
+                    ..with(0.0)
+                };
+                if let Probe::Infeasible = self.solve(first)? {
+                    continue;
                 }
-                found.ok_or(RelaxFailure::Numerical)?
+                if self.probes_left == 0 {
+                    break;
+                }
+                self.probes_left -= 1;
             }
+            if let Probe::Feasible(u) = self.solve(with(eps))? {
+                return Ok(Some((u, eps)));
+            }
+        }
+        // Out of probes: the most relaxed problem, and its plan's own violation.
+        let top = if cap.is_finite() { with(cap) } else { fixed };
+        match self.solve(top)? {
+            Probe::Feasible(u) => {
+                let v = self.violation(soft, &u).max(lo).min(cap);
+                if !v.is_finite() {
+                    return Err(RelaxFailure::Numerical);
+                }
+                Ok(Some((u, v)))
+            }
+            Probe::Infeasible => Ok(None),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    extern crate std;
+
+    use super::*;
+    use crate::{Assembly, Config, ConvexPolygon, CycleInput, PaperController, Side};
+    use nalgebra::Vector2;
+
+    const NC: usize = crate::constraint_capacity(3, 8, false);
+    /// Random cycles (about 4 in 5 are infeasible).
+    const CASES: usize = 1000;
+
+    /// Counts the solves of the priority scheme.
+    struct Counting(usize);
+    impl QpBackend<6, NC> for Counting {
+        fn solve_qp(
+            &mut self,
+            solver: &DualActiveSet<6, NC>,
+            qp: &DenseQp<6, NC>,
+            prefer: &[bool; NC],
+            max_iter: u32,
+        ) -> crate::qp::QpSolution<6, NC> {
+            self.0 += 1;
+            solver.solve(qp, prefer, max_iter)
+        }
+    }
+
+    /// Deterministic uniform numbers in [0, 1) (64-bit LCG, top bits).
+    struct Lcg(u64);
+    impl Lcg {
+        fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64
+        }
+        fn range(&mut self, a: f64, b: f64) -> f64 {
+            a + (b - a) * self.next()
+        }
+    }
+
+    /// The nominal QP with the gait and safety rows relaxed by `gait` and
+    /// `safety` (`None`: left out) is empty, as proven by a Farkas
+    /// certificate checked here independently of the solver (`y >= 0`,
+    /// `G'y = 0` to 1e-9, `h'y < 0`).
+    fn certified_empty(
+        solver: &DualActiveSet<6, NC>,
+        asm: &Assembly<3, 6, NC, 8>,
+        gait: Option<f64>,
+        safety: Option<f64>,
+    ) -> bool {
+        let keep = Keep {
+            safety,
+            gait,
+            first_step: false,
         };
-        Ok(Some((u, hi)))
+        let mut qp = DenseQp::<6, NC>::with_q(asm.qp.q);
+        for ((g, h, n), id) in asm.qp.rows_with_norm().zip(&asm.rows) {
+            if let Some(e) = keep.eps(RowClass::of(id.kind)) {
+                qp.push_row(&g, h + e * n).unwrap();
+            }
+        }
+        let sol = solver.solve(&qp, &[false; NC], 500);
+        if sol.status != QpStatus::Infeasible {
+            return false;
+        }
+        let y = &sol.lambda;
+        let mut gty = SVector::<f64, 6>::zeros();
+        let mut hty = 0.0;
+        for (i, (g, h)) in qp.rows().enumerate() {
+            assert!(y[i] >= 0.0);
+            gty += g * y[i];
+            hty += h * y[i];
+        }
+        gty.amax() <= 1e-9 * (1.0 + y.amax()) && hty < 0.0
+    }
+
+    /// On random cycles of a robot walking into nearby boxes, every infeasible
+    /// nominal QP gets a relaxed plan that keeps reachability and each class
+    /// within its reported relaxation, and each reported relaxation is
+    /// minimal in the priority order: 1e-6 (relative, plus 1e-6 absolute) less
+    /// is certified infeasible, and a safety relaxation comes only when the
+    /// gait rows at the cap cannot make the problem feasible.
+    #[test]
+    fn relaxations_are_minimal_in_priority_order() {
+        let mut rng = Lcg(0x005e_ed0f_5afe);
+        let mut ctl = PaperController::new(Config::default()).unwrap();
+        let cap = ctl.config().max_gait_relaxation;
+        let mut asm = Assembly::default();
+        let mut scratch = DenseQp::<6, NC>::default();
+        let (mut infeasible, mut stage1, mut stage2, mut stage3) = (0, 0, 0, 0);
+        let less = |e: f64| e - 1e-6 * (1.0 + e);
+        let mut solves = [0usize; 32];
+        for case in 0..CASES {
+            let delta = if rng.next() < 0.5 { 0.0 } else { 0.2 };
+            ctl = PaperController::new(Config {
+                delta,
+                ..Config::default()
+            })
+            .unwrap();
+            let th = rng.range(-3.0, 3.0);
+            let dir = Vector2::new(libm::cos(th), libm::sin(th));
+            let side = Vector2::new(-dir.y, dir.x);
+            let speed = rng.range(0.2, 1.2);
+            let v = dir * speed + side * rng.range(-0.3, 0.3);
+            let mut obstacles =
+                [ConvexPolygon::<8>::new(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]).unwrap(); 3];
+            let n_obs = 1 + (rng.next() * 3.0) as usize;
+            for o in obstacles.iter_mut().take(n_obs) {
+                let c = dir * rng.range(0.3, 1.6) + side * rng.range(-0.8, 0.8);
+                let (a, b) = (rng.range(0.1, 0.8), rng.range(0.1, 0.8));
+                *o = ConvexPolygon::hull(&[
+                    [c.x - a, c.y - b],
+                    [c.x + a, c.y - b],
+                    [c.x + a, c.y + b],
+                    [c.x - a, c.y + b],
+                ])
+                .unwrap();
+            }
+            let input = CycleInput {
+                com_position: Vector2::zeros(),
+                com_velocity: v,
+                heading: th + rng.range(-0.3, 0.3),
+                turning_rate: rng.range(-0.3, 0.3),
+                stance_foot: dir * rng.range(-0.2, 0.2) + side * rng.range(-0.15, 0.15),
+                stance_side: if rng.next() < 0.5 {
+                    Side::Left
+                } else {
+                    Side::Right
+                },
+                time_in_step: rng.range(0.0, 0.4),
+                goal: dir * 10.0,
+                obstacles: &obstacles[..n_obs],
+            };
+            ctl.assemble(&input, &mut asm).unwrap();
+            let solver = ctl.solver();
+            if !solver
+                .solve(&asm.qp, &[false; NC], 64)
+                .status
+                .is_infeasible()
+            {
+                continue;
+            }
+            infeasible += 1;
+            let mut count = Counting(0);
+            let r = relax(
+                solver,
+                &mut count,
+                &asm.qp,
+                &asm.rows,
+                &mut scratch,
+                64,
+                2048,
+                12,
+                cap,
+            )
+            .unwrap_or_else(|e| panic!("case {case}: {e:?}"));
+            solves[count.0.min(31)] += 1;
+            let v = class_violation(&asm.qp, &asm.rows, &r.u);
+            let (eg, es) = (r.eps_gait, r.eps_safety);
+            assert!(v.reach <= 1e-9, "case {case}: {v:?}");
+            assert!(
+                v.gait <= eg * (1.0 + 1e-9) + 1e-9,
+                "case {case}: {v:?} {r:?}"
+            );
+            assert!(
+                v.safety <= es * (1.0 + 1e-9) + 1e-9,
+                "case {case}: {v:?} {r:?}"
+            );
+            if es == 0.0 {
+                // Stage 1 (or stage 3 without a safety relaxation): the least
+                // gait relaxation with safety kept.
+                assert_eq!(r.level, RelaxLevel::Gait);
+                assert!(eg > 0.0, "case {case}: the nominal QP is infeasible");
+                assert!(
+                    certified_empty(solver, &asm, Some(less(eg)), Some(0.0)),
+                    "case {case}: {r:?} not minimal"
+                );
+                stage1 += 1;
+                continue;
+            }
+            assert_eq!(r.level, RelaxLevel::Safety);
+            // Safety gives way only when the capped gait rows cannot help.
+            assert!(
+                certified_empty(solver, &asm, Some(cap), Some(0.0)),
+                "case {case}"
+            );
+            // The least safety relaxation with the gait rows at the cap
+            // (stage 2) or left out (stage 3).
+            let gait_bound = (eg <= cap * (1.0 + 1e-9)).then_some(cap);
+            assert!(
+                certified_empty(solver, &asm, gait_bound, Some(less(es))),
+                "case {case}: {r:?}: safety not minimal"
+            );
+            // Then the least gait relaxation under that safety relaxation.
+            if eg > 1e-6 {
+                assert!(
+                    certified_empty(solver, &asm, Some(less(eg)), Some(es)),
+                    "case {case}: {r:?}: gait not minimal"
+                );
+            }
+            if gait_bound.is_some() {
+                stage2 += 1;
+            } else {
+                stage3 += 1;
+            }
+        }
+        std::println!(
+            "{infeasible} infeasible: {stage1} stage 1, {stage2} stage 2, {stage3} stage 3; \
+             solves of the priority scheme (count: cycles): {:?}",
+            solves
+                .iter()
+                .enumerate()
+                .filter(|(_, n)| **n > 0)
+                .collect::<std::vec::Vec<_>>()
+        );
+        assert!(
+            stage1 >= 20 && stage2 >= 50 && stage3 >= 20,
+            "{stage1} {stage2} {stage3}"
+        );
     }
 }
