@@ -138,22 +138,37 @@ fn capture_steps(
     (feet, com)
 }
 
-/// The previous plan's vector shifted by `shift` steps, the last entry
-/// extrapolated by the last stride (mpc.rs module docs).
-fn shifted(old: &U, shift: usize) -> U {
-    let mut u = U::zeros();
-    for k in 0..HORIZON {
+/// The previous plan's footsteps shifted by `shift` steps, the last one
+/// extrapolated by the last stride (mpc.rs, `previous_plan`).
+fn shifted(old: &[Vector2<f64>; HORIZON], shift: usize) -> [Vector2<f64>; HORIZON] {
+    let mut f = [Vector2::zeros(); HORIZON];
+    for (k, fk) in f.iter_mut().enumerate() {
         let src = k + shift;
-        for a in 0..2 {
-            u[2 * k + a] = if src < HORIZON {
-                old[2 * src + a]
-            } else {
-                let last = HORIZON - 1;
-                2.0 * old[2 * last + a] - old[2 * last - 2 + a]
-            };
-        }
+        *fk = if src < HORIZON {
+            old[src]
+        } else {
+            let last = HORIZON - 1;
+            2.0 * old[last] - old[last - 1]
+        };
     }
-    u
+    f
+}
+
+/// The CoM positions at the step ends that `feet` lead to from the cycle's
+/// predicted state (the LIP step map).
+fn com_of(
+    asm: &Asm,
+    lip: &Lip,
+    cfg: &Config,
+    feet: &[Vector2<f64>; HORIZON],
+) -> [Vector2<f64>; HORIZON] {
+    let (mut p, mut v) = (asm.prediction.p0, asm.prediction.v0);
+    let mut com = [Vector2::zeros(); HORIZON];
+    for (k, f) in feet.iter().enumerate() {
+        (p, v) = lip.propagate(&p, &v, f, cfg.step_duration);
+        com[k] = p;
+    }
+    com
 }
 
 /// What one closed loop did.
@@ -193,7 +208,7 @@ fn check_case(case: &Case, b: u32, time_limit: f64) -> (String, Vec<String>, usi
     let mut fails = Vec::new();
     let mut t = Tally::default();
     let mut asm = Asm::default();
-    let mut prev: Option<(U, Side)> = None;
+    let mut prev: Option<([Vector2<f64>; HORIZON], Side)> = None;
     // The QP's variables, once a cycle has told them apart.
     let mut known_layout: Option<Layout> = None;
     let period = (r.cycles.get(1).map_or(0.05, |c| c.time) / ldcbf_sim::sim::PLANT_DT).round();
@@ -248,7 +263,7 @@ fn check_case(case: &Case, b: u32, time_limit: f64) -> (String, Vec<String>, usi
         let layout = known_layout.unwrap_or(Layout::Feet);
         let com = out.plan.states.map(|s| s.position);
         let u = layout.vector(&out.plan.feet, &com);
-        let this = (u, c.stance_side);
+        let this = (out.plan.feet, c.stance_side);
         let source = out.info.source;
         if !matches!(
             source,
@@ -284,7 +299,10 @@ fn check_case(case: &Case, b: u32, time_limit: f64) -> (String, Vec<String>, usi
         // 2. One of the candidates, chosen by the documented rule.
         let (cf, cc) = capture_steps(&asm, &lip, &cfg);
         let capture = layout.vector(&cf, &cc);
-        let previous = prev.map(|(old, side)| shifted(&old, usize::from(side != c.stance_side)));
+        let previous = prev.map(|(old, side)| {
+            let feet = shifted(&old, usize::from(side != c.stance_side));
+            layout.vector(&feet, &com_of(&asm, &lip, &cfg, &feet))
+        });
         let same = |a: &U, b: &U| (a - b).amax() <= 1e-9 * (1.0 + b.amax());
         let cap_v = class_violation(&asm.qp, &asm.rows, &capture);
         let prev_v = previous.map(|p| class_violation(&asm.qp, &asm.rows, &p));
