@@ -22,7 +22,9 @@
 //! * [`batch`]: `ldcbf-sim batch` and `merge`: many seeds of a scenario family in
 //!   parallel, sharded across machines, one CSV row per run and a Markdown table;
 //! * [`deadline`]: `ldcbf-sim deadline`: per-cycle compute time, solver
-//!   iterations and (from the firmware) instructions against a real-time deadline.
+//!   iterations and (from the firmware) instructions against a real-time deadline;
+//! * [`replay`]: a run's controller inputs rebuilt from its logs, to replay its
+//!   cycles outside the loop (benchmarks).
 //!
 //! Frames and units: world frame W, metres, seconds, radians, as in the controller.
 
@@ -34,6 +36,7 @@ pub mod planner;
 pub mod plant;
 pub mod plot;
 pub mod qpbench;
+pub mod replay;
 pub mod report;
 pub mod scenario;
 pub mod sim;
