@@ -42,13 +42,15 @@
 //! individually: `R` passes over the set in order (each pass exactly as above,
 //! `Instant` around each call only), and each cycle's time is its minimum over
 //! the passes (a preemption or a cache miss of one pass does not count; a cycle
-//! that is slow in every pass does). Printed per set and mode: median, p99 and
-//! max over the cycles of those minima, the worst cycle (run, index, status,
-//! iterations, active obstacles), the max over the optimal cycles only, and,
-//! less optimistic, the max over the cycles of each cycle's MEDIAN over the
-//! passes (a preemption must then hit half of a cycle's passes to count). `R`
-//! is `RECORDED_PASSES` (default 50; 0 skips the table); under `cargo test
-//! --benches` (no `--bench` argument) one pass.
+//! that is slow in every pass does). Printed per set and mode: mean (to compare
+//! with criterion's estimate), median, p99 and max over the cycles of those
+//! minima, the worst cycle (run, index, status, iterations, active obstacles),
+//! the max over the optimal cycles only, and, less optimistic, the max over the
+//! cycles of each cycle's MEDIAN over the passes (a preemption must then hit
+//! half of a cycle's passes to count). `R` is `RECORDED_PASSES` (default 50; 0
+//! skips the table); under `cargo test --benches` (no `--bench` argument) one
+//! pass. `cargo bench --bench recorded -- none` prints the table alone (the
+//! filter matches no benchmark).
 //!
 //! Plots off, as in `benches/controller.rs`.
 
@@ -295,10 +297,10 @@ fn per_cycle_table(sets: &[Set], passes: usize) {
         timer_floor()
     );
     println!(
-        "| set | mode | cycles | p50 ns | p99 ns | max ns | worst cycle | max optimal ns | max of medians ns | targets (p50 <= {} ns, max <= {} ns) |",
+        "| set | mode | cycles | mean ns | p50 ns | p99 ns | max ns | worst cycle | max optimal ns | max of medians ns | targets (p50 <= {} ns, max <= {} ns) |",
         TARGET_MEDIAN_NS, TARGET_WORST_NS
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|");
     for set in sets {
         for mode in Mode::ALL {
             let mut ctls: Vec<PaperController> = set
@@ -355,10 +357,11 @@ fn per_cycle_table(sets: &[Set], passes: usize) {
                 "-".into()
             };
             println!(
-                "| {} | {} | {} | {} | {} | {} | {} #{} ({}, {} it, {} obst.) {} ns | {} ({} cycles) | {} | {} |",
+                "| {} | {} | {} | {:.0} | {} | {} | {} | {} #{} ({}, {} it, {} obst.) {} ns | {} ({} cycles) | {} | {} |",
                 set.name,
                 mode.name(),
                 ns.len(),
+                st.mean_ns,
                 st.p50_ns,
                 st.p99_ns,
                 st.max_ns,
