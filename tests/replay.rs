@@ -39,13 +39,14 @@ fn replayed_inputs_reproduce_the_logged_outputs() {
 
 #[test]
 fn a_perturbed_input_is_detected() {
-    let mut rec = recorded("paper");
+    let original = recorded("paper");
+    let mut rec = original.clone();
     let i = rec.len() / 2;
     rec.inputs[i].com_position.x += 1e-6;
     let e = rec.verify().expect_err("perturbed input").to_string();
     assert!(e.contains(&format!("cycle {i}:")), "{e}");
     // A stance foot off by one step is detected too.
-    let mut rec = recorded("paper");
+    let mut rec = original;
     let j = rec.len() / 3;
     rec.inputs[j].stance_foot = rec.inputs[j.saturating_sub(8)].stance_foot;
     assert!(rec.verify().is_err());
