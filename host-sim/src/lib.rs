@@ -26,7 +26,9 @@
 //! * [`robustness`]: `ldcbf-sim robustness`: success and true CoM clearance
 //!   under each disturbance, with and without the safety margin `delta`;
 //! * [`deadline`]: `ldcbf-sim deadline`: per-cycle compute time, solver
-//!   iterations and (from the firmware) instructions against a real-time deadline.
+//!   iterations and (from the firmware) instructions against a real-time deadline;
+//! * [`replay`]: a run's controller inputs rebuilt from its logs, to replay its
+//!   cycles outside the loop (benchmarks).
 //!
 //! Frames and units: world frame W, metres, seconds, radians, as in the controller.
 
@@ -39,6 +41,7 @@ pub mod planner;
 pub mod plant;
 pub mod plot;
 pub mod qpbench;
+pub mod replay;
 pub mod report;
 pub mod robustness;
 pub mod scenario;
