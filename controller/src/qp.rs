@@ -246,8 +246,12 @@ impl<const NV: usize, const NC: usize> DenseQp<NV, NC> {
 #[derive(Clone, Debug)]
 pub struct DualActiveSet<const NV: usize, const NC: usize> {
     H: SMatrix<f64, NV, NV>,
-    /// `J0 = L^-T` with `H = L L'`.
-    J0: SMatrix<f64, NV, NV>,
+    /// `L^-1` with `H = L L'`: lower triangular, entries above the diagonal
+    /// exactly zero. Its transpose `J0 = L^-T` starts `J` in every solve.
+    Linv: SMatrix<f64, NV, NV>,
+    /// `L^-1` (so `H`) is diagonal: products with `L^-1` and `L^-T` cost `NV`
+    /// instead of `NV^2`.
+    linv_diag: bool,
     settings: QpSettings,
 }
 
@@ -275,9 +279,23 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         if !L.transpose().solve_upper_triangular_mut(&mut J0) || J0.iter().any(|v| !v.is_finite()) {
             return Err(HessianError::NotPositiveDefinite);
         }
+        // L^-1 with exact zeros above the diagonal.
+        let mut Linv = J0.transpose();
+        for (j, col) in Linv.data.0.iter_mut().enumerate() {
+            for v in col.iter_mut().take(j) {
+                *v = 0.0;
+            }
+        }
+        let linv_diag = Linv
+            .data
+            .0
+            .iter()
+            .enumerate()
+            .all(|(j, col)| col.iter().enumerate().all(|(k, &v)| k == j || v == 0.0));
         Ok(DualActiveSet {
             H: *H,
-            J0,
+            Linv,
+            linv_diag,
             settings,
         })
     }
@@ -294,7 +312,43 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
 
     /// Objective `1/2 x'Hx + q'x`.
     pub fn objective(&self, q: &SVector<f64, NV>, x: &SVector<f64, NV>) -> f64 {
-        0.5 * (self.H * x).dot(x) + q.dot(x)
+        let mut xhx = 0.0;
+        for (col, xj) in self.H.data.0.iter().zip(x.iter()) {
+            xhx += xj * dot(col, &x.data.0[0]);
+        }
+        0.5 * xhx + dot(&q.data.0[0], &x.data.0[0])
+    }
+
+    /// `L^-1 g` (`= J0' g`) as column axpys (no reductions);
+    /// `NV` products when `H` is diagonal.
+    #[inline(always)]
+    fn linv_mul(&self, g: &[f64; NV]) -> [f64; NV] {
+        let mut w = [0.0f64; NV];
+        for (k, (col, &gk)) in self.Linv.data.0.iter().zip(g).enumerate() {
+            if self.linv_diag {
+                w[k] = col[k] * gk;
+            } else {
+                // zeros above the diagonal included: fixed length, vectorised
+                for (wi, c) in w.iter_mut().zip(col) {
+                    *wi += c * gk;
+                }
+            }
+        }
+        w
+    }
+
+    /// `L^-T w` (`= J0 w`); `NV` products when `H` is diagonal.
+    #[inline(always)]
+    fn linvt_mul(&self, w: &[f64; NV]) -> [f64; NV] {
+        let mut x = [0.0f64; NV];
+        for (k, (xk, col)) in x.iter_mut().zip(&self.Linv.data.0).enumerate() {
+            *xk = if self.linv_diag {
+                col[k] * w[k]
+            } else {
+                dot(col, w) // zeros above the diagonal included: no branches
+            };
+        }
+        x
     }
 
     /// Solves the QP `qp` with at most `max_iter` adds plus drops. `prefer[i]` marks
@@ -315,9 +369,10 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
             active: [0; NV],
             n_active: 0,
         };
-        let data_finite = qp.q.iter().all(|v| v.is_finite())
-            && (0..m).all(|i| qp.h[i].is_finite() && qp.gt.column(i).iter().all(|v| v.is_finite()));
-        if !data_finite {
+        let rows = &qp.gt.data.0; // `rows[i]` is row `i` of `G`
+        let h = qp.h.as_slice();
+        let q = &qp.q.data.0[0];
+        if !q.iter().all(|v| v.is_finite()) {
             return sol;
         }
 
@@ -327,32 +382,52 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         // `s_i / |L^-1 g_i|` is the square root of the cost increase of enforcing
         // row i alone, which picks rows that matter and roughly halves the
         // add/drop count on the controller's QPs compared with the Euclidean rule.
-        // The H^-1 norm costs NV^2 per row, so it is computed only for rows
-        // found violated (0 = not computed yet).
+        // The H^-1 norm costs up to NV^2 / 2 per row, so it is computed only for
+        // rows found violated (0 = not computed yet).
         let mut inv_norm = [0.0f64; NC];
         let mut inv_hnorm = [0.0f64; NC];
-        for i in 0..m {
-            let n = qp.gt.column(i).norm();
-            if n > ZERO_ROW {
-                inv_norm[i] = 1.0 / n;
-            }
-            if n <= ZERO_ROW && qp.h[i] < -tol {
-                // 0'x <= h with h < 0: nothing satisfies it; y = e_i certifies it.
-                sol.status = QpStatus::Infeasible;
-                if let Some(y) = sol.lambda.get_mut(i) {
-                    *y = 1.0;
-                }
+        let mut zero_infeasible: Option<usize> = None;
+        for (i, ((g, &hi), inv)) in rows.iter().zip(h).zip(&mut inv_norm).enumerate().take(m) {
+            let n2 = dot(g, g);
+            // A NaN or infinite entry makes `n2` non-finite; so can a huge finite
+            // row, which the element check then lets through.
+            if !hi.is_finite() || (!n2.is_finite() && !g.iter().all(|v| v.is_finite())) {
                 return sol;
             }
+            let n = libm::sqrt(n2);
+            if n > ZERO_ROW {
+                *inv = 1.0 / n;
+            } else if hi < -tol && zero_infeasible.is_none() {
+                zero_infeasible = Some(i);
+            }
+        }
+        if let Some(i) = zero_infeasible {
+            // 0'x <= h with h < 0: nothing satisfies it; y = e_i certifies it.
+            sol.status = QpStatus::Infeasible;
+            if let Some(y) = sol.lambda.get_mut(i) {
+                *y = 1.0;
+            }
+            return sol;
         }
 
-        // Unconstrained minimiser x = -J0 J0' q.
-        let mut J = self.J0;
-        let mut x = -(J * (J.transpose() * qp.q));
+        // Unconstrained minimiser x = -J0 J0' q = -L^-T L^-1 q.
+        let mut J = self.Linv.transpose();
+        let mut x = self.linvt_mul(&self.linv_mul(q));
+        for v in x.iter_mut() {
+            *v = -*v;
+        }
         let mut R = SMatrix::<f64, NV, NV>::zeros();
         let mut u = [0.0f64; NV]; // multipliers of the active rows
         let mut act = [0u16; NV];
         let mut is_active = [false; NC];
+        // Skipping rows that cannot be violated: the normalised slack
+        // `(h_i - g_i x) / |g_i|` moves by at most `|dx|` when `x` moves by `dx`, so
+        // with `travel` the Euclidean path length of `x` so far and
+        // `bound[i] = slack_i / |g_i| + travel` at the last evaluation of row `i`,
+        // the row still holds while `bound[i] > travel`. Rows far from active are
+        // then evaluated once per solve instead of once per add.
+        let mut bound = [f64::NEG_INFINITY; NC];
+        let mut travel = 0.0f64;
         let mut nact: usize = 0;
         let mut iters: u32 = 0;
         // On infeasibility: the row `p` and `-r` of the active rows (see below).
@@ -364,28 +439,41 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
             let mut best_v = 0.0;
             let mut best_pref: Option<usize> = None;
             let mut best_pref_v = 0.0;
-            for i in 0..m {
-                if is_active[i] || inv_norm[i] == 0.0 {
+            let scan = rows
+                .iter()
+                .zip(h)
+                .zip(&inv_norm)
+                .zip(&mut inv_hnorm)
+                .zip(&is_active)
+                .zip(prefer)
+                .zip(&mut bound)
+                .enumerate()
+                .take(m);
+            for (i, ((((((g, &hi), &inv_n), inv_hn), &active), &pref), bound_i)) in scan {
+                if active || inv_n == 0.0 || *bound_i > travel {
                     continue;
                 }
-                let slack = qp.h[i] - qp.gt.column(i).dot(&x);
+                let slack = hi - dot(g, &x);
                 if !slack.is_finite() {
                     break 'outer QpStatus::NumericalError;
                 }
-                if slack * inv_norm[i] >= -tol {
+                let sigma = slack * inv_n;
+                *bound_i = sigma + travel;
+                if sigma >= -tol {
                     continue; // satisfied to tolerance
                 }
-                if inv_hnorm[i] == 0.0 {
-                    let hn = (self.J0.transpose() * qp.gt.column(i)).norm();
+                if *inv_hn == 0.0 {
+                    let w = self.linv_mul(g);
+                    let hn = libm::sqrt(dot(&w, &w));
                     // J0 is nonsingular, so hn > 0 for a non-zero row.
-                    inv_hnorm[i] = if hn > 0.0 { 1.0 / hn } else { inv_norm[i] };
+                    *inv_hn = if hn > 0.0 { 1.0 / hn } else { inv_n };
                 }
-                let s = slack * inv_hnorm[i];
+                let s = slack * *inv_hn;
                 if s < best_v {
                     best_v = s;
                     best = Some(i);
                 }
-                if prefer[i] && s < best_pref_v {
+                if pref && s < best_pref_v {
                     best_pref_v = s;
                     best_pref = Some(i);
                 }
@@ -395,10 +483,9 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
                 Some(p) => p,
             };
             // `p < m <= NC`, so the row exists.
-            let Some((gp, hp)) = qp.get_row(p) else {
+            let (Some(gp), Some(&hp)) = (rows.get(p), h.get(p)) else {
                 break QpStatus::NumericalError;
             };
-            let np = -gp; // GI normal: np'x >= -h_p
             let mut u_new: f64 = 0.0; // multiplier of p
 
             // Step 2: move until p is satisfied (full step) or a row must be dropped.
@@ -409,12 +496,18 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
                 // Invariant: nact <= NV (a row is only added when `add_row` found
                 // room); the `min` states it for the compiler.
                 let nact_c = nact.min(NV);
-                let d = J.transpose() * np;
+                // d = J' n_p with the GI normal n_p = -g_p (n_p'x >= -h_p).
+                let mut d = [0.0f64; NV];
+                for (dj, col) in d.iter_mut().zip(&J.data.0) {
+                    *dj = -dot(col, gp);
+                }
                 // z = J2 d2: component of the step outside the active span.
-                let mut z = SVector::<f64, NV>::zeros();
+                let mut z = [0.0f64; NV];
                 let mut d2sq = 0.0;
                 for (col, &dj) in J.data.0.iter().zip(d.iter()).skip(nact_c) {
-                    z += SVector::from(*col) * dj; // column j of J, j >= nact
+                    for (zk, c) in z.iter_mut().zip(col) {
+                        *zk += c * dj; // column j of J, j >= nact
+                    }
                     d2sq += dj * dj;
                 }
                 // r = R^-1 d1 (back substitution on the active block). Counting
@@ -441,9 +534,9 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
                     }
                 }
                 // Full (primal) step length t2.
-                let dn = d.norm();
+                let dn = libm::sqrt(dot(&d, &d));
                 let dependent = libm::sqrt(d2sq) <= self.settings.tol_dependence * dn;
-                let slack_p = hp - gp.dot(&x); // < 0 while violated
+                let slack_p = hp - dot(gp, &x); // < 0 while violated
                 let t2 = if dependent {
                     f64::INFINITY
                 } else {
@@ -472,7 +565,10 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
                 }
                 u_new += t;
                 if !dependent {
-                    x += z * t;
+                    for (xk, zk) in x.iter_mut().zip(&z) {
+                        *xk += t * zk;
+                    }
+                    travel += t * libm::sqrt(dot(&z, &z));
                 }
                 if t2 <= t1 {
                     // Full step: p becomes active.
@@ -509,7 +605,7 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
             }
         };
 
-        sol.x = x;
+        sol.x = SVector::from(x);
         let nact = nact.min(NV);
         // Multipliers of the active rows, or the Farkas certificate.
         let weights = match farkas {
@@ -529,7 +625,7 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         sol.active = act;
         sol.n_active = nact;
         sol.iterations = iters;
-        sol.objective = self.objective(&qp.q, &x);
+        sol.objective = self.objective(&qp.q, &sol.x);
         sol.status = if x.iter().all(|v| v.is_finite()) && sol.objective.is_finite() {
             status
         } else {
@@ -545,7 +641,7 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         J: &mut SMatrix<f64, NV, NV>,
         R: &mut SMatrix<f64, NV, NV>,
         nact: usize,
-        d: &SVector<f64, NV>,
+        d: &[f64; NV],
     ) -> bool {
         if nact >= NV {
             return false;
@@ -632,9 +728,27 @@ impl<const NV: usize, const NC: usize> QpBackend<NV, NC> for OwnSolver {
     }
 }
 
+/// `a . b` with four partial sums (independent add chains; `N` is a constant, so
+/// the loop unrolls and vectorises without bounds checks).
+#[inline(always)]
+fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
+    let mut acc = [0.0f64; 2];
+    for k in 0..N {
+        acc[k % 2] += a[k] * b[k];
+    }
+    acc[0] + acc[1]
+}
+
 /// Givens rotation `(c, s, r)` with `c a + s b = r`, `-s a + c b = 0`.
 fn givens(a: f64, b: f64) -> (f64, f64, f64) {
-    let r = libm::hypot(a, b);
+    // sqrt(a^2 + b^2) is within an ulp or two of hypot; hypot (slower, no
+    // overflow or underflow) only when the squares leave the normal range.
+    let r2 = a * a + b * b;
+    let r = if (1e-280..=1e280).contains(&r2) {
+        libm::sqrt(r2)
+    } else {
+        libm::hypot(a, b)
+    };
     if r == 0.0 {
         return (1.0, 0.0, 0.0);
     }
