@@ -77,4 +77,5 @@ pub use mpc::{
 };
 pub use qp::{
     DenseQp, DualActiveSet, HessianError, OwnSolver, QpBackend, QpSettings, QpSolution, QpStatus,
+    RowNorms,
 };
