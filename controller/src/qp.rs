@@ -1072,6 +1072,72 @@ mod tests {
         }
     }
 
+    /// KKT conditions of a solution, or the certificate of an infeasible QP.
+    fn assert_kkt<const NV: usize, const NC: usize>(
+        s: &DualActiveSet<NV, NC>,
+        qp: &DenseQp<NV, NC>,
+        sol: &QpSolution<NV, NC>,
+    ) {
+        match sol.status {
+            QpStatus::Solved => {
+                let mut stat = s.hessian() * sol.x + qp.q;
+                for i in 0..qp.m {
+                    let (g, h) = qp.get_row(i).unwrap();
+                    let slack = h - g.dot(&sol.x);
+                    assert!(sol.lambda[i] >= 0.0);
+                    assert!(slack >= -1e-9, "row {i} violated by {slack}");
+                    assert!((sol.lambda[i] * slack).abs() < 1e-9, "complementarity");
+                    stat += g * sol.lambda[i];
+                }
+                assert!(stat.amax() < 1e-9, "stationarity {stat:?}");
+            }
+            QpStatus::Infeasible => assert_certificate(qp, &sol.lambda),
+            other => panic!("unexpected status {other:?}"),
+        }
+    }
+
+    #[test]
+    fn diagonal_and_dense_hessians_satisfy_kkt_on_random_qps() {
+        // Deterministic pseudo-random QPs (64-bit LCG), both Hessian code paths.
+        let mut state: u64 = 0x2545_f491_4f6c_dd1d;
+        let mut rnd = move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0 // [-1, 1)
+        };
+        let (mut solved, mut infeasible) = (0, 0);
+        for k in 0..400 {
+            let H = if k % 2 == 0 {
+                SMatrix::<f64, 6, 6>::from_diagonal(&SVector::from_fn(|_, _| {
+                    0.1 + 10.0 * rnd().abs()
+                }))
+            } else {
+                let A = SMatrix::<f64, 6, 6>::from_fn(|_, _| rnd());
+                A.transpose() * A + SMatrix::identity() * 0.1
+            };
+            let s = DualActiveSet::<6, 24>::new(&H, QpSettings::default()).unwrap();
+            assert_eq!(s.linv_diag, k % 2 == 0);
+            let mut qp = DenseQp::<6, 24>::with_q(SVector::from_fn(|_, _| 5.0 * rnd()));
+            for _ in 0..(4 + k % 20) {
+                let g = SVector::<f64, 6>::from_fn(|_, _| rnd());
+                qp.push_row(&g, rnd() + 0.3).unwrap();
+            }
+            let sol = s.solve(&qp, &[false; 24], 200);
+            assert_kkt(&s, &qp, &sol);
+            let rows = s.prepare_rows(&qp);
+            let prepared = s.solve_prepared(&qp, &rows, &[false; 24], 200);
+            assert_eq!(prepared.x, sol.x);
+            solved += usize::from(sol.status.is_solved());
+            infeasible += usize::from(sol.status.is_infeasible());
+        }
+        // Both outcomes are exercised.
+        assert!(
+            solved > 100 && infeasible > 10,
+            "{solved} solved, {infeasible} infeasible"
+        );
+    }
+
     #[test]
     fn overflowing_row_norm_is_numerical_error() {
         let s = solver2();
