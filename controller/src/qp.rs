@@ -44,9 +44,10 @@
 
 use nalgebra::{SMatrix, SVector};
 
-/// Rows with a normal shorter than this (Euclidean norm, in the units of `G`) are
-/// treated as zero rows: satisfied when `h_i >= -tol`, infeasible otherwise.
-const ZERO_ROW: f64 = 1e-300;
+/// Rows whose squared Euclidean norm is not above this (it is 0 for an exactly
+/// zero row or one whose squares underflow, `|g| < ~1e-162`) are treated as zero
+/// rows: satisfied when `h_i >= -tol`, infeasible otherwise.
+const ZERO_ROW2: f64 = 0.0;
 
 /// What one solve did. `Copy`, so it can travel in every cycle's diagnostics.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -252,14 +253,15 @@ impl<const NV: usize, const NC: usize> DenseQp<NV, NC> {
     }
 }
 
-/// Per-row data of a constraint matrix `G` used by a solve: reciprocal Euclidean
-/// norms `1 / |g_i|` and reciprocal norms in the metric of `H^-1`,
+/// Per-row data of a constraint matrix `G` used by a solve: squared Euclidean
+/// norms `|g_i|^2` and reciprocal norms in the metric of `H^-1`,
 /// `1 / |L^-1 g_i|` (both 0 for a zero row). Built by
 /// [`DualActiveSet::prepare_rows`] for [`DualActiveSet::solve_prepared`].
 #[derive(Clone, Debug)]
 pub struct RowNorms<const NC: usize> {
-    /// `1 / |g_i|`, in the inverse units of `G`.
-    inv_norm: [f64; NC],
+    /// `|g_i|^2`, in the units of `G` squared (no square root or division, so
+    /// the pass over all rows is cheap; the violation test squares the slack).
+    norm2: [f64; NC],
     /// `1 / |L^-1 g_i|`, 0 = not computed yet.
     inv_hnorm: [f64; NC],
     /// Rows covered.
@@ -269,26 +271,23 @@ pub struct RowNorms<const NC: usize> {
 }
 
 impl<const NC: usize> RowNorms<NC> {
-    /// Euclidean norms of the used rows of `qp` (H^-1 norms not computed).
+    /// Squared Euclidean norms of the used rows of `qp` (H^-1 norms not
+    /// computed).
     fn euclidean<const NV: usize>(qp: &DenseQp<NV, NC>) -> Self {
         let m = qp.m.min(NC);
         let mut rows = RowNorms {
-            inv_norm: [0.0; NC],
+            norm2: [0.0; NC],
             inv_hnorm: [0.0; NC],
             m,
             finite: true,
         };
-        for (g, inv) in qp.gt.data.0.iter().zip(&mut rows.inv_norm).take(m) {
-            let n2 = dot(g, g);
+        for (g, n2) in qp.gt.data.0.iter().zip(&mut rows.norm2).take(m) {
+            *n2 = dot(g, g);
             // A NaN or infinite entry makes `n2` non-finite, and so does a row
             // whose squared norm overflows (|g| > ~1e154): both are numerical
-            // errors (a zero `inv_norm` must mean a zero row).
+            // errors.
             if !n2.is_finite() {
                 rows.finite = false;
-            }
-            let n = libm::sqrt(n2);
-            if n > ZERO_ROW {
-                *inv = 1.0 / n;
             }
         }
         rows
@@ -430,17 +429,17 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
     /// [`DualActiveSet::solve_prepared`].
     pub fn prepare_rows(&self, qp: &DenseQp<NV, NC>) -> RowNorms<NC> {
         let mut rows = RowNorms::euclidean(qp);
-        for ((g, &inv_n), inv_hn) in qp
+        for ((g, &n2), inv_hn) in qp
             .gt
             .data
             .0
             .iter()
-            .zip(&rows.inv_norm)
+            .zip(&rows.norm2)
             .zip(&mut rows.inv_hnorm)
             .take(rows.m)
         {
-            if inv_n != 0.0 {
-                *inv_hn = self.inv_hnorm(g, inv_n);
+            if n2 > ZERO_ROW2 {
+                *inv_hn = self.inv_hnorm(g, n2);
             }
         }
         rows
@@ -464,15 +463,20 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         self.solve_with(qp, &mut rows, prefer, max_iter)
     }
 
-    /// `1 / |L^-1 g|` for a row with `1 / |g| = inv_n > 0`.
+    /// `1 / |L^-1 g|` for a row with `|g|^2 = n2 > 0`.
     // Inlined on hosts (vectorised into the callers); the compiler decides on
     // bare-metal targets, where one out-of-line copy saves flash.
     #[cfg_attr(not(target_os = "none"), inline(always))]
-    fn inv_hnorm(&self, g: &[f64; NV], inv_n: f64) -> f64 {
+    fn inv_hnorm(&self, g: &[f64; NV], n2: f64) -> f64 {
         let w = self.linv_mul(g);
         let hn = libm::sqrt(dot(&w, &w));
-        // L^-1 is nonsingular, so hn > 0 for a non-zero row.
-        if hn > 0.0 { 1.0 / hn } else { inv_n }
+        // L^-1 is nonsingular, so hn > 0 for a non-zero row (barring underflow,
+        // where the Euclidean norm stands in).
+        if hn > 0.0 {
+            1.0 / hn
+        } else {
+            1.0 / libm::sqrt(n2)
+        }
     }
 
     /// The solve proper, with the Euclidean row norms in `rows` and the H^-1 norms
@@ -509,16 +513,17 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         // `s_i / |L^-1 g_i|` is the square root of the cost increase of enforcing
         // row i alone, which picks rows that matter and roughly halves the
         // add/drop count on the controller's QPs compared with the Euclidean rule.
+        // A row is violated when `slack / |g| < -tol`, tested without the square
+        // root as `slack < 0` and `slack^2 > tol^2 |g|^2`.
+        let tol2 = tol * tol;
         let RowNorms {
-            inv_norm,
-            inv_hnorm,
-            ..
+            norm2, inv_hnorm, ..
         } = norms;
         let zero_infeasible = h
             .iter()
-            .zip(inv_norm.iter())
+            .zip(norm2.iter())
             .take(m)
-            .position(|(&hi, &inv_n)| inv_n == 0.0 && hi < -tol);
+            .position(|(&hi, &n2)| n2 <= ZERO_ROW2 && hi < -tol);
         if let Some(i) = zero_infeasible {
             // 0'x <= h with h < 0: nothing satisfies it; y = e_i certifies it.
             sol.status = QpStatus::Infeasible;
@@ -551,7 +556,7 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
             let mut best_pref_v = 0.0;
             for i in 0..m {
                 // `i < m <= NC`: every index below is in bounds.
-                if is_active[i] || inv_norm[i] == 0.0 {
+                if is_active[i] || norm2[i] <= ZERO_ROW2 {
                     continue;
                 }
                 let g = &rows[i];
@@ -559,11 +564,11 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
                 if !slack.is_finite() {
                     break 'outer QpStatus::NumericalError;
                 }
-                if slack * inv_norm[i] >= -tol {
+                if slack >= 0.0 || slack * slack <= tol2 * norm2[i] {
                     continue; // satisfied to tolerance
                 }
                 if inv_hnorm[i] == 0.0 {
-                    inv_hnorm[i] = self.inv_hnorm(g, inv_norm[i]);
+                    inv_hnorm[i] = self.inv_hnorm(g, norm2[i]);
                 }
                 let s = slack * inv_hnorm[i];
                 if s < best_v {
