@@ -79,4 +79,5 @@ pub use mpc::{
 };
 pub use qp::{
     DenseQp, DualActiveSet, HessianError, OwnSolver, QpBackend, QpSettings, QpSolution, QpStatus,
+    RowNorms,
 };

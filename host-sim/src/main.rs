@@ -192,7 +192,8 @@ enum Command {
 #[derive(Subcommand)]
 enum QpCommand {
     /// Solve each file with our solver; print CSV: status, iterations, objective
-    /// and the minimum solve time over the repeats (ns, solver call only).
+    /// and the minimum solve times over the repeats (ns, solver call only): from
+    /// the raw rows, and with the row norms prepared outside the timing.
     Solve {
         /// npz files (P, q, G, h).
         #[arg(required = true)]

@@ -125,7 +125,7 @@ fn exported_qps_solve_again() {
     let lines: Vec<&str> = out.lines().collect();
     assert_eq!(
         lines[0],
-        "file,n,m,status,iterations,objective,min_solve_ns"
+        "file,n,m,status,iterations,objective,min_solve_ns,min_prepared_ns"
     );
     assert_eq!(lines.len(), 6);
     assert!(
