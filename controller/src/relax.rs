@@ -61,8 +61,10 @@
 //!   and its gait search from the one its safety search ended with, which
 //!   usually proves at once that less than the cap is infeasible.
 //!
-//! On the firmware's recorded infeasible cycles (all stage 1) this is three
-//! solves per cycle, the nominal one included (4 or 15 with the bisection this
+//! On the firmware's recorded infeasible cycles (all stage 1) this is two
+//! solves per cycle, the nominal one included: the nominal certificate proves
+//! the bound, and the solve just above it is feasible (three when the first
+//! certificate came from the first-step solve, 4 or 15 with the bisection this
 //! replaces); see `docs/fallback.md`.
 //!
 //! Tolerance: a reported `eps` is at most `b (1 + 1e-9) + 1e-9`, `b` the lower
