@@ -4,7 +4,7 @@
 //!
 //! Stable Rust cannot write `2 * N` in a type, so the sizes are four const
 //! parameters whose relations are checked at compile time (`const { assert!(..) }`
-//! in [`Controller::new`]):
+//! in [`Controller::configure`], which [`Controller::new`] calls):
 //!
 //! | parameter | meaning | rule |
 //! |---|---|---|
