@@ -96,7 +96,7 @@
 //! e.g. `1` for the `k = 0` LDCBF rows, `sqrt(1 + (1 - gamma)^2)` for the others.
 #![allow(non_snake_case)]
 
-use nalgebra::{SMatrix, SVector, Vector2};
+use nalgebra::{ArrayStorage, SMatrix, SVector, Vector2};
 
 use crate::lip::Lip;
 use crate::qp::DenseQp;
@@ -154,12 +154,17 @@ pub struct RowId {
     pub k: u8,
 }
 
+impl RowId {
+    /// The default row identity (`VelLonUpper`, `k = 0`), as a constant.
+    pub const DEFAULT: RowId = RowId {
+        kind: RowKind::VelLonUpper,
+        k: 0,
+    };
+}
+
 impl Default for RowId {
     fn default() -> Self {
-        RowId {
-            kind: RowKind::VelLonUpper,
-            k: 0,
-        }
+        RowId::DEFAULT
     }
 }
 
@@ -187,6 +192,18 @@ pub struct Condensed<const N: usize> {
 }
 
 impl<const N: usize> Condensed<N> {
+    /// All-zero placeholder (every coefficient 0, not a model): for `const` and
+    /// `static` initialisers, e.g. an unconfigured controller. Build real maps
+    /// with [`Condensed::new`].
+    pub const ZERO: Self = Condensed {
+        c: 0.0,
+        s_over_beta: 0.0,
+        beta_s: 0.0,
+        kappa: 0.0,
+        V0: [Vector2::new(0.0, 0.0); N],
+        V_w: SMatrix::from_array_storage(ArrayStorage([[0.0; N]; N])),
+    };
+
     /// Builds the maps from the step model.
     pub fn new(lip: &Lip) -> Self {
         let c = lip.cosh_bt;

@@ -30,6 +30,16 @@ pub struct Lip {
 }
 
 impl Lip {
+    /// All-zero placeholder (`beta = T = 0`, not a model): for `const` and
+    /// `static` initialisers, e.g. an unconfigured controller. Build real
+    /// models with [`Lip::new`].
+    pub const ZERO: Lip = Lip {
+        beta: 0.0,
+        step_duration: 0.0,
+        cosh_bt: 0.0,
+        sinh_bt: 0.0,
+    };
+
     /// Builds the model for gravity `g` (m/s^2), CoM height `H` (m) and step
     /// duration `T` (s). The caller validates that all three are positive and finite.
     pub fn new(gravity: f64, com_height: f64, step_duration: f64) -> Self {

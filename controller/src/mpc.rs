@@ -4,7 +4,7 @@
 //!
 //! Stable Rust cannot write `2 * N` in a type, so the sizes are four const
 //! parameters whose relations are checked at compile time (`const { assert!(..) }`
-//! in [`Controller::new`]):
+//! in [`Controller::configure`], which [`Controller::new`] calls):
 //!
 //! | parameter | meaning | rule |
 //! |---|---|---|
@@ -45,12 +45,14 @@
 //!   ([`CommandSource::CaptureStep`]). A capture step brings a LIP to rest over the
 //!   foot; the later feet repeat the rule from the state it leads to. It honours
 //!   leg reachability but not necessarily the LDCBF rows.
-//! * [`CycleStatus::InvalidInput`]: a measured input was NaN or infinite. The
-//!   command holds: the last valid swing target (or the stance foot, or the
-//!   origin if that is not finite either) and turning rate 0 ([`CommandSource::Hold`]).
+//! * [`CycleStatus::InvalidInput`]: a measured input was NaN or infinite, or
+//!   the controller is not configured yet ([`InputError::NotConfigured`], see
+//!   [`Controller::UNCONFIGURED`]). The command holds: the last valid swing
+//!   target (or the stance foot, or the origin if that is not finite either)
+//!   and turning rate 0 ([`CommandSource::Hold`]).
 #![allow(non_snake_case)]
 
-use nalgebra::{SVector, Vector2};
+use nalgebra::{ArrayStorage, SVector, Vector2};
 
 use crate::constraints::{
     Condensed, GaitBounds, HalfPlane, RowId, RowKind, push_foot_row, push_gait_rows, push_ldcbf_row,
@@ -199,6 +201,32 @@ impl core::fmt::Display for ConfigError {
 impl core::error::Error for ConfigError {}
 
 impl Config {
+    /// All-zero placeholder of an unconfigured controller (fails
+    /// [`Config::validate`]; never used to compute anything).
+    const UNSET: Config = Config {
+        gravity: 0.0,
+        com_height: 0.0,
+        step_duration: 0.0,
+        vx_min: 0.0,
+        vx_max: 0.0,
+        vy_min: 0.0,
+        vy_max: 0.0,
+        l_max: 0.0,
+        alpha: 0.0,
+        omega_max: 0.0,
+        gamma: 0.0,
+        delta: 0.0,
+        r_active: 0.0,
+        foot_clearance: None,
+        heading_freeze_radius: 0.0,
+        max_iter: 0,
+        max_iter_cycle: 0,
+        relax_bisections: 0,
+        max_gait_relaxation: 0.0,
+        warm_start: false,
+        tol_primal: 0.0,
+    };
+
     /// This configuration with the iteration budgets (`max_iter`,
     /// `max_iter_cycle`) multiplied by `ceil(n / 3)`, for a controller of horizon
     /// `n`. The defaults are sized for the paper's `N = 3`; the rows and the
@@ -324,6 +352,10 @@ pub enum InputError {
     TimeInStep,
     /// Goal.
     Goal,
+    /// Not a measurement: the controller has no valid configuration yet (it
+    /// is [`Controller::UNCONFIGURED`] and no [`Controller::configure`] has
+    /// succeeded).
+    NotConfigured,
 }
 
 impl core::fmt::Display for InputError {
@@ -333,6 +365,7 @@ impl core::fmt::Display for InputError {
             InputError::StanceFoot => "stance foot position is not finite or out of range",
             InputError::TimeInStep => "time in step is not finite",
             InputError::Goal => "goal is not finite or out of range",
+            InputError::NotConfigured => "the controller is not configured",
         })
     }
 }
@@ -350,7 +383,8 @@ pub enum CycleStatus {
     BudgetExhausted,
     /// The solver met a numerical failure; fallback command.
     NumericalFailure,
-    /// An input was not finite; hold command.
+    /// An input was not finite or out of range, or the controller is not
+    /// configured ([`InputError::NotConfigured`]); hold command.
     InvalidInput(InputError),
 }
 
@@ -531,6 +565,49 @@ pub struct Assembly<const N: usize, const NV: usize, const NC: usize, const NOBS
 impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
     Assembly<N, NV, NC, NOBS>
 {
+    /// An empty assembly (no rows, no obstacles), all storage zero: usable in
+    /// `const` and `static` initialisers (a `static` holding it lands in `.bss`).
+    pub const EMPTY: Self = Assembly {
+        qp: DenseQp::EMPTY,
+        cost_constant: 0.0,
+        rows: [RowId::DEFAULT; NC],
+        prediction: Prediction {
+            p0: Vector2::new(0.0, 0.0),
+            v0: Vector2::new(0.0, 0.0),
+            heading: HeadingPlan {
+                omega_bar: 0.0,
+                theta: [0.0; N],
+                theta_end: 0.0,
+            },
+            first_side: Side::Left,
+            goal: Vector2::new(0.0, 0.0),
+        },
+        obstacles: [ActiveObstacle::ZERO; NOBS],
+        n_obstacles: 0,
+        obstacles_truncated: false,
+        time_clamped: false,
+    };
+
+    /// Resets every field in place to [`Assembly::EMPTY`] (no temporary copy
+    /// of the whole assembly).
+    fn clear_in_place(&mut self) {
+        clear_qp_in_place(&mut self.qp);
+        self.cost_constant = 0.0;
+        self.rows.fill(RowId::DEFAULT);
+        let pred = &mut self.prediction;
+        pred.p0 = Vector2::zeros();
+        pred.v0 = Vector2::zeros();
+        pred.heading.omega_bar = 0.0;
+        pred.heading.theta.fill(0.0);
+        pred.heading.theta_end = 0.0;
+        pred.first_side = Side::Left;
+        pred.goal = Vector2::zeros();
+        self.obstacles.fill(ActiveObstacle::ZERO);
+        self.n_obstacles = 0;
+        self.obstacles_truncated = false;
+        self.time_clamped = false;
+    }
+
     /// The active obstacles, nearest first.
     pub fn active_obstacles(&self) -> &[ActiveObstacle] {
         &self.obstacles[..self.n_obstacles.min(NOBS)]
@@ -540,36 +617,29 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
 impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize> Default
     for Assembly<N, NV, NC, NOBS>
 {
+    /// [`Assembly::EMPTY`].
     fn default() -> Self {
-        let zero_hp = HalfPlane {
-            c: Vector2::zeros(),
-            eta: Vector2::zeros(),
-        };
-        Assembly {
-            qp: DenseQp::default(),
-            cost_constant: 0.0,
-            rows: [RowId::default(); NC],
-            prediction: Prediction {
-                p0: Vector2::zeros(),
-                v0: Vector2::zeros(),
-                heading: HeadingPlan {
-                    omega_bar: 0.0,
-                    theta: [0.0; N],
-                    theta_end: 0.0,
-                },
-                first_side: Side::Right,
-                goal: Vector2::zeros(),
-            },
-            obstacles: [ActiveObstacle {
-                index: 0,
-                distance: 0.0,
-                half_plane: zero_hp,
-            }; NOBS],
-            n_obstacles: 0,
-            obstacles_truncated: false,
-            time_clamped: false,
-        }
+        Self::EMPTY
     }
+}
+
+impl ActiveObstacle {
+    /// All-zero placeholder (index 0, distance 0, zero half-plane).
+    const ZERO: ActiveObstacle = ActiveObstacle {
+        index: 0,
+        distance: 0.0,
+        half_plane: HalfPlane {
+            c: Vector2::new(0.0, 0.0),
+            eta: Vector2::new(0.0, 0.0),
+        },
+    };
+}
+
+/// Empties `qp` in place: no rows, `q`, `G` and `h` zero.
+fn clear_qp_in_place<const NV: usize, const NC: usize>(qp: &mut DenseQp<NV, NC>) {
+    qp.clear();
+    qp.gt.fill(0.0);
+    qp.h.fill(0.0);
 }
 
 /// Warm-start and fallback memory carried from one cycle to the next.
@@ -590,6 +660,11 @@ struct Memory<const NV: usize> {
 
 /// The LDCBF-MPC controller: precomputed model and factored Hessian, plus the
 /// warm-start memory. One [`Controller::step`] per control cycle.
+///
+/// Build it with [`Controller::new`], or, without the controller ever being
+/// on the stack (embedded targets), as [`Controller::UNCONFIGURED`] in a
+/// `static` (all storage zero: `.bss`, no flash) followed by
+/// [`Controller::configure`] in place.
 #[derive(Clone, Debug)]
 pub struct Controller<const N: usize, const NV: usize, const NC: usize, const NOBS: usize> {
     core: Core<N, NV, NC>,
@@ -602,6 +677,9 @@ pub struct Controller<const N: usize, const NV: usize, const NC: usize, const NO
 /// The immutable, precomputed part of the controller.
 #[derive(Clone, Debug)]
 struct Core<const N: usize, const NV: usize, const NC: usize> {
+    /// `config`, `lip`, `model` and `solver` hold a validated configuration
+    /// (else they are the all-zero placeholders and every step holds).
+    configured: bool,
     config: Config,
     lip: Lip,
     model: Condensed<N>,
@@ -611,8 +689,52 @@ struct Core<const N: usize, const NV: usize, const NC: usize> {
 impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
     Controller<N, NV, NC, NOBS>
 {
-    /// Validates `config` and precomputes the model and the Hessian factorisation.
+    /// A controller without a configuration, all storage zero (so a `static`
+    /// initialised with it lands in `.bss` and costs no flash). Until
+    /// [`Controller::configure`] succeeds, [`Controller::step`] returns
+    /// [`CycleStatus::InvalidInput`]`(`[`InputError::NotConfigured`]`)` with the
+    /// hold command ([`CommandSource::Hold`]: the stance foot, or the origin if
+    /// that is not finite, and turning rate 0), and [`Controller::assemble`]
+    /// returns `Err(InputError::NotConfigured)`; [`Controller::config`],
+    /// [`Controller::lip`], [`Controller::model`] and [`Controller::solver`]
+    /// return all-zero placeholders.
+    pub const UNCONFIGURED: Self = Controller {
+        core: Core {
+            configured: false,
+            config: Config::UNSET,
+            lip: Lip::ZERO,
+            model: Condensed::ZERO,
+            solver: DualActiveSet::PLACEHOLDER,
+        },
+        memory: Memory {
+            active: [RowId::DEFAULT; NV],
+            n_active: 0,
+            plan: SVector::from_array_storage(ArrayStorage([[0.0; NV]; 1])),
+            has_plan: false,
+            stance: Side::Left,
+            last_target: None,
+        },
+        work: Assembly::EMPTY,
+        scratch: DenseQp::EMPTY,
+    };
+
+    /// Validates `config` and precomputes the model and the Hessian
+    /// factorisation: [`Controller::UNCONFIGURED`] followed by
+    /// [`Controller::configure`].
     pub fn new(config: Config) -> Result<Self, ConfigError> {
+        let mut controller = Self::UNCONFIGURED;
+        controller.configure(config)?;
+        Ok(controller)
+    }
+
+    /// Validates `config`, precomputes the model and the Hessian factorisation
+    /// and writes them into `self` in place (no copy of the whole controller
+    /// is made, so this is how an embedded target configures a controller held
+    /// in a `static`). On success the controller is as [`Controller::new`]
+    /// would build it: the warm-start and fallback memory and the workspaces
+    /// are cleared. On error nothing changes (an unconfigured controller stays
+    /// unconfigured, a configured one keeps its configuration and memory).
+    pub fn configure(&mut self, config: Config) -> Result<(), ConfigError> {
         const {
             assert!(N >= 1, "horizon N must be >= 1");
             assert!(NV == 2 * N, "NV must equal 2 * N");
@@ -646,24 +768,29 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
             field: "com_height",
             requirement: "gives a Hessian that is not positive definite (check gravity, com_height, step_duration)",
         })?;
-        Ok(Controller {
-            core: Core {
-                config,
-                lip,
-                model,
-                solver,
-            },
-            memory: Memory {
-                active: [RowId::default(); NV],
-                n_active: 0,
-                plan: SVector::zeros(),
-                has_plan: false,
-                stance: Side::Left,
-                last_target: None,
-            },
-            work: Assembly::default(),
-            scratch: DenseQp::default(),
-        })
+        // Everything is checked: commit, field by field.
+        let core = &mut self.core;
+        core.config = config;
+        core.lip = lip;
+        core.model = model;
+        core.solver = solver;
+        core.configured = true;
+        let memory = &mut self.memory;
+        memory.active.fill(RowId::DEFAULT);
+        memory.n_active = 0;
+        memory.plan.fill(0.0);
+        memory.has_plan = false;
+        memory.stance = Side::Left;
+        memory.last_target = None;
+        self.work.clear_in_place();
+        clear_qp_in_place(&mut self.scratch);
+        Ok(())
+    }
+
+    /// True once a [`Controller::configure`] (or [`Controller::new`]) has
+    /// succeeded.
+    pub fn is_configured(&self) -> bool {
+        self.core.configured
     }
 
     /// The validated configuration.
@@ -723,6 +850,8 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
 
     /// Steps 1-2 and 5 of SPEC section 2: prediction, headings, obstacle selection
     /// and all QP rows, written into `out`. Pure: uses no warm-start memory.
+    /// `Err(InputError::NotConfigured)` (and `out` unchanged) on an
+    /// unconfigured controller.
     pub fn assemble<const V: usize>(
         &self,
         input: &CycleInput<'_, V>,
@@ -763,6 +892,9 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         input: &CycleInput<'_, V>,
         out: &mut Assembly<N, NV, NC, NOBS>,
     ) -> Result<(), InputError> {
+        if !self.configured {
+            return Err(InputError::NotConfigured);
+        }
         let cfg = &self.config;
         let finite2 = |v: &Vector2<f64>| v.x.is_finite() && v.y.is_finite();
         // `!(x <= bound)` is also true for NaN.
@@ -1040,6 +1172,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                         self.config.max_iter_cycle.saturating_sub(sol.iterations),
                         self.config.relax_bisections,
                         self.config.max_gait_relaxation,
+                        Some(&sol.lambda),
                     )
                 } else {
                     Err(relax::RelaxError {
@@ -1383,6 +1516,73 @@ mod tests {
             ..Config::default()
         };
         assert!(Ctl::new(c).is_ok());
+    }
+
+    #[test]
+    fn unconfigured_controller_holds_until_configured_in_place() {
+        let mut ctl = Ctl::UNCONFIGURED;
+        assert!(!ctl.is_configured());
+        let wall = [Poly::new(&[[0.6, -2.0], [1.6, -2.0], [1.6, 2.0], [0.6, 2.0]]).unwrap()];
+        let inp = input(&wall);
+        let not_configured = CycleStatus::InvalidInput(InputError::NotConfigured);
+        let out = ctl.step(&inp);
+        assert_eq!(out.status, not_configured);
+        assert_eq!(out.info.source, CommandSource::Hold);
+        assert_eq!(out.foot_target, inp.stance_foot);
+        assert_eq!(out.turning_rate, 0.0);
+        assert!(output_is_finite(&out));
+        let mut bad_foot = inp;
+        bad_foot.stance_foot.x = f64::NAN;
+        let out = ctl.step(&bad_foot);
+        assert_eq!(out.status, not_configured);
+        assert_eq!(out.foot_target, Vector2::zeros());
+        assert!(output_is_finite(&out));
+        let mut asm = Assembly::default();
+        assert_eq!(ctl.assemble(&inp, &mut asm), Err(InputError::NotConfigured));
+        // A failed configure leaves it unconfigured.
+        let bad = Config {
+            gamma: 0.0,
+            ..Config::default()
+        };
+        assert_eq!(ctl.configure(bad).unwrap_err().field, "gamma");
+        let t = Config {
+            step_duration: 1e-6,
+            ..Config::default()
+        };
+        assert_eq!(ctl.configure(t).unwrap_err().field, "step_duration");
+        assert!(!ctl.is_configured());
+        assert_eq!(ctl.step(&inp).status, not_configured);
+        // Configured in place it behaves as `new`, cycle after cycle (the
+        // warm-start memory included).
+        ctl.configure(Config::default()).unwrap();
+        assert!(ctl.is_configured());
+        let mut fresh = Ctl::new(Config::default()).unwrap();
+        let walk = |ctl: &mut Ctl, fresh: &mut Ctl| {
+            let mut i = inp;
+            for k in 0..6 {
+                i.time_in_step = 0.1 * f64::from(k % 4);
+                i.com_velocity = Vector2::new(0.3 + 0.1 * f64::from(k), 0.05);
+                let (a, b) = (ctl.step(&i), fresh.step(&i));
+                assert_eq!(a, b, "cycle {k}");
+                assert_ne!(a.status, not_configured);
+            }
+        };
+        walk(&mut ctl, &mut fresh);
+        // A failed reconfiguration changes nothing (configuration and memory).
+        let mut twin = ctl.clone();
+        assert!(ctl.configure(bad).is_err());
+        assert!(ctl.is_configured());
+        assert_eq!(ctl.config(), &Config::default());
+        walk(&mut ctl, &mut twin);
+        // A successful one clears the memory: as new again.
+        let cfg = Config {
+            delta: 0.1,
+            ..Config::default()
+        };
+        ctl.configure(cfg).unwrap();
+        let mut fresh = Ctl::new(cfg).unwrap();
+        assert_eq!(ctl.config(), fresh.config());
+        walk(&mut ctl, &mut fresh);
     }
 
     #[test]

@@ -42,7 +42,7 @@
 //! [`QpStatus::Infeasible`].
 #![allow(non_snake_case)]
 
-use nalgebra::{SMatrix, SVector};
+use nalgebra::{ArrayStorage, SMatrix, SVector};
 
 /// Rows whose squared Euclidean norm is not above this (it is 0 for an exactly
 /// zero row or one whose squares underflow, `|g| < ~1e-162`) are treated as zero
@@ -176,6 +176,15 @@ impl<const NV: usize, const NC: usize> Default for DenseQp<NV, NC> {
 }
 
 impl<const NV: usize, const NC: usize> DenseQp<NV, NC> {
+    /// An empty QP (no rows, `q = 0`), all storage zero: usable in `const` and
+    /// `static` initialisers (a `static` holding it lands in `.bss`).
+    pub const EMPTY: Self = DenseQp {
+        q: SVector::from_array_storage(ArrayStorage([[0.0; NV]; 1])),
+        gt: SMatrix::from_array_storage(ArrayStorage([[0.0; NV]; NC])),
+        h: SVector::from_array_storage(ArrayStorage([[0.0; NC]; 1])),
+        m: 0,
+    };
+
     /// An empty QP with linear term `q`.
     pub fn with_q(q: SVector<f64, NV>) -> Self {
         DenseQp {
@@ -309,6 +318,20 @@ pub struct DualActiveSet<const NV: usize, const NC: usize> {
 }
 
 impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
+    /// A placeholder with `H = 0`, `J0 = 0` and zero tolerances, all storage
+    /// zero, for `const` and `static` initialisers (e.g. an unconfigured
+    /// controller). Not a solver: overwrite it with one from
+    /// [`DualActiveSet::new`] before solving (its solves never panic but mean
+    /// nothing).
+    pub const PLACEHOLDER: Self = DualActiveSet {
+        H: SMatrix::from_array_storage(ArrayStorage([[0.0; NV]; NV])),
+        J0: SMatrix::from_array_storage(ArrayStorage([[0.0; NV]; NV])),
+        settings: QpSettings {
+            tol_primal: 0.0,
+            tol_dependence: 0.0,
+        },
+    };
+
     /// Factors `H` (symmetric positive definite) once.
     pub fn new(H: &SMatrix<f64, NV, NV>, settings: QpSettings) -> Result<Self, HessianError> {
         const {

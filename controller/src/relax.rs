@@ -44,8 +44,9 @@
 //! and the safety rows at `e_s`, `y'h + e_g y'|g|_gait + e_s y'|g|_safety < 0`
 //! proves the relaxed problem empty. So each search runs from below:
 //!
-//! * the last certificate gives a lower bound `b` on `t` (none yet in the
-//!   first search: its first solve is the unrelaxed problem restricted to the
+//! * the last certificate gives a lower bound `b` on `t` (in the first search
+//!   the nominal solve's, which the controller hands over; without one its
+//!   first solve is the unrelaxed problem restricted to the
 //!   rows of the first step, `k = 0`, which is usually already infeasible and
 //!   about a third of the rows; a certificate of a subset of the rows is one
 //!   of all of them; only if it is feasible is the whole unrelaxed problem
@@ -60,8 +61,10 @@
 //!   and its gait search from the one its safety search ended with, which
 //!   usually proves at once that less than the cap is infeasible.
 //!
-//! On the firmware's recorded infeasible cycles (all stage 1) this is three
-//! solves per cycle, the nominal one included (4 or 15 with the bisection this
+//! On the firmware's recorded infeasible cycles (all stage 1) this is two
+//! solves per cycle, the nominal one included: the nominal certificate proves
+//! the bound, and the solve just above it is feasible (three when the first
+//! certificate came from the first-step solve, 4 or 15 with the bisection this
 //! replaces); see `docs/fallback.md`.
 //!
 //! Tolerance: a reported `eps` is at most `b (1 + 1e-9) + 1e-9`, `b` the lower
@@ -235,7 +238,11 @@ pub enum RelaxFailure {
 /// in this cycle; `probes` the largest number of solves of one search for a
 /// smallest relaxation (the scheme makes at most `2 probes + 4` solves in all,
 /// see the module docs); `gait_cap` the largest relaxation of the gait rows
-/// (m/s) allowed before the safety rows give way.
+/// (m/s) allowed before the safety rows give way. `certificate`: a Farkas
+/// certificate of the nominal QP (one weight per row of `qp`, as
+/// [`crate::qp::QpSolution::lambda`] of its infeasible solve), used as the
+/// first search's starting certificate when it proves the nominal QP empty
+/// (`y'h < 0`); it replaces the first-step solve.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     solver: &DualActiveSet<NV, NC>,
@@ -247,6 +254,7 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     budget: u32,
     probes: u32,
     gait_cap: f64,
+    certificate: Option<&SVector<f64, NC>>,
 ) -> Result<Relaxed<NV>, RelaxError> {
     let mut norms = [0.0f64; NC];
     for (n, g) in norms.iter_mut().zip(qp.gt.column_iter().take(qp.m)) {
@@ -267,6 +275,18 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         cert: None,
         marks: [false; NC],
     };
+    if let Some(y) = certificate {
+        // Same rows, same order: row `i` is nominal row `i`.
+        let mut orig = [0u16; NC];
+        for (i, o) in orig.iter_mut().enumerate() {
+            *o = i as u16;
+        }
+        ctx.take_certificate(y, &orig, qp.m);
+        if !ctx.cert.is_some_and(|c| c.yh < 0.0) {
+            ctx.cert = None;
+            ctx.marks = [false; NC];
+        }
+    }
     let out = run_stages(&mut ctx, gait_cap);
     out.map_err(|kind| RelaxError {
         kind,
@@ -478,62 +498,68 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         match sol.status {
             QpStatus::Solved => Ok(Probe::Feasible(sol.x)),
             QpStatus::Infeasible => {
-                let mut c = Certificate {
-                    yh: 0.0,
-                    yg: 0.0,
-                    ys: 0.0,
-                    yn: 0.0,
-                };
-                self.marks = [false; NC];
-                let m = self.scratch.m.min(NC);
-                // Weights at rounding level (~1e-17 of the largest) are not
-                // part of the certificate's support.
-                let floor = 1e-12 * sol.lambda.amax();
-                for (&y, &o) in sol.lambda.iter().zip(&orig[..m]) {
-                    let o = usize::from(o);
-                    let (Some(&h), Some(&n), Some(id)) =
-                        (self.qp.h.get(o), self.norms.get(o), self.rows.get(o))
-                    else {
-                        continue;
-                    };
-                    // (NaN weights are skipped too.)
-                    if y.partial_cmp(&floor) != Some(core::cmp::Ordering::Greater) {
-                        continue;
-                    }
-                    if let Some(mk) = self.marks.get_mut(o) {
-                        *mk = true;
-                    }
-                    let yn = y * n;
-                    c.yh += y * h;
-                    c.yn += yn;
-                    match RowClass::of(id.kind) {
-                        RowClass::Gait => c.yg += yn,
-                        RowClass::Safety => c.ys += yn,
-                        RowClass::Reach => {}
-                    }
-                }
-                // The support's normals are linearly dependent (`G'y = 0`):
-                // marking all of them makes the next solve add one too many
-                // and drop it again. Leave out the lightest.
-                let mut lightest: Option<(usize, f64)> = None;
-                for (&y, &o) in sol.lambda.iter().zip(&orig[..m]) {
-                    let o = usize::from(o);
-                    let w = y * self.norms.get(o).copied().unwrap_or(0.0);
-                    if self.marks.get(o).copied().unwrap_or(false)
-                        && lightest.is_none_or(|(_, lw)| w < lw)
-                    {
-                        lightest = Some((o, w));
-                    }
-                }
-                if let Some(mk) = lightest.and_then(|(o, _)| self.marks.get_mut(o)) {
-                    *mk = false;
-                }
-                self.cert = (c.yh.is_finite() && c.yn.is_finite()).then_some(c);
+                self.take_certificate(&sol.lambda, &orig, self.scratch.m);
                 Ok(Probe::Infeasible)
             }
             QpStatus::IterationLimit => Err(RelaxFailure::Budget),
             QpStatus::NumericalError => Err(RelaxFailure::Numerical),
         }
+    }
+
+    /// Keeps the Farkas certificate `lambda` of an infeasible solve whose row
+    /// `i < m` is the nominal row `orig[i]`: its sums in [`Ctx::cert`] and its
+    /// support (but the lightest row) in [`Ctx::marks`].
+    fn take_certificate(&mut self, lambda: &SVector<f64, NC>, orig: &[u16; NC], m: usize) {
+        let mut c = Certificate {
+            yh: 0.0,
+            yg: 0.0,
+            ys: 0.0,
+            yn: 0.0,
+        };
+        self.marks = [false; NC];
+        let m = m.min(NC);
+        // Weights at rounding level (~1e-17 of the largest) are not
+        // part of the certificate's support.
+        let floor = 1e-12 * lambda.amax();
+        for (&y, &o) in lambda.iter().zip(&orig[..m]) {
+            let o = usize::from(o);
+            let (Some(&h), Some(&n), Some(id)) =
+                (self.qp.h.get(o), self.norms.get(o), self.rows.get(o))
+            else {
+                continue;
+            };
+            // (NaN weights are skipped too.)
+            if y.partial_cmp(&floor) != Some(core::cmp::Ordering::Greater) {
+                continue;
+            }
+            if let Some(mk) = self.marks.get_mut(o) {
+                *mk = true;
+            }
+            let yn = y * n;
+            c.yh += y * h;
+            c.yn += yn;
+            match RowClass::of(id.kind) {
+                RowClass::Gait => c.yg += yn,
+                RowClass::Safety => c.ys += yn,
+                RowClass::Reach => {}
+            }
+        }
+        // The support's normals are linearly dependent (`G'y = 0`):
+        // marking all of them makes the next solve add one too many
+        // and drop it again. Leave out the lightest.
+        let mut lightest: Option<(usize, f64)> = None;
+        for (&y, &o) in lambda.iter().zip(&orig[..m]) {
+            let o = usize::from(o);
+            let w = y * self.norms.get(o).copied().unwrap_or(0.0);
+            if self.marks.get(o).copied().unwrap_or(false) && lightest.is_none_or(|(_, lw)| w < lw)
+            {
+                lightest = Some((o, w));
+            }
+        }
+        if let Some(mk) = lightest.and_then(|(o, _)| self.marks.get_mut(o)) {
+            *mk = false;
+        }
+        self.cert = (c.yh.is_finite() && c.yn.is_finite()).then_some(c);
     }
 
     /// Largest violation of the rows of `class` at `u`, per unit row norm.
@@ -769,14 +795,27 @@ mod tests {
             };
             ctl.assemble(&input, &mut asm).unwrap();
             let solver = ctl.solver();
-            if !solver
-                .solve(&asm.qp, &[false; NC], 64)
-                .status
-                .is_infeasible()
-            {
+            let nominal = solver.solve(&asm.qp, &[false; NC], 64);
+            if !nominal.status.is_infeasible() {
                 continue;
             }
             infeasible += 1;
+            // The nominal solve's certificate is one of the nominal QP
+            // (`y >= 0` on the used rows, 0 beyond, `G'y = 0`, `h'y < 0`), so
+            // of every relaxation the scheme bounds with it. Every other case
+            // hands it over (as the controller does), the rest run without.
+            let y = &nominal.lambda;
+            let m = asm.qp.m;
+            assert!(y.iter().take(m).all(|&v| v >= 0.0), "case {case}");
+            assert!(y.iter().skip(m).all(|&v| v == 0.0), "case {case}");
+            let scale: f64 = (0..m).map(|i| y[i] * asm.qp.row(i).norm()).sum();
+            let gty = (0..m).fold(nalgebra::SVector::<f64, 6>::zeros(), |acc, i| {
+                acc + asm.qp.row(i) * y[i]
+            });
+            assert!(gty.amax() <= 1e-9 * scale, "case {case}: G'y = {gty:?}");
+            let yh: f64 = (0..m).map(|i| y[i] * asm.qp.h[i]).sum();
+            assert!(yh < 0.0, "case {case}: y'h = {yh}");
+            let certificate = (case % 2 == 0).then_some(y);
             let mut count = Counting(0);
             let r = relax(
                 solver,
@@ -788,6 +827,7 @@ mod tests {
                 2048,
                 12,
                 cap,
+                certificate,
             )
             .unwrap_or_else(|e| panic!("case {case}: {e:?}"));
             solves[count.0.min(31)] += 1;

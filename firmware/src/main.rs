@@ -24,7 +24,8 @@
 //! the same ticks are core clock cycles.
 //!
 //! Stack: the free stack is painted at reset; `startup_peak` is the deepest use
-//! up to the end of building the controller, `main_depth` the stack in use by
+//! up to the end of configuring the controller (in place, in its `static`:
+//! [`PaperController::UNCONFIGURED`] then `configure`), `main_depth` the stack in use by
 //! `main` in the control loop. Before each cycle 32 KiB below the stack pointer
 //! are painted again; a cycle's `<stack bytes>` is the depth below `main`'s
 //! frame that the cycle (`Controller::step`) reached.
@@ -56,14 +57,18 @@ const PAINT_WORDS: usize = 8 * 1024;
 /// SysTick is a 24-bit down-counter.
 const SYST_MASK: u32 = 0x00FF_FFFF;
 
-/// Everything the controller needs between cycles, in `.bss`.
-struct State {
-    controller: PaperController,
-    obstacles: [Poly; recorded::OBSTACLES.len()],
-}
+/// The controller, in `.bss` (the unconfigured value is all zero bytes, so it
+/// costs no flash); configured in place by [`init_state`].
+static mut CONTROLLER: PaperController = PaperController::UNCONFIGURED;
 
-/// Storage of [`State`]: zero-initialised `.bss`, written once by [`init_state`].
-static mut STATE: MaybeUninit<State> = MaybeUninit::uninit();
+/// The obstacle polygons: zero-initialised `.bss`, written once by [`init_state`].
+static mut OBSTACLES: MaybeUninit<[Poly; recorded::OBSTACLES.len()]> = MaybeUninit::uninit();
+
+/// Everything the controller needs between cycles.
+struct State {
+    controller: &'static mut PaperController,
+    obstacles: &'static [Poly],
+}
 
 unsafe extern "C" {
     /// Top of the stack (end of RAM), from cortex-m-rt's `link.x`.
@@ -125,7 +130,7 @@ fn main() -> ! {
     let goal = Vector2::new(recorded::GOAL[0], recorded::GOAL[1]);
     let (mut max_ticks, mut max_stack) = (0u32, 0usize);
     for (i, rec) in recorded::CYCLES.iter().enumerate() {
-        let input = decode(black_box(rec), goal, &state.obstacles);
+        let input = decode(black_box(rec), goal, state.obstacles);
         let sp = cortex_m::register::msp::read() as usize;
         let bottom = paint_stack();
         let (cmd, ticks) = measure(&mut syst, || state.controller.step(black_box(&input)));
@@ -159,27 +164,29 @@ fn main() -> ! {
     }
 }
 
-/// Builds the controller and the obstacle polygons into [`STATE`] (once),
-/// field by field so that no whole `State` is assembled on the stack.
+/// Configures [`CONTROLLER`] in place and builds the obstacle polygons into
+/// [`OBSTACLES`] (once), so that no controller is assembled on the stack.
 #[inline(never)]
-fn init_state() -> &'static mut State {
-    // SAFETY: called once from `main` before any other access to STATE, so
-    // this is the only reference to it; both fields are written before the
-    // `assume_init_mut`.
+fn init_state() -> State {
+    // SAFETY: called once from `main` before any other access to CONTROLLER
+    // and OBSTACLES, so these are the only references to them; every
+    // obstacle is written before the `assume_init_ref`.
     unsafe {
-        let state = (*core::ptr::addr_of_mut!(STATE)).as_mut_ptr();
-        match PaperController::new(Config::default()) {
-            Ok(c) => core::ptr::addr_of_mut!((*state).controller).write(c),
-            Err(_) => fail(),
+        let controller = &mut *core::ptr::addr_of_mut!(CONTROLLER);
+        if controller.configure(Config::default()).is_err() {
+            fail();
         }
-        let obstacles = core::ptr::addr_of_mut!((*state).obstacles);
+        let obstacles = (*core::ptr::addr_of_mut!(OBSTACLES)).as_mut_ptr();
         for (i, verts) in recorded::OBSTACLES.iter().enumerate() {
             match Poly::hull(verts) {
                 Ok(p) => (*obstacles)[i] = p,
                 Err(_) => fail(),
             }
         }
-        (*core::ptr::addr_of_mut!(STATE)).assume_init_mut()
+        State {
+            controller,
+            obstacles: (*core::ptr::addr_of!(OBSTACLES)).assume_init_ref(),
+        }
     }
 }
 

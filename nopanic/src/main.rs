@@ -177,6 +177,15 @@ fn main() -> ! {
             paper.reset();
             foot.reset();
         }
+        // Reconfiguration in place, of a used controller and of an
+        // unconfigured one (whose steps hold).
+        if r[52] > 0.0 {
+            let _ = paper.configure(config(&r));
+        }
+        if r[53] > 0.0 {
+            foot = FootController::UNCONFIGURED;
+            let _ = foot.configure(config(&r));
+        }
         let inp = input(&r, obstacles);
         let a = paper.step(&inp);
         let b = foot.step(&inp);
