@@ -318,14 +318,15 @@ pub struct DualActiveSet<const NV: usize, const NC: usize> {
 }
 
 impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
-    /// A placeholder with `H = 0`, `J0 = 0` and zero tolerances, all storage
+    /// A placeholder with `H = 0`, `L^-1 = 0` and zero tolerances, all storage
     /// zero, for `const` and `static` initialisers (e.g. an unconfigured
     /// controller). Not a solver: overwrite it with one from
     /// [`DualActiveSet::new`] before solving (its solves never panic but mean
     /// nothing).
     pub const PLACEHOLDER: Self = DualActiveSet {
         H: SMatrix::from_array_storage(ArrayStorage([[0.0; NV]; NV])),
-        J0: SMatrix::from_array_storage(ArrayStorage([[0.0; NV]; NV])),
+        Linv: SMatrix::from_array_storage(ArrayStorage([[0.0; NV]; NV])),
+        linv_diag: false,
         settings: QpSettings {
             tol_primal: 0.0,
             tol_dependence: 0.0,
