@@ -112,8 +112,10 @@ impl RowClass {
     }
 }
 
-/// Largest violation of each row class by a plan, per unit row norm (m/s for
-/// gait rows, m for reachability and safety rows); 0 when the class holds.
+/// Largest violation of each row class by a plan, in the rows' physical units
+/// (the units of their right-hand sides: m/s of a body-frame velocity component
+/// for gait rows, m for reachability rows, m of `h` for LDCBF and foot-clearance
+/// rows); 0 when the class holds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClassViolation {
     /// Leg reachability rows.
@@ -156,7 +158,7 @@ pub fn class_violation<const NV: usize, const NC: usize>(
         if n == 0.0 {
             continue;
         }
-        let e = (g.dot(u) - h) / n;
+        let e = g.dot(u) - h;
         let e = if e.is_nan() { f64::INFINITY } else { e };
         let slot = match RowClass::of(id.kind) {
             RowClass::Reach => &mut v.reach,
@@ -168,22 +170,124 @@ pub fn class_violation<const NV: usize, const NC: usize>(
     v
 }
 
+/// The capturability bound (see the module docs): every body-frame component
+/// of every predicted end-of-step velocity `v_{k+1}` within `+-speed`. It
+/// shares its left-hand sides with the gait velocity rows, so it is applied as
+/// a per-row ceiling on their relaxation rather than as extra rows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CaptureBounds {
+    /// Largest capturable velocity component, m/s (body frame of step `k`).
+    pub speed: f64,
+    /// `speed` minus the nominal bound of each gait row, m/s, clamped at 0
+    /// (the capturability bound never tightens a nominal row), in the order
+    /// `VelLonUpper, VelLonLower, VelLatUpper, VelLatLower`.
+    pub headroom: [f64; 4],
+}
+
+impl CaptureBounds {
+    /// The bound of `cfg` (`None` when [`crate::Config::capture_fraction`] is
+    /// off): `speed = fraction |kappa| l_max` with `kappa` (1/s) of the step
+    /// map (`|kappa| = beta coth(beta T / 2)`), and `omega_bar` (rad/s) the
+    /// cycle's turning rate (it lowers the `VelLonUpper` row's nominal bound).
+    pub fn new(cfg: &crate::Config, kappa: f64, omega_bar: f64) -> Option<CaptureBounds> {
+        let speed = cfg.capture_fraction? * kappa.abs() * cfg.l_max;
+        let lon_upper = cfg
+            .vx_max
+            .min(cfg.vx_max - cfg.alpha / core::f64::consts::PI * omega_bar.abs());
+        let room = |b: f64| (speed - b).max(0.0);
+        let cb = CaptureBounds {
+            speed,
+            headroom: [
+                room(lon_upper),
+                room(-cfg.vx_min),
+                room(cfg.vy_max),
+                room(-cfg.vy_min),
+            ],
+        };
+        cb.headroom.iter().all(|h| h.is_finite()).then_some(cb)
+    }
+
+    /// The headroom of a row of kind `kind` (`None`: not a velocity row).
+    fn of(&self, kind: RowKind) -> Option<f64> {
+        let i = match kind {
+            RowKind::VelLonUpper => 0,
+            RowKind::VelLonLower => 1,
+            RowKind::VelLatUpper => 2,
+            RowKind::VelLatLower => 3,
+            _ => return None,
+        };
+        self.headroom.get(i).copied()
+    }
+}
+
+/// What a search relaxes: one of the row classes, or the capturability bound
+/// (which acts on the gait rows).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Soft {
+    Safety,
+    Gait,
+    Capture,
+}
+
 /// Which rows a relaxed problem keeps, and by how much each class is relaxed
 /// (`None`: the class is left out); `first_step`: only the rows of the first
-/// step (`k = 0`).
+/// step (`k = 0`). A gait row's right-hand side is `h + min(gait, headroom +
+/// capture)` (each term only when present; the row is left out when neither
+/// is).
 #[derive(Clone, Copy, Debug)]
 struct Keep {
     safety: Option<f64>,
     gait: Option<f64>,
+    capture: Option<f64>,
     first_step: bool,
 }
 
 impl Keep {
-    fn eps(&self, c: RowClass) -> Option<f64> {
+    fn eps(&self, c: Soft) -> Option<f64> {
         match c {
-            RowClass::Reach => Some(0.0),
-            RowClass::Safety => self.safety,
-            RowClass::Gait => self.gait,
+            Soft::Safety => self.safety,
+            Soft::Gait => self.gait,
+            Soft::Capture => self.capture,
+        }
+    }
+
+    fn with(self, c: Soft, eps: f64) -> Keep {
+        match c {
+            Soft::Safety => Keep {
+                safety: Some(eps),
+                ..self
+            },
+            Soft::Gait => Keep {
+                gait: Some(eps),
+                ..self
+            },
+            Soft::Capture => Keep {
+                capture: Some(eps),
+                ..self
+            },
+        }
+    }
+
+    /// The relaxed right-hand side of a row of kind `kind` with nominal
+    /// right-hand side `h`, and whether it is the capturability ceiling
+    /// (`None`: left out).
+    fn rhs(&self, kind: RowKind, h: f64, capture: Option<&CaptureBounds>) -> Option<(f64, bool)> {
+        match RowClass::of(kind) {
+            RowClass::Reach => Some((h, false)),
+            RowClass::Safety => self.safety.map(|e| (h + e, false)),
+            RowClass::Gait => {
+                let by_gait = self.gait.map(|e| h + e);
+                let by_capture = match (capture.and_then(|c| c.of(kind)), self.capture) {
+                    (Some(room), Some(e)) => Some(h + room + e),
+                    _ => None,
+                };
+                match (by_gait, by_capture) {
+                    (Some(a), Some(b)) if b < a => Some((b, true)),
+                    (Some(a), _) => Some((a, false)),
+                    (None, Some(b)) => Some((b, true)),
+                    (None, None) => None,
+                }
+            }
         }
     }
 }
@@ -206,8 +310,10 @@ pub struct Relaxed<const NV: usize> {
     pub level: RelaxLevel,
     /// Uniform relaxation of the gait rows, m/s (0 if none was needed).
     pub eps_gait: f64,
-    /// Uniform relaxation of the safety rows, m (0 at stage 1).
+    /// Uniform relaxation of the safety rows, m of `h` (0 at stage 1).
     pub eps_safety: f64,
+    /// Uniform relaxation of the capturability bound, m/s (0 unless stage 4).
+    pub eps_capture: f64,
     /// Solver iterations spent.
     pub iterations: u32,
 }
@@ -235,7 +341,8 @@ pub enum RelaxFailure {
 /// in this cycle; `probes` the largest number of solves of one search for a
 /// smallest relaxation (the scheme makes at most `2 probes + 4` solves in all,
 /// see the module docs); `gait_cap` the largest relaxation of the gait rows
-/// (m/s) allowed before the safety rows give way.
+/// (m/s) allowed before the safety rows give way; `capture` the
+/// capturability bound (`None`: off).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     solver: &DualActiveSet<NV, NC>,
@@ -247,6 +354,7 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     budget: u32,
     probes: u32,
     gait_cap: f64,
+    capture: Option<CaptureBounds>,
 ) -> Result<Relaxed<NV>, RelaxError> {
     let mut norms = [0.0f64; NC];
     for (n, g) in norms.iter_mut().zip(qp.gt.column_iter().take(qp.m)) {
@@ -266,6 +374,7 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         probes_left: probes.saturating_mul(2),
         cert: None,
         marks: [false; NC],
+        capture,
     };
     let out = run_stages(&mut ctx, gait_cap);
     out.map_err(|kind| RelaxError {
@@ -279,18 +388,22 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     ctx: &mut Ctx<'_, NV, NC, B>,
     gait_cap: f64,
 ) -> Result<Relaxed<NV>, RelaxFailure> {
-    // Stage 1: reachability and safety hard, gait soft up to the cap.
+    // The capturability bound, when on, is kept through stages 1-3.
+    let capture0 = ctx.capture.map(|_| 0.0);
+    // Stage 1: reachability, safety and capturability hard, gait soft up to the cap.
     let safe = Keep {
         safety: Some(0.0),
         gait: None,
+        capture: capture0,
         first_step: false,
     };
-    if let Some((u, eps)) = ctx.minimal(safe, RowClass::Gait, gait_cap, None)? {
+    if let Some((u, eps)) = ctx.minimal(safe, Soft::Gait, gait_cap, None)? {
         return Ok(Relaxed {
             u,
             level: RelaxLevel::Gait,
             eps_gait: eps,
             eps_safety: 0.0,
+            eps_capture: 0.0,
             iterations: ctx.used,
         });
     }
@@ -298,19 +411,63 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     // safety relaxed by exactly that much, the least gait relaxation (<= cap).
     // Stage 3, when even reachability and the capped gait rows conflict (the
     // robot already moves faster than the capped limits allow): the same with
-    // the gait rows unbounded.
-    for cap in [gait_cap, f64::INFINITY] {
+    // the gait rows unbounded (but under the capturability bound, when on).
+    // Stage 4 (capturability on, and reachability and the bound conflict: the
+    // robot is already too fast to stay within it): first the least uniform
+    // relaxation of the capturability bound, then as stage 3 under it.
+    for stage in 2..=4u8 {
+        let cap = if stage == 2 { gait_cap } else { f64::INFINITY };
+        let mut capture = capture0;
+        let mut known_s = None;
+        if stage == 3 && ctx.capture.is_some() {
+            // One solve tells whether reachability and the capturability bound
+            // alone are feasible: if not, stage 4 (with this certificate); if
+            // so, the plan bounds stage 3's safety search from above.
+            let free = Keep {
+                safety: None,
+                gait: None,
+                capture: Some(0.0),
+                first_step: false,
+            };
+            ctx.probes_left = ctx.probes_left.saturating_sub(1);
+            match ctx.solve(free)? {
+                Probe::Feasible(u) => {
+                    known_s = Some((ctx.violation(Soft::Safety, &u).max(0.0), u));
+                }
+                Probe::Infeasible => continue,
+            }
+        }
+        if stage == 4 {
+            if ctx.capture.is_none() {
+                break;
+            }
+            // Stage 4 gets probes of its own (its three searches).
+            ctx.probes_left = ctx.probes_left.saturating_add(ctx.probes);
+            let free = Keep {
+                safety: None,
+                gait: None,
+                capture: None,
+                first_step: false,
+            };
+            let Some((u_c, eps_c)) = ctx.minimal(free, Soft::Capture, f64::INFINITY, None)? else {
+                break;
+            };
+            capture = Some(eps_c);
+            known_s = Some((ctx.violation(Soft::Safety, &u_c).max(0.0), u_c));
+        }
         let reach = Keep {
             safety: None,
             gait: if cap.is_finite() { Some(cap) } else { None },
+            capture,
             first_step: false,
         };
-        let Some((u_s, eps_s)) = ctx.minimal(reach, RowClass::Safety, f64::INFINITY, None)? else {
+        let Some((u_s, eps_s)) = ctx.minimal(reach, Soft::Safety, f64::INFINITY, known_s)? else {
             continue;
         };
         let fixed = Keep {
             safety: Some(eps_s),
             gait: None,
+            capture,
             first_step: false,
         };
         // The plan just found is feasible with the gait rows at the cap (or
@@ -318,10 +475,10 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         let known = if cap.is_finite() {
             cap
         } else {
-            ctx.violation(RowClass::Gait, &u_s).max(0.0)
+            ctx.violation(Soft::Gait, &u_s).max(0.0)
         };
         let (u, eps_g) = ctx
-            .minimal(fixed, RowClass::Gait, cap, Some((known, u_s)))?
+            .minimal(fixed, Soft::Gait, cap, Some((known, u_s)))?
             .ok_or(RelaxFailure::Numerical)?;
         // Without any safety relaxation this is still a gait relaxation (beyond
         // the cap: the robot moves too fast already).
@@ -335,6 +492,7 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
             level,
             eps_gait: eps_g,
             eps_safety: eps_s,
+            eps_capture: capture.unwrap_or(0.0),
             iterations: ctx.used,
         });
     }
@@ -343,17 +501,23 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
 }
 
 /// The sums of a Farkas certificate `y` (`y >= 0`, `G'y = 0`) that matter for
-/// every relaxation of the same rows: with the gait rows at `h + e_g |g|` and
-/// the safety rows at `h + e_s |g|`, `y'h(e) = yh + e_g yg + e_s ys`, and the
-/// relaxed problem is infeasible whenever that is negative.
+/// every relaxation of the same rows: with the gait rows at `h + e_g` and
+/// the safety rows at `h + e_s`, `y'h(e) = yh + e_g yg + e_s ys (+ e_c yc)`,
+/// and the relaxed problem is infeasible whenever that is negative. A gait row
+/// whose right-hand side was the capturability ceiling `h + room + e_c` counts
+/// in `yh` (with `y room`) and `yc`: since each gait row's right-hand side is
+/// the smaller of its two forms, this linear form is never below the true
+/// `y'h(e)`, so it still proves emptiness wherever it is negative.
 #[derive(Clone, Copy, Debug)]
 struct Certificate {
-    /// `y'h` at no relaxation.
+    /// `y'h` at no relaxation (with the capturability ceilings' headroom).
     yh: f64,
-    /// `y' |g|` over the gait rows (0: the gait rows take no part).
+    /// Sum of `y` over the gait rows in their gait form (0: they take no part).
     yg: f64,
-    /// `y' |g|` over the safety rows.
+    /// Sum of `y` over the safety rows.
     ys: f64,
+    /// Sum of `y` over the gait rows in their capturability form.
+    yc: f64,
     /// `y' |g|` over all rows (scale for "zero").
     yn: f64,
 }
@@ -361,7 +525,7 @@ struct Certificate {
 /// What a certificate says about the relaxation `t` of one class, the others
 /// fixed.
 enum Bound {
-    /// Infeasible for every `t` below this (m or m/s).
+    /// Infeasible for every `t` below this (m of `h` or m/s).
     Below(f64),
     /// Infeasible for every `t`: relaxing this class cannot help.
     Never,
@@ -373,10 +537,14 @@ enum Bound {
 impl Certificate {
     /// The bound on the relaxation of `soft` when the other classes are as in
     /// `fixed` (`None`: left out).
-    fn bound(&self, fixed: Keep, soft: RowClass) -> Bound {
+    fn bound(&self, fixed: Keep, soft: Soft) -> Bound {
         let mut a = self.yh;
         let mut b = 0.0;
-        for (class, y) in [(RowClass::Gait, self.yg), (RowClass::Safety, self.ys)] {
+        for (class, y) in [
+            (Soft::Gait, self.yg),
+            (Soft::Safety, self.ys),
+            (Soft::Capture, self.yc),
+        ] {
             if class == soft {
                 b = y;
             } else {
@@ -397,7 +565,9 @@ impl Certificate {
             } else {
                 Bound::Unknown
             }
-        } else if a < 0.0 {
+        } else if a < -1e-9 * self.yn {
+            // (A certificate whose `a` is zero up to its accuracy, e.g. at a
+            // relaxation found just at its bound, proves nothing.)
             Bound::Never
         } else {
             Bound::Unknown
@@ -416,6 +586,8 @@ enum Probe<const NV: usize> {
 struct Ctx<'a, const NV: usize, const NC: usize, B> {
     /// Euclidean norms of the nominal rows.
     norms: [f64; NC],
+    /// The capturability bound (`None`: off).
+    capture: Option<CaptureBounds>,
     solver: &'a DualActiveSet<NV, NC>,
     backend: &'a mut B,
     qp: &'a DenseQp<NV, NC>,
@@ -454,8 +626,8 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         // Scratch row -> nominal row, and the scratch rows' warm-start marks.
         let mut orig = [0u16; NC];
         let mut prefer = [false; NC];
-        for (i, (((g, h), &n), id)) in self.qp.rows().zip(&self.norms).zip(self.rows).enumerate() {
-            let Some(eps) = keep.eps(RowClass::of(id.kind)) else {
+        for (i, ((g, h), id)) in self.qp.rows().zip(self.rows).enumerate() {
+            let Some((rhs, _)) = keep.rhs(id.kind, h, self.capture.as_ref()) else {
                 continue;
             };
             if keep.first_step && id.k != 0 {
@@ -464,7 +636,7 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
             let k = self.scratch.m;
             // Capacity cannot be exceeded: the scratch QP has the same capacity
             // and receives a subset of the rows.
-            if self.scratch.push_row(&g, h + eps * n).is_ok()
+            if self.scratch.push_row(&g, rhs).is_ok()
                 && let (Some(o), Some(p)) = (orig.get_mut(k), prefer.get_mut(k))
             {
                 *o = i as u16;
@@ -482,6 +654,7 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
                     yh: 0.0,
                     yg: 0.0,
                     ys: 0.0,
+                    yc: 0.0,
                     yn: 0.0,
                 };
                 self.marks = [false; NC];
@@ -503,12 +676,22 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
                     if let Some(mk) = self.marks.get_mut(o) {
                         *mk = true;
                     }
-                    let yn = y * n;
                     c.yh += y * h;
-                    c.yn += yn;
+                    c.yn += y * n;
                     match RowClass::of(id.kind) {
-                        RowClass::Gait => c.yg += yn,
-                        RowClass::Safety => c.ys += yn,
+                        RowClass::Gait => {
+                            let capped = keep
+                                .rhs(id.kind, h, self.capture.as_ref())
+                                .is_some_and(|(_, capped)| capped);
+                            match self.capture.as_ref().and_then(|c| c.of(id.kind)) {
+                                Some(room) if capped => {
+                                    c.yh += y * room;
+                                    c.yc += y;
+                                }
+                                _ => c.yg += y,
+                            }
+                        }
+                        RowClass::Safety => c.ys += y,
                         RowClass::Reach => {}
                     }
                 }
@@ -536,9 +719,23 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         }
     }
 
-    /// Largest violation of the rows of `class` at `u`, per unit row norm.
-    fn violation(&self, class: RowClass, u: &SVector<f64, NV>) -> f64 {
-        class_violation(self.qp, self.rows, u).of(class)
+    /// Largest violation at `u` (physical units) of the safety rows, the gait
+    /// rows, or the capturability bound.
+    fn violation(&self, soft: Soft, u: &SVector<f64, NV>) -> f64 {
+        match soft {
+            Soft::Safety => class_violation(self.qp, self.rows, u).safety,
+            Soft::Gait => class_violation(self.qp, self.rows, u).gait,
+            Soft::Capture => {
+                let mut v: f64 = 0.0;
+                for ((g, h), id) in self.qp.rows().zip(self.rows) {
+                    if let Some(room) = self.capture.as_ref().and_then(|c| c.of(id.kind)) {
+                        let e = g.dot(u) - h - room;
+                        v = if e.is_nan() { f64::INFINITY } else { v.max(e) };
+                    }
+                }
+                v
+            }
+        }
     }
 
     /// With `fixed` kept, the smallest uniform relaxation of `soft`, at most
@@ -557,21 +754,11 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
     fn minimal(
         &mut self,
         fixed: Keep,
-        soft: RowClass,
+        soft: Soft,
         cap: f64,
         known: Option<(f64, SVector<f64, NV>)>,
     ) -> Result<Option<(SVector<f64, NV>, f64)>, RelaxFailure> {
-        let with = |eps: f64| match soft {
-            RowClass::Gait => Keep {
-                gait: Some(eps),
-                ..fixed
-            },
-            RowClass::Safety => Keep {
-                safety: Some(eps),
-                ..fixed
-            },
-            RowClass::Reach => fixed,
-        };
+        let with = |eps: f64| fixed.with(soft, eps);
         // `lo`: proven infeasible below; `pad`: the margin of the next probe.
         let mut lo: f64 = 0.0;
         let mut pad = 0.0;
@@ -683,16 +870,19 @@ mod tests {
         asm: &Assembly<3, 6, NC, 8>,
         gait: Option<f64>,
         safety: Option<f64>,
+        capture: Option<(CaptureBounds, f64)>,
     ) -> bool {
         let keep = Keep {
             safety,
             gait,
+            capture: capture.map(|c| c.1),
             first_step: false,
         };
+        let bounds = capture.map(|c| c.0);
         let mut qp = DenseQp::<6, NC>::with_q(asm.qp.q);
-        for ((g, h, n), id) in asm.qp.rows_with_norm().zip(&asm.rows) {
-            if let Some(e) = keep.eps(RowClass::of(id.kind)) {
-                qp.push_row(&g, h + e * n).unwrap();
+        for ((g, h), id) in asm.qp.rows().zip(&asm.rows) {
+            if let Some((rhs, _)) = keep.rhs(id.kind, h, bounds.as_ref()) {
+                qp.push_row(&g, rhs).unwrap();
             }
         }
         let sol = solver.solve(&qp, &[false; NC], 500);
@@ -714,8 +904,10 @@ mod tests {
     /// nominal QP gets a relaxed plan that keeps reachability and each class
     /// within its reported relaxation, and each reported relaxation is
     /// minimal in the priority order: 1e-6 (relative, plus 1e-6 absolute) less
-    /// is certified infeasible, and a safety relaxation comes only when the
-    /// gait rows at the cap cannot make the problem feasible.
+    /// is certified infeasible, a safety relaxation comes only when the gait
+    /// rows at the cap cannot make the problem feasible, and (half of the
+    /// cases run with the capturability bound on) the bound is relaxed only
+    /// when reachability alone cannot meet it.
     #[test]
     fn relaxations_are_minimal_in_priority_order() {
         let mut rng = Lcg(0x005e_ed0f_5afe);
@@ -723,13 +915,17 @@ mod tests {
         let cap = ctl.config().max_gait_relaxation;
         let mut asm = Assembly::default();
         let mut scratch = DenseQp::<6, NC>::default();
-        let (mut infeasible, mut stage1, mut stage2, mut stage3) = (0, 0, 0, 0);
+        let (mut infeasible, mut stage1, mut stage2, mut stage3, mut stage4) = (0, 0, 0, 0, 0);
         let less = |e: f64| e - 1e-6 * (1.0 + e);
         let mut solves = [0usize; 32];
+        let kappa =
+            crate::constraints::Condensed::<3>::new(&crate::lip::Lip::new(9.81, 1.0, 0.4)).kappa;
         for case in 0..CASES {
             let delta = if rng.next() < 0.5 { 0.0 } else { 0.2 };
+            let capture_fraction = if case % 2 == 0 { Some(0.92) } else { None };
             ctl = PaperController::new(Config {
                 delta,
+                capture_fraction,
                 ..Config::default()
             })
             .unwrap();
@@ -777,6 +973,8 @@ mod tests {
                 continue;
             }
             infeasible += 1;
+            let cb = CaptureBounds::new(ctl.config(), kappa, asm.prediction.heading.omega_bar);
+            assert_eq!(cb.is_some(), capture_fraction.is_some());
             let mut count = Counting(0);
             let r = relax(
                 solver,
@@ -788,11 +986,24 @@ mod tests {
                 2048,
                 12,
                 cap,
+                cb,
             )
             .unwrap_or_else(|e| panic!("case {case}: {e:?}"));
             solves[count.0.min(31)] += 1;
             let v = class_violation(&asm.qp, &asm.rows, &r.u);
-            let (eg, es) = (r.eps_gait, r.eps_safety);
+            let (eg, es, ec) = (r.eps_gait, r.eps_safety, r.eps_capture);
+            // The capturability bound, relaxed by `ec`, holds.
+            let with_capture = |e: f64| cb.map(|c| (c, e));
+            if let Some(c) = cb {
+                for ((g, h), id) in asm.qp.rows().zip(&asm.rows) {
+                    if let Some(room) = c.of(id.kind) {
+                        let e = g.dot(&r.u) - h - room;
+                        assert!(e <= ec * (1.0 + 1e-9) + 1e-9, "case {case}: {e} {r:?}");
+                    }
+                }
+            } else {
+                assert_eq!(ec, 0.0);
+            }
             assert!(v.reach <= 1e-9, "case {case}: {v:?}");
             assert!(
                 v.gait <= eg * (1.0 + 1e-9) + 1e-9,
@@ -802,13 +1013,36 @@ mod tests {
                 v.safety <= es * (1.0 + 1e-9) + 1e-9,
                 "case {case}: {v:?} {r:?}"
             );
+            if ec > 0.0 {
+                // Stage 4: the least relaxation of the capturability bound
+                // with reachability alone, then the least safety and gait
+                // relaxations under it.
+                assert!(
+                    certified_empty(solver, &asm, None, None, with_capture(less(ec))),
+                    "case {case}: {r:?}: capture not minimal"
+                );
+                if es > 1e-6 {
+                    assert!(
+                        certified_empty(solver, &asm, None, Some(less(es)), with_capture(ec)),
+                        "case {case}: {r:?}: safety not minimal"
+                    );
+                }
+                if eg > 1e-6 {
+                    assert!(
+                        certified_empty(solver, &asm, Some(less(eg)), Some(es), with_capture(ec)),
+                        "case {case}: {r:?}: gait not minimal"
+                    );
+                }
+                stage4 += 1;
+                continue;
+            }
             if es == 0.0 {
                 // Stage 1 (or stage 3 without a safety relaxation): the least
                 // gait relaxation with safety kept.
                 assert_eq!(r.level, RelaxLevel::Gait);
                 assert!(eg > 0.0, "case {case}: the nominal QP is infeasible");
                 assert!(
-                    certified_empty(solver, &asm, Some(less(eg)), Some(0.0)),
+                    certified_empty(solver, &asm, Some(less(eg)), Some(0.0), with_capture(0.0)),
                     "case {case}: {r:?} not minimal"
                 );
                 stage1 += 1;
@@ -817,20 +1051,21 @@ mod tests {
             assert_eq!(r.level, RelaxLevel::Safety);
             // Safety gives way only when the capped gait rows cannot help.
             assert!(
-                certified_empty(solver, &asm, Some(cap), Some(0.0)),
+                certified_empty(solver, &asm, Some(cap), Some(0.0), with_capture(0.0)),
                 "case {case}"
             );
             // The least safety relaxation with the gait rows at the cap
-            // (stage 2) or left out (stage 3).
+            // (stage 2) or left out (stage 3; under the capturability bound
+            // when on).
             let gait_bound = (eg <= cap * (1.0 + 1e-9)).then_some(cap);
             assert!(
-                certified_empty(solver, &asm, gait_bound, Some(less(es))),
+                certified_empty(solver, &asm, gait_bound, Some(less(es)), with_capture(0.0)),
                 "case {case}: {r:?}: safety not minimal"
             );
             // Then the least gait relaxation under that safety relaxation.
             if eg > 1e-6 {
                 assert!(
-                    certified_empty(solver, &asm, Some(less(eg)), Some(es)),
+                    certified_empty(solver, &asm, Some(less(eg)), Some(es), with_capture(0.0)),
                     "case {case}: {r:?}: gait not minimal"
                 );
             }
@@ -841,8 +1076,8 @@ mod tests {
             }
         }
         std::println!(
-            "{infeasible} infeasible: {stage1} stage 1, {stage2} stage 2, {stage3} stage 3; \
-             solves of the priority scheme (count: cycles): {:?}",
+            "{infeasible} infeasible: {stage1} stage 1, {stage2} stage 2, {stage3} stage 3, \
+             {stage4} stage 4; solves of the priority scheme (count: cycles): {:?}",
             solves
                 .iter()
                 .enumerate()
@@ -850,8 +1085,8 @@ mod tests {
                 .collect::<std::vec::Vec<_>>()
         );
         assert!(
-            stage1 >= 20 && stage2 >= 50 && stage3 >= 20,
-            "{stage1} {stage2} {stage3}"
+            stage1 >= 20 && stage2 >= 50 && stage3 >= 20 && stage4 >= 10,
+            "{stage1} {stage2} {stage3} {stage4}"
         );
     }
 }

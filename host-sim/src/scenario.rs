@@ -194,6 +194,9 @@ pub struct ControllerOverrides {
     pub max_iter: Option<u32>,
     pub max_iter_cycle: Option<u32>,
     pub relax_bisections: Option<u32>,
+    pub max_gait_relaxation: Option<f64>,
+    /// `Config::capture_fraction`; 0 turns the capturability bound off.
+    pub capture_fraction: Option<f64>,
     pub warm_start: Option<bool>,
     pub tol_primal: Option<f64>,
 }
@@ -218,6 +221,8 @@ pub const CONTROLLER_FIELDS: &[&str] = &[
     "max_iter",
     "max_iter_cycle",
     "relax_bisections",
+    "max_gait_relaxation",
+    "capture_fraction",
     "warm_start",
     "tol_primal",
 ];
@@ -247,9 +252,13 @@ impl ControllerOverrides {
             max_iter,
             max_iter_cycle,
             relax_bisections,
+            max_gait_relaxation,
             warm_start,
             tol_primal
         );
+        if let Some(r) = self.capture_fraction {
+            c.capture_fraction = (r != 0.0).then_some(r);
+        }
         if self.foot_clearance.is_some() {
             c.foot_clearance = self.foot_clearance;
         }
