@@ -419,7 +419,7 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         let cap = if stage == 2 { gait_cap } else { f64::INFINITY };
         let mut capture = capture0;
         let mut known_s = None;
-        if stage == 3 && ctx.capture.is_some() {
+        if stage == 3 && ctx.capture.is_some() && ctx.probes_left > 0 {
             // One solve tells whether reachability and the capturability bound
             // alone are feasible: if not, stage 4 (with this certificate); if
             // so, the plan bounds stage 3's safety search from above.
@@ -429,7 +429,7 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
                 capture: Some(0.0),
                 first_step: false,
             };
-            ctx.probes_left = ctx.probes_left.saturating_sub(1);
+            ctx.probes_left -= 1;
             match ctx.solve(free)? {
                 Probe::Feasible(u) => {
                     known_s = Some((ctx.violation(Soft::Safety, &u).max(0.0), u));
@@ -441,8 +441,6 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
             if ctx.capture.is_none() {
                 break;
             }
-            // Stage 4 gets probes of its own (its three searches).
-            ctx.probes_left = ctx.probes_left.saturating_add(ctx.probes);
             let free = Keep {
                 safety: None,
                 gait: None,
@@ -1088,5 +1086,111 @@ mod tests {
             stage1 >= 20 && stage2 >= 50 && stage3 >= 20 && stage4 >= 10,
             "{stage1} {stage2} {stage3} {stage4}"
         );
+    }
+
+    /// The largest body-frame velocity component of a plan's `v_1 .. v_N`
+    /// (each in its step's heading frame), m/s.
+    fn fastest_component(out: &crate::CycleOutput<3>) -> f64 {
+        out.plan
+            .states
+            .iter()
+            .map(|s| {
+                let (c, sn) = (libm::cos(s.heading), libm::sin(s.heading));
+                let lon = c * s.velocity.x + sn * s.velocity.y;
+                let lat = -sn * s.velocity.x + c * s.velocity.y;
+                lon.abs().max(lat.abs())
+            })
+            .fold(0.0, f64::max)
+    }
+
+    /// A robot at the end of a step, walking at `vx_max` along x, pushed
+    /// sideways to `lateral` m/s, no obstacles, goal far ahead.
+    fn pushed(capture_fraction: Option<f64>, forward: f64, lateral: f64) -> crate::CycleOutput<3> {
+        let mut ctl = PaperController::new(Config {
+            capture_fraction,
+            ..Config::default()
+        })
+        .unwrap();
+        let input = CycleInput::<8> {
+            com_position: Vector2::zeros(),
+            com_velocity: Vector2::new(forward, lateral),
+            heading: 0.0,
+            turning_rate: 0.0,
+            stance_foot: Vector2::new(-0.1, -0.1),
+            stance_side: Side::Right,
+            time_in_step: 0.4,
+            goal: Vector2::new(20.0, 0.0),
+            obstacles: &[],
+        };
+        ctl.step(&input)
+    }
+
+    /// Pushed to 0.75 m/s sideways (beyond `vy_max` = 0.4 m/s, but below the
+    /// capturable 0.92 |kappa| l_max = 0.898 m/s): the gait rows give way
+    /// beyond their cap (stage 3). Without the capturability bound the uniform
+    /// relaxation also lets the forward velocity exceed what any step within
+    /// reach can stop; with it every planned component stays capturable and
+    /// the bound itself is not relaxed.
+    #[test]
+    fn capturable_push_keeps_the_plan_capturable() {
+        let kappa =
+            crate::constraints::Condensed::<3>::new(&crate::lip::Lip::new(9.81, 1.0, 0.4)).kappa;
+        let limit = kappa.abs() * Config::default().l_max;
+        let speed = 0.92 * limit;
+        let on = pushed(Some(0.92), 0.8, 0.75);
+        let off = pushed(None, 0.8, 0.75);
+        std::println!(
+            "on: {:?} fastest {:.3}; off: {:?} fastest {:.3}; limit {limit:.3}",
+            on.info,
+            fastest_component(&on),
+            off.info,
+            fastest_component(&off)
+        );
+        assert!(on.info.relax_gait > 0.1, "{:?}", on.info);
+        assert_eq!(on.info.relax_capture, 0.0);
+        assert!(fastest_component(&on) <= speed + 1e-9);
+        assert!(fastest_component(&off) > limit, "{:?}", off.plan);
+    }
+
+    /// Pushed forward beyond the bound. At 0.95 m/s (above the bound's
+    /// 0.898 m/s, below `|kappa| l_max` = 0.976 m/s) no step within reach
+    /// meets the bound at once (`v_1 >= cosh(beta T) v_0 - beta sinh(beta T)
+    /// l_max` = 0.927 m/s): the bound is relaxed (stage 4, reported in
+    /// `relax_capture`) by just that excess, no planned velocity exceeds the
+    /// relaxed bound, and from the planned `v_1` the bound holds again. At
+    /// 1.1 m/s the LIP cannot be stopped: the relaxation is reported,
+    /// large, and the plan (the slowest possible) still speeds up.
+    #[test]
+    fn push_beyond_the_bound_is_detected() {
+        let lip = crate::lip::Lip::new(9.81, 1.0, 0.4);
+        let l_max = Config::default().l_max;
+        let kappa = crate::constraints::Condensed::<3>::new(&lip).kappa;
+        let speed = 0.92 * kappa.abs() * l_max;
+        let bs = lip.beta * lip.sinh_bt;
+        // The slowest reachable velocities from v_0.
+        let slowest = |v0: f64| {
+            let v1 = lip.cosh_bt * v0 - bs * l_max;
+            [v1, lip.cosh_bt * v1 - bs * l_max]
+        };
+        let out = pushed(Some(0.92), 0.95, 0.0);
+        let v: std::vec::Vec<f64> = out.plan.states.iter().map(|s| s.velocity.x).collect();
+        std::println!("0.95 m/s: {:?} {v:?}", out.info);
+        assert!(
+            (out.info.relax_capture - (slowest(0.95)[0] - speed)).abs() < 1e-6,
+            "{:?}",
+            out.info
+        );
+        let relaxed = speed + out.info.relax_capture + 1e-9;
+        assert!(v[0] < 0.95 && v.iter().all(|&x| x <= relaxed), "{v:?}");
+        let next = pushed(Some(0.92), v[0], 0.0);
+        assert_eq!(next.info.relax_capture, 0.0, "{:?}", next.info);
+        let out = pushed(Some(0.92), 1.1, 0.0);
+        let v: std::vec::Vec<f64> = out.plan.states.iter().map(|s| s.velocity.x).collect();
+        std::println!("1.1 m/s: {:?} {v:?}", out.info);
+        assert!(out.info.relax_capture > slowest(1.1)[1] - speed - 1e-6);
+        assert!(v[0] > 1.1 && v[1] > v[0], "{v:?}");
+        // Not reported when the robot is within the bound.
+        let within = pushed(Some(0.92), 0.85, 0.0);
+        assert_eq!(within.info.relax_capture, 0.0, "{:?}", within.info);
     }
 }
