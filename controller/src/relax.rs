@@ -3,23 +3,52 @@
 //!
 //! Rows fall in three classes ([`RowClass`]): leg **reachability** (physical: never
 //! relaxed), **safety** (LDCBF and foot clearance), and **gait** (walking velocity
-//! and maneuverability). When the nominal QP is infeasible the controller solves,
-//! lexicographically:
+//! and maneuverability). A fourth bound, **capturability** (optional,
+//! [`crate::Config::capture_fraction`], on by default; below), shares the gait
+//! rows' left-hand sides.
 //!
-//! 1. **Gait relaxed.** Keep reachability and safety; relax every gait row by the
-//!    same amount `eps_gait` (m/s, on unit-norm rows: `g_i u <= h_i + eps |g_i|`),
-//!    the smallest that makes the problem feasible, but at most
+//! # Units
+//!
+//! Every relaxation is in the physical units of the relaxed rows' right-hand
+//! sides, as [`crate::constraints`] builds them: a gait row `a'v_{k+1} <= b`
+//! (`a` a body-frame axis of step `k`) relaxed by `eps_gait` is
+//! `a'v_{k+1} <= b + eps_gait`, m/s of that velocity component, on every step of the horizon
+//! alike; an LDCBF row `h(p_{k+1}) - (1 - gamma) h(p_k) >= 0` relaxed by
+//! `eps_safety` is `>= -eps_safety`, m of `h` (a foot-clearance row likewise,
+//! m); the capturability bound relaxed by `eps_capture` is `|a'v_{k+1}| <=
+//! speed + eps_capture`, m/s. (In the decision variables the rows have norms
+//! from 1 to about 13, so a relaxation per unit row norm, as before, was not in
+//! these units: the 0.1 cap let a first-step velocity row give way by about
+//! 0.56 m/s and a second-step one by about 1.26 m/s.) [`class_violation`]
+//! measures violations in the same units.
+//!
+//! # Stages
+//!
+//! When the nominal QP is infeasible the controller solves, lexicographically:
+//!
+//! 1. **Gait relaxed.** Keep reachability, safety and capturability; relax
+//!    every gait row by the same amount `eps_gait` (m/s), the smallest that
+//!    makes the problem feasible, but at most
 //!    [`crate::Config::max_gait_relaxation`]; then minimise the nominal cost
 //!    under that relaxation.
 //! 2. **Safety relaxed** (when stage 1 needs more than the cap): keep
-//!    reachability and the gait rows relaxed by the cap; find the smallest
-//!    uniform relaxation `eps_safety` (m) of the safety rows, then, with safety
-//!    relaxed by exactly that, the smallest `eps_gait` (<= cap), then minimise
-//!    the cost. This is the least-violating reachable step in the sense of the
-//!    largest LDCBF violation.
-//! 3. **Gait unbounded** (only when reachability and the capped gait rows alone
-//!    conflict, i.e. the robot already moves faster than the capped limits): as
-//!    stage 2 with no cap.
+//!    reachability, capturability and the gait rows relaxed by the cap; find
+//!    the smallest uniform relaxation `eps_safety` (m) of the safety rows,
+//!    then, with safety relaxed by exactly that, the smallest `eps_gait` (<=
+//!    cap), then minimise the cost. This is the least-violating reachable step
+//!    in the sense of the largest LDCBF violation.
+//! 3. **Gait unbounded** (only when reachability, capturability and the capped
+//!    gait rows alone conflict, i.e. the robot already moves faster than the
+//!    capped limits): as stage 2 with no cap on the gait rows, which then give
+//!    way up to the capturability bound.
+//! 4. **Capturability relaxed** (bound on, and reachability alone cannot meet
+//!    it: the robot already moves too fast to keep within it): the smallest
+//!    uniform relaxation `eps_capture` (m/s) of the bound with reachability
+//!    alone, then as stage 3 under the bound relaxed by that. Reported in
+//!    [`Relaxed::eps_capture`] and `CycleInfo::relax_capture`: never silent.
+//!
+//! So the priority order, most important first: reachability, capturability,
+//! gait up to the cap, safety, gait beyond the cap.
 //!
 //! Why the cap: the gait rows bound the CoM velocity at the end of each step,
 //! which is what keeps the pendulum capturable with steps inside the
@@ -28,21 +57,50 @@
 //! speed the robot up, cycle after cycle, past about 0.96 m/s, where no
 //! reachable step can stop it, and it fell. With the cap (0.1 m/s by default,
 //! so at most 0.9 m/s forward) the safety rows give way first, by the least
-//! amount, and the robot stays capturable.
+//! amount.
 //!
-//! Reachability alone is always feasible (each `f_k` may sit at `p_k`), so stage 3
-//! always has an answer up to numerical failure or budget exhaustion.
+//! # Capturability
+//!
+//! Per body axis, with the heading fixed, the step map of
+//! [`crate::constraints`] gives `v_{k+1} = cosh(beta T) v_k - beta sinh(beta
+//! T) d_k` for the foot offset `d_k = f_k - p_k`, `|d_k| <= l_max` (leg
+//! reachability). The best step against `v_k > 0` (`d_k = l_max`) slows the
+//! robot iff `v_k < |kappa| l_max` with `|kappa| = beta sinh(beta T) /
+//! (cosh(beta T) - 1) = beta coth(beta T / 2)`; from any `|v_k| < |kappa|
+//! l_max` the robot can stop in finitely many steps within reach (N-step
+//! capturability of the LIP with reach `l_max` and step time `T`, as in
+//! Koolen et al., IJRR 2012), from any faster state it cannot and falls.
+//! For Table I (`beta = 3.13 /s`, `T = 0.4 s`, `l_max = 0.173 m`) the limit
+//! is `|kappa| l_max = 5.64 x 0.173 = 0.976 m/s`. The bound keeps every
+//! body-frame component of every predicted `v_{k+1}` within `speed =
+//! capture_fraction |kappa| l_max` (default 0.92: 0.898 m/s, just below the
+//! capped forward gait `vx_max + 0.1 = 0.9 m/s`, leaving 8 % for turns, which
+//! rotate the body frame by up to `omega_max T = 0.2 rad` per step, and for
+//! model error). The nominal gait rows of Table I imply it (0.8 and 0.4 m/s),
+//! so it changes nothing on cycles that meet them; it binds only when the gait
+//! rows give way. Each of its rows has the left-hand side of one gait velocity
+//! row, so it is applied as a per-row ceiling on that row's relaxation
+//! (`h + min(eps_gait, headroom + eps_capture)`, headroom = `speed` minus the
+//! row's nominal bound, at least 0) rather than as extra rows: the QP keeps
+//! its size.
+//!
+//! Reachability alone is always feasible (each `f_k` may sit at `p_k`), so
+//! stage 4 (and, without the bound, stage 3) always has an answer up to
+//! numerical failure or budget exhaustion.
 //!
 //! # Finding the smallest relaxation
 //!
 //! Each smallest uniform relaxation is the optimal value of a linear program
-//! (minimise `t` subject to the soft rows at `h + t |g|` and the others as
+//! (minimise `t` subject to the soft rows at `h + t` and the others as
 //! fixed), whose dual is: maximise `-y'h` over Farkas certificates `y >= 0`,
 //! `G'y = 0`, normalised by `y'|g|_soft = 1`. The dual active-set solver
 //! returns such a certificate with every infeasible solve, and one certificate
 //! holds for every relaxation of the same rows: with the gait rows at `e_g`
-//! and the safety rows at `e_s`, `y'h + e_g y'|g|_gait + e_s y'|g|_safety < 0`
-//! proves the relaxed problem empty. So each search runs from below:
+//! and the safety rows at `e_s`, `y'h + e_g sum_gait y + e_s sum_safety y < 0`
+//! proves the relaxed problem empty (a gait row at its capturability ceiling
+//! counts with its headroom in `y'h` and towards `e_c`; the linear form is
+//! never below the true `y'h(e)`, so the proof stays valid). So each search
+//! runs from below:
 //!
 //! * the last certificate gives a lower bound `b` on `t` (none yet in the
 //!   first search: its first solve is the unrelaxed problem restricted to the
@@ -73,9 +131,13 @@
 //! historical: it now counts probes, not halvings) and the whole scheme at
 //! most twice that many; a search that runs out solves the most relaxed
 //! problem once more and reports that plan with its own violation (feasible,
-//! not minimal). So one infeasible cycle makes at most `2 relax_bisections +
-//! 4` solves after the nominal one (four searches at most: stage 1, the safety
-//! searches of stages 2 and 3, one gait search), each drawing on the cycle's
+//! not minimal). Stage 3 with the capturability bound on starts with one
+//! solve of reachability and the bound alone (counted as a probe): infeasible,
+//! it goes to stage 4 with that certificate; feasible, its plan bounds stage
+//! 3's safety search from above. So one infeasible cycle makes at most `2
+//! relax_bisections + 6` solves after the nominal one (six searches at most:
+//! stage 1, the safety searches of stages 2, 3 and 4, the capturability
+//! search of stage 4, one gait search), each drawing on the cycle's
 //! iteration budget ([`crate::Config::max_iter_cycle`]); if that runs out the
 //! controller falls back to the previous plan or the capture step.
 
