@@ -1354,6 +1354,32 @@ regular = { center = [4.0, 2.0], radius = 1.0, sides = 25 }
     }
 
     #[test]
+    fn relaxation_settings_are_overridable() {
+        let set = |sets: &[(&str, &str)]| LoadOptions {
+            seed: None,
+            sets: sets
+                .iter()
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect(),
+        };
+        let s = parse_str(OK, "t.toml", &LoadOptions::default()).unwrap();
+        assert_eq!(s.config.capture_fraction, Config::default().capture_fraction);
+        assert!(s.config.capture_fraction.is_some());
+        let o = set(&[("max_gait_relaxation", "0.25"), ("capture_fraction", "0")]);
+        let s = parse_str(OK, "t.toml", &o).unwrap();
+        assert_eq!(s.config.max_gait_relaxation, 0.25);
+        assert_eq!(s.config.capture_fraction, None);
+        let text = OK.replace("delta = 0.2", "delta = 0.2\ncapture_fraction = 0.8");
+        let s = parse_str(&text, "t.toml", &LoadOptions::default()).unwrap();
+        assert_eq!(s.config.capture_fraction, Some(0.8));
+        let e = parse_str(OK, "t.toml", &set(&[("capture_fraction", "1.5")])).unwrap_err();
+        assert_eq!(e.field, "controller.capture_fraction", "{e}");
+        let m = crate::report::config_map(&s.config);
+        assert_eq!(m["capture_fraction"], serde_json::json!(0.8));
+        assert_eq!(m["max_gait_relaxation"], serde_json::json!(0.1));
+    }
+
+    #[test]
     fn disturbance_table_parses_and_is_validated() {
         let text = format!(
             "{OK}\n[disturbance]\nseed = 4\npush_time = 2.0\npush_lateral = 0.3\nfoot_sigma = 0.02\n"
