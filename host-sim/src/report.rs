@@ -84,8 +84,9 @@ pub struct Summary {
     /// Max over every cycle of `CycleInfo::max_violation`: the largest violation of
     /// that cycle's own QP rows (gait + LDCBF) by the plan it returned and the
     /// simulator applied (every cycle's command is sent to the plant); in the rows'
-    /// units (m or m/s, rows are unit-normalised by the controller). Cycles that
-    /// hold (invalid input, NaN violation) are not counted.
+    /// physical units (m/s for velocity rows, m for reachability rows, m of `h`
+    /// for LDCBF rows; see `ldcbf_controller::relax`). Cycles that hold
+    /// (invalid input, NaN violation) are not counted.
     pub max_violation: f64,
     /// Same, restricted to the cycles whose swing target actually landed (the last
     /// cycle of each step).

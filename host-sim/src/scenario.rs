@@ -1363,7 +1363,10 @@ regular = { center = [4.0, 2.0], radius = 1.0, sides = 25 }
                 .collect(),
         };
         let s = parse_str(OK, "t.toml", &LoadOptions::default()).unwrap();
-        assert_eq!(s.config.capture_fraction, Config::default().capture_fraction);
+        assert_eq!(
+            s.config.capture_fraction,
+            Config::default().capture_fraction
+        );
         assert!(s.config.capture_fraction.is_some());
         let o = set(&[("max_gait_relaxation", "0.25"), ("capture_fraction", "0")]);
         let s = parse_str(OK, "t.toml", &o).unwrap();
