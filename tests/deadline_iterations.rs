@@ -30,15 +30,21 @@
 //! An upper bound for an infeasible cycle from the structure of
 //! `controller/src/relax.rs` (`relax_bisections` = 12): each search for a
 //! smallest relaxation makes at most 12 probes, the whole scheme at most
-//! 2 x 12 = 24 (a shared count), plus one last solve of the most relaxed
-//! problem per search that runs out, at most 4 searches (stage 1, the safety
-//! searches of stages 2 and 3, one gait search): the nominal solve and at
-//! most 24 + 4 = 28 more, 29 solves of at most 64 iterations, 1,856 <= 2,048.
+//! 2 x 12 = 24 (a shared count, which also covers the one solve of
+//! reachability and the capturability bound at the start of stage 3), plus
+//! one last solve of the most relaxed problem per search that runs out, at
+//! most 6 searches (stage 1, the safety searches of stages 2, 3 and 4, the
+//! capturability search of stage 4, one gait search): the nominal solve and
+//! at most 24 + 6 = 30 more, 31 solves of at most 64 iterations, 1,984 <=
+//! 2,048.
 //! So `max_iter_cycle` is never the binding limit; `max_iter` is.
 //!
 //! Measured (2026-11-22, `cargo test --release --test deadline_iterations --
 //! --nocapture`; `ldcbf-sim deadline --random 200` prints the same counts),
-//! 98,180 cycles in 208 runs:
+//! 98,180 cycles in 208 runs (before the relaxations were made physical and
+//! the capturability bound added; after: 98,181 cycles, 97 non-optimal, the
+//! same worst cases of 32 and 40, the shipped worst now 40 in `crowded@0`
+//! cycle 118):
 //!
 //! | cycles | worst | budget | margin |
 //! |---|---|---|---|

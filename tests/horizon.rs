@@ -41,7 +41,8 @@ struct LoopResult {
     iterations: Vec<u32>,
     /// Wall time of `step` per cycle, ns (sorted; noisy on a shared machine).
     cycle_ns: Vec<u64>,
-    /// Largest row violation of an optimal plan (per unit row norm).
+    /// Largest row violation of an optimal plan (physical units,
+    /// `CycleInfo::max_violation`).
     worst_optimal_violation: f64,
 }
 

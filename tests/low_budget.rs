@@ -66,7 +66,8 @@ const RANDOM: u64 = 2;
 /// The one case whose fallbacks can violate a safety row, and the slowest
 /// (LiDAR): a debug build (CI) runs it at this budget only.
 const LIDAR_CASE: (&str, u32) = ("crowded@0", 16);
-/// Row violations (per unit row norm, m or m/s) up to this count as satisfied:
+/// Row violations (physical units of `relax::class_violation`: m, m of `h` or
+/// m/s) up to this count as satisfied:
 /// the controller's own tolerance, `10 tol_primal`.
 const TOL: f64 = 1e-9;
 

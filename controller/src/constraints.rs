@@ -91,9 +91,14 @@
 //! with the smaller right-hand side: identical feasible set, no duplicated
 //! (linearly dependent) rows for the solver.
 //!
-//! Row norms (the unit in which the solver's tolerance and the priority scheme's
-//! relaxations of [`crate::relax`] are measured) are those of these variables:
-//! e.g. `1` for the `k = 0` LDCBF rows, `sqrt(1 + (1 - gamma)^2)` for the others.
+//! Every row's right-hand side is in physical units: m/s of a body-frame
+//! velocity component for the velocity rows, m for the reachability rows, m of
+//! `h` for the LDCBF and foot-clearance rows. The priority scheme of
+//! [`crate::relax`] relaxes rows in these units (`h_i + eps`). The rows' norms
+//! in these variables (the unit of the solver's tolerance) differ: e.g. `1` for
+//! the `k = 0` LDCBF rows, `sqrt(1 + (1 - gamma)^2)` for the others, `|kappa| =
+//! 5.64` for a first-step velocity row and about 12.6 for a second-step one
+//! (Table I).
 #![allow(non_snake_case)]
 
 use nalgebra::{ArrayStorage, SMatrix, SVector, Vector2};

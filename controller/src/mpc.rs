@@ -142,9 +142,17 @@ pub struct Config {
     /// `violation / 2^relax_bisections`), at most 52.
     pub relax_bisections: u32,
     /// Largest uniform relaxation of the gait (velocity, maneuverability) rows,
-    /// m/s, before the priority scheme relaxes the safety rows instead; keeps
-    /// the relaxed velocity limits capturable (see [`crate::relax`]).
+    /// m/s of the bounded body-frame velocity component (each row `a'v_{k+1} <=
+    /// b` becomes `a'v_{k+1} <= b + eps`), before the priority scheme relaxes
+    /// the safety rows instead (see [`crate::relax`]).
     pub max_gait_relaxation: f64,
+    /// Capturability bound (see [`crate::relax`]): every body-frame component of
+    /// every predicted end-of-step velocity is kept within `capture_fraction
+    /// |kappa| l_max` (m/s; `|kappa| l_max` = 0.976 m/s for Table I is the
+    /// speed above which no step within reach can slow the LIP down), above
+    /// the gait rows and below the safety rows in the priority order. A
+    /// fraction in (0, 1]; `None` = off.
+    pub capture_fraction: Option<f64>,
     /// Prefer the previous cycle's active rows (shifted) when choosing rows to add.
     pub warm_start: bool,
     /// Primal feasibility tolerance of the solver (on unit-norm rows), m or m/s.
@@ -173,6 +181,7 @@ impl Default for Config {
             max_iter_cycle: 2048,
             relax_bisections: 12,
             max_gait_relaxation: 0.1,
+            capture_fraction: Some(0.92),
             warm_start: true,
             tol_primal: 1e-10,
         }
@@ -223,6 +232,7 @@ impl Config {
         max_iter_cycle: 0,
         relax_bisections: 0,
         max_gait_relaxation: 0.0,
+        capture_fraction: None,
         warm_start: false,
         tol_primal: 0.0,
     };
@@ -304,6 +314,11 @@ impl Config {
         }
         if !(self.max_gait_relaxation.is_finite() && self.max_gait_relaxation >= 0.0) {
             return err("max_gait_relaxation", "must be finite and >= 0");
+        }
+        if let Some(r) = self.capture_fraction
+            && !(r.is_finite() && r > 0.0 && r <= 1.0)
+        {
+            return err("capture_fraction", "must be in (0, 1] when set");
         }
         if !(self.tol_primal.is_finite() && self.tol_primal > 0.0 && self.tol_primal < 1e-3) {
             return err("tol_primal", "must be in (0, 1e-3)");
@@ -485,16 +500,22 @@ pub struct CycleInfo {
     pub source: CommandSource,
     /// Cost `sum_k |p_k - g|^2` of the returned plan (m^2); NaN for `Hold`.
     pub cost: f64,
-    /// Largest violation of this cycle's QP rows by the returned plan, per unit
-    /// row norm (m for reachability and safety rows, m/s for gait rows; 0 when all
-    /// hold; the same units as `relax_gait` and `relax_safety`); NaN for `Hold`.
+    /// Largest violation of this cycle's QP rows by the returned plan, in the
+    /// rows' physical units (m for reachability rows, m of `h` for safety rows,
+    /// m/s for gait rows; 0 when all hold; the same units as `relax_gait` and
+    /// `relax_safety`); NaN for `Hold`.
     pub max_violation: f64,
     /// Smallest `h_j(p_0)` over the active obstacles (m), `+inf` if none.
     pub min_h0: f64,
-    /// Uniform relaxation of the gait rows in the returned plan, m/s (0 if none).
+    /// Uniform relaxation of the gait rows in the returned plan, m/s of the
+    /// bounded body-frame velocity component (0 if none).
     pub relax_gait: f64,
-    /// Uniform relaxation of the safety rows in the returned plan, m (0 if none).
+    /// Uniform relaxation of the safety rows in the returned plan, m of `h`
+    /// (0 if none).
     pub relax_safety: f64,
+    /// Uniform relaxation of the capturability bound in the returned plan, m/s
+    /// (0 if none or off; see [`Config::capture_fraction`]).
+    pub relax_capture: f64,
 }
 
 /// Everything one cycle returns. All numbers are finite.
@@ -1146,6 +1167,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             min_h0,
             relax_gait: 0.0,
             relax_safety: 0.0,
+            relax_capture: 0.0,
         };
         // `z`: this cycle's decision vector (positions); `feet`: set for the
         // fallbacks, which are defined by their footsteps.
@@ -1172,6 +1194,11 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                         self.config.max_iter_cycle.saturating_sub(sol.iterations),
                         self.config.relax_bisections,
                         self.config.max_gait_relaxation,
+                        relax::CaptureBounds::new(
+                            &self.config,
+                            self.model.kappa,
+                            pred.heading.omega_bar,
+                        ),
                         Some(&sol.lambda),
                     )
                 } else {
@@ -1184,6 +1211,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                     info.iterations = info.iterations.saturating_add(r.iterations);
                     info.relax_gait = r.eps_gait;
                     info.relax_safety = r.eps_safety;
+                    info.relax_capture = r.eps_capture;
                     info.source = match r.level {
                         relax::RelaxLevel::Gait => CommandSource::RelaxedGait,
                         relax::RelaxLevel::Safety => CommandSource::RelaxedSafety,
@@ -1443,6 +1471,7 @@ fn hold<const N: usize, const NV: usize, const V: usize>(
             min_h0: f64::INFINITY,
             relax_gait: 0.0,
             relax_safety: 0.0,
+            relax_capture: 0.0,
         },
     }
 }
@@ -1665,7 +1694,7 @@ mod tests {
         assert_eq!(warm.status, cold.status);
     }
 
-    /// Largest violation (per unit row norm) of the rows of `class` by the plan
+    /// Largest violation (physical units) of the rows of `class` by the plan
     /// of `out`, on the QP of the last step.
     fn class_violation(ctl: &Ctl, out: &CycleOutput<3>, class: relax::RowClass) -> f64 {
         let asm = ctl.last_assembly();
@@ -1688,7 +1717,7 @@ mod tests {
                 continue;
             }
             let g = asm.qp.row(i);
-            let h = asm.qp.h[i] + if c == class { eps * g.norm() } else { 0.0 };
+            let h = asm.qp.h[i] + if c == class { eps } else { 0.0 };
             qp.push_row(&g, h).unwrap();
         }
         ctl.solver().solve(&qp, &[false; 48], 500).status == QpStatus::Solved

@@ -3,23 +3,52 @@
 //!
 //! Rows fall in three classes ([`RowClass`]): leg **reachability** (physical: never
 //! relaxed), **safety** (LDCBF and foot clearance), and **gait** (walking velocity
-//! and maneuverability). When the nominal QP is infeasible the controller solves,
-//! lexicographically:
+//! and maneuverability). A fourth bound, **capturability** (optional,
+//! [`crate::Config::capture_fraction`], on by default; below), shares the gait
+//! rows' left-hand sides.
 //!
-//! 1. **Gait relaxed.** Keep reachability and safety; relax every gait row by the
-//!    same amount `eps_gait` (m/s, on unit-norm rows: `g_i u <= h_i + eps |g_i|`),
-//!    the smallest that makes the problem feasible, but at most
+//! # Units
+//!
+//! Every relaxation is in the physical units of the relaxed rows' right-hand
+//! sides, as [`crate::constraints`] builds them: a gait row `a'v_{k+1} <= b`
+//! (`a` a body-frame axis of step `k`) relaxed by `eps_gait` is
+//! `a'v_{k+1} <= b + eps_gait`, m/s of that velocity component, on every step of the horizon
+//! alike; an LDCBF row `h(p_{k+1}) - (1 - gamma) h(p_k) >= 0` relaxed by
+//! `eps_safety` is `>= -eps_safety`, m of `h` (a foot-clearance row likewise,
+//! m); the capturability bound relaxed by `eps_capture` is `|a'v_{k+1}| <=
+//! speed + eps_capture`, m/s. (In the decision variables the rows have norms
+//! from 1 to about 13, so a relaxation per unit row norm, as before, was not in
+//! these units: the 0.1 cap let a first-step velocity row give way by about
+//! 0.56 m/s and a second-step one by about 1.26 m/s.) [`class_violation`]
+//! measures violations in the same units.
+//!
+//! # Stages
+//!
+//! When the nominal QP is infeasible the controller solves, lexicographically:
+//!
+//! 1. **Gait relaxed.** Keep reachability, safety and capturability; relax
+//!    every gait row by the same amount `eps_gait` (m/s), the smallest that
+//!    makes the problem feasible, but at most
 //!    [`crate::Config::max_gait_relaxation`]; then minimise the nominal cost
 //!    under that relaxation.
 //! 2. **Safety relaxed** (when stage 1 needs more than the cap): keep
-//!    reachability and the gait rows relaxed by the cap; find the smallest
-//!    uniform relaxation `eps_safety` (m) of the safety rows, then, with safety
-//!    relaxed by exactly that, the smallest `eps_gait` (<= cap), then minimise
-//!    the cost. This is the least-violating reachable step in the sense of the
-//!    largest LDCBF violation.
-//! 3. **Gait unbounded** (only when reachability and the capped gait rows alone
-//!    conflict, i.e. the robot already moves faster than the capped limits): as
-//!    stage 2 with no cap.
+//!    reachability, capturability and the gait rows relaxed by the cap; find
+//!    the smallest uniform relaxation `eps_safety` (m) of the safety rows,
+//!    then, with safety relaxed by exactly that, the smallest `eps_gait` (<=
+//!    cap), then minimise the cost. This is the least-violating reachable step
+//!    in the sense of the largest LDCBF violation.
+//! 3. **Gait unbounded** (only when reachability, capturability and the capped
+//!    gait rows alone conflict, i.e. the robot already moves faster than the
+//!    capped limits): as stage 2 with no cap on the gait rows, which then give
+//!    way up to the capturability bound.
+//! 4. **Capturability relaxed** (bound on, and reachability alone cannot meet
+//!    it: the robot already moves too fast to keep within it): the smallest
+//!    uniform relaxation `eps_capture` (m/s) of the bound with reachability
+//!    alone, then as stage 3 under the bound relaxed by that. Reported in
+//!    [`Relaxed::eps_capture`] and `CycleInfo::relax_capture`: never silent.
+//!
+//! So the priority order, most important first: reachability, capturability,
+//! gait up to the cap, safety, gait beyond the cap.
 //!
 //! Why the cap: the gait rows bound the CoM velocity at the end of each step,
 //! which is what keeps the pendulum capturable with steps inside the
@@ -28,21 +57,50 @@
 //! speed the robot up, cycle after cycle, past about 0.96 m/s, where no
 //! reachable step can stop it, and it fell. With the cap (0.1 m/s by default,
 //! so at most 0.9 m/s forward) the safety rows give way first, by the least
-//! amount, and the robot stays capturable.
+//! amount.
 //!
-//! Reachability alone is always feasible (each `f_k` may sit at `p_k`), so stage 3
-//! always has an answer up to numerical failure or budget exhaustion.
+//! # Capturability
+//!
+//! Per body axis, with the heading fixed, the step map of
+//! [`crate::constraints`] gives `v_{k+1} = cosh(beta T) v_k - beta sinh(beta
+//! T) d_k` for the foot offset `d_k = f_k - p_k`, `|d_k| <= l_max` (leg
+//! reachability). The best step against `v_k > 0` (`d_k = l_max`) slows the
+//! robot iff `v_k < |kappa| l_max` with `|kappa| = beta sinh(beta T) /
+//! (cosh(beta T) - 1) = beta coth(beta T / 2)`; from any `|v_k| < |kappa|
+//! l_max` the robot can stop in finitely many steps within reach (N-step
+//! capturability of the LIP with reach `l_max` and step time `T`, as in
+//! Koolen et al., IJRR 2012), from any faster state it cannot and falls.
+//! For Table I (`beta = 3.13 /s`, `T = 0.4 s`, `l_max = 0.173 m`) the limit
+//! is `|kappa| l_max = 5.64 x 0.173 = 0.976 m/s`. The bound keeps every
+//! body-frame component of every predicted `v_{k+1}` within `speed =
+//! capture_fraction |kappa| l_max` (default 0.92: 0.898 m/s, just below the
+//! capped forward gait `vx_max + 0.1 = 0.9 m/s`, leaving 8 % for turns, which
+//! rotate the body frame by up to `omega_max T = 0.2 rad` per step, and for
+//! model error). The nominal gait rows of Table I imply it (0.8 and 0.4 m/s),
+//! so it changes nothing on cycles that meet them; it binds only when the gait
+//! rows give way. Each of its rows has the left-hand side of one gait velocity
+//! row, so it is applied as a per-row ceiling on that row's relaxation
+//! (`h + min(eps_gait, headroom + eps_capture)`, headroom = `speed` minus the
+//! row's nominal bound, at least 0) rather than as extra rows: the QP keeps
+//! its size.
+//!
+//! Reachability alone is always feasible (each `f_k` may sit at `p_k`), so
+//! stage 4 (and, without the bound, stage 3) always has an answer up to
+//! numerical failure or budget exhaustion.
 //!
 //! # Finding the smallest relaxation
 //!
 //! Each smallest uniform relaxation is the optimal value of a linear program
-//! (minimise `t` subject to the soft rows at `h + t |g|` and the others as
+//! (minimise `t` subject to the soft rows at `h + t` and the others as
 //! fixed), whose dual is: maximise `-y'h` over Farkas certificates `y >= 0`,
 //! `G'y = 0`, normalised by `y'|g|_soft = 1`. The dual active-set solver
 //! returns such a certificate with every infeasible solve, and one certificate
 //! holds for every relaxation of the same rows: with the gait rows at `e_g`
-//! and the safety rows at `e_s`, `y'h + e_g y'|g|_gait + e_s y'|g|_safety < 0`
-//! proves the relaxed problem empty. So each search runs from below:
+//! and the safety rows at `e_s`, `y'h + e_g sum_gait y + e_s sum_safety y < 0`
+//! proves the relaxed problem empty (a gait row at its capturability ceiling
+//! counts with its headroom in `y'h` and towards `e_c`; the linear form is
+//! never below the true `y'h(e)`, so the proof stays valid). So each search
+//! runs from below:
 //!
 //! * the last certificate gives a lower bound `b` on `t` (in the first search
 //!   the nominal solve's, which the controller hands over; without one its
@@ -76,9 +134,13 @@
 //! historical: it now counts probes, not halvings) and the whole scheme at
 //! most twice that many; a search that runs out solves the most relaxed
 //! problem once more and reports that plan with its own violation (feasible,
-//! not minimal). So one infeasible cycle makes at most `2 relax_bisections +
-//! 4` solves after the nominal one (four searches at most: stage 1, the safety
-//! searches of stages 2 and 3, one gait search), each drawing on the cycle's
+//! not minimal). Stage 3 with the capturability bound on starts with one
+//! solve of reachability and the bound alone (counted as a probe): infeasible,
+//! it goes to stage 4 with that certificate; feasible, its plan bounds stage
+//! 3's safety search from above. So one infeasible cycle makes at most `2
+//! relax_bisections + 6` solves after the nominal one (six searches at most:
+//! stage 1, the safety searches of stages 2, 3 and 4, the capturability
+//! search of stage 4, one gait search), each drawing on the cycle's
 //! iteration budget ([`crate::Config::max_iter_cycle`]); if that runs out the
 //! controller falls back to the previous plan or the capture step.
 
@@ -115,8 +177,10 @@ impl RowClass {
     }
 }
 
-/// Largest violation of each row class by a plan, per unit row norm (m/s for
-/// gait rows, m for reachability and safety rows); 0 when the class holds.
+/// Largest violation of each row class by a plan, in the rows' physical units
+/// (the units of their right-hand sides: m/s of a body-frame velocity component
+/// for gait rows, m for reachability rows, m of `h` for LDCBF and foot-clearance
+/// rows); 0 when the class holds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ClassViolation {
     /// Leg reachability rows.
@@ -159,7 +223,7 @@ pub fn class_violation<const NV: usize, const NC: usize>(
         if n == 0.0 {
             continue;
         }
-        let e = (g.dot(u) - h) / n;
+        let e = g.dot(u) - h;
         let e = if e.is_nan() { f64::INFINITY } else { e };
         let slot = match RowClass::of(id.kind) {
             RowClass::Reach => &mut v.reach,
@@ -171,22 +235,124 @@ pub fn class_violation<const NV: usize, const NC: usize>(
     v
 }
 
+/// The capturability bound (see the module docs): every body-frame component
+/// of every predicted end-of-step velocity `v_{k+1}` within `+-speed`. It
+/// shares its left-hand sides with the gait velocity rows, so it is applied as
+/// a per-row ceiling on their relaxation rather than as extra rows.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CaptureBounds {
+    /// Largest capturable velocity component, m/s (body frame of step `k`).
+    pub speed: f64,
+    /// `speed` minus the nominal bound of each gait row, m/s, clamped at 0
+    /// (the capturability bound never tightens a nominal row), in the order
+    /// `VelLonUpper, VelLonLower, VelLatUpper, VelLatLower`.
+    pub headroom: [f64; 4],
+}
+
+impl CaptureBounds {
+    /// The bound of `cfg` (`None` when [`crate::Config::capture_fraction`] is
+    /// off): `speed = fraction |kappa| l_max` with `kappa` (1/s) of the step
+    /// map (`|kappa| = beta coth(beta T / 2)`), and `omega_bar` (rad/s) the
+    /// cycle's turning rate (it lowers the `VelLonUpper` row's nominal bound).
+    pub fn new(cfg: &crate::Config, kappa: f64, omega_bar: f64) -> Option<CaptureBounds> {
+        let speed = cfg.capture_fraction? * kappa.abs() * cfg.l_max;
+        let lon_upper = cfg
+            .vx_max
+            .min(cfg.vx_max - cfg.alpha / core::f64::consts::PI * omega_bar.abs());
+        let room = |b: f64| (speed - b).max(0.0);
+        let cb = CaptureBounds {
+            speed,
+            headroom: [
+                room(lon_upper),
+                room(-cfg.vx_min),
+                room(cfg.vy_max),
+                room(-cfg.vy_min),
+            ],
+        };
+        cb.headroom.iter().all(|h| h.is_finite()).then_some(cb)
+    }
+
+    /// The headroom of a row of kind `kind` (`None`: not a velocity row).
+    fn of(&self, kind: RowKind) -> Option<f64> {
+        let i = match kind {
+            RowKind::VelLonUpper => 0,
+            RowKind::VelLonLower => 1,
+            RowKind::VelLatUpper => 2,
+            RowKind::VelLatLower => 3,
+            _ => return None,
+        };
+        self.headroom.get(i).copied()
+    }
+}
+
+/// What a search relaxes: one of the row classes, or the capturability bound
+/// (which acts on the gait rows).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Soft {
+    Safety,
+    Gait,
+    Capture,
+}
+
 /// Which rows a relaxed problem keeps, and by how much each class is relaxed
 /// (`None`: the class is left out); `first_step`: only the rows of the first
-/// step (`k = 0`).
+/// step (`k = 0`). A gait row's right-hand side is `h + min(gait, headroom +
+/// capture)` (each term only when present; the row is left out when neither
+/// is).
 #[derive(Clone, Copy, Debug)]
 struct Keep {
     safety: Option<f64>,
     gait: Option<f64>,
+    capture: Option<f64>,
     first_step: bool,
 }
 
 impl Keep {
-    fn eps(&self, c: RowClass) -> Option<f64> {
+    fn eps(&self, c: Soft) -> Option<f64> {
         match c {
-            RowClass::Reach => Some(0.0),
-            RowClass::Safety => self.safety,
-            RowClass::Gait => self.gait,
+            Soft::Safety => self.safety,
+            Soft::Gait => self.gait,
+            Soft::Capture => self.capture,
+        }
+    }
+
+    fn with(self, c: Soft, eps: f64) -> Keep {
+        match c {
+            Soft::Safety => Keep {
+                safety: Some(eps),
+                ..self
+            },
+            Soft::Gait => Keep {
+                gait: Some(eps),
+                ..self
+            },
+            Soft::Capture => Keep {
+                capture: Some(eps),
+                ..self
+            },
+        }
+    }
+
+    /// The relaxed right-hand side of a row of kind `kind` with nominal
+    /// right-hand side `h`, and whether it is the capturability ceiling
+    /// (`None`: left out).
+    fn rhs(&self, kind: RowKind, h: f64, capture: Option<&CaptureBounds>) -> Option<(f64, bool)> {
+        match RowClass::of(kind) {
+            RowClass::Reach => Some((h, false)),
+            RowClass::Safety => self.safety.map(|e| (h + e, false)),
+            RowClass::Gait => {
+                let by_gait = self.gait.map(|e| h + e);
+                let by_capture = match (capture.and_then(|c| c.of(kind)), self.capture) {
+                    (Some(room), Some(e)) => Some(h + room + e),
+                    _ => None,
+                };
+                match (by_gait, by_capture) {
+                    (Some(a), Some(b)) if b < a => Some((b, true)),
+                    (Some(a), _) => Some((a, false)),
+                    (None, Some(b)) => Some((b, true)),
+                    (None, None) => None,
+                }
+            }
         }
     }
 }
@@ -209,8 +375,10 @@ pub struct Relaxed<const NV: usize> {
     pub level: RelaxLevel,
     /// Uniform relaxation of the gait rows, m/s (0 if none was needed).
     pub eps_gait: f64,
-    /// Uniform relaxation of the safety rows, m (0 at stage 1).
+    /// Uniform relaxation of the safety rows, m of `h` (0 at stage 1).
     pub eps_safety: f64,
+    /// Uniform relaxation of the capturability bound, m/s (0 unless stage 4).
+    pub eps_capture: f64,
     /// Solver iterations spent.
     pub iterations: u32,
 }
@@ -238,8 +406,9 @@ pub enum RelaxFailure {
 /// in this cycle; `probes` the largest number of solves of one search for a
 /// smallest relaxation (the scheme makes at most `2 probes + 4` solves in all,
 /// see the module docs); `gait_cap` the largest relaxation of the gait rows
-/// (m/s) allowed before the safety rows give way. `certificate`: a Farkas
-/// certificate of the nominal QP (one weight per row of `qp`, as
+/// (m/s) allowed before the safety rows give way; `capture` the
+/// capturability bound (`None`: off). `certificate`: a Farkas certificate of
+/// the nominal QP (one weight per row of `qp`, as
 /// [`crate::qp::QpSolution::lambda`] of its infeasible solve), used as the
 /// first search's starting certificate when it proves the nominal QP empty
 /// (`y'h < 0`); it replaces the first-step solve.
@@ -254,6 +423,7 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     budget: u32,
     probes: u32,
     gait_cap: f64,
+    capture: Option<CaptureBounds>,
     certificate: Option<&SVector<f64, NC>>,
 ) -> Result<Relaxed<NV>, RelaxError> {
     let mut norms = [0.0f64; NC];
@@ -274,6 +444,7 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         probes_left: probes.saturating_mul(2),
         cert: None,
         marks: [false; NC],
+        capture,
     };
     if let Some(y) = certificate {
         // Same rows, same order: row `i` is nominal row `i`.
@@ -281,7 +452,15 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         for (i, o) in orig.iter_mut().enumerate() {
             *o = i as u16;
         }
-        ctx.take_certificate(y, &orig, qp.m);
+        // The nominal QP is the first probe's problem (stage 1 at no
+        // relaxation) without the first-step restriction.
+        let nominal = Keep {
+            safety: Some(0.0),
+            gait: Some(0.0),
+            capture: capture.map(|_| 0.0),
+            first_step: false,
+        };
+        ctx.take_certificate(y, &orig, qp.m, nominal);
         if !ctx.cert.is_some_and(|c| c.yh < 0.0) {
             ctx.cert = None;
             ctx.marks = [false; NC];
@@ -299,18 +478,22 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     ctx: &mut Ctx<'_, NV, NC, B>,
     gait_cap: f64,
 ) -> Result<Relaxed<NV>, RelaxFailure> {
-    // Stage 1: reachability and safety hard, gait soft up to the cap.
+    // The capturability bound, when on, is kept through stages 1-3.
+    let capture0 = ctx.capture.map(|_| 0.0);
+    // Stage 1: reachability, safety and capturability hard, gait soft up to the cap.
     let safe = Keep {
         safety: Some(0.0),
         gait: None,
+        capture: capture0,
         first_step: false,
     };
-    if let Some((u, eps)) = ctx.minimal(safe, RowClass::Gait, gait_cap, None)? {
+    if let Some((u, eps)) = ctx.minimal(safe, Soft::Gait, gait_cap, None)? {
         return Ok(Relaxed {
             u,
             level: RelaxLevel::Gait,
             eps_gait: eps,
             eps_safety: 0.0,
+            eps_capture: 0.0,
             iterations: ctx.used,
         });
     }
@@ -318,19 +501,61 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     // safety relaxed by exactly that much, the least gait relaxation (<= cap).
     // Stage 3, when even reachability and the capped gait rows conflict (the
     // robot already moves faster than the capped limits allow): the same with
-    // the gait rows unbounded.
-    for cap in [gait_cap, f64::INFINITY] {
+    // the gait rows unbounded (but under the capturability bound, when on).
+    // Stage 4 (capturability on, and reachability and the bound conflict: the
+    // robot is already too fast to stay within it): first the least uniform
+    // relaxation of the capturability bound, then as stage 3 under it.
+    for stage in 2..=4u8 {
+        let cap = if stage == 2 { gait_cap } else { f64::INFINITY };
+        let mut capture = capture0;
+        let mut known_s = None;
+        if stage == 3 && ctx.capture.is_some() && ctx.probes_left > 0 {
+            // One solve tells whether reachability and the capturability bound
+            // alone are feasible: if not, stage 4 (with this certificate); if
+            // so, the plan bounds stage 3's safety search from above.
+            let free = Keep {
+                safety: None,
+                gait: None,
+                capture: Some(0.0),
+                first_step: false,
+            };
+            ctx.probes_left -= 1;
+            match ctx.solve(free)? {
+                Probe::Feasible(u) => {
+                    known_s = Some((ctx.violation(Soft::Safety, &u).max(0.0), u));
+                }
+                Probe::Infeasible => continue,
+            }
+        }
+        if stage == 4 {
+            if ctx.capture.is_none() {
+                break;
+            }
+            let free = Keep {
+                safety: None,
+                gait: None,
+                capture: None,
+                first_step: false,
+            };
+            let Some((u_c, eps_c)) = ctx.minimal(free, Soft::Capture, f64::INFINITY, None)? else {
+                break;
+            };
+            capture = Some(eps_c);
+            known_s = Some((ctx.violation(Soft::Safety, &u_c).max(0.0), u_c));
+        }
         let reach = Keep {
             safety: None,
             gait: if cap.is_finite() { Some(cap) } else { None },
+            capture,
             first_step: false,
         };
-        let Some((u_s, eps_s)) = ctx.minimal(reach, RowClass::Safety, f64::INFINITY, None)? else {
+        let Some((u_s, eps_s)) = ctx.minimal(reach, Soft::Safety, f64::INFINITY, known_s)? else {
             continue;
         };
         let fixed = Keep {
             safety: Some(eps_s),
             gait: None,
+            capture,
             first_step: false,
         };
         // The plan just found is feasible with the gait rows at the cap (or
@@ -338,10 +563,10 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         let known = if cap.is_finite() {
             cap
         } else {
-            ctx.violation(RowClass::Gait, &u_s).max(0.0)
+            ctx.violation(Soft::Gait, &u_s).max(0.0)
         };
         let (u, eps_g) = ctx
-            .minimal(fixed, RowClass::Gait, cap, Some((known, u_s)))?
+            .minimal(fixed, Soft::Gait, cap, Some((known, u_s)))?
             .ok_or(RelaxFailure::Numerical)?;
         // Without any safety relaxation this is still a gait relaxation (beyond
         // the cap: the robot moves too fast already).
@@ -355,6 +580,7 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
             level,
             eps_gait: eps_g,
             eps_safety: eps_s,
+            eps_capture: capture.unwrap_or(0.0),
             iterations: ctx.used,
         });
     }
@@ -363,17 +589,23 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
 }
 
 /// The sums of a Farkas certificate `y` (`y >= 0`, `G'y = 0`) that matter for
-/// every relaxation of the same rows: with the gait rows at `h + e_g |g|` and
-/// the safety rows at `h + e_s |g|`, `y'h(e) = yh + e_g yg + e_s ys`, and the
-/// relaxed problem is infeasible whenever that is negative.
+/// every relaxation of the same rows: with the gait rows at `h + e_g` and
+/// the safety rows at `h + e_s`, `y'h(e) = yh + e_g yg + e_s ys (+ e_c yc)`,
+/// and the relaxed problem is infeasible whenever that is negative. A gait row
+/// whose right-hand side was the capturability ceiling `h + room + e_c` counts
+/// in `yh` (with `y room`) and `yc`: since each gait row's right-hand side is
+/// the smaller of its two forms, this linear form is never below the true
+/// `y'h(e)`, so it still proves emptiness wherever it is negative.
 #[derive(Clone, Copy, Debug)]
 struct Certificate {
-    /// `y'h` at no relaxation.
+    /// `y'h` at no relaxation (with the capturability ceilings' headroom).
     yh: f64,
-    /// `y' |g|` over the gait rows (0: the gait rows take no part).
+    /// Sum of `y` over the gait rows in their gait form (0: they take no part).
     yg: f64,
-    /// `y' |g|` over the safety rows.
+    /// Sum of `y` over the safety rows.
     ys: f64,
+    /// Sum of `y` over the gait rows in their capturability form.
+    yc: f64,
     /// `y' |g|` over all rows (scale for "zero").
     yn: f64,
 }
@@ -381,7 +613,7 @@ struct Certificate {
 /// What a certificate says about the relaxation `t` of one class, the others
 /// fixed.
 enum Bound {
-    /// Infeasible for every `t` below this (m or m/s).
+    /// Infeasible for every `t` below this (m of `h` or m/s).
     Below(f64),
     /// Infeasible for every `t`: relaxing this class cannot help.
     Never,
@@ -393,10 +625,14 @@ enum Bound {
 impl Certificate {
     /// The bound on the relaxation of `soft` when the other classes are as in
     /// `fixed` (`None`: left out).
-    fn bound(&self, fixed: Keep, soft: RowClass) -> Bound {
+    fn bound(&self, fixed: Keep, soft: Soft) -> Bound {
         let mut a = self.yh;
         let mut b = 0.0;
-        for (class, y) in [(RowClass::Gait, self.yg), (RowClass::Safety, self.ys)] {
+        for (class, y) in [
+            (Soft::Gait, self.yg),
+            (Soft::Safety, self.ys),
+            (Soft::Capture, self.yc),
+        ] {
             if class == soft {
                 b = y;
             } else {
@@ -417,7 +653,9 @@ impl Certificate {
             } else {
                 Bound::Unknown
             }
-        } else if a < 0.0 {
+        } else if a < -1e-9 * self.yn {
+            // (A certificate whose `a` is zero up to its accuracy, e.g. at a
+            // relaxation found just at its bound, proves nothing.)
             Bound::Never
         } else {
             Bound::Unknown
@@ -436,6 +674,8 @@ enum Probe<const NV: usize> {
 struct Ctx<'a, const NV: usize, const NC: usize, B> {
     /// Euclidean norms of the nominal rows.
     norms: [f64; NC],
+    /// The capturability bound (`None`: off).
+    capture: Option<CaptureBounds>,
     solver: &'a DualActiveSet<NV, NC>,
     backend: &'a mut B,
     qp: &'a DenseQp<NV, NC>,
@@ -474,8 +714,8 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         // Scratch row -> nominal row, and the scratch rows' warm-start marks.
         let mut orig = [0u16; NC];
         let mut prefer = [false; NC];
-        for (i, (((g, h), &n), id)) in self.qp.rows().zip(&self.norms).zip(self.rows).enumerate() {
-            let Some(eps) = keep.eps(RowClass::of(id.kind)) else {
+        for (i, ((g, h), id)) in self.qp.rows().zip(self.rows).enumerate() {
+            let Some((rhs, _)) = keep.rhs(id.kind, h, self.capture.as_ref()) else {
                 continue;
             };
             if keep.first_step && id.k != 0 {
@@ -484,7 +724,7 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
             let k = self.scratch.m;
             // Capacity cannot be exceeded: the scratch QP has the same capacity
             // and receives a subset of the rows.
-            if self.scratch.push_row(&g, h + eps * n).is_ok()
+            if self.scratch.push_row(&g, rhs).is_ok()
                 && let (Some(o), Some(p)) = (orig.get_mut(k), prefer.get_mut(k))
             {
                 *o = i as u16;
@@ -498,7 +738,7 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         match sol.status {
             QpStatus::Solved => Ok(Probe::Feasible(sol.x)),
             QpStatus::Infeasible => {
-                self.take_certificate(&sol.lambda, &orig, self.scratch.m);
+                self.take_certificate(&sol.lambda, &orig, self.scratch.m, keep);
                 Ok(Probe::Infeasible)
             }
             QpStatus::IterationLimit => Err(RelaxFailure::Budget),
@@ -506,14 +746,22 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         }
     }
 
-    /// Keeps the Farkas certificate `lambda` of an infeasible solve whose row
-    /// `i < m` is the nominal row `orig[i]`: its sums in [`Ctx::cert`] and its
-    /// support (but the lightest row) in [`Ctx::marks`].
-    fn take_certificate(&mut self, lambda: &SVector<f64, NC>, orig: &[u16; NC], m: usize) {
+    /// Keeps the Farkas certificate `lambda` of an infeasible solve of the
+    /// problem `keep` whose row `i < m` is the nominal row `orig[i]`: its sums
+    /// in [`Ctx::cert`] and its support (but the lightest row) in
+    /// [`Ctx::marks`].
+    fn take_certificate(
+        &mut self,
+        lambda: &SVector<f64, NC>,
+        orig: &[u16; NC],
+        m: usize,
+        keep: Keep,
+    ) {
         let mut c = Certificate {
             yh: 0.0,
             yg: 0.0,
             ys: 0.0,
+            yc: 0.0,
             yn: 0.0,
         };
         self.marks = [false; NC];
@@ -535,12 +783,22 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
             if let Some(mk) = self.marks.get_mut(o) {
                 *mk = true;
             }
-            let yn = y * n;
             c.yh += y * h;
-            c.yn += yn;
+            c.yn += y * n;
             match RowClass::of(id.kind) {
-                RowClass::Gait => c.yg += yn,
-                RowClass::Safety => c.ys += yn,
+                RowClass::Gait => {
+                    let capped = keep
+                        .rhs(id.kind, h, self.capture.as_ref())
+                        .is_some_and(|(_, capped)| capped);
+                    match self.capture.as_ref().and_then(|c| c.of(id.kind)) {
+                        Some(room) if capped => {
+                            c.yh += y * room;
+                            c.yc += y;
+                        }
+                        _ => c.yg += y,
+                    }
+                }
+                RowClass::Safety => c.ys += y,
                 RowClass::Reach => {}
             }
         }
@@ -562,9 +820,23 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         self.cert = (c.yh.is_finite() && c.yn.is_finite()).then_some(c);
     }
 
-    /// Largest violation of the rows of `class` at `u`, per unit row norm.
-    fn violation(&self, class: RowClass, u: &SVector<f64, NV>) -> f64 {
-        class_violation(self.qp, self.rows, u).of(class)
+    /// Largest violation at `u` (physical units) of the safety rows, the gait
+    /// rows, or the capturability bound.
+    fn violation(&self, soft: Soft, u: &SVector<f64, NV>) -> f64 {
+        match soft {
+            Soft::Safety => class_violation(self.qp, self.rows, u).safety,
+            Soft::Gait => class_violation(self.qp, self.rows, u).gait,
+            Soft::Capture => {
+                let mut v: f64 = 0.0;
+                for ((g, h), id) in self.qp.rows().zip(self.rows) {
+                    if let Some(room) = self.capture.as_ref().and_then(|c| c.of(id.kind)) {
+                        let e = g.dot(u) - h - room;
+                        v = if e.is_nan() { f64::INFINITY } else { v.max(e) };
+                    }
+                }
+                v
+            }
+        }
     }
 
     /// With `fixed` kept, the smallest uniform relaxation of `soft`, at most
@@ -583,21 +855,11 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
     fn minimal(
         &mut self,
         fixed: Keep,
-        soft: RowClass,
+        soft: Soft,
         cap: f64,
         known: Option<(f64, SVector<f64, NV>)>,
     ) -> Result<Option<(SVector<f64, NV>, f64)>, RelaxFailure> {
-        let with = |eps: f64| match soft {
-            RowClass::Gait => Keep {
-                gait: Some(eps),
-                ..fixed
-            },
-            RowClass::Safety => Keep {
-                safety: Some(eps),
-                ..fixed
-            },
-            RowClass::Reach => fixed,
-        };
+        let with = |eps: f64| fixed.with(soft, eps);
         // `lo`: proven infeasible below; `pad`: the margin of the next probe.
         let mut lo: f64 = 0.0;
         let mut pad = 0.0;
@@ -709,16 +971,19 @@ mod tests {
         asm: &Assembly<3, 6, NC, 8>,
         gait: Option<f64>,
         safety: Option<f64>,
+        capture: Option<(CaptureBounds, f64)>,
     ) -> bool {
         let keep = Keep {
             safety,
             gait,
+            capture: capture.map(|c| c.1),
             first_step: false,
         };
+        let bounds = capture.map(|c| c.0);
         let mut qp = DenseQp::<6, NC>::with_q(asm.qp.q);
-        for ((g, h, n), id) in asm.qp.rows_with_norm().zip(&asm.rows) {
-            if let Some(e) = keep.eps(RowClass::of(id.kind)) {
-                qp.push_row(&g, h + e * n).unwrap();
+        for ((g, h), id) in asm.qp.rows().zip(&asm.rows) {
+            if let Some((rhs, _)) = keep.rhs(id.kind, h, bounds.as_ref()) {
+                qp.push_row(&g, rhs).unwrap();
             }
         }
         let sol = solver.solve(&qp, &[false; NC], 500);
@@ -740,8 +1005,10 @@ mod tests {
     /// nominal QP gets a relaxed plan that keeps reachability and each class
     /// within its reported relaxation, and each reported relaxation is
     /// minimal in the priority order: 1e-6 (relative, plus 1e-6 absolute) less
-    /// is certified infeasible, and a safety relaxation comes only when the
-    /// gait rows at the cap cannot make the problem feasible.
+    /// is certified infeasible, a safety relaxation comes only when the gait
+    /// rows at the cap cannot make the problem feasible, and (half of the
+    /// cases run with the capturability bound on) the bound is relaxed only
+    /// when reachability alone cannot meet it.
     #[test]
     fn relaxations_are_minimal_in_priority_order() {
         let mut rng = Lcg(0x005e_ed0f_5afe);
@@ -749,13 +1016,17 @@ mod tests {
         let cap = ctl.config().max_gait_relaxation;
         let mut asm = Assembly::default();
         let mut scratch = DenseQp::<6, NC>::default();
-        let (mut infeasible, mut stage1, mut stage2, mut stage3) = (0, 0, 0, 0);
+        let (mut infeasible, mut stage1, mut stage2, mut stage3, mut stage4) = (0, 0, 0, 0, 0);
         let less = |e: f64| e - 1e-6 * (1.0 + e);
         let mut solves = [0usize; 32];
+        let kappa =
+            crate::constraints::Condensed::<3>::new(&crate::lip::Lip::new(9.81, 1.0, 0.4)).kappa;
         for case in 0..CASES {
             let delta = if rng.next() < 0.5 { 0.0 } else { 0.2 };
+            let capture_fraction = if case % 2 == 0 { Some(0.92) } else { None };
             ctl = PaperController::new(Config {
                 delta,
+                capture_fraction,
                 ..Config::default()
             })
             .unwrap();
@@ -816,6 +1087,8 @@ mod tests {
             let yh: f64 = (0..m).map(|i| y[i] * asm.qp.h[i]).sum();
             assert!(yh < 0.0, "case {case}: y'h = {yh}");
             let certificate = (case % 2 == 0).then_some(y);
+            let cb = CaptureBounds::new(ctl.config(), kappa, asm.prediction.heading.omega_bar);
+            assert_eq!(cb.is_some(), capture_fraction.is_some());
             let mut count = Counting(0);
             let r = relax(
                 solver,
@@ -827,12 +1100,25 @@ mod tests {
                 2048,
                 12,
                 cap,
+                cb,
                 certificate,
             )
             .unwrap_or_else(|e| panic!("case {case}: {e:?}"));
             solves[count.0.min(31)] += 1;
             let v = class_violation(&asm.qp, &asm.rows, &r.u);
-            let (eg, es) = (r.eps_gait, r.eps_safety);
+            let (eg, es, ec) = (r.eps_gait, r.eps_safety, r.eps_capture);
+            // The capturability bound, relaxed by `ec`, holds.
+            let with_capture = |e: f64| cb.map(|c| (c, e));
+            if let Some(c) = cb {
+                for ((g, h), id) in asm.qp.rows().zip(&asm.rows) {
+                    if let Some(room) = c.of(id.kind) {
+                        let e = g.dot(&r.u) - h - room;
+                        assert!(e <= ec * (1.0 + 1e-9) + 1e-9, "case {case}: {e} {r:?}");
+                    }
+                }
+            } else {
+                assert_eq!(ec, 0.0);
+            }
             assert!(v.reach <= 1e-9, "case {case}: {v:?}");
             assert!(
                 v.gait <= eg * (1.0 + 1e-9) + 1e-9,
@@ -842,13 +1128,36 @@ mod tests {
                 v.safety <= es * (1.0 + 1e-9) + 1e-9,
                 "case {case}: {v:?} {r:?}"
             );
+            if ec > 0.0 {
+                // Stage 4: the least relaxation of the capturability bound
+                // with reachability alone, then the least safety and gait
+                // relaxations under it.
+                assert!(
+                    certified_empty(solver, &asm, None, None, with_capture(less(ec))),
+                    "case {case}: {r:?}: capture not minimal"
+                );
+                if es > 1e-6 {
+                    assert!(
+                        certified_empty(solver, &asm, None, Some(less(es)), with_capture(ec)),
+                        "case {case}: {r:?}: safety not minimal"
+                    );
+                }
+                if eg > 1e-6 {
+                    assert!(
+                        certified_empty(solver, &asm, Some(less(eg)), Some(es), with_capture(ec)),
+                        "case {case}: {r:?}: gait not minimal"
+                    );
+                }
+                stage4 += 1;
+                continue;
+            }
             if es == 0.0 {
                 // Stage 1 (or stage 3 without a safety relaxation): the least
                 // gait relaxation with safety kept.
                 assert_eq!(r.level, RelaxLevel::Gait);
                 assert!(eg > 0.0, "case {case}: the nominal QP is infeasible");
                 assert!(
-                    certified_empty(solver, &asm, Some(less(eg)), Some(0.0)),
+                    certified_empty(solver, &asm, Some(less(eg)), Some(0.0), with_capture(0.0)),
                     "case {case}: {r:?} not minimal"
                 );
                 stage1 += 1;
@@ -857,20 +1166,21 @@ mod tests {
             assert_eq!(r.level, RelaxLevel::Safety);
             // Safety gives way only when the capped gait rows cannot help.
             assert!(
-                certified_empty(solver, &asm, Some(cap), Some(0.0)),
+                certified_empty(solver, &asm, Some(cap), Some(0.0), with_capture(0.0)),
                 "case {case}"
             );
             // The least safety relaxation with the gait rows at the cap
-            // (stage 2) or left out (stage 3).
+            // (stage 2) or left out (stage 3; under the capturability bound
+            // when on).
             let gait_bound = (eg <= cap * (1.0 + 1e-9)).then_some(cap);
             assert!(
-                certified_empty(solver, &asm, gait_bound, Some(less(es))),
+                certified_empty(solver, &asm, gait_bound, Some(less(es)), with_capture(0.0)),
                 "case {case}: {r:?}: safety not minimal"
             );
             // Then the least gait relaxation under that safety relaxation.
             if eg > 1e-6 {
                 assert!(
-                    certified_empty(solver, &asm, Some(less(eg)), Some(es)),
+                    certified_empty(solver, &asm, Some(less(eg)), Some(es), with_capture(0.0)),
                     "case {case}: {r:?}: gait not minimal"
                 );
             }
@@ -881,8 +1191,8 @@ mod tests {
             }
         }
         std::println!(
-            "{infeasible} infeasible: {stage1} stage 1, {stage2} stage 2, {stage3} stage 3; \
-             solves of the priority scheme (count: cycles): {:?}",
+            "{infeasible} infeasible: {stage1} stage 1, {stage2} stage 2, {stage3} stage 3, \
+             {stage4} stage 4; solves of the priority scheme (count: cycles): {:?}",
             solves
                 .iter()
                 .enumerate()
@@ -890,8 +1200,114 @@ mod tests {
                 .collect::<std::vec::Vec<_>>()
         );
         assert!(
-            stage1 >= 20 && stage2 >= 50 && stage3 >= 20,
-            "{stage1} {stage2} {stage3}"
+            stage1 >= 20 && stage2 >= 50 && stage3 >= 20 && stage4 >= 10,
+            "{stage1} {stage2} {stage3} {stage4}"
         );
+    }
+
+    /// The largest body-frame velocity component of a plan's `v_1 .. v_N`
+    /// (each in its step's heading frame), m/s.
+    fn fastest_component(out: &crate::CycleOutput<3>) -> f64 {
+        out.plan
+            .states
+            .iter()
+            .map(|s| {
+                let (c, sn) = (libm::cos(s.heading), libm::sin(s.heading));
+                let lon = c * s.velocity.x + sn * s.velocity.y;
+                let lat = -sn * s.velocity.x + c * s.velocity.y;
+                lon.abs().max(lat.abs())
+            })
+            .fold(0.0, f64::max)
+    }
+
+    /// A robot at the end of a step, walking at `vx_max` along x, pushed
+    /// sideways to `lateral` m/s, no obstacles, goal far ahead.
+    fn pushed(capture_fraction: Option<f64>, forward: f64, lateral: f64) -> crate::CycleOutput<3> {
+        let mut ctl = PaperController::new(Config {
+            capture_fraction,
+            ..Config::default()
+        })
+        .unwrap();
+        let input = CycleInput::<8> {
+            com_position: Vector2::zeros(),
+            com_velocity: Vector2::new(forward, lateral),
+            heading: 0.0,
+            turning_rate: 0.0,
+            stance_foot: Vector2::new(-0.1, -0.1),
+            stance_side: Side::Right,
+            time_in_step: 0.4,
+            goal: Vector2::new(20.0, 0.0),
+            obstacles: &[],
+        };
+        ctl.step(&input)
+    }
+
+    /// Pushed to 0.75 m/s sideways (beyond `vy_max` = 0.4 m/s, but below the
+    /// capturable 0.92 |kappa| l_max = 0.898 m/s): the gait rows give way
+    /// beyond their cap (stage 3). Without the capturability bound the uniform
+    /// relaxation also lets the forward velocity exceed what any step within
+    /// reach can stop; with it every planned component stays capturable and
+    /// the bound itself is not relaxed.
+    #[test]
+    fn capturable_push_keeps_the_plan_capturable() {
+        let kappa =
+            crate::constraints::Condensed::<3>::new(&crate::lip::Lip::new(9.81, 1.0, 0.4)).kappa;
+        let limit = kappa.abs() * Config::default().l_max;
+        let speed = 0.92 * limit;
+        let on = pushed(Some(0.92), 0.8, 0.75);
+        let off = pushed(None, 0.8, 0.75);
+        std::println!(
+            "on: {:?} fastest {:.3}; off: {:?} fastest {:.3}; limit {limit:.3}",
+            on.info,
+            fastest_component(&on),
+            off.info,
+            fastest_component(&off)
+        );
+        assert!(on.info.relax_gait > 0.1, "{:?}", on.info);
+        assert_eq!(on.info.relax_capture, 0.0);
+        assert!(fastest_component(&on) <= speed + 1e-9);
+        assert!(fastest_component(&off) > limit, "{:?}", off.plan);
+    }
+
+    /// Pushed forward beyond the bound. At 0.95 m/s (above the bound's
+    /// 0.898 m/s, below `|kappa| l_max` = 0.976 m/s) no step within reach
+    /// meets the bound at once (`v_1 >= cosh(beta T) v_0 - beta sinh(beta T)
+    /// l_max` = 0.927 m/s): the bound is relaxed (stage 4, reported in
+    /// `relax_capture`) by just that excess, no planned velocity exceeds the
+    /// relaxed bound, and from the planned `v_1` the bound holds again. At
+    /// 1.1 m/s the LIP cannot be stopped: the relaxation is reported,
+    /// large, and the plan (the slowest possible) still speeds up.
+    #[test]
+    fn push_beyond_the_bound_is_detected() {
+        let lip = crate::lip::Lip::new(9.81, 1.0, 0.4);
+        let l_max = Config::default().l_max;
+        let kappa = crate::constraints::Condensed::<3>::new(&lip).kappa;
+        let speed = 0.92 * kappa.abs() * l_max;
+        let bs = lip.beta * lip.sinh_bt;
+        // The slowest reachable velocities from v_0.
+        let slowest = |v0: f64| {
+            let v1 = lip.cosh_bt * v0 - bs * l_max;
+            [v1, lip.cosh_bt * v1 - bs * l_max]
+        };
+        let out = pushed(Some(0.92), 0.95, 0.0);
+        let v: std::vec::Vec<f64> = out.plan.states.iter().map(|s| s.velocity.x).collect();
+        std::println!("0.95 m/s: {:?} {v:?}", out.info);
+        assert!(
+            (out.info.relax_capture - (slowest(0.95)[0] - speed)).abs() < 1e-6,
+            "{:?}",
+            out.info
+        );
+        let relaxed = speed + out.info.relax_capture + 1e-9;
+        assert!(v[0] < 0.95 && v.iter().all(|&x| x <= relaxed), "{v:?}");
+        let next = pushed(Some(0.92), v[0], 0.0);
+        assert_eq!(next.info.relax_capture, 0.0, "{:?}", next.info);
+        let out = pushed(Some(0.92), 1.1, 0.0);
+        let v: std::vec::Vec<f64> = out.plan.states.iter().map(|s| s.velocity.x).collect();
+        std::println!("1.1 m/s: {:?} {v:?}", out.info);
+        assert!(out.info.relax_capture > slowest(1.1)[1] - speed - 1e-6);
+        assert!(v[0] > 1.1 && v[1] > v[0], "{v:?}");
+        // Not reported when the robot is within the bound.
+        let within = pushed(Some(0.92), 0.85, 0.0);
+        assert_eq!(within.info.relax_capture, 0.0, "{:?}", within.info);
     }
 }

@@ -14,8 +14,7 @@ use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_controller::relax::{ClassViolation, class_violation};
 use ldcbf_controller::{
     Assembly, CommandSource, Config, ConvexPolygon, CycleInput, CycleOutput, CycleStatus,
-    GeometryError, InputError, PaperController, PointLocation, RowKind, Side,
-    closest_point_point_polygon,
+    GeometryError, InputError, PaperController, PointLocation, Side, closest_point_point_polygon,
 };
 
 type Ctl = PaperController;
@@ -126,23 +125,17 @@ fn h_along_plan(ctl: &Ctl, out: &CycleOutput<N>) -> [f64; N + 1] {
 }
 
 /// Lower bounds `L_1 .. L_N` on `h_j(p_k)` that the LDCBF rows of active
-/// obstacle `j` guarantee under the reported safety relaxation `eps` (each row
-/// `h(p_{k+1}) - (1 - gamma) h(p_k) >= 0` relaxed by `eps |g_row|`):
-/// `L_0 = h(p_0)`, `L_{k+1} = (1 - gamma) L_k - eps |g_k|`.
+/// obstacle `j` guarantee under the reported safety relaxation `eps` (m of `h`:
+/// each row `h(p_{k+1}) - (1 - gamma) h(p_k) >= 0` relaxed to `>= -eps`):
+/// `L_0 = h(p_0)`, `L_{k+1} = (1 - gamma) L_k - eps`.
 fn ldcbf_bounds(ctl: &Ctl, out: &CycleOutput<N>, j: usize) -> [f64; N] {
     let asm = ctl.last_assembly();
     let ob = asm.active_obstacles()[j];
     let gamma = ctl.config().gamma;
-    let mut norms = [f64::NAN; N];
-    for (i, id) in asm.rows[..asm.qp.m].iter().enumerate() {
-        if id.kind == RowKind::Ldcbf(ob.index) {
-            norms[id.k as usize] = asm.qp.row(i).norm();
-        }
-    }
     let mut l = ob.half_plane.h(&out.plan.x0.position, ctl.config().delta);
     let mut bounds = [0.0; N];
-    for (b, n) in bounds.iter_mut().zip(norms) {
-        l = (1.0 - gamma) * l - out.info.relax_safety * n;
+    for b in bounds.iter_mut() {
+        l = (1.0 - gamma) * l - out.info.relax_safety;
         *b = l;
     }
     bounds
@@ -248,8 +241,13 @@ impl Walker {
 /// never touches the obstacle.
 #[test]
 fn start_inside_the_delta_margin_recovers() {
+    // Backing away from rest out of a margin violated by 0.2 m needs the gait
+    // rows relaxed by 0.24 m/s (measured), more than the default cap of
+    // 0.1 m/s (which, before the relaxation was made physical, allowed about
+    // 0.56 m/s on the first step's velocity rows).
     let cfg = Config {
         delta: 0.3,
+        max_gait_relaxation: 0.3,
         ..Config::default()
     };
     let gamma = cfg.gamma;
@@ -400,12 +398,12 @@ fn turn_conflicts_with_velocity_limits() {
     assert!(out.info.relax_gait < 0.1, "{:?}", out.info);
     assert_eq!(out.turning_rate.abs(), cfg.omega_max);
     // The planned longitudinal velocities respect the merged bound up to the
-    // relaxation (the rows are unit-norm in u, not in velocity: compare loosely).
+    // relaxation (m/s of the velocity component).
     let bound = cfg.vx_max - cfg.alpha / core::f64::consts::PI * cfg.omega_max;
     let th = ctl.last_assembly().prediction.heading.theta;
     for (k, s) in out.plan.states.iter().enumerate() {
         let lon = s.velocity.x * th[k].cos() + s.velocity.y * th[k].sin();
-        assert!(lon <= bound + 10.0 * out.info.relax_gait, "k = {k}: {lon}");
+        assert!(lon <= bound + out.info.relax_gait + 1e-9, "k = {k}: {lon}");
     }
 
     let mut fastest: f64 = 0.0;
@@ -456,8 +454,12 @@ fn robot_exactly_on_an_edge_or_a_vertex() {
         let cp = closest_point_point_polygon(&p, &square[0]);
         assert_eq!(cp.location, PointLocation::OnBoundary, "{name}");
         for delta in [0.0, 0.2] {
+            // From rest, with `p_0` 0.2 m inside the margin, the LDCBF needs
+            // the gait rows relaxed by 0.24 m/s: above the default cap (see
+            // `start_inside_the_delta_margin_recovers`).
             let mut ctl = Ctl::new(Config {
                 delta,
+                max_gait_relaxation: 0.3,
                 ..Config::default()
             })
             .unwrap();

@@ -8,9 +8,13 @@
 //!   at the end of the current step), `active_obstacles`, `truncated`, `status`
 //!   (`CycleStatus::name`), `source` (where the command came from), `iterations`,
 //!   `active_set`, `compute_ns` (wall clock around the controller call only),
-//!   `max_violation` (of this cycle's QP rows by the returned plan, m or m/s),
-//!   `cost` (m^2), `min_h0` (m), `relax_gait` (m/s), `relax_safety` (m) (the
-//!   uniform relaxations of an infeasible cycle), `foot_x, foot_y` (the swing target), `omega`
+//!   `max_violation` (of this cycle's QP rows by the returned plan, in the rows'
+//!   physical units: m/s for velocity rows, m for reachability rows, m of `h`
+//!   for LDCBF rows), `cost` (m^2), `min_h0` (m), `relax_gait` (m/s of the
+//!   bounded body-frame velocity component), `relax_safety` (m of the barrier
+//!   `h`), `relax_capture` (m/s, the capturability bound) (the uniform
+//!   relaxations of an infeasible cycle, see `ldcbf_controller::relax`),
+//!   `foot_x, foot_y` (the swing target), `omega`
 //!   (rad/s), `landed` (1 when this target is where the foot landed).
 //! * `footsteps.csv`: `step, side, x, y, t, clearance`: the initial stance foot is
 //!   step 0; step `k` landed at the end of step `k - 1`.
@@ -80,8 +84,9 @@ pub struct Summary {
     /// Max over every cycle of `CycleInfo::max_violation`: the largest violation of
     /// that cycle's own QP rows (gait + LDCBF) by the plan it returned and the
     /// simulator applied (every cycle's command is sent to the plant); in the rows'
-    /// units (m or m/s, rows are unit-normalised by the controller). Cycles that
-    /// hold (invalid input, NaN violation) are not counted.
+    /// physical units (m/s for velocity rows, m for reachability rows, m of `h`
+    /// for LDCBF rows; see `ldcbf_controller::relax`). Cycles that hold
+    /// (invalid input, NaN violation) are not counted.
     pub max_violation: f64,
     /// Same, restricted to the cycles whose swing target actually landed (the last
     /// cycle of each step).
@@ -90,6 +95,8 @@ pub struct Summary {
     pub max_relax_gait: f64,
     /// Largest safety (LDCBF) relaxation of an applied plan, m (0 when none).
     pub max_relax_safety: f64,
+    /// Largest relaxation of the capturability bound, m/s (0 when none).
+    pub max_relax_capture: f64,
     /// Number of cycles per `CycleStatus::name`.
     pub status_counts: BTreeMap<String, usize>,
     /// Number of cycles per command source (`optimal`, `relaxed_gait`,
@@ -213,6 +220,12 @@ pub fn config_map(c: &Config) -> BTreeMap<String, serde_json::Value> {
     put("max_iter", c.max_iter.into());
     put("max_iter_cycle", c.max_iter_cycle.into());
     put("relax_bisections", c.relax_bisections.into());
+    put("max_gait_relaxation", c.max_gait_relaxation.into());
+    put(
+        "capture_fraction",
+        c.capture_fraction
+            .map_or(serde_json::Value::Null, Into::into),
+    );
     put("warm_start", c.warm_start.into());
     put("tol_primal", c.tol_primal.into());
     m
@@ -237,7 +250,9 @@ pub fn summarize(r: &SimResult) -> Summary {
     let mut max_violation = 0.0f64;
     let mut max_violation_landed = 0.0f64;
     let (mut max_relax_gait, mut max_relax_safety) = (0.0f64, 0.0f64);
+    let mut max_relax_capture = 0.0f64;
     for c in &r.cycles {
+        max_relax_capture = max_relax_capture.max(c.output.info.relax_capture);
         max_relax_gait = max_relax_gait.max(c.output.info.relax_gait);
         max_relax_safety = max_relax_safety.max(c.output.info.relax_safety);
         *status_counts
@@ -280,6 +295,7 @@ pub fn summarize(r: &SimResult) -> Summary {
         max_violation_landed,
         max_relax_gait,
         max_relax_safety,
+        max_relax_capture,
         status_counts,
         source_counts,
         cycles: r.cycles.len(),
@@ -406,10 +422,11 @@ pub fn human_summary(s: &Summary) -> String {
             .collect();
         let _ = writeln!(
             o,
-            "  commands: {}; max relaxation gait {:.2e} m/s, safety {:.2e} m",
+            "  commands: {}; max relaxation gait {:.2e} m/s, safety {:.2e} m, capture {:.2e} m/s",
             src.join(", "),
             s.max_relax_gait,
-            s.max_relax_safety
+            s.max_relax_safety,
+            s.max_relax_capture
         );
     }
     o
@@ -431,14 +448,14 @@ pub fn write_logs(
 ) -> std::io::Result<()> {
     let mut s = String::from(
         "t,time_in_step,step,stance,x0_px,x0_py,x0_vx,x0_vy,x0_theta,active_obstacles,truncated,\
-status,source,iterations,active_set,compute_ns,max_violation,cost,min_h0,relax_gait,relax_safety,foot_x,foot_y,omega,landed\n",
+status,source,iterations,active_set,compute_ns,max_violation,cost,min_h0,relax_gait,relax_safety,relax_capture,foot_x,foot_y,omega,landed\n",
     );
     for c in &r.cycles {
         let o = &c.output;
         let x0 = &o.plan.x0;
         let _ = writeln!(
             s,
-            "{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:e},{},{},{},{},{},{},{},{}",
+            "{:.3},{:.3},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{:e},{},{},{},{},{},{},{},{},{}",
             c.time,
             c.time_in_step,
             c.step,
@@ -460,6 +477,7 @@ status,source,iterations,active_set,compute_ns,max_violation,cost,min_h0,relax_g
             o.info.min_h0,
             o.info.relax_gait,
             o.info.relax_safety,
+            o.info.relax_capture,
             o.foot_target.x,
             o.foot_target.y,
             o.turning_rate,

@@ -194,6 +194,9 @@ pub struct ControllerOverrides {
     pub max_iter: Option<u32>,
     pub max_iter_cycle: Option<u32>,
     pub relax_bisections: Option<u32>,
+    pub max_gait_relaxation: Option<f64>,
+    /// `Config::capture_fraction`; 0 turns the capturability bound off.
+    pub capture_fraction: Option<f64>,
     pub warm_start: Option<bool>,
     pub tol_primal: Option<f64>,
 }
@@ -218,6 +221,8 @@ pub const CONTROLLER_FIELDS: &[&str] = &[
     "max_iter",
     "max_iter_cycle",
     "relax_bisections",
+    "max_gait_relaxation",
+    "capture_fraction",
     "warm_start",
     "tol_primal",
 ];
@@ -247,9 +252,13 @@ impl ControllerOverrides {
             max_iter,
             max_iter_cycle,
             relax_bisections,
+            max_gait_relaxation,
             warm_start,
             tol_primal
         );
+        if let Some(r) = self.capture_fraction {
+            c.capture_fraction = (r != 0.0).then_some(r);
+        }
         if self.foot_clearance.is_some() {
             c.foot_clearance = self.foot_clearance;
         }
@@ -1342,6 +1351,35 @@ regular = { center = [4.0, 2.0], radius = 1.0, sides = 25 }
         };
         let e = parse_str(OK, "t.toml", &o).unwrap_err();
         assert_eq!(e.field, "bogus");
+    }
+
+    #[test]
+    fn relaxation_settings_are_overridable() {
+        let set = |sets: &[(&str, &str)]| LoadOptions {
+            seed: None,
+            sets: sets
+                .iter()
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect(),
+        };
+        let s = parse_str(OK, "t.toml", &LoadOptions::default()).unwrap();
+        assert_eq!(
+            s.config.capture_fraction,
+            Config::default().capture_fraction
+        );
+        assert!(s.config.capture_fraction.is_some());
+        let o = set(&[("max_gait_relaxation", "0.25"), ("capture_fraction", "0")]);
+        let s = parse_str(OK, "t.toml", &o).unwrap();
+        assert_eq!(s.config.max_gait_relaxation, 0.25);
+        assert_eq!(s.config.capture_fraction, None);
+        let text = OK.replace("delta = 0.2", "delta = 0.2\ncapture_fraction = 0.8");
+        let s = parse_str(&text, "t.toml", &LoadOptions::default()).unwrap();
+        assert_eq!(s.config.capture_fraction, Some(0.8));
+        let e = parse_str(OK, "t.toml", &set(&[("capture_fraction", "1.5")])).unwrap_err();
+        assert_eq!(e.field, "controller.capture_fraction", "{e}");
+        let m = crate::report::config_map(&s.config);
+        assert_eq!(m["capture_fraction"], serde_json::json!(0.8));
+        assert_eq!(m["max_gait_relaxation"], serde_json::json!(0.1));
     }
 
     #[test]

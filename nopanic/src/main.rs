@@ -88,6 +88,7 @@ fn config(r: &[f64; 64]) -> Config {
         max_iter_cycle: r[47] as u32,
         relax_bisections: r[48] as u32,
         max_gait_relaxation: r[51],
+        capture_fraction: if r[52] > 0.0 { Some(r[53]) } else { None },
         warm_start: r[49] > 0.0,
         tol_primal: r[50],
     }
@@ -117,7 +118,7 @@ fn summary<const N: usize>(o: &CycleOutput<N>) -> [f64; 16] {
         o.info.max_violation,
         o.info.min_h0,
         o.info.relax_gait,
-        o.info.relax_safety,
+        o.info.relax_safety + o.info.relax_capture,
         f64::from(o.info.iterations),
         f64::from(o.info.active_obstacles),
         o.status.name().len() as f64,
