@@ -340,6 +340,10 @@ pub fn run_robustness(req: &RobustnessRequest) -> Result<RobustnessReport> {
     if req.deltas.iter().any(|d| !(d.is_finite() && *d >= 0.0)) {
         bail!("every delta must be finite and >= 0");
     }
+    if let Some(out) = &req.out {
+        // Before the study, not after it: a bad --out fails at once.
+        OutputDir::preflight(out).with_context(|| format!("--out {}", out.display()))?;
+    }
     let mut cases: Vec<(&'static str, Case)> =
         req.cases.iter().map(|c| ("shipped", c.clone())).collect();
     cases.extend(random_cases(req.random).into_iter().map(|c| ("random", c)));

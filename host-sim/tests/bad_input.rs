@@ -151,6 +151,7 @@ fn run_and_batch_refuse_unusable_output_locations() {
         "run simple --no-plots",
         "batch --seeds 0 --quiet",
         "merge b --allow-partial",
+        "robustness simple --random 0 --delta 0 --quiet",
     ] {
         // `merge` needs a valid batch directory: added below.
         for (fixture, out, needles) in [
