@@ -792,6 +792,25 @@ fn pick_cycles(r: &SimResult, n: usize) -> Vec<&CycleRecord> {
 
 /// Figure (c): six frames of the walk with the LDCBF half-planes.
 pub fn frames_png(scene: &Scene<'_>, path: &Path) -> Result<()> {
+    six_frames(scene, path, true, |c, _| {
+        format!(
+            "t = {:.1} s, {} active obstacle{}",
+            c.time,
+            c.half_planes.len(),
+            if c.half_planes.len() == 1 { "" } else { "s" }
+        )
+    })
+}
+
+/// Six cycles of the run ([`pick_cycles`]) in a 3 x 2 grid of map cells, each
+/// drawn up to its time with its scan (if recorded) and, with `half_planes`,
+/// its LDCBF half-planes; `title` names a cell from its cycle and scan.
+fn six_frames(
+    scene: &Scene<'_>,
+    path: &Path,
+    half_planes: bool,
+    title: impl Fn(&CycleRecord, Option<&ScanRecord>) -> String,
+) -> Result<()> {
     ensure_fonts();
     let side = 440;
     let layout = MapLayout::for_side(side);
@@ -802,22 +821,17 @@ pub fn frames_png(scene: &Scene<'_>, path: &Path) -> Result<()> {
     let cells = root.split_evenly((rows as usize, cols as usize));
     let picks = pick_cycles(scene.r, (cols * rows) as usize);
     for (cell, c) in cells.iter().zip(picks) {
-        let title = format!(
-            "t = {:.1} s, {} active obstacle{}",
-            c.time,
-            c.half_planes.len(),
-            if c.half_planes.len() == 1 { "" } else { "s" }
-        );
+        let scan = scan_of(scene.r, c);
         draw_scene(
             cell,
             scene,
             layout,
             Moment {
                 until: c.time,
-                cycle: Some(c),
-                scan: scan_of(scene.r, c),
+                cycle: half_planes.then_some(c),
+                scan,
             },
-            &title,
+            &title(c, scan),
             false,
         )?;
     }
@@ -932,38 +946,14 @@ fn scan_of<'a>(r: &'a SimResult, c: &CycleRecord) -> Option<&'a ScanRecord> {
 
 /// Figure 12 of the report: six frames of a LiDAR run with the scan of each.
 pub fn perception_png(scene: &Scene<'_>, path: &Path) -> Result<()> {
-    ensure_fonts();
-    let side = 440;
-    let layout = MapLayout::for_side(side);
-    let (cw, ch) = layout.cell(side);
-    let (cols, rows) = (3u32, 2u32);
-    let root = BitMapBackend::new(path, (cw * cols, ch * rows)).into_drawing_area();
-    root.fill(&WHITE).map_err(e)?;
-    let cells = root.split_evenly((rows as usize, cols as usize));
-    let picks = pick_cycles(scene.r, (cols * rows) as usize);
-    for (cell, c) in cells.iter().zip(picks) {
-        let scan = scan_of(scene.r, c);
-        let title = format!(
+    six_frames(scene, path, false, |c, scan| {
+        format!(
             "t = {:.1} s: {} hits, {} inferred",
             c.time,
             scan.map_or(0, |s| s.points.len()),
             scan.map_or(0, |s| s.obstacles.len())
-        );
-        draw_scene(
-            cell,
-            scene,
-            layout,
-            Moment {
-                until: c.time,
-                cycle: None,
-                scan,
-            },
-            &title,
-            false,
-        )?;
-    }
-    root.present().map_err(e)?;
-    Ok(())
+        )
+    })
 }
 
 /// A five-pointed star around `c` (data units), outer radius `r`.
