@@ -71,6 +71,13 @@ fn check_points(points: &[[f64; 2]]) -> Result<(), GeometryError> {
     Ok(())
 }
 
+/// Euclidean length `|v|` (m): `sqrt(|v|^2)`, as nalgebra's `norm`, with the
+/// controller's square root ([`crate::float::sqrt`]; one instruction on the
+/// Cortex-M7).
+fn norm(v: &Vector2<f64>) -> f64 {
+    crate::float::sqrt(v.norm_squared())
+}
+
 fn cross(a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
     a.x * b.y - a.y * b.x
 }
@@ -78,7 +85,7 @@ fn cross(a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
 /// The error for a degenerate (zero-area) point set: [`GeometryError::ZeroArea`]
 /// when it has three distinct points, [`GeometryError::TooFewVertices`] otherwise.
 fn degenerate(mut pts: impl Iterator<Item = Vector2<f64>> + Clone) -> GeometryError {
-    let far = |p: &Vector2<f64>, q: &Vector2<f64>| (p - q).norm() > DUPLICATE_TOL;
+    let far = |p: &Vector2<f64>, q: &Vector2<f64>| norm(&(p - q)) > DUPLICATE_TOL;
     let three = pts.next().is_some_and(|a| {
         pts.clone()
             .find(|b| far(b, &a))
@@ -119,7 +126,7 @@ impl<const V: usize> ConvexPolygon<V> {
         let mut last: Option<Vector2<f64>> = None;
         for p in points {
             let v = Vector2::new(p[0], p[1]);
-            if last.is_some_and(|l| (v - l).norm() <= DUPLICATE_TOL) {
+            if last.is_some_and(|l| norm(&(v - l)) <= DUPLICATE_TOL) {
                 continue;
             }
             let Some(slot) = buf.get_mut(n) else {
@@ -133,7 +140,7 @@ impl<const V: usize> ConvexPolygon<V> {
         while let Some((last, init)) = pts.split_last()
             && init
                 .first()
-                .is_some_and(|first| (last - first).norm() <= DUPLICATE_TOL)
+                .is_some_and(|first| norm(&(last - first)) <= DUPLICATE_TOL)
         {
             pts = init;
         }
@@ -147,7 +154,7 @@ impl<const V: usize> ConvexPolygon<V> {
         // 2. Orientation from the signed area; zero area means collinear.
         let area2 = edges(pts).fold(0.0, |s, (a, b)| s + cross(a, b));
         let scale = pts.iter().fold(0.0f64, |m, v| m.max(v.amax()));
-        let span = pts.iter().fold(0.0f64, |m, v| m.max((v - first).norm()));
+        let span = pts.iter().fold(0.0f64, |m, v| m.max(norm(&(v - first))));
         if area2.abs() <= 1e-12 * span * span.max(scale.max(1.0)) {
             return Err(degenerate(pts.iter().copied()));
         }
@@ -167,7 +174,7 @@ impl<const V: usize> ConvexPolygon<V> {
             let e1 = cur - prev;
             let e2 = next - cur;
             let c = cross(&e1, &e2);
-            let tol = 1e-12 * e1.norm() * e2.norm();
+            let tol = 1e-12 * norm(&e1) * norm(&e2);
             if c.abs() <= tol {
                 if e1.dot(&e2) < 0.0 {
                     return Err(GeometryError::NotConvex); // spike
@@ -247,7 +254,7 @@ impl<const V: usize> ConvexPolygon<V> {
             let Some((next, next_pt)) = cand else {
                 break;
             };
-            if next == start || (next_pt - start_pt).norm() <= DUPLICATE_TOL {
+            if next == start || norm(&(next_pt - start_pt)) <= DUPLICATE_TOL {
                 break;
             }
             (cur, c) = (next, next_pt);
@@ -360,7 +367,7 @@ pub fn closest_point_point_polygon<const V: usize>(
         a = b;
     }
     edge(n - 1, a, first); // the closing edge
-    let dist = libm::sqrt(best_d2);
+    let dist = crate::float::sqrt(best_d2);
     // Edge `i` runs from vertex `i` to vertex `i + 1` (indices modulo `n >= 1`;
     // both always exist, the zero vector is never used).
     let edge_normal = |i: usize| {
@@ -368,7 +375,7 @@ pub fn closest_point_point_polygon<const V: usize>(
             (Some(a), Some(b)) => b - a,
             _ => Vector2::zeros(),
         };
-        Vector2::new(e.y, -e.x) / e.norm() // outward for counter-clockwise order
+        Vector2::new(e.y, -e.x) / norm(&e) // outward for counter-clockwise order
     };
     if dist <= ON_BOUNDARY_TOL {
         let mut nrm = edge_normal(best_edge);
@@ -379,7 +386,7 @@ pub fn closest_point_point_polygon<const V: usize>(
         }
         return ClosestPoint {
             point: best_c,
-            normal: nrm / nrm.norm(),
+            normal: nrm / norm(&nrm),
             signed_distance: 0.0,
             location: PointLocation::OnBoundary,
         };

@@ -922,7 +922,10 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         let within = |v: f64, bound: f64| v.abs() <= bound;
         let pos_ok = |v: &Vector2<f64>| within(v.x, MAX_COORDINATE) && within(v.y, MAX_COORDINATE);
         if !(pos_ok(&input.com_position)
-            && within(input.com_velocity.norm(), MAX_RATE)
+            && within(
+                crate::float::sqrt(input.com_velocity.norm_squared()),
+                MAX_RATE,
+            )
             && within(input.heading, MAX_COORDINATE)
             && within(input.turning_rate, MAX_RATE))
         {

@@ -493,13 +493,13 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
     #[cfg_attr(not(target_os = "none"), inline(always))]
     fn inv_hnorm(&self, g: &[f64; NV], n2: f64) -> f64 {
         let w = self.linv_mul(g);
-        let hn = libm::sqrt(dot(&w, &w));
+        let hn = crate::float::sqrt(dot(&w, &w));
         // L^-1 is nonsingular, so hn > 0 for a non-zero row (barring underflow,
         // where the Euclidean norm stands in).
         if hn > 0.0 {
             1.0 / hn
         } else {
-            1.0 / libm::sqrt(n2)
+            1.0 / crate::float::sqrt(n2)
         }
     }
 
@@ -660,8 +660,8 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
                     }
                 }
                 // Full (primal) step length t2.
-                let dn = libm::sqrt(dot(&d, &d));
-                let dependent = libm::sqrt(d2sq) <= self.settings.tol_dependence * dn;
+                let dn = crate::float::sqrt(dot(&d, &d));
+                let dependent = crate::float::sqrt(d2sq) <= self.settings.tol_dependence * dn;
                 let slack_p = hp - dot(gp, &x); // < 0 while violated
                 let t2 = if dependent {
                     f64::INFINITY
@@ -783,7 +783,7 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
             // x = d[nact..], alpha = -sign(x_0) |x|, v = x - alpha e_0 (no
             // cancellation), reflection I - beta v v' with beta = 2 / v'v and
             // v'v = 2 |x| (|x| + |x_0|).
-            let norm = libm::sqrt(d0 * d0 + tail);
+            let norm = crate::float::sqrt(d0 * d0 + tail);
             let alpha = if d0 >= 0.0 { -norm } else { norm };
             let mut v = d;
             v[nact] = d0 - alpha;
@@ -891,7 +891,7 @@ fn givens(a: f64, b: f64) -> (f64, f64, f64) {
     // overflow or underflow) only when the squares leave the normal range.
     let r2 = a * a + b * b;
     let r = if (1e-280..=1e280).contains(&r2) {
-        libm::sqrt(r2)
+        crate::float::sqrt(r2)
     } else {
         libm::hypot(a, b)
     };
