@@ -691,8 +691,6 @@ pub struct Controller<const N: usize, const NV: usize, const NC: usize, const NO
     core: Core<N, NV, NC>,
     memory: Memory<NV>,
     work: Assembly<N, NV, NC, NOBS>,
-    /// Workspace of the priority scheme (relaxed QPs).
-    scratch: DenseQp<NV, NC>,
 }
 
 /// The immutable, precomputed part of the controller.
@@ -736,7 +734,6 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
             last_target: None,
         },
         work: Assembly::EMPTY,
-        scratch: DenseQp::EMPTY,
     };
 
     /// Validates `config` and precomputes the model and the Hessian
@@ -804,7 +801,6 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
         memory.stance = Side::Left;
         memory.last_target = None;
         self.work.clear_in_place();
-        clear_qp_in_place(&mut self.scratch);
         Ok(())
     }
 
@@ -894,14 +890,9 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
         input: &CycleInput<'_, V>,
         backend: &mut B,
     ) -> CycleOutput<N> {
-        let Controller {
-            core,
-            memory,
-            work,
-            scratch,
-        } = self;
+        let Controller { core, memory, work } = self;
         match core.assemble(input, work) {
-            Ok(()) => core.solve_assembled(memory, input, work, scratch, backend),
+            Ok(()) => core.solve_assembled(memory, input, work, backend),
             Err(e) => hold(memory, input, e),
         }
     }
@@ -1116,7 +1107,6 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         memory: &mut Memory<NV>,
         input: &CycleInput<'_, V>,
         work: &Assembly<N, NV, NC, NOBS>,
-        scratch: &mut DenseQp<NV, NC>,
         backend: &mut B,
     ) -> CycleOutput<N> {
         let pred = &work.prediction;
@@ -1192,7 +1182,6 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                         backend,
                         &work.qp,
                         &work.rows,
-                        scratch,
                         self.config.max_iter,
                         self.config.max_iter_cycle.saturating_sub(sol.iterations),
                         self.config.relax_bisections,

@@ -443,7 +443,40 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         // The H^-1 norms are left to the solve, which computes them only for
         // rows found violated.
         let mut rows = RowNorms::euclidean(qp);
-        self.solve_with(qp, &mut rows, prefer, max_iter)
+        self.solve_with(
+            qp,
+            qp.h.as_slice(),
+            &[false; NC],
+            &mut rows,
+            prefer,
+            max_iter,
+        )
+    }
+
+    /// [`DualActiveSet::solve`] on a selection of `qp`'s rows with other
+    /// right-hand sides: `min 1/2 x'Hx + q'x` subject to `g_i'x <= h[i]` for the
+    /// rows `i < qp.m` with `enabled[i]`; the other rows are left out, as if
+    /// absent, and `qp.h` is not used. Multipliers (or the Farkas certificate)
+    /// are indexed like `qp`'s rows, 0 for the rows left out, and so are
+    /// `active` and `prefer`. Bit for bit the result of `solve` on a QP holding
+    /// only the enabled rows, in the same order, without copying them: the
+    /// relaxation scheme ([`crate::relax`]) solves its probes so, with no
+    /// second QP in memory. Every row of `qp` must be finite, enabled or not
+    /// (else [`QpStatus::NumericalError`]).
+    pub fn solve_selected(
+        &self,
+        qp: &DenseQp<NV, NC>,
+        h: &SVector<f64, NC>,
+        enabled: &[bool; NC],
+        prefer: &[bool; NC],
+        max_iter: u32,
+    ) -> QpSolution<NV, NC> {
+        let mut excluded = [false; NC];
+        for (x, &on) in excluded.iter_mut().zip(enabled) {
+            *x = !on;
+        }
+        let mut rows = RowNorms::euclidean(qp);
+        self.solve_with(qp, h.as_slice(), &excluded, &mut rows, prefer, max_iter)
     }
 
     /// The per-row data of `qp`'s constraint matrix that [`DualActiveSet::solve`]
@@ -484,7 +517,14 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         if rows.m != qp.m.min(NC) {
             rows.finite = false;
         }
-        self.solve_with(qp, &mut rows, prefer, max_iter)
+        self.solve_with(
+            qp,
+            qp.h.as_slice(),
+            &[false; NC],
+            &mut rows,
+            prefer,
+            max_iter,
+        )
     }
 
     /// `1 / |L^-1 g|` for a row with `|g|^2 = n2 > 0`.
@@ -503,11 +543,14 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         }
     }
 
-    /// The solve proper, with the Euclidean row norms in `rows` and the H^-1 norms
-    /// there or computed on demand (0 = not yet).
+    /// The solve proper, with the right-hand side `h` (`qp.h` or another), the
+    /// rows `excluded[i]` left out, the Euclidean row norms in `rows` and the
+    /// H^-1 norms there or computed on demand (0 = not yet).
     fn solve_with(
         &self,
         qp: &DenseQp<NV, NC>,
+        h: &[f64],
+        excluded: &[bool; NC],
         norms: &mut RowNorms<NC>,
         prefer: &[bool; NC],
         max_iter: u32,
@@ -523,11 +566,15 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
             n_active: 0,
         };
         let rows = &qp.gt.data.0; // `rows[i]` is row `i` of `G`
-        let h = qp.h.as_slice();
         let q = &qp.q.data.0[0];
         if !norms.finite
+            || h.len() < m
             || !q.iter().all(|v| v.is_finite())
-            || !h.iter().take(m).all(|v| v.is_finite())
+            || !h
+                .iter()
+                .zip(excluded)
+                .take(m)
+                .all(|(v, &out)| out || v.is_finite())
         {
             return sol;
         }
@@ -546,8 +593,9 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         let zero_infeasible = h
             .iter()
             .zip(norm2.iter())
+            .zip(excluded)
             .take(m)
-            .position(|(&hi, &n2)| n2 <= ZERO_ROW2 && hi < -tol);
+            .position(|((&hi, &n2), &out)| !out && n2 <= ZERO_ROW2 && hi < -tol);
         if let Some(i) = zero_infeasible {
             // 0'x <= h with h < 0: nothing satisfies it; y = e_i certifies it.
             sol.status = QpStatus::Infeasible;
@@ -566,7 +614,9 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         let mut R = SMatrix::<f64, NV, NV>::zeros();
         let mut u = [0.0f64; NV]; // multipliers of the active rows
         let mut act = [0u16; NV];
-        let mut is_active = [false; NC];
+        // Rows left out are never scanned: they start (and stay) marked as if
+        // active, but never enter `act`.
+        let mut is_active = *excluded;
         let mut nact: usize = 0;
         let mut iters: u32 = 0;
         // On infeasibility: the row `p` and `-r` of the active rows (see below).
@@ -856,6 +906,53 @@ pub trait QpBackend<const NV: usize, const NC: usize> {
         prefer: &[bool; NC],
         max_iter: u32,
     ) -> QpSolution<NV, NC>;
+
+    /// [`QpBackend::solve_qp`] on the rows `i` of `qp` with `enabled[i]`, with the
+    /// right-hand side `h` instead of `qp.h`, multipliers (and `prefer`) indexed
+    /// like `qp`'s rows; see [`DualActiveSet::solve_selected`]. The provided
+    /// method copies the enabled rows into a compact QP (on the stack) for
+    /// `solve_qp` and maps the result back; [`OwnSolver`] solves in place.
+    fn solve_selected(
+        &mut self,
+        solver: &DualActiveSet<NV, NC>,
+        qp: &DenseQp<NV, NC>,
+        h: &SVector<f64, NC>,
+        enabled: &[bool; NC],
+        prefer: &[bool; NC],
+        max_iter: u32,
+    ) -> QpSolution<NV, NC> {
+        let mut sub = DenseQp::with_q(qp.q);
+        // Compact row -> row of `qp`, and the compact rows' warm-start marks.
+        let mut orig = [0u16; NC];
+        let mut sub_prefer = [false; NC];
+        for (i, (g, &hi)) in qp.gt.data.0.iter().zip(h.iter()).enumerate().take(qp.m) {
+            if !enabled.get(i).copied().unwrap_or(false) {
+                continue;
+            }
+            let k = sub.m;
+            // Capacity cannot be exceeded: a subset of `qp`'s rows.
+            if sub.push_row(&SVector::from(*g), hi).is_ok()
+                && let (Some(o), Some(p)) = (orig.get_mut(k), sub_prefer.get_mut(k))
+            {
+                *o = i as u16;
+                *p = prefer.get(i).copied().unwrap_or(false);
+            }
+        }
+        let s = self.solve_qp(solver, &sub, &sub_prefer, max_iter);
+        let mut out = QpSolution {
+            lambda: SVector::zeros(),
+            ..s
+        };
+        for (&y, &o) in s.lambda.iter().zip(&orig).take(sub.m) {
+            if let Some(l) = out.lambda.get_mut(usize::from(o)) {
+                *l = y;
+            }
+        }
+        for a in out.active.iter_mut().take(s.n_active) {
+            *a = orig.get(usize::from(*a)).copied().unwrap_or(*a);
+        }
+        out
+    }
 }
 
 /// The built-in backend: [`DualActiveSet::solve`].
@@ -871,6 +968,18 @@ impl<const NV: usize, const NC: usize> QpBackend<NV, NC> for OwnSolver {
         max_iter: u32,
     ) -> QpSolution<NV, NC> {
         solver.solve(qp, prefer, max_iter)
+    }
+
+    fn solve_selected(
+        &mut self,
+        solver: &DualActiveSet<NV, NC>,
+        qp: &DenseQp<NV, NC>,
+        h: &SVector<f64, NC>,
+        enabled: &[bool; NC],
+        prefer: &[bool; NC],
+        max_iter: u32,
+    ) -> QpSolution<NV, NC> {
+        solver.solve_selected(qp, h, enabled, prefer, max_iter)
     }
 }
 
@@ -1161,6 +1270,83 @@ mod tests {
             infeasible += usize::from(sol.status.is_infeasible());
         }
         // Both outcomes are exercised.
+        assert!(
+            solved > 100 && infeasible > 10,
+            "{solved} solved, {infeasible} infeasible"
+        );
+    }
+
+    /// `solve_selected` (in place) is bit for bit `solve` on the compacted QP,
+    /// and so is the provided `QpBackend::solve_selected` (which compacts),
+    /// with multipliers, active set and warm-start marks mapped between the two
+    /// row numberings; a non-finite right-hand side of a left-out row is
+    /// ignored.
+    #[test]
+    fn solve_selected_is_solve_on_the_selected_rows() {
+        struct Compacting;
+        impl QpBackend<6, 24> for Compacting {
+            fn solve_qp(
+                &mut self,
+                solver: &DualActiveSet<6, 24>,
+                qp: &DenseQp<6, 24>,
+                prefer: &[bool; 24],
+                max_iter: u32,
+            ) -> QpSolution<6, 24> {
+                solver.solve(qp, prefer, max_iter)
+            }
+        }
+        let mut state: u64 = 0x0bad_5eed_1234_5678;
+        let mut rnd = move || {
+            state = state
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0 // [-1, 1)
+        };
+        let (mut solved, mut infeasible) = (0, 0);
+        for k in 0..400 {
+            let H = SMatrix::<f64, 6, 6>::identity() * 2.0;
+            let s = DualActiveSet::<6, 24>::new(&H, QpSettings::default()).unwrap();
+            let mut qp = DenseQp::<6, 24>::with_q(SVector::from_fn(|_, _| 5.0 * rnd()));
+            let mut h = SVector::<f64, 24>::zeros();
+            let mut enabled = [false; 24];
+            let mut prefer = [false; 24];
+            let mut sub = DenseQp::<6, 24>::with_q(qp.q);
+            let mut sub_prefer = [false; 24];
+            let mut orig = [0usize; 24];
+            for i in 0..(4 + k % 20) {
+                let g = SVector::<f64, 6>::from_fn(|_, _| rnd());
+                qp.push_row(&g, 7.0).unwrap();
+                enabled[i] = rnd() < 0.5;
+                prefer[i] = rnd() < -0.6;
+                h[i] = if enabled[i] { rnd() + 0.3 } else { f64::NAN };
+                if enabled[i] {
+                    orig[sub.m] = i;
+                    sub_prefer[sub.m] = prefer[i];
+                    sub.push_row(&g, h[i]).unwrap();
+                }
+            }
+            let want = s.solve(&sub, &sub_prefer, 200);
+            for got in [
+                s.solve_selected(&qp, &h, &enabled, &prefer, 200),
+                Compacting.solve_selected(&s, &qp, &h, &enabled, &prefer, 200),
+            ] {
+                assert_eq!(got.status, want.status);
+                assert_eq!(got.iterations, want.iterations);
+                assert_eq!(got.x.map(f64::to_bits), want.x.map(f64::to_bits));
+                assert_eq!(got.objective.to_bits(), want.objective.to_bits());
+                let mut lambda = SVector::<f64, 24>::zeros();
+                for j in 0..sub.m {
+                    lambda[orig[j]] = want.lambda[j];
+                }
+                assert_eq!(got.lambda.map(f64::to_bits), lambda.map(f64::to_bits));
+                assert_eq!(got.n_active, want.n_active);
+                for (&g, &w) in got.active_set().iter().zip(want.active_set()) {
+                    assert_eq!(usize::from(g), orig[usize::from(w)]);
+                }
+            }
+            solved += usize::from(want.status.is_solved());
+            infeasible += usize::from(want.status.is_infeasible());
+        }
         assert!(
             solved > 100 && infeasible > 10,
             "{solved} solved, {infeasible} infeasible"

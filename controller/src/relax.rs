@@ -406,9 +406,9 @@ pub enum RelaxFailure {
     Numerical,
 }
 
-/// Runs the priority scheme on the nominal QP `qp` (rows identified by `rows`),
-/// using `scratch` as workspace. `budget` is the number of solver iterations left
-/// in this cycle; `probes` the largest number of solves of one search for a
+/// Runs the priority scheme on the nominal QP `qp` (rows identified by `rows`;
+/// each probe solves a selection of its rows in place, with no copy).
+/// `budget` is the number of solver iterations left in this cycle; `probes` the largest number of solves of one search for a
 /// smallest relaxation (the scheme makes at most `2 probes + 4` solves in all,
 /// see the module docs); `gait_cap` the largest relaxation of the gait rows
 /// (m/s) allowed before the safety rows give way; `capture` the
@@ -423,7 +423,6 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     backend: &mut B,
     qp: &DenseQp<NV, NC>,
     rows: &[RowId; NC],
-    scratch: &mut DenseQp<NV, NC>,
     max_iter: u32,
     budget: u32,
     probes: u32,
@@ -433,7 +432,7 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
 ) -> Result<Relaxed<NV>, RelaxError> {
     let mut norms = [0.0f64; NC];
     for (n, g) in norms.iter_mut().zip(qp.gt.column_iter().take(qp.m)) {
-        *n = g.norm();
+        *n = crate::float::sqrt(g.norm_squared());
     }
     let mut ctx = Ctx {
         norms,
@@ -441,7 +440,6 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         backend,
         qp,
         rows,
-        scratch,
         max_iter,
         budget,
         used: 0,
@@ -452,11 +450,6 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         capture,
     };
     if let Some(y) = certificate {
-        // Same rows, same order: row `i` is nominal row `i`.
-        let mut orig = [0u16; NC];
-        for (i, o) in orig.iter_mut().enumerate() {
-            *o = i as u16;
-        }
         // The nominal QP is the first probe's problem (stage 1 at no
         // relaxation) without the first-step restriction.
         let nominal = Keep {
@@ -465,7 +458,7 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
             capture: capture.map(|_| 0.0),
             first_step: false,
         };
-        ctx.take_certificate(y, &orig, qp.m, nominal);
+        ctx.take_certificate(y, nominal);
         if !ctx.cert.is_some_and(|c| c.yh < 0.0) {
             ctx.cert = None;
             ctx.marks = [false; NC];
@@ -685,7 +678,6 @@ struct Ctx<'a, const NV: usize, const NC: usize, B> {
     backend: &'a mut B,
     qp: &'a DenseQp<NV, NC>,
     rows: &'a [RowId; NC],
-    scratch: &'a mut DenseQp<NV, NC>,
     max_iter: u32,
     budget: u32,
     used: u32,
@@ -704,46 +696,49 @@ struct Ctx<'a, const NV: usize, const NC: usize, B> {
 const PAD: f64 = 1e-9;
 
 impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> {
-    /// Builds the problem `keep` into the scratch QP and solves it, the marked
-    /// rows first. An infeasible solve leaves its certificate in `self.cert`
-    /// and its support in `self.marks`. Not inlined: one copy of the solver
-    /// call in flash.
+    /// Solves the problem `keep`: the nominal QP's rows that `keep` keeps, with
+    /// its right-hand sides, in place ([`QpBackend::solve_selected`]: no copy of
+    /// the rows), the marked rows first. An infeasible solve leaves its
+    /// certificate in `self.cert` and its support in `self.marks`. Not inlined:
+    /// one copy of the solver call in flash.
     #[inline(never)]
     fn solve(&mut self, keep: Keep) -> Result<Probe<NV>, RelaxFailure> {
         let left = self.budget.saturating_sub(self.used);
         if left == 0 {
             return Err(RelaxFailure::Budget);
         }
-        self.scratch.clear();
-        self.scratch.q = self.qp.q;
-        // Scratch row -> nominal row, and the scratch rows' warm-start marks.
-        let mut orig = [0u16; NC];
-        let mut prefer = [false; NC];
-        for (i, ((g, h), id)) in self.qp.rows().zip(self.rows).enumerate() {
-            let Some((rhs, _)) = keep.rhs(id.kind, h, self.capture.as_ref()) else {
-                continue;
-            };
+        let mut h = SVector::<f64, NC>::zeros();
+        let mut enabled = [false; NC];
+        for (((&h0, id), hi), on) in self
+            .qp
+            .h
+            .iter()
+            .zip(self.rows)
+            .zip(h.iter_mut())
+            .zip(&mut enabled)
+            .take(self.qp.m)
+        {
             if keep.first_step && id.k != 0 {
                 continue;
             }
-            let k = self.scratch.m;
-            // Capacity cannot be exceeded: the scratch QP has the same capacity
-            // and receives a subset of the rows.
-            if self.scratch.push_row(&g, rhs).is_ok()
-                && let (Some(o), Some(p)) = (orig.get_mut(k), prefer.get_mut(k))
-            {
-                *o = i as u16;
-                *p = self.marks.get(i).copied().unwrap_or(false);
+            if let Some((rhs, _)) = keep.rhs(id.kind, h0, self.capture.as_ref()) {
+                *hi = rhs;
+                *on = true;
             }
         }
-        let sol =
-            self.backend
-                .solve_qp(self.solver, self.scratch, &prefer, self.max_iter.min(left));
+        let sol = self.backend.solve_selected(
+            self.solver,
+            self.qp,
+            &h,
+            &enabled,
+            &self.marks,
+            self.max_iter.min(left),
+        );
         self.used = self.used.saturating_add(sol.iterations);
         match sol.status {
             QpStatus::Solved => Ok(Probe::Feasible(sol.x)),
             QpStatus::Infeasible => {
-                self.take_certificate(&sol.lambda, &orig, self.scratch.m, keep);
+                self.take_certificate(&sol.lambda, keep);
                 Ok(Probe::Infeasible)
             }
             QpStatus::IterationLimit => Err(RelaxFailure::Budget),
@@ -751,17 +746,10 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         }
     }
 
-    /// Keeps the Farkas certificate `lambda` of an infeasible solve of the
-    /// problem `keep` whose row `i < m` is the nominal row `orig[i]`: its sums
-    /// in [`Ctx::cert`] and its support (but the lightest row) in
-    /// [`Ctx::marks`].
-    fn take_certificate(
-        &mut self,
-        lambda: &SVector<f64, NC>,
-        orig: &[u16; NC],
-        m: usize,
-        keep: Keep,
-    ) {
+    /// Keeps the Farkas certificate `lambda` (one weight per nominal row) of an
+    /// infeasible solve of the problem `keep`: its sums in [`Ctx::cert`] and its
+    /// support (but the lightest row) in [`Ctx::marks`].
+    fn take_certificate(&mut self, lambda: &SVector<f64, NC>, keep: Keep) {
         let mut c = Certificate {
             yh: 0.0,
             yg: 0.0,
@@ -770,12 +758,11 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
             yn: 0.0,
         };
         self.marks = [false; NC];
-        let m = m.min(NC);
+        let m = self.qp.m.min(NC);
         // Weights at rounding level (~1e-17 of the largest) are not
         // part of the certificate's support.
         let floor = 1e-12 * lambda.amax();
-        for (&y, &o) in lambda.iter().zip(&orig[..m]) {
-            let o = usize::from(o);
+        for (o, &y) in lambda.iter().enumerate().take(m) {
             let (Some(&h), Some(&n), Some(id)) =
                 (self.qp.h.get(o), self.norms.get(o), self.rows.get(o))
             else {
@@ -811,8 +798,7 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         // marking all of them makes the next solve add one too many
         // and drop it again. Leave out the lightest.
         let mut lightest: Option<(usize, f64)> = None;
-        for (&y, &o) in lambda.iter().zip(&orig[..m]) {
-            let o = usize::from(o);
+        for (o, &y) in lambda.iter().enumerate().take(m) {
             let w = y * self.norms.get(o).copied().unwrap_or(0.0);
             if self.marks.get(o).copied().unwrap_or(false) && lightest.is_none_or(|(_, lw)| w < lw)
             {
@@ -1020,7 +1006,6 @@ mod tests {
         let mut ctl = PaperController::new(Config::default()).unwrap();
         let cap = ctl.config().max_gait_relaxation;
         let mut asm = Assembly::default();
-        let mut scratch = DenseQp::<6, NC>::default();
         let (mut infeasible, mut stage1, mut stage2, mut stage3, mut stage4) = (0, 0, 0, 0, 0);
         let less = |e: f64| e - 1e-6 * (1.0 + e);
         let mut solves = [0usize; 32];
@@ -1100,7 +1085,6 @@ mod tests {
                 &mut count,
                 &asm.qp,
                 &asm.rows,
-                &mut scratch,
                 64,
                 2048,
                 12,
