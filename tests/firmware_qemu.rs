@@ -660,7 +660,7 @@ fn budgets(max_opt: u64, max_all: u64, flash: u64, ram_loop: u64, ram_startup: u
             // Met since the controller has no panicking branch left (nopanic/):
             // no panic message, so no float formatting, is linked. The firmware's
             // controller is `Controller::UNCONFIGURED` in a `static`: all zero
-            // bytes, so `.bss`; were it not, its ~7 KiB would land in `.data`
+            // bytes, so `.bss`; were it not, its ~4.6 KiB would land in `.data`
             // (flash) and fail this budget.
             what: "flash bytes: text + data - recorded cycles",
             value: flash,
