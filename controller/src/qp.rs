@@ -1234,16 +1234,21 @@ mod tests {
         }
     }
 
-    #[test]
-    fn diagonal_and_dense_hessians_satisfy_kkt_on_random_qps() {
-        // Deterministic pseudo-random QPs (64-bit LCG), both Hessian code paths.
-        let mut state: u64 = 0x2545_f491_4f6c_dd1d;
-        let mut rnd = move || {
+    /// Deterministic pseudo-random numbers in [-1, 1) (64-bit LCG, top bits).
+    fn uniform(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
             state = state
                 .wrapping_mul(6_364_136_223_846_793_005)
                 .wrapping_add(1_442_695_040_888_963_407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0 // [-1, 1)
-        };
+            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        }
+    }
+
+    #[test]
+    fn diagonal_and_dense_hessians_satisfy_kkt_on_random_qps() {
+        // Deterministic pseudo-random QPs (64-bit LCG), both Hessian code paths.
+        let mut rnd = uniform(0x2545_f491_4f6c_dd1d);
         let (mut solved, mut infeasible) = (0, 0);
         for k in 0..400 {
             let H = if k % 2 == 0 {
@@ -1295,13 +1300,7 @@ mod tests {
                 solver.solve(qp, prefer, max_iter)
             }
         }
-        let mut state: u64 = 0x0bad_5eed_1234_5678;
-        let mut rnd = move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0 // [-1, 1)
-        };
+        let mut rnd = uniform(0x0bad_5eed_1234_5678);
         let (mut solved, mut infeasible) = (0, 0);
         for k in 0..400 {
             let H = SMatrix::<f64, 6, 6>::identity() * 2.0;
