@@ -559,6 +559,23 @@ pub struct Prediction<const N: usize> {
     pub goal: Vector2<f64>,
 }
 
+impl<const N: usize> Prediction<N> {
+    /// The plan from this prediction's `x_0` (start of step 0) through the
+    /// predicted end-of-step `states`, with the footsteps `feet` (m, world).
+    fn plan(&self, states: [LipState; N], feet: [Vector2<f64>; N]) -> Plan<N> {
+        Plan {
+            x0: LipState {
+                position: self.p0,
+                velocity: self.v0,
+                heading: self.heading.theta[0],
+            },
+            states,
+            feet,
+            first_side: self.first_side,
+        }
+    }
+}
+
 /// One cycle's QP and its bookkeeping, as assembled by [`Controller::assemble`].
 /// Public so that the reference crate can solve exactly the same problem.
 #[derive(Clone, Debug)]
@@ -1365,16 +1382,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                 heading: th,
             };
         }
-        Plan {
-            x0: LipState {
-                position: pred.p0,
-                velocity: pred.v0,
-                heading: pred.heading.theta[0],
-            },
-            states,
-            feet,
-            first_side: pred.first_side,
-        }
+        pred.plan(states, feet)
     }
 
     /// The plan of a fallback given by its feet `u` (interleaved): the LIP rolled
@@ -1395,16 +1403,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             };
             feet[k] = f;
         }
-        Plan {
-            x0: LipState {
-                position: pred.p0,
-                velocity: pred.v0,
-                heading: pred.heading.theta[0],
-            },
-            states,
-            feet,
-            first_side: pred.first_side,
-        }
+        pred.plan(states, feet)
     }
 }
 
