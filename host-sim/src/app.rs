@@ -137,6 +137,7 @@ pub fn execute_run(req: &RunRequest) -> Result<RunReport> {
             record_scans: req.plots,
             record_qps: req.export_qps.is_some(),
             record_clearance: true,
+            timing_repeats: 1,
         },
     )?;
     if let Some(qd) = &qd {

@@ -9,7 +9,7 @@
 //! ldcbf-sim merge DIR... --out DIR [--allow-partial]
 //! ldcbf-sim table DIR...
 //! ldcbf-sim deadline [CASES...] [--random N] [--deadline-us D] [--clock-mhz F]
-//!                    [--set k=v ...] [--jobs J] [--instructions FILE]
+//!                    [--set k=v ...] [--jobs J] [--repeat K] [--instructions FILE]
 //! ldcbf-sim robustness [CASES...] [--random N] [--delta D,D,...] [--set k=v ...]
 //!                      [--jobs J] [--out DIR]
 //! ```
@@ -148,6 +148,14 @@ enum Command {
         /// shows in the wall-clock times).
         #[arg(long, default_value_t = 1)]
         jobs: usize,
+        /// Timings of each control cycle: the controller call is timed K times
+        /// on the same input and state (clones of the controller) and the
+        /// cycle's compute time is the minimum, so a preemption does not count
+        /// and the max is the hardest cycle. The closed loops (cycles, statuses,
+        /// iterations) are the same for every K; the study takes about K times
+        /// as long. With --jobs > 1 the runs still share the cores.
+        #[arg(long, default_value_t = 1, value_name = "K")]
+        repeat: u32,
         /// Per-cycle instruction counts of the firmware in QEMU (CSV
         /// `cycle,status,iterations,instructions`, written by
         /// tests/firmware_qemu.rs to firmware/target/instructions.csv).
@@ -370,6 +378,7 @@ fn main() -> ExitCode {
             clock_mhz,
             sets,
             jobs,
+            repeat,
             instructions,
         } => {
             let mut req = ldcbf_sim::deadline::DeadlineRequest::new();
@@ -381,6 +390,7 @@ fn main() -> ExitCode {
             req.clock_mhz = clock_mhz;
             req.sets = sets;
             req.jobs = jobs;
+            req.repeat = repeat;
             req.instructions = instructions;
             match ldcbf_sim::deadline::run_deadline(&req) {
                 Ok(rep) => {
