@@ -3,6 +3,7 @@
 //! ```text
 //! ldcbf-sim run <scenario> [--out DIR] [--seed S] [--set key=value ...]
 //!               [--solver own|clarabel] [--mpc-rate 20|step] [--no-plots] [--no-gif]
+//!               [--repeat K]
 //! ldcbf-sim list
 //! ldcbf-sim batch --family random --seeds 0..200 [--planner none|rrt_star]
 //!                 [--perception known|lidar] [--jobs J] [--shard I/N] [--out DIR] [--set k=v ...]
@@ -65,6 +66,11 @@ enum Command {
         /// layout `qp solve` reads.
         #[arg(long, value_name = "DIR")]
         export_qps: Option<PathBuf>,
+        /// Timings of each controller call: `compute_ns` in cycles.csv (and the
+        /// summary's compute) is the minimum of K timings on the same input and
+        /// state, as in `deadline --repeat`; the run itself is the same.
+        #[arg(long, default_value_t = 1, value_name = "K")]
+        repeat: u32,
     },
     /// Dense QPs in the npz layout of ../shared/qpbench (P, q, G, h).
     Qp {
@@ -473,6 +479,7 @@ fn main() -> ExitCode {
             no_gif,
             trajectory_every,
             export_qps,
+            repeat,
         } => {
             let req = RunRequest {
                 out,
@@ -484,6 +491,7 @@ fn main() -> ExitCode {
                 gif: !no_gif,
                 trajectory_every,
                 export_qps: export_qps.clone(),
+                timing_repeats: repeat,
                 ..RunRequest::new(&scenario)
             };
             match execute_run(&req) {
