@@ -616,8 +616,9 @@ pub struct DeadlineRequest {
     /// shows in the wall-clock times (not in the iterations).
     pub jobs: usize,
     /// Timings of each control cycle, `>= 1`; the cycle's compute time is their
-    /// minimum ([`SimOptions::timing_repeats`]). The study takes about `repeat`
-    /// times as long; the cycles, statuses and iterations do not change.
+    /// minimum ([`SimOptions::timing_repeats`]). The controller's share of the
+    /// study's time grows `repeat`-fold; the cycles, statuses and iterations do
+    /// not change.
     pub repeat: u32,
     /// A per-cycle instruction CSV of the firmware ([`read_instructions`]).
     pub instructions: Option<PathBuf>,

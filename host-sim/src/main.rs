@@ -158,8 +158,10 @@ enum Command {
         /// on the same input and state (clones of the controller) and the
         /// cycle's compute time is the minimum, so a preemption does not count
         /// and the max is the hardest cycle. The closed loops (cycles, statuses,
-        /// iterations) are the same for every K; the study takes about K times
-        /// as long. With --jobs > 1 the runs still share the cores.
+        /// iterations) are the same for every K; the controller's share of the
+        /// study's time grows K-fold. A lower bound: back-to-back timings of one
+        /// input run with warm caches. With --jobs > 1 the runs still share the
+        /// cores.
         #[arg(long, default_value_t = 1, value_name = "K")]
         repeat: u32,
         /// Per-cycle instruction counts of the firmware in QEMU (CSV
