@@ -36,11 +36,14 @@ pub struct RunRequest {
     /// Also write every cycle's QP as `cycle_NNNNN.npz` (`P, q, G, h`) into this
     /// directory (created atomically like the output directory).
     pub export_qps: Option<PathBuf>,
+    /// Timings of each controller call, `>= 1` ([`SimOptions::timing_repeats`]:
+    /// `compute_ns` in `cycles.csv` is their minimum; the run is the same).
+    pub timing_repeats: u32,
 }
 
 impl RunRequest {
     /// A request with the defaults of the CLI: own solver, 20 Hz, all figures,
-    /// trajectory at 100 Hz.
+    /// trajectory at 100 Hz, one timing per controller call.
     pub fn new(scenario: &str) -> Self {
         RunRequest {
             scenario: scenario.into(),
@@ -53,6 +56,7 @@ impl RunRequest {
             gif: true,
             trajectory_every: 10,
             export_qps: None,
+            timing_repeats: 1,
         }
     }
 }
@@ -96,6 +100,9 @@ fn overlapping(a: &Path, b: &Path) -> bool {
 /// (as temporary siblings) before the simulation and moved into place only at
 /// the end.
 pub fn execute_run(req: &RunRequest) -> Result<RunReport> {
+    if req.timing_repeats == 0 {
+        bail!("--repeat must be >= 1 (timings of each control cycle), got 0");
+    }
     let scenario = load(
         &req.scenario,
         &LoadOptions {
@@ -137,6 +144,7 @@ pub fn execute_run(req: &RunRequest) -> Result<RunReport> {
             record_scans: req.plots,
             record_qps: req.export_qps.is_some(),
             record_clearance: true,
+            timing_repeats: req.timing_repeats,
         },
     )?;
     if let Some(qd) = &qd {

@@ -697,6 +697,7 @@ pub fn run_batch(req: &BatchRequest) -> Result<BatchReport> {
         record_scans: false,
         record_qps: false,
         record_clearance: true,
+        timing_repeats: 1,
     };
     let t0 = Instant::now();
     let rows: Vec<Result<RunRow>> = pool.install(|| {

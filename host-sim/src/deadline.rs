@@ -8,7 +8,12 @@
 //! it keeps the status, where the command came from, the solver iterations
 //! (`CycleInfo::iterations`, the whole cycle's adds plus drops, the priority
 //! scheme's solves included) and the wall-clock time of the controller call
-//! (measured by the simulator around `Controller::step_with` only).
+//! (measured by the simulator around `Controller::step_with` only). With
+//! `--repeat K` ([`DeadlineRequest::repeat`], [`SimOptions::timing_repeats`])
+//! each cycle's call is timed `K` times on the same input and the same
+//! controller state (clones made just before the call) and its time is the
+//! minimum: the cycle's compute without the scheduler's noise. The closed loops,
+//! hence the cycles, statuses and iterations, are the same for every `K`.
 //!
 //! Two kinds of cost, reported side by side by [`markdown`]:
 //!
@@ -19,9 +24,12 @@
 //!   QEMU (`tests/firmware_qemu.rs`) are the other deterministic measure; they
 //!   exist only for the 240 recorded `paper` cycles the firmware replays, and are
 //!   shown when a CSV of them is given ([`read_instructions`]).
-//! * **Wall clock**: p50 / p99 / max of the compute time per cycle (ns) and the
-//!   margin `deadline - max`. These are of this machine, this build and its
-//!   load (a preemption during one call shows as the maximum): indicative only.
+//! * **Wall clock**: p50 / p99 / max of the compute time per cycle (ns), the
+//!   cycle of the max ([`CostStats::slowest`]) and the margin `deadline - max`.
+//!   These are of this machine and this build. With one timing per cycle
+//!   (`K = 1`) they are also of its load: a preemption during one call shows as
+//!   the maximum. With `K > 1` the max is the hardest cycle's compute, as long
+//!   as one of its `K` timings ran undisturbed.
 //!
 //! The default deadline is the issue's real-time target: 100,000 instructions
 //! per cycle at 400 MHz (one instruction per clock), i.e. 250 µs
@@ -244,11 +252,27 @@ pub struct CaseRun {
 }
 
 /// Loads every case (all errors before any simulation), then simulates them
-/// with `jobs` worker threads. The results are in the order of `cases` and do
-/// not depend on `jobs` (except the wall-clock times).
+/// with `jobs` worker threads, one timing per controller call. The results are
+/// in the order of `cases` and do not depend on `jobs` (except the wall-clock
+/// times).
 pub fn run_cases(cases: &[Case], sets: &[(String, String)], jobs: usize) -> Result<Vec<CaseRun>> {
+    run_cases_timed(cases, sets, jobs, 1)
+}
+
+/// [`run_cases`] with `repeat` timings of each controller call
+/// ([`SimOptions::timing_repeats`]: each cycle's `compute_ns` is the minimum).
+/// Everything but the wall-clock times is the same for every `repeat >= 1`.
+pub fn run_cases_timed(
+    cases: &[Case],
+    sets: &[(String, String)],
+    jobs: usize,
+    repeat: u32,
+) -> Result<Vec<CaseRun>> {
     if jobs == 0 {
         bail!("--jobs must be >= 1");
+    }
+    if repeat == 0 {
+        bail!("--repeat must be >= 1 (timings of each control cycle), got 0");
     }
     let scenarios: Vec<Scenario> = cases.iter().map(|c| c.load(sets)).collect::<Result<_>>()?;
     let pool = rayon::ThreadPoolBuilder::new()
@@ -259,6 +283,7 @@ pub fn run_cases(cases: &[Case], sets: &[(String, String)], jobs: usize) -> Resu
     let opts = SimOptions {
         record_scans: false,
         record_clearance: false,
+        timing_repeats: repeat,
         ..SimOptions::default()
     };
     let runs: Vec<Result<CaseRun>> = pool.install(|| {
@@ -322,6 +347,38 @@ impl core::fmt::Display for Worst {
     }
 }
 
+/// The cycle with the longest compute time of a group of runs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Slowest {
+    /// Its compute time, ns ([`CycleCost::compute_ns`]).
+    pub compute_ns: u64,
+    /// The run's label.
+    pub label: String,
+    /// The cycle's index in its run, from 0 (data row `cycle + 1` of the
+    /// `cycles.csv` that `ldcbf-sim run` writes).
+    pub cycle: usize,
+    /// The cycle's simulated time, s.
+    pub time: f64,
+    /// The cycle's status.
+    pub status: CycleStatus,
+    /// Its solver iterations.
+    pub iterations: u32,
+}
+
+impl core::fmt::Display for Slowest {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        write!(
+            f,
+            "{} cycle {} (t = {:.2} s, {}, {} it)",
+            self.label,
+            self.cycle,
+            self.time,
+            self.status.name(),
+            self.iterations
+        )
+    }
+}
+
 /// The per-cycle cost of a group of runs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct CostStats {
@@ -345,6 +402,8 @@ pub struct CostStats {
     pub compute_non_optimal: ComputeStats,
     /// Cycles whose compute time exceeded the deadline.
     pub over_deadline: usize,
+    /// The cycle of `compute.max_ns` (the first one on ties), if any.
+    pub slowest: Option<Slowest>,
     /// Most iterations of an `optimal` cycle (one QP solve), if any.
     pub worst_optimal: Option<Worst>,
     /// Most iterations of any cycle (the priority scheme included), if any.
@@ -371,6 +430,25 @@ fn worst_of<'a>(
         }
     }
     best
+}
+
+fn slowest(runs: &[&CaseRun]) -> Option<Slowest> {
+    let mut best: Option<(&CaseRun, &CycleCost)> = None;
+    for r in runs {
+        for c in &r.cycles {
+            if best.is_none_or(|(_, b)| c.compute_ns > b.compute_ns) {
+                best = Some((r, c));
+            }
+        }
+    }
+    best.map(|(r, c)| Slowest {
+        compute_ns: c.compute_ns,
+        label: r.label.clone(),
+        cycle: c.index,
+        time: c.time,
+        status: c.status,
+        iterations: c.iterations,
+    })
 }
 
 /// The statistics of a group of runs; `deadline_ns` counts the cycles over it.
@@ -403,6 +481,7 @@ pub fn cost_stats(runs: &[&CaseRun], deadline_ns: u64) -> CostStats {
                 .collect::<Vec<_>>(),
         ),
         over_deadline: count(&|c| c.compute_ns > deadline_ns),
+        slowest: slowest(runs),
         worst_optimal: worst(&|c| c.status.is_optimal()),
         worst_all: worst(&|_| true),
         max_iter: runs.iter().map(|r| r.max_iter).min().unwrap_or(0),
@@ -428,6 +507,10 @@ pub struct FirmwareInstructions {
     pub max_optimal: Option<u64>,
     /// Most instructions of any cycle.
     pub max_all: u64,
+    /// The cycle of `max_all` (the file's `cycle` column; the first on ties).
+    pub max_all_cycle: u64,
+    /// Its status, as written in the file.
+    pub max_all_status: String,
     /// Most iterations of an `optimal` cycle, if any.
     pub iterations_optimal: Option<u32>,
     /// Most iterations of any cycle.
@@ -479,6 +562,8 @@ pub fn read_instructions(path: &Path) -> Result<FirmwareInstructions> {
         non_optimal: 0,
         max_optimal: None,
         max_all: 0,
+        max_all_cycle: 0,
+        max_all_status: String::new(),
         iterations_optimal: None,
         iterations_all: 0,
     };
@@ -491,11 +576,15 @@ pub fn read_instructions(path: &Path) -> Result<FirmwareInstructions> {
         if f.len() != 4 {
             return Err(bad("expected 4 fields"));
         }
-        f[0].parse::<u64>().map_err(|_| bad("bad cycle"))?;
+        let cycle: u64 = f[0].parse().map_err(|_| bad("bad cycle"))?;
         let iterations: u32 = f[2].parse().map_err(|_| bad("bad iterations"))?;
         let instructions: u64 = f[3].parse().map_err(|_| bad("bad instructions"))?;
+        if out.cycles == 0 || instructions > out.max_all {
+            out.max_all = instructions;
+            out.max_all_cycle = cycle;
+            out.max_all_status = f[1].to_string();
+        }
         out.cycles += 1;
-        out.max_all = out.max_all.max(instructions);
         out.iterations_all = out.iterations_all.max(iterations);
         if f[1] == "optimal" {
             out.max_optimal = Some(out.max_optimal.unwrap_or(0).max(instructions));
@@ -526,13 +615,18 @@ pub struct DeadlineRequest {
     /// Worker threads. More than one makes the runs share the cores, which
     /// shows in the wall-clock times (not in the iterations).
     pub jobs: usize,
+    /// Timings of each control cycle, `>= 1`; the cycle's compute time is their
+    /// minimum ([`SimOptions::timing_repeats`]). The controller's share of the
+    /// study's time grows `repeat`-fold; the cycles, statuses and iterations do
+    /// not change.
+    pub repeat: u32,
     /// A per-cycle instruction CSV of the firmware ([`read_instructions`]).
     pub instructions: Option<PathBuf>,
 }
 
 impl DeadlineRequest {
     /// The CLI's defaults: the shipped cases, no random seeds, 250 µs at
-    /// 400 MHz, one job, no instruction file.
+    /// 400 MHz, one job, one timing per cycle, no instruction file.
     pub fn new() -> Self {
         DeadlineRequest {
             cases: shipped_cases(),
@@ -541,6 +635,7 @@ impl DeadlineRequest {
             deadline_us: DEFAULT_DEADLINE_US,
             clock_mhz: DEFAULT_CLOCK_MHZ,
             jobs: 1,
+            repeat: 1,
             instructions: None,
         }
     }
@@ -579,6 +674,8 @@ pub struct DeadlineReport {
     pub wall_time_s: f64,
     /// Worker threads used.
     pub jobs: usize,
+    /// Timings per control cycle (the minimum counts).
+    pub repeat: u32,
 }
 
 impl DeadlineReport {
@@ -603,6 +700,9 @@ pub fn run_deadline(req: &DeadlineRequest) -> Result<DeadlineReport> {
             req.clock_mhz
         );
     }
+    if req.repeat == 0 {
+        bail!("--repeat must be >= 1 (timings of each control cycle), got 0");
+    }
     if req.cases.is_empty() && req.random == 0 {
         bail!("nothing to run: give scenarios or --random N");
     }
@@ -615,7 +715,7 @@ pub fn run_deadline(req: &DeadlineRequest) -> Result<DeadlineReport> {
     let mut cases = req.cases.clone();
     cases.extend(random_cases(req.random));
     let t0 = Instant::now();
-    let runs = run_cases(&cases, &req.sets, req.jobs)?;
+    let runs = run_cases_timed(&cases, &req.sets, req.jobs, req.repeat)?;
     let wall_time_s = t0.elapsed().as_secs_f64();
     let named = req.cases.len();
     let mut rows: Vec<DeadlineRow> = runs[..named]
@@ -647,6 +747,7 @@ pub fn run_deadline(req: &DeadlineRequest) -> Result<DeadlineReport> {
         instructions,
         wall_time_s,
         jobs: req.jobs,
+        repeat: req.repeat,
     })
 }
 
@@ -663,11 +764,22 @@ fn pct(part: f64, whole: f64) -> String {
 pub fn markdown(rep: &DeadlineReport) -> String {
     let mut s = String::new();
     let budget = rep.instruction_budget();
+    let timing = if rep.repeat > 1 {
+        format!(
+            "compute = wall clock around the controller call only, each cycle's minimum of {} timings \
+             on the same input and state (preemption filtered: the max is the hardest cycle)",
+            rep.repeat
+        )
+    } else {
+        "compute = wall clock around the controller call only, one timing per cycle (a preemption \
+         shows as the max; --repeat K takes each cycle's minimum of K)"
+            .to_string()
+    };
     let _ = writeln!(
         s,
-        "deadline {} ns per control cycle (= {budget} instructions at {} MHz); compute = wall clock \
-         around the controller call only, {} build, {} job(s), this machine and its load \
-         (indicative; the iteration counts are deterministic); study wall time {:.1} s",
+        "deadline {} ns per control cycle (= {budget} instructions at {} MHz); {timing}; {} build, \
+         {} job(s), this machine (indicative; the iteration counts are deterministic); study wall \
+         time {:.1} s",
         rep.deadline_ns,
         rep.clock_mhz,
         if cfg!(debug_assertions) {
@@ -680,15 +792,15 @@ pub fn markdown(rep: &DeadlineReport) -> String {
     );
     s.push('\n');
     s += "| case | runs | reached | cycles | non-optimal | compute p50 [ns] | p99 [ns] | max [ns] \
-          | over deadline | iterations max: optimal / all | instructions max | margin [ns] |\n";
-    s += "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|\n";
+          | max at | over deadline | iterations max: optimal / all | instructions max | margin [ns] |\n";
+    s += "|---|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---|---:|\n";
     let it = |w: &Option<Worst>| w.as_ref().map_or("-".to_string(), |w| w.value.to_string());
     for row in &rep.rows {
         let st = &row.stats;
         let margin = rep.deadline_ns as i64 - st.compute.max_ns as i64;
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} / {} | n/a | {margin} ({}){} |",
+            "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} / {} | n/a | {margin} ({}){} |",
             row.label,
             st.runs,
             st.reached,
@@ -697,6 +809,9 @@ pub fn markdown(rep: &DeadlineReport) -> String {
             st.compute.p50_ns,
             st.compute.p99_ns,
             st.compute.max_ns,
+            st.slowest
+                .as_ref()
+                .map_or("-".to_string(), ToString::to_string),
             st.over_deadline,
             it(&st.worst_optimal),
             it(&st.worst_all),
@@ -709,11 +824,13 @@ pub fn markdown(rep: &DeadlineReport) -> String {
         let margin = rep.deadline_ns as f64 - max_ns;
         let _ = writeln!(
             s,
-            "| firmware (QEMU, recorded cycles) | 1 | - | {} | {} | - | - | {:.0} at {} MHz | - | {} / {} | {} / {} | {:.0} ({}){} |",
+            "| firmware (QEMU, recorded cycles) | 1 | - | {} | {} | - | - | {:.0} at {} MHz | cycle {} ({}) | - | {} / {} | {} / {} | {:.0} ({}){} |",
             fw.cycles,
             fw.non_optimal,
             max_ns,
             rep.clock_mhz,
+            fw.max_all_cycle,
+            fw.max_all_status,
             fw.iterations_optimal
                 .map_or("-".to_string(), |v| v.to_string()),
             fw.iterations_all,
@@ -759,6 +876,21 @@ pub fn markdown(rep: &DeadlineReport) -> String {
             total.compute_non_optimal.p50_ns,
             total.compute_non_optimal.max_ns
         );
+        if let Some(w) = &total.slowest {
+            let _ = writeln!(
+                s,
+                "- slowest cycle: {} ns, {w} (`ldcbf-sim run` of that case logs it in cycles.csv: \
+                 data row {}, `t` = {:.3}){}",
+                w.compute_ns,
+                w.cycle + 1,
+                w.time,
+                if rep.repeat > 1 {
+                    format!("; minimum of {} timings", rep.repeat)
+                } else {
+                    "; one timing, maybe a preemption".to_string()
+                }
+            );
+        }
     }
     match &rep.instructions {
         Some(fw) => {
@@ -851,6 +983,15 @@ mod tests {
         assert_eq!((wo.value, wo.label.as_str(), wo.cycle), (12, "b", 0));
         assert_eq!(st.worst_all.unwrap().value, 300);
         assert_eq!(st.compute.max_ns, 300_000);
+        let sl = st.slowest.unwrap();
+        assert_eq!(
+            (sl.compute_ns, sl.label.as_str(), sl.cycle, sl.iterations),
+            (300_000, "b", 1, 12)
+        );
+        assert_eq!(sl.to_string(), "b cycle 1 (t = 0.05 s, optimal, 12 it)");
+        let sa = cost_stats(&[&a], 250_000).slowest.unwrap();
+        assert_eq!((sa.cycle, sa.status), (1, CycleStatus::Infeasible));
+        assert!(cost_stats(&[], 250_000).slowest.is_none());
         assert_eq!((st.fallback, st.budget_exhausted), (0, 0));
     }
 
@@ -868,6 +1009,10 @@ mod tests {
         assert_eq!((fw.cycles, fw.non_optimal), (3, 1));
         assert_eq!((fw.max_optimal, fw.max_all), (Some(90_000), 500_000));
         assert_eq!((fw.iterations_optimal, fw.iterations_all), (Some(9), 300));
+        assert_eq!(
+            (fw.max_all_cycle, fw.max_all_status.as_str()),
+            (1, "infeasible")
+        );
         std::fs::write(&p, format!("{INSTRUCTIONS_HEADER}\n0,optimal,4\n")).unwrap();
         let e = read_instructions(&p).unwrap_err().to_string();
         assert!(e.contains(":2:"), "{e}");

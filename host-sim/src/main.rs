@@ -3,13 +3,14 @@
 //! ```text
 //! ldcbf-sim run <scenario> [--out DIR] [--seed S] [--set key=value ...]
 //!               [--solver own|clarabel] [--mpc-rate 20|step] [--no-plots] [--no-gif]
+//!               [--repeat K]
 //! ldcbf-sim list
 //! ldcbf-sim batch --family random --seeds 0..200 [--planner none|rrt_star]
 //!                 [--perception known|lidar] [--jobs J] [--shard I/N] [--out DIR] [--set k=v ...]
 //! ldcbf-sim merge DIR... --out DIR [--allow-partial]
 //! ldcbf-sim table DIR...
 //! ldcbf-sim deadline [CASES...] [--random N] [--deadline-us D] [--clock-mhz F]
-//!                    [--set k=v ...] [--jobs J] [--instructions FILE]
+//!                    [--set k=v ...] [--jobs J] [--repeat K] [--instructions FILE]
 //! ldcbf-sim robustness [CASES...] [--random N] [--delta D,D,...] [--set k=v ...]
 //!                      [--jobs J] [--out DIR]
 //! ```
@@ -65,6 +66,11 @@ enum Command {
         /// layout `qp solve` reads.
         #[arg(long, value_name = "DIR")]
         export_qps: Option<PathBuf>,
+        /// Timings of each controller call: `compute_ns` in cycles.csv (and the
+        /// summary's compute) is the minimum of K timings on the same input and
+        /// state, as in `deadline --repeat`; the run itself is the same.
+        #[arg(long, default_value_t = 1, value_name = "K")]
+        repeat: u32,
     },
     /// Dense QPs in the npz layout of ../shared/qpbench (P, q, G, h).
     Qp {
@@ -148,6 +154,16 @@ enum Command {
         /// shows in the wall-clock times).
         #[arg(long, default_value_t = 1)]
         jobs: usize,
+        /// Timings of each control cycle: the controller call is timed K times
+        /// on the same input and state (clones of the controller) and the
+        /// cycle's compute time is the minimum, so a preemption does not count
+        /// and the max is the hardest cycle. The closed loops (cycles, statuses,
+        /// iterations) are the same for every K; the controller's share of the
+        /// study's time grows K-fold. A lower bound: back-to-back timings of one
+        /// input run with warm caches. With --jobs > 1 the runs still share the
+        /// cores.
+        #[arg(long, default_value_t = 1, value_name = "K")]
+        repeat: u32,
         /// Per-cycle instruction counts of the firmware in QEMU (CSV
         /// `cycle,status,iterations,instructions`, written by
         /// tests/firmware_qemu.rs to firmware/target/instructions.csv).
@@ -370,6 +386,7 @@ fn main() -> ExitCode {
             clock_mhz,
             sets,
             jobs,
+            repeat,
             instructions,
         } => {
             let mut req = ldcbf_sim::deadline::DeadlineRequest::new();
@@ -381,6 +398,7 @@ fn main() -> ExitCode {
             req.clock_mhz = clock_mhz;
             req.sets = sets;
             req.jobs = jobs;
+            req.repeat = repeat;
             req.instructions = instructions;
             match ldcbf_sim::deadline::run_deadline(&req) {
                 Ok(rep) => {
@@ -463,6 +481,7 @@ fn main() -> ExitCode {
             no_gif,
             trajectory_every,
             export_qps,
+            repeat,
         } => {
             let req = RunRequest {
                 out,
@@ -474,6 +493,7 @@ fn main() -> ExitCode {
                 gif: !no_gif,
                 trajectory_every,
                 export_qps: export_qps.clone(),
+                timing_repeats: repeat,
                 ..RunRequest::new(&scenario)
             };
             match execute_run(&req) {

@@ -7,7 +7,9 @@
 //!   `step`, `stance`, `x0_px, x0_py, x0_vx, x0_vy, x0_theta` (the predicted state
 //!   at the end of the current step), `active_obstacles`, `truncated`, `status`
 //!   (`CycleStatus::name`), `source` (where the command came from), `iterations`,
-//!   `active_set`, `compute_ns` (wall clock around the controller call only),
+//!   `active_set`, `compute_ns` (wall clock around the controller call only;
+//!   with `run --repeat K` the minimum of K timings of the call on the same
+//!   input and state, `SimOptions::timing_repeats`),
 //!   `max_violation` (of this cycle's QP rows by the returned plan, in the rows'
 //!   physical units: m/s for velocity rows, m for reachability rows, m of `h`
 //!   for LDCBF rows), `cost` (m^2), `min_h0` (m), `relax_gait` (m/s of the
@@ -104,8 +106,12 @@ pub struct Summary {
     pub source_counts: BTreeMap<String, usize>,
     /// Control cycles run.
     pub cycles: usize,
-    /// Controller compute time (wall clock, around the call only).
+    /// Controller compute time (wall clock, around the call only; with
+    /// `timing_repeats` > 1 each cycle's minimum over that many timings).
     pub compute: ComputeStats,
+    /// Timings of each controller call (`run --repeat`, default 1;
+    /// `SimOptions::timing_repeats`).
+    pub timing_repeats: u32,
     /// Solver iterations: max over cycles.
     pub max_iterations: u32,
     /// Obstacles in the scenario (the true map).
@@ -300,6 +306,7 @@ pub fn summarize(r: &SimResult) -> Summary {
         source_counts,
         cycles: r.cycles.len(),
         compute: compute_stats(&ns),
+        timing_repeats: r.options.timing_repeats,
         max_iterations: r
             .cycles
             .iter()
@@ -406,13 +413,18 @@ pub fn human_summary(s: &Summary) -> String {
         .collect();
     let _ = writeln!(
         o,
-        "  {} cycles ({}), max {} iterations; compute p50 {:.1} us, p99 {:.1} us, max {:.1} us",
+        "  {} cycles ({}), max {} iterations; compute p50 {:.1} us, p99 {:.1} us, max {:.1} us{}",
         s.cycles,
         statuses.join(", "),
         s.max_iterations,
         s.compute.p50_ns as f64 / 1e3,
         s.compute.p99_ns as f64 / 1e3,
-        s.compute.max_ns as f64 / 1e3
+        s.compute.max_ns as f64 / 1e3,
+        if s.timing_repeats > 1 {
+            format!(" (each cycle's minimum of {} timings)", s.timing_repeats)
+        } else {
+            String::new()
+        }
     );
     if s.source_counts.len() > 1 || !s.source_counts.contains_key("optimal") {
         let src: Vec<String> = s

@@ -1,7 +1,7 @@
 //! The `ldcbf-sim` binary: exit codes, messages, files.
 
 mod common;
-use common::{sim, text};
+use common::{fails_in, sim, text};
 
 #[test]
 fn list_shows_the_shipped_scenarios() {
@@ -138,4 +138,46 @@ fn exported_qps_solve_again() {
     assert!(!o.status.success());
     assert!(o.stdout.is_empty());
     assert!(text(&o.stderr).contains("nope.npz"));
+}
+
+/// `run --repeat K`: the same run (every `cycles.csv` column but `compute_ns`
+/// equal, the same footsteps), the summary says K; `--repeat 0` is one error
+/// line, exit 1, nothing written. No timing is asserted.
+#[test]
+fn run_repeat_changes_only_the_timings() {
+    let tmp = tempfile::tempdir().unwrap();
+    for (k, dir) in [("1", "a"), ("3", "b")] {
+        let o = sim(
+            &["run", "simple", "--no-plots", "--out", dir, "--repeat", k],
+            tmp.path(),
+        );
+        assert!(o.status.success(), "{}", text(&o.stderr));
+    }
+    let read = |d: &str, f: &str| std::fs::read_to_string(tmp.path().join(d).join(f)).unwrap();
+    let without_ns = |csv: &str| -> Vec<String> {
+        let mut lines = csv.lines();
+        let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+        let col = header.iter().position(|h| *h == "compute_ns").unwrap();
+        lines
+            .map(|l| {
+                let mut f: Vec<&str> = l.split(',').collect();
+                assert!(f[col].parse::<u64>().unwrap() > 0, "{l}");
+                f.remove(col);
+                f.join(",")
+            })
+            .collect()
+    };
+    let (a, b) = (read("a", "cycles.csv"), read("b", "cycles.csv"));
+    assert!(a.lines().count() > 100);
+    assert_eq!(without_ns(&a), without_ns(&b));
+    assert_eq!(read("a", "footsteps.csv"), read("b", "footsteps.csv"));
+    assert!(read("a", "summary.json").contains("\"timing_repeats\": 1"));
+    assert!(read("b", "summary.json").contains("\"timing_repeats\": 3"));
+
+    let empty = tempfile::tempdir().unwrap();
+    fails_in(
+        empty.path(),
+        &["run", "simple", "--no-plots", "--repeat", "0"],
+        &["--repeat must be >= 1"],
+    );
 }

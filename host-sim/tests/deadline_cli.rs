@@ -4,7 +4,7 @@
 //! input.
 
 mod common;
-use common::{fails, sim, text};
+use common::{fails, fails_in, sim, text};
 
 use ldcbf_sim::scenario::{LoadOptions, load};
 use ldcbf_sim::sim::{SimOptions, run};
@@ -55,17 +55,40 @@ fn deadline_reports_simple() {
         .filter(|c| !c.output.status.is_optimal())
         .count();
     let cells = row(&out, "simple");
-    assert_eq!(cells.len(), 12, "{cells:?}");
+    assert_eq!(cells.len(), 13, "{cells:?}");
     assert_eq!(cells[1], "1");
     assert_eq!(cells[2], "1", "simple reaches its goal");
     assert_eq!(cells[3], r.cycles.len().to_string());
     assert_eq!(cells[4], non_optimal.to_string());
-    assert_eq!(cells[9], format!("{max_it} / {max_it}"), "all optimal");
-    assert_eq!(cells[10], "n/a");
+    assert_eq!(cells[10], format!("{max_it} / {max_it}"), "all optimal");
+    assert_eq!(cells[11], "n/a");
     // p50 <= p99 <= max, and margin = deadline - max.
     let ns: Vec<i64> = cells[5..8].iter().map(|c| c.parse().unwrap()).collect();
     assert!(ns[0] > 0 && ns[0] <= ns[1] && ns[1] <= ns[2], "{ns:?}");
-    let margin: i64 = cells[11]
+    // The cycle of the max: `simple cycle I (t = T s, STATUS, N it)`, a real
+    // cycle of the run with that time, status and iteration count.
+    let at = &cells[8];
+    let i: usize = at
+        .strip_prefix("simple cycle ")
+        .and_then(|r| r.split_whitespace().next())
+        .and_then(|i| i.parse().ok())
+        .unwrap_or_else(|| panic!("max at: {at}"));
+    let c = &r.cycles[i];
+    assert_eq!(
+        at,
+        &format!(
+            "simple cycle {i} (t = {:.2} s, {}, {} it)",
+            c.time,
+            c.output.status.name(),
+            c.output.info.iterations
+        )
+    );
+    assert!(
+        out.contains(&format!("- slowest cycle: {} ns, simple cycle {i} ", ns[2])),
+        "{out}"
+    );
+    assert!(out.contains("one timing per cycle"), "{out}");
+    let margin: i64 = cells[12]
         .split_whitespace()
         .next()
         .unwrap()
@@ -110,15 +133,18 @@ fn deadline_random_seeds_and_firmware_row() {
     let n = |c: &Vec<String>, i: usize| c[i].parse::<u64>().unwrap();
     assert_eq!(n(&all, 3), n(&simple, 3) + n(&random, 3));
     for r in [&simple, &random, &all] {
-        assert_eq!(r[8], r[3], "every cycle over a 1 ns deadline: {r:?}");
-        assert!(r[11].ends_with("MISSED"), "{r:?}");
+        assert_eq!(r[9], r[3], "every cycle over a 1 ns deadline: {r:?}");
+        assert!(r[12].ends_with("MISSED"), "{r:?}");
     }
+    assert!(simple[8].starts_with("simple cycle "), "{simple:?}");
+    assert!(random[8].starts_with("random@"), "{random:?}");
     // The firmware row: 1 ns = 0.4 instructions at 400 MHz.
     let fw = row(&out, "firmware (QEMU, recorded cycles)");
     assert_eq!((fw[3].as_str(), fw[4].as_str()), ("3", "1"));
-    assert_eq!(fw[9], "20 / 70");
-    assert_eq!(fw[10], "92000 / 560000");
+    assert_eq!(fw[10], "20 / 70");
+    assert_eq!(fw[11], "92000 / 560000");
     assert_eq!(fw[7], "1400000 at 400 MHz");
+    assert_eq!(fw[8], "cycle 1 (infeasible)");
     assert!(
         out.contains("- instructions: instructions.csv (3 cycles"),
         "{out}"
@@ -137,6 +163,8 @@ fn bad_deadline_arguments_fail_cleanly() {
     fails(&["deadline", "simple", "--deadline-us", "abc"], "abc");
     fails(&["deadline", "simple", "--clock-mhz", "0"], "--clock-mhz");
     fails(&["deadline", "simple", "--jobs", "0"], "--jobs");
+    fails(&["deadline", "simple", "--repeat", "-1"], "-1");
+    fails(&["deadline", "simple", "--repeat", "x"], "--repeat");
     fails(&["deadline", "simple", "--set", "delta=-1"], "delta");
     fails(&["deadline", "simple", "--random", "-3"], "-3");
     fails(
@@ -163,4 +191,56 @@ fn a_malformed_instruction_file_names_its_line() {
     assert!(!o.status.success());
     assert!(err.contains("i.csv:2: bad iterations"), "{err}");
     assert!(o.stdout.is_empty());
+}
+
+/// `--repeat K` times each cycle K times on clones of the controller: the
+/// closed loops (cycles, statuses, iterations, reached) are those of one
+/// timing; only the times and the header change. No timing is asserted.
+#[test]
+fn repeat_keeps_the_closed_loops() {
+    let tmp = tempfile::tempdir().unwrap();
+    let args = ["deadline", "simple", "trap+rrt_star", "--random", "2"];
+    let one = sim(&args, tmp.path());
+    let three = sim(&[&args[..], &["--repeat", "3"]].concat(), tmp.path());
+    let (a, b) = (text(&one.stdout), text(&three.stdout));
+    assert!(one.status.success() && three.status.success(), "{a}\n{b}");
+    assert!(a.contains("one timing per cycle"), "{a}");
+    assert!(b.contains("each cycle's minimum of 3 timings"), "{b}");
+    assert!(b.contains("; minimum of 3 timings"), "{b}");
+    for label in ["simple", "trap+rrt_star", "random@0..2", "all"] {
+        let (x, y) = (row(&a, label), row(&b, label));
+        assert_eq!(y.len(), 13, "{y:?}");
+        // runs, reached, cycles, non-optimal; iterations; instructions.
+        for i in [1, 2, 3, 4, 10, 11] {
+            assert_eq!(x[i], y[i], "{label} column {i}: {x:?} vs {y:?}");
+        }
+        let ns: Vec<u64> = y[5..8].iter().map(|c| c.parse().unwrap()).collect();
+        assert!(ns[0] > 0 && ns[0] <= ns[1] && ns[1] <= ns[2], "{ns:?}");
+    }
+    // The worst-iteration lines name the same cycles.
+    let worst = |s: &str| -> Vec<String> {
+        s.lines()
+            .filter(|l| l.starts_with("- iterations") || l.starts_with("- non-optimal cycles"))
+            .map(|l| l.split("; their compute").next().unwrap().to_string())
+            .collect()
+    };
+    assert_eq!(worst(&a), worst(&b));
+    assert_eq!(worst(&a).len(), 3, "{a}");
+    assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 0);
+}
+
+/// `--repeat 0`: one `error:` line naming the option, exit status 1, nothing
+/// printed or written.
+#[test]
+fn repeat_zero_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let line = fails_in(
+        tmp.path(),
+        &["deadline", "simple", "--repeat", "0"],
+        &["--repeat", ">= 1"],
+    );
+    assert_eq!(
+        line,
+        "error: --repeat must be >= 1 (timings of each control cycle), got 0"
+    );
 }
