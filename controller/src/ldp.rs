@@ -1,0 +1,488 @@
+//! Range-space (least-distance) dual active-set solve for a fixed constraint
+//! matrix: the same QPs, the same rules and the same results as
+//! [`DualActiveSet::solve`], organised for many solves with one `G` (only `q`
+//! and `h` change, as in a linear MPC with fixed constraints).
+//!
+//! With `H = L L'` (the factor kept by [`DualActiveSet`]), the change of
+//! variables `u = L'x + v`, `v = L^-1 q` turns
+//!
+//! ```text
+//! minimise 1/2 x'Hx + q'x  s.t.  G x <= h
+//! ```
+//!
+//! into the least-distance problem (LDP)
+//!
+//! ```text
+//! minimise 1/2 |u|^2  s.t.  M u <= d,   M = G L^-T,  d = h + M v,
+//! ```
+//!
+//! with `x = L^-T (u - v)` and objective `1/2 |u|^2 - 1/2 |v|^2`. Three stages:
+//!
+//! * [`LdpSolver::prepare`] (once per `G`): the rows `m_i = L^-1 g_i` scaled to
+//!   unit norm, their Gram matrix `K = M M'` (`NC x NC`), the violation
+//!   thresholds; `O(m NV^2 + m^2 NV)`.
+//! * [`LdpSolver::load`] (once per `q`, `h`): `v` and the scaled slacks at the
+//!   unconstrained minimiser `u = 0`, `d_i / |m_i|`; `O(m NV)`.
+//! * [`LdpSolver::solve`]: the Goldfarb–Idnani iterations on the LDP, then `x`.
+//!   The active set is represented by the Cholesky factor `C` of `M_A M_A'`
+//!   (`nact x nact`, lower triangular), extended by one row on an add and
+//!   restored by Givens rotations on a drop, so an add or drop costs
+//!   `O(nact^2 + nact NV)` instead of the `O(NV^2)` update of `J` in
+//!   [`DualActiveSet::solve`]. The slacks of all rows are updated from `K`
+//!   (`O(m (nact + 1))` per step) instead of recomputed (`O(m NV)`); the primal
+//!   `u = -M_A' lambda_A` is formed once at the end.
+//!
+//! This is the form DAQP (Arnström, Bemporad, Axehill 2022) works in; DAQP
+//! keeps an `L D L'` factor of `M_A M_A'` and recomputes slacks by products
+//! with `M`. The iterations are the ones of [`DualActiveSet::solve`]: the same
+//! choice of row to add (most negative slack in the metric of `H^-1`, marked
+//! rows first), the same partial and full steps, the same tolerances with the
+//! same meaning (a row is violated when `slack / |g_i| < -tol_primal`; a new
+//! row is linearly dependent on the active ones when the component of `m_p`
+//! outside their span is below `tol_dependence |m_p|`), the same statuses,
+//! multipliers and Farkas certificate, and `iterations` counts adds plus drops.
+//! Rounding differs, so results agree to rounding, not bit for bit.
+//!
+//! Memory: an [`LdpSolver`] holds `NC x NV` scaled rows and the `NC x NC` Gram
+//! matrix (8 KiB for `NC = 32`, 113 KiB for `NC = 120`), so it is meant for
+//! hosts or for small `NC`; the controller (whose `G` changes every cycle)
+//! does not use it.
+#![allow(non_snake_case)]
+
+use nalgebra::SVector;
+
+use crate::qp::{DenseQp, DualActiveSet, QpSolution, QpStatus, ZERO_ROW2, dot, givens};
+
+/// The least-distance form of one constraint matrix `G` for one Hessian: build
+/// once with [`LdpSolver::prepare`], then [`LdpSolver::load`] and
+/// [`LdpSolver::solve`] per `(q, h)`.
+#[derive(Clone, Debug)]
+pub struct LdpSolver<const NV: usize, const NC: usize> {
+    /// The solver whose Hessian factor defines the change of variables.
+    solver: DualActiveSet<NV, NC>,
+    /// `m_i / |m_i|` with `m_i = L^-1 g_i` (dimensionless; zero for zero rows).
+    mhat: [[f64; NV]; NC],
+    /// Gram matrix of the scaled rows, `K_ij = mhat_i . mhat_j` (unit diagonal
+    /// for non-zero rows); rows `m..NC` are zero.
+    K: [[f64; NC]; NC],
+    /// `1 / |m_i|` (units of `1 / (G L^-T)`), 0 for zero rows.
+    inv_mnorm: [f64; NC],
+    /// Violation threshold on the squared scaled slack:
+    /// `tol_primal^2 |g_i|^2 / |m_i|^2`.
+    thr: [f64; NC],
+    /// Row `i` is a zero row (`|g_i|^2` or `|m_i|^2` is 0): never added.
+    zero: [bool; NC],
+    /// Rows covered.
+    m: usize,
+    /// Every entry of `M` and `K` is finite.
+    finite: bool,
+}
+
+/// The per-`(q, h)` data of an LDP solve, from [`LdpSolver::load`].
+#[derive(Clone, Debug)]
+pub struct LdpLoaded<const NV: usize, const NC: usize> {
+    /// `v = L^-1 q`, so `x = L^-T (u - v)`.
+    v: [f64; NV],
+    /// `|v|^2`: the objective is `1/2 |u|^2 - 1/2 |v|^2`.
+    vv: f64,
+    /// Scaled slacks at `u = 0`: `d_i / |m_i| = (h_i - g_i x_unc) / |m_i|`
+    /// with `x_unc = -H^-1 q` (0 for zero rows).
+    s0: [f64; NC],
+    /// A zero row with `h_i < -tol_primal` (the problem is infeasible).
+    zero_infeasible: Option<usize>,
+    /// Rows covered (must match the solver's).
+    m: usize,
+    /// `q` and `h` are finite.
+    finite: bool,
+}
+
+impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
+    /// The LDP form of the rows of `qp` (its `q` and `h` are not used) for the
+    /// Hessian of `solver`. Non-finite rows, or rows whose squared norms
+    /// overflow, make every later solve a [`QpStatus::NumericalError`].
+    pub fn prepare(solver: &DualActiveSet<NV, NC>, qp: &DenseQp<NV, NC>) -> Self {
+        let m = qp.m.min(NC);
+        let tol = solver.settings().tol_primal;
+        let mut p = LdpSolver {
+            solver: solver.clone(),
+            mhat: [[0.0; NV]; NC],
+            K: [[0.0; NC]; NC],
+            inv_mnorm: [0.0; NC],
+            thr: [0.0; NC],
+            zero: [false; NC],
+            m,
+            finite: true,
+        };
+        for (i, g) in qp.gt.data.0.iter().enumerate().take(m) {
+            let n2 = dot(g, g);
+            let mi = solver.linv_mul(g);
+            let mn2 = dot(&mi, &mi);
+            if !(n2.is_finite() && mn2.is_finite()) {
+                p.finite = false;
+                continue;
+            }
+            if n2 <= ZERO_ROW2 || mn2 <= 0.0 {
+                p.zero[i] = true;
+                continue;
+            }
+            let inv = 1.0 / libm::sqrt(mn2);
+            for (a, b) in p.mhat[i].iter_mut().zip(&mi) {
+                *a = b * inv;
+            }
+            p.inv_mnorm[i] = inv;
+            p.thr[i] = tol * tol * n2 * inv * inv;
+        }
+        for i in 0..m {
+            for j in 0..=i {
+                let k = dot(&p.mhat[i], &p.mhat[j]);
+                p.K[i][j] = k;
+                p.K[j][i] = k;
+            }
+        }
+        p
+    }
+
+    /// The solver this LDP was prepared for.
+    pub fn solver(&self) -> &DualActiveSet<NV, NC> {
+        &self.solver
+    }
+
+    /// Rows covered (`m` of the prepared QP).
+    pub fn rows(&self) -> usize {
+        self.m
+    }
+
+    /// The per-`(q, h)` data: `v = L^-1 q` and the scaled slacks at the
+    /// unconstrained minimiser. `h` entries beyond the prepared `m` are
+    /// ignored. Non-finite `q` or `h` make the solve a
+    /// [`QpStatus::NumericalError`].
+    pub fn load(&self, q: &SVector<f64, NV>, h: &SVector<f64, NC>) -> LdpLoaded<NV, NC> {
+        let q = &q.data.0[0];
+        let h = h.as_slice();
+        let tol = self.solver.settings().tol_primal;
+        let v = self.solver.linv_mul(q);
+        let mut ld = LdpLoaded {
+            v,
+            vv: dot(&v, &v),
+            s0: [0.0; NC],
+            zero_infeasible: None,
+            m: self.m,
+            finite: q.iter().all(|a| a.is_finite()),
+        };
+        for i in 0..self.m.min(NC) {
+            let hi = h[i];
+            if !hi.is_finite() {
+                ld.finite = false;
+            }
+            if self.zero[i] {
+                if hi < -tol && ld.zero_infeasible.is_none() {
+                    ld.zero_infeasible = Some(i);
+                }
+                continue;
+            }
+            // d_i / |m_i| = h_i / |m_i| + mhat_i . v
+            ld.s0[i] = hi * self.inv_mnorm[i] + dot(&self.mhat[i], &v);
+        }
+        ld
+    }
+
+    /// [`LdpSolver::load`] and [`LdpSolver::solve`] with `qp.q` and `qp.h`
+    /// (`qp`'s rows must be the prepared ones; they are not read).
+    pub fn solve_qp(
+        &self,
+        qp: &DenseQp<NV, NC>,
+        prefer: &[bool; NC],
+        max_iter: u32,
+    ) -> QpSolution<NV, NC> {
+        let ld = self.load(&qp.q, &qp.h);
+        self.solve(&ld, prefer, max_iter)
+    }
+
+    /// Solves the loaded QP with at most `max_iter` adds plus drops; `prefer[i]`
+    /// marks row `i` as expected active (warm start). Same contract as
+    /// [`DualActiveSet::solve`]. A `loaded` from a solver with another row count
+    /// gives [`QpStatus::NumericalError`].
+    pub fn solve(
+        &self,
+        loaded: &LdpLoaded<NV, NC>,
+        prefer: &[bool; NC],
+        max_iter: u32,
+    ) -> QpSolution<NV, NC> {
+        let m = self.m.min(NC);
+        let mut sol = QpSolution {
+            x: SVector::zeros(),
+            lambda: SVector::zeros(),
+            objective: 0.0,
+            status: QpStatus::NumericalError,
+            iterations: 0,
+            active: [0; NV],
+            n_active: 0,
+        };
+        if !self.finite || !loaded.finite || loaded.m != self.m {
+            return sol;
+        }
+        if let Some(i) = loaded.zero_infeasible {
+            // 0'x <= h with h < 0: y = e_i certifies it.
+            sol.status = QpStatus::Infeasible;
+            if let Some(y) = sol.lambda.get_mut(i) {
+                *y = 1.0;
+            }
+            return sol;
+        }
+        let tol_dep = self.solver.settings().tol_dependence;
+        let tol_dep2 = tol_dep * tol_dep;
+        let mut s = loaded.s0; // scaled slacks of all rows
+        let mut blocked = self.zero; // active or zero rows: not scanned
+        let mut lam = [0.0f64; NV]; // scaled multipliers of the active rows
+        let mut act = [0u16; NV];
+        let mut nact: usize = 0;
+        // Cholesky factor of M_A M_A' (scaled rows), row-major, zeros above
+        // the diagonal kept exactly zero (the solves use full-length dots).
+        let mut C = [[0.0f64; NV]; NV];
+        let mut iters: u32 = 0;
+        // The row being added and its multiplier (part of the iterate).
+        let mut pending: Option<(usize, f64)> = None;
+        let mut farkas: Option<(usize, [f64; NV])> = None;
+
+        let status = 'outer: loop {
+            // Step 1: the most violated row in the H^-1 metric (marked first).
+            let mut best: Option<usize> = None;
+            let mut best_v = 0.0;
+            let mut best_pref: Option<usize> = None;
+            let mut best_pref_v = 0.0;
+            for i in 0..m {
+                let si = s[i];
+                if blocked[i] || si >= 0.0 || si * si <= self.thr[i] {
+                    continue;
+                }
+                if !si.is_finite() {
+                    break 'outer QpStatus::NumericalError;
+                }
+                if si < best_v {
+                    best_v = si;
+                    best = Some(i);
+                }
+                if prefer[i] && si < best_pref_v {
+                    best_pref_v = si;
+                    best_pref = Some(i);
+                }
+            }
+            let p = match best_pref.or(best) {
+                None => break QpStatus::Solved,
+                Some(p) => p,
+            };
+            let (Some(mp), Some(kp)) = (self.mhat.get(p), self.K.get(p)) else {
+                break QpStatus::NumericalError;
+            };
+            pending = Some((p, 0.0));
+            let mut u_new = 0.0;
+
+            // Step 2: move until p holds (full step) or a row must be dropped.
+            loop {
+                if iters >= max_iter {
+                    break 'outer QpStatus::IterationLimit;
+                }
+                let nact_c = nact.min(NV);
+                // w = C^-1 M_A m_p, r = C^-T w = (M_A M_A')^-1 M_A m_p.
+                let mut w = [0.0f64; NV];
+                for i in 0..nact_c {
+                    let b = kp[usize::from(act[i])];
+                    w[i] = (b - dot(&C[i], &w)) / C[i][i];
+                }
+                let mut r = [0.0f64; NV];
+                for i in (0..NV).rev().filter(|&i| i < nact_c) {
+                    let mut acc = w[i];
+                    for k in (i + 1)..nact_c {
+                        acc -= C[k][i] * r[k];
+                    }
+                    r[i] = acc / C[i][i];
+                }
+                // z = m_p - M_A' r: the component of m_p outside the active span.
+                let mut z = *mp;
+                for (&a, &rj) in act.iter().zip(&r).take(nact_c) {
+                    if let Some(ma) = self.mhat.get(usize::from(a)) {
+                        for (zk, mk) in z.iter_mut().zip(ma) {
+                            *zk -= rj * mk;
+                        }
+                    }
+                }
+                let z2 = dot(&z, &z);
+                // Partial (dual) step length t1 and the row to drop.
+                let mut t1 = f64::INFINITY;
+                let mut drop: Option<usize> = None;
+                let rmax = r[..nact_c].iter().fold(0.0f64, |a, b| a.max(b.abs()));
+                for i in 0..nact_c {
+                    if r[i] > 1e-14 * rmax.max(1.0) {
+                        let t = lam[i] / r[i];
+                        if t < t1 {
+                            t1 = t;
+                            drop = Some(i);
+                        }
+                    }
+                }
+                // Full (primal) step length t2 (|mhat_p| = 1).
+                let dependent = z2 <= tol_dep2;
+                let t2 = if dependent { f64::INFINITY } else { -s[p] / z2 };
+                if !(t1.is_finite() || t2.is_finite()) {
+                    if t1.is_nan() || t2.is_nan() {
+                        break 'outer QpStatus::NumericalError;
+                    }
+                    // m_p = M_A' r with every r_j <= 0: y_p = 1, y_A = -r.
+                    let mut neg_r = r;
+                    for y in neg_r.iter_mut() {
+                        *y = -*y;
+                    }
+                    farkas = Some((p, neg_r));
+                    break 'outer QpStatus::Infeasible;
+                }
+                let t = t1.min(t2);
+                iters += 1;
+                for i in 0..nact_c {
+                    lam[i] -= t * r[i];
+                }
+                u_new += t;
+                pending = Some((p, u_new));
+                if !dependent {
+                    // u moves by -t z: slack_i grows by t mhat_i . z
+                    // = t (K_ip - sum_j r_j K_i,A_j).
+                    for (si, &k) in s.iter_mut().zip(kp) {
+                        *si += t * k;
+                    }
+                    for (&a, &rj) in act.iter().zip(&r).take(nact_c) {
+                        if let Some(ka) = self.K.get(usize::from(a)) {
+                            let f = t * rj;
+                            for (si, &k) in s.iter_mut().zip(ka) {
+                                *si -= f * k;
+                            }
+                        }
+                    }
+                }
+                if t2 <= t1 {
+                    // Full step: p becomes active; C gains the row [w', |z|].
+                    let diag = libm::sqrt(z2);
+                    let (Some(row), Some(a), Some(l), Some(flag)) = (
+                        C.get_mut(nact_c),
+                        act.get_mut(nact_c),
+                        lam.get_mut(nact_c),
+                        blocked.get_mut(p),
+                    ) else {
+                        break 'outer QpStatus::NumericalError;
+                    };
+                    if !(diag > 0.0 && diag.is_finite()) {
+                        break 'outer QpStatus::NumericalError;
+                    }
+                    *row = w;
+                    row[nact_c] = diag;
+                    *a = p as u16;
+                    *l = u_new;
+                    *flag = true;
+                    s[p] = 0.0;
+                    nact = nact_c + 1;
+                    pending = None;
+                    continue 'outer;
+                }
+                // Partial step: drop active row `l`, then retry the same p.
+                let Some((l, &row_l)) = drop.and_then(|l| Some((l, act.get(l)?))) else {
+                    break 'outer QpStatus::NumericalError;
+                };
+                if let Some(flag) = blocked.get_mut(usize::from(row_l)) {
+                    *flag = false;
+                }
+                chol_drop(&mut C, nact_c, l);
+                let last = nact_c.saturating_sub(1);
+                for i in l..last {
+                    act[i] = act[i + 1];
+                    lam[i] = lam[i + 1];
+                }
+                lam[last] = 0.0;
+                nact = last;
+            }
+        };
+
+        let nact = nact.min(NV);
+        // u = -M_A' lambda_A - u_new m_p (scaled rows, scaled multipliers).
+        let mut u = [0.0f64; NV];
+        for (&a, &la) in act.iter().zip(&lam).take(nact) {
+            if let Some(ma) = self.mhat.get(usize::from(a)) {
+                for (uk, mk) in u.iter_mut().zip(ma) {
+                    *uk -= la * mk;
+                }
+            }
+        }
+        if let Some((p, un)) = pending
+            && let Some(mp) = self.mhat.get(p)
+        {
+            for (uk, mk) in u.iter_mut().zip(mp) {
+                *uk -= un * mk;
+            }
+        }
+        let mut uv = u;
+        for (a, b) in uv.iter_mut().zip(&loaded.v) {
+            *a -= b;
+        }
+        sol.x = SVector::from(self.solver.linvt_mul(&uv));
+        sol.objective = 0.5 * (dot(&u, &u) - loaded.vv);
+        // Multipliers in the units of G: lambda_i = lambda_hat_i / |m_i|.
+        match farkas {
+            Some((p, neg_r)) => {
+                let scale = self.inv_mnorm.get(p).copied().unwrap_or(1.0);
+                if let Some(y) = sol.lambda.get_mut(p) {
+                    *y = 1.0;
+                }
+                for (&a, &y) in act.iter().zip(&neg_r).take(nact) {
+                    let a = usize::from(a);
+                    if let (Some(l), Some(&inv)) = (sol.lambda.get_mut(a), self.inv_mnorm.get(a)) {
+                        *l = (y * inv / scale).max(0.0);
+                    }
+                }
+            }
+            None => {
+                for (&a, &la) in act.iter().zip(&lam).take(nact) {
+                    let a = usize::from(a);
+                    if let (Some(l), Some(&inv)) = (sol.lambda.get_mut(a), self.inv_mnorm.get(a)) {
+                        *l = (la * inv).max(0.0);
+                    }
+                }
+            }
+        }
+        sol.active = act;
+        sol.n_active = nact;
+        sol.iterations = iters;
+        sol.status = if sol.x.iter().all(|v| v.is_finite()) && sol.objective.is_finite() {
+            status
+        } else {
+            QpStatus::NumericalError
+        };
+        sol
+    }
+}
+
+/// Removes row `l` (of `nact`) from the Cholesky factor `C` of `M_A M_A'`:
+/// the rows below move up, and Givens rotations of column pairs restore the
+/// triangle (`C C'` stays the Gram matrix of the remaining rows).
+fn chol_drop<const NV: usize>(C: &mut [[f64; NV]; NV], nact: usize, l: usize) {
+    let nact = nact.min(NV);
+    if l >= nact {
+        return;
+    }
+    let last = nact - 1;
+    for i in l..last {
+        C[i] = C[i + 1];
+    }
+    C[last] = [0.0; NV];
+    // Rows k..last-1 now reach column k+1; rotate columns k, k+1.
+    for k in l..last {
+        let (a, b) = (C[k][k], C[k][k + 1]);
+        if b == 0.0 {
+            continue;
+        }
+        let (c, s, r) = givens(a, b);
+        C[k][k] = r;
+        C[k][k + 1] = 0.0;
+        for row in C.iter_mut().take(last).skip(k + 1) {
+            let (a, b) = (row[k], row[k + 1]);
+            row[k] = c * a + s * b;
+            row[k + 1] = -s * a + c * b;
+        }
+    }
+}
