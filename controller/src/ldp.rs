@@ -284,29 +284,32 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                 }
                 let nact_c = nact.min(NV);
                 // w = C^-1 M_A m_p, r = C^-T w = (M_A M_A')^-1 M_A m_p.
-                let mut w = [0.0f64; NV];
-                for i in 0..nact_c {
-                    let b = kp[usize::from(act[i])];
-                    w[i] = (b - dot(&C[i], &w)) / C[i][i];
+                let mut b = [0.0f64; NV];
+                for (bi, &a) in b.iter_mut().zip(&act).take(nact_c) {
+                    *bi = kp[usize::from(a)];
                 }
-                let mut r = [0.0f64; NV];
-                for i in (0..NV).rev().filter(|&i| i < nact_c) {
-                    let mut acc = w[i];
-                    for k in (i + 1)..nact_c {
-                        acc -= C[k][i] * r[k];
-                    }
-                    r[i] = acc / C[i][i];
-                }
+                let (w, mut r) = chol_solve(&C, &b, nact_c);
                 // z = m_p - M_A' r: the component of m_p outside the active span.
                 let mut z = *mp;
-                for (&a, &rj) in act.iter().zip(&r).take(nact_c) {
-                    if let Some(ma) = self.mhat.get(usize::from(a)) {
-                        for (zk, mk) in z.iter_mut().zip(ma) {
-                            *zk -= rj * mk;
+                self.sub_active(&mut z, &act, &r, nact_c);
+                let mut z2 = dot(&z, &z);
+                if z2 < REFINE2 && nact_c < NV {
+                    // Cancellation: z carries rounding of order eps cond(M_A)^2.
+                    // Project it once more (Gram-Schmidt "twice is enough"),
+                    // r2 = (M_A M_A')^-1 M_A z, z -= M_A' r2, r += r2.
+                    let mut b = [0.0f64; NV];
+                    for (bi, &a) in b.iter_mut().zip(&act).take(nact_c) {
+                        if let Some(ma) = self.mhat.get(usize::from(a)) {
+                            *bi = dot(ma, &z);
                         }
                     }
+                    let r2 = chol_solve(&C, &b, nact_c).1;
+                    self.sub_active(&mut z, &act, &r2, nact_c);
+                    for (ri, r2i) in r.iter_mut().zip(&r2) {
+                        *ri += r2i;
+                    }
+                    z2 = dot(&z, &z);
                 }
-                let z2 = dot(&z, &z);
                 // Partial (dual) step length t1 and the row to drop.
                 let mut t1 = f64::INFINITY;
                 let mut drop: Option<usize> = None;
@@ -321,7 +324,8 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                     }
                 }
                 // Full (primal) step length t2 (|mhat_p| = 1).
-                let dependent = z2 <= tol_dep2;
+                // With NV rows active (independent) the span is everything.
+                let dependent = z2 <= tol_dep2 || nact_c >= NV;
                 let t2 = if dependent { f64::INFINITY } else { -s[p] / z2 };
                 if !(t1.is_finite() || t2.is_finite()) {
                     if t1.is_nan() || t2.is_nan() {
@@ -455,6 +459,48 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
         };
         sol
     }
+
+    /// `z -= M_A' r` over the first `nact` active rows (scaled rows).
+    #[inline(always)]
+    fn sub_active(&self, z: &mut [f64; NV], act: &[u16; NV], r: &[f64; NV], nact: usize) {
+        for (&a, &rj) in act.iter().zip(r).take(nact) {
+            if let Some(ma) = self.mhat.get(usize::from(a)) {
+                for (zk, mk) in z.iter_mut().zip(ma) {
+                    *zk -= rj * mk;
+                }
+            }
+        }
+    }
+}
+
+/// Below this squared norm of the new row's component outside the active span
+/// (the rows have unit norm: `|z| < 0.1`), the component is projected a second
+/// time.
+const REFINE2: f64 = 1e-2;
+
+/// `(w, r)` with `C w = b`, `C' r = w` on the leading `nact x nact` block
+/// (`r = (C C')^-1 b`); `C` has zeros above the diagonal.
+#[inline(always)]
+fn chol_solve<const NV: usize>(
+    C: &[[f64; NV]; NV],
+    b: &[f64; NV],
+    nact: usize,
+) -> ([f64; NV], [f64; NV]) {
+    let nact = nact.min(NV);
+    let mut w = [0.0f64; NV];
+    for i in 0..nact {
+        // w[i..] is still zero, and so is C[i][i+1..]: a full-length dot.
+        w[i] = (b[i] - dot(&C[i], &w)) / C[i][i];
+    }
+    let mut r = [0.0f64; NV];
+    for i in (0..NV).rev().filter(|&i| i < nact) {
+        let mut acc = w[i];
+        for k in (i + 1)..nact {
+            acc -= C[k][i] * r[k];
+        }
+        r[i] = acc / C[i][i];
+    }
+    (w, r)
 }
 
 /// Removes row `l` (of `nact`) from the Cholesky factor `C` of `M_A M_A'`:
@@ -483,6 +529,294 @@ fn chol_drop<const NV: usize>(C: &mut [[f64; NV]; NV], nact: usize, l: usize) {
             let (a, b) = (row[k], row[k + 1]);
             row[k] = c * a + s * b;
             row[k + 1] = -s * a + c * b;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::qp::QpSettings;
+    use nalgebra::{Matrix2, SMatrix, Vector2};
+
+    /// Deterministic uniform numbers in [-1, 1) (64-bit LCG).
+    struct Rnd(u64);
+    impl Rnd {
+        fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
+        }
+    }
+
+    /// Checks a Farkas certificate: y >= 0, |G'y| small, h'y < 0.
+    fn assert_certificate<const NV: usize, const NC: usize>(
+        qp: &DenseQp<NV, NC>,
+        y: &SVector<f64, NC>,
+    ) {
+        let mut gty = SVector::<f64, NV>::zeros();
+        let (mut hty, mut scale) = (0.0, 0.0f64);
+        for (i, (g, h)) in qp.rows().enumerate() {
+            assert!(y[i] >= 0.0);
+            gty += g * y[i];
+            hty += h * y[i];
+            scale = scale.max(y[i] * g.amax());
+        }
+        assert!(gty.amax() <= 1e-10 * (1.0 + scale), "G'y = {gty:?}");
+        assert!(hty < 0.0, "h'y = {hty}");
+    }
+
+    /// KKT conditions of a solution (stationarity, feasibility,
+    /// complementarity, signs), independent of either solver.
+    fn assert_kkt<const NV: usize, const NC: usize>(
+        s: &DualActiveSet<NV, NC>,
+        qp: &DenseQp<NV, NC>,
+        sol: &QpSolution<NV, NC>,
+    ) {
+        let mut stat = s.hessian() * sol.x + qp.q;
+        let scale = 1.0 + sol.lambda.amax() + qp.q.amax();
+        for (i, (g, h)) in qp.rows().enumerate() {
+            let slack = h - g.dot(&sol.x);
+            assert!(sol.lambda[i] >= 0.0);
+            assert!(slack >= -1e-9 * g.norm().max(1.0), "row {i} violated by {slack}");
+            assert!((sol.lambda[i] * slack).abs() < 1e-9 * scale, "complementarity");
+            stat += g * sol.lambda[i];
+        }
+        assert!(stat.amax() < 1e-9 * scale, "stationarity {stat:?}");
+    }
+
+    /// The LDP path and `solve` on one QP: same status and iterations;
+    /// solved: x, objective and multipliers agree and satisfy KKT;
+    /// infeasible: both certificates are valid.
+    fn assert_same<const NV: usize, const NC: usize>(
+        s: &DualActiveSet<NV, NC>,
+        qp: &DenseQp<NV, NC>,
+        prefer: &[bool; NC],
+    ) -> QpStatus {
+        let a = s.solve(qp, prefer, 500);
+        let ldp = LdpSolver::prepare(s, qp);
+        let b = ldp.solve_qp(qp, prefer, 500);
+        assert_eq!(a.status, b.status, "{qp:?}");
+        assert_eq!(a.iterations, b.iterations);
+        match b.status {
+            QpStatus::Solved => {
+                assert_kkt(s, qp, &b);
+                let xs = a.x.amax().max(1.0);
+                assert!((a.x - b.x).amax() <= 1e-9 * xs, "{} vs {}", a.x, b.x);
+                let os = a.objective.abs().max(1.0);
+                assert!((a.objective - b.objective).abs() <= 1e-9 * os);
+                let ls = a.lambda.amax().max(1.0);
+                assert!((a.lambda - b.lambda).amax() <= 1e-8 * ls);
+                assert_eq!(a.active_set(), b.active_set());
+            }
+            QpStatus::Infeasible => {
+                assert_certificate(qp, &a.lambda);
+                assert_certificate(qp, &b.lambda);
+            }
+            other => panic!("unexpected status {other:?}"),
+        }
+        b.status
+    }
+
+    fn random_hessian<const NV: usize>(rnd: &mut Rnd, diagonal: bool) -> SMatrix<f64, NV, NV> {
+        if diagonal {
+            SMatrix::from_diagonal(&SVector::from_fn(|_, _| 0.1 + 10.0 * rnd.next().abs()))
+        } else {
+            let A = SMatrix::<f64, NV, NV>::from_fn(|_, _| rnd.next());
+            A.transpose() * A + SMatrix::identity() * 0.1
+        }
+    }
+
+    fn random_family<const NV: usize, const NC: usize>(seed: u64, count: usize) {
+        let mut rnd = Rnd(seed);
+        let (mut solved, mut infeasible) = (0, 0);
+        for k in 0..count {
+            let H = random_hessian::<NV>(&mut rnd, k % 2 == 0);
+            let s = DualActiveSet::<NV, NC>::new(&H, QpSettings::default()).unwrap();
+            let mut qp = DenseQp::<NV, NC>::with_q(SVector::from_fn(|_, _| 5.0 * rnd.next()));
+            for _ in 0..(4 + k % (NC - 3)) {
+                let g = SVector::<f64, NV>::from_fn(|_, _| rnd.next());
+                qp.push_row(&g, rnd.next() + 0.3).unwrap();
+            }
+            let mut prefer = [false; NC];
+            if k % 3 == 0 {
+                for p in prefer.iter_mut().take(qp.m) {
+                    *p = rnd.next() > 0.5;
+                }
+            }
+            match assert_same(&s, &qp, &prefer) {
+                QpStatus::Solved => solved += 1,
+                _ => infeasible += 1,
+            }
+        }
+        assert!(
+            solved > count / 4 && infeasible > count / 40,
+            "{solved} solved, {infeasible} infeasible"
+        );
+    }
+
+    #[test]
+    fn agrees_with_solve_on_random_qps_n6() {
+        random_family::<6, 24>(0x2545_f491_4f6c_dd1d, 600);
+    }
+
+    #[test]
+    fn agrees_with_solve_on_random_qps_n16() {
+        random_family::<16, 40>(0x9e37_79b9_7f4a_7c15, 300);
+    }
+
+    #[test]
+    fn one_fixed_g_many_q_h() {
+        // One preparation, many loads: every solve matches `solve`.
+        let mut rnd = Rnd(7);
+        let H = random_hessian::<6>(&mut rnd, false);
+        let s = DualActiveSet::<6, 16>::new(&H, QpSettings::default()).unwrap();
+        let mut qp = DenseQp::<6, 16>::default();
+        for _ in 0..16 {
+            let g = SVector::<f64, 6>::from_fn(|_, _| rnd.next());
+            qp.push_row(&g, 0.0).unwrap();
+        }
+        let ldp = LdpSolver::prepare(&s, &qp);
+        for _ in 0..200 {
+            qp.q = SVector::from_fn(|_, _| 5.0 * rnd.next());
+            qp.h = SVector::from_fn(|_, _| rnd.next() + 0.4);
+            let a = s.solve(&qp, &[false; 16], 200);
+            let b = ldp.solve(&ldp.load(&qp.q, &qp.h), &[false; 16], 200);
+            assert_eq!(a.status, b.status);
+            assert_eq!(a.iterations, b.iterations);
+            assert!((a.x - b.x).amax() <= 1e-9 * a.x.amax().max(1.0));
+        }
+    }
+
+    fn solver2() -> DualActiveSet<2, 8> {
+        DualActiveSet::new(&Matrix2::new(2.0, 0.0, 0.0, 2.0), QpSettings::default()).unwrap()
+    }
+
+    fn qp2(rows: &[([f64; 2], f64)]) -> DenseQp<2, 8> {
+        let mut qp = DenseQp::<2, 8>::with_q(Vector2::new(-2.0, -4.0));
+        for &(g, h) in rows {
+            qp.push_row(&Vector2::from(g), h).unwrap();
+        }
+        qp
+    }
+
+    #[test]
+    fn degenerate_rows() {
+        let s = solver2();
+        let dense =
+            DualActiveSet::<2, 8>::new(&Matrix2::new(3.0, 1.0, 1.0, 2.0), QpSettings::default())
+                .unwrap();
+        let cases: [&[([f64; 2], f64)]; 8] = [
+            // zero rows: satisfied, and one with h slightly negative but within tol
+            &[([0.0, 0.0], 1.0), ([1.0, 1.0], 1.0), ([0.0, 0.0], -1e-12)],
+            // duplicate rows (the second is linearly dependent once the first is active)
+            &[([1.0, 1.0], 1.0), ([1.0, 1.0], 1.0), ([2.0, 2.0], 2.0)],
+            // nearly parallel rows
+            &[([1.0, 1.0], 1.0), ([1.0, 1.0 + 1e-13], 1.0), ([1.0, 1.0 - 1e-9], 1.0)],
+            // three rows through the optimal vertex (degenerate vertex)
+            &[([1.0, 0.0], 0.0), ([0.0, 1.0], 0.0), ([1.0, 1.0], 0.0), ([1.0, 2.0], 0.0)],
+            // a drop is needed
+            &[([1.0, 1.0], -2.0), ([0.0, 1.0], 0.0), ([1.0, 0.0], -1.0)],
+            // infeasible: opposite half-planes, and parallel duplicates of them
+            &[([1.0, 0.0], -1.0), ([-1.0, 0.0], -1.0), ([1.0, 0.0], -1.0)],
+            // infeasible through a zero row with a negative right-hand side
+            &[([1.0, 1.0], 1.0), ([0.0, 0.0], -1.0)],
+            // infeasible triangle, one irrelevant row
+            &[([0.0, 1.0], 5.0), ([1.0, 1.0], -1.0), ([-1.0, 0.0], 0.0), ([0.0, -1.0], 0.0)],
+        ];
+        for s in [&s, &dense] {
+            for rows in cases {
+                let qp = qp2(rows);
+                assert_same(s, &qp, &[false; 8]);
+                assert_same(s, &qp, &[true; 8]);
+            }
+        }
+        let st: [QpStatus; 3] = [5, 6, 7].map(|k| assert_same(&solver2(), &qp2(cases[k]), &[false; 8]));
+        assert!(st.iter().all(|s| s.is_infeasible()));
+        // The zero-row certificate is e_1.
+        let qp = qp2(cases[6]);
+        let sol = LdpSolver::prepare(&solver2(), &qp).solve_qp(&qp, &[false; 8], 10);
+        assert_eq!(sol.lambda[1], 1.0);
+    }
+
+    #[test]
+    fn unconstrained_and_budget() {
+        let s = solver2();
+        let qp = qp2(&[]);
+        let sol = LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; 8], 10);
+        assert_eq!(sol.status, QpStatus::Solved);
+        assert_eq!(sol.iterations, 0);
+        assert!((sol.x - Vector2::new(1.0, 2.0)).amax() < 1e-14);
+        assert!((sol.objective + 5.0).abs() < 1e-14);
+        let qp = qp2(&[([1.0, 1.0], -2.0), ([0.0, 1.0], -1.0)]);
+        let ldp = LdpSolver::prepare(&s, &qp);
+        let full = ldp.solve_qp(&qp, &[false; 8], 10);
+        assert_eq!((full.status, full.iterations), (QpStatus::Solved, 2));
+        for budget in [0, 1] {
+            let a = s.solve(&qp, &[false; 8], budget);
+            let b = ldp.solve_qp(&qp, &[false; 8], budget);
+            assert_eq!(b.status, QpStatus::IterationLimit);
+            assert_eq!(b.iterations, budget);
+            // The last iterate is the one of `solve`.
+            assert!((a.x - b.x).amax() < 1e-12, "{} vs {}", a.x, b.x);
+        }
+    }
+
+    #[test]
+    fn bad_input_is_numerical_error() {
+        let s = solver2();
+        let good = qp2(&[([1.0, 1.0], 1.0)]);
+        let ldp = LdpSolver::prepare(&s, &good);
+        let err = |sol: QpSolution<2, 8>| assert_eq!(sol.status, QpStatus::NumericalError);
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            // q, h
+            err(ldp.solve(&ldp.load(&Vector2::new(bad, 0.0), &good.h), &[false; 8], 10));
+            let mut h = good.h;
+            h[0] = bad;
+            err(ldp.solve(&ldp.load(&good.q, &h), &[false; 8], 10));
+            // G
+            let qp = qp2(&[([1.0, bad], 1.0)]);
+            err(LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; 8], 10));
+        }
+        // A row whose squared norm overflows.
+        let qp = qp2(&[([1e200, 0.0], 1.0)]);
+        err(LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; 8], 10));
+        // Loaded data of a solver with another row count.
+        let other = LdpSolver::prepare(&s, &qp2(&[([1.0, 0.0], 0.0), ([0.0, 1.0], 0.0)]));
+        err(ldp.solve(&other.load(&good.q, &good.h), &[false; 8], 10));
+        // The placeholder solver (H = 0): defined status, no panic.
+        let ph = DualActiveSet::<2, 8>::PLACEHOLDER;
+        let sol = LdpSolver::prepare(&ph, &good).solve_qp(&good, &[false; 8], 10);
+        assert!(!sol.status.is_solved() || sol.x.iter().all(|v| v.is_finite()));
+    }
+
+    #[test]
+    fn chol_drop_keeps_the_gram_matrix() {
+        // Rows of a random 5 x 5 lower-triangular factor; drop each row in turn.
+        let mut rnd = Rnd(3);
+        for l in 0..5 {
+            let mut C = [[0.0f64; 5]; 5];
+            for (i, row) in C.iter_mut().enumerate() {
+                for (j, c) in row.iter_mut().enumerate().take(i + 1) {
+                    *c = if i == j { 1.0 + rnd.next().abs() } else { rnd.next() };
+                }
+            }
+            let gram = |C: &[[f64; 5]; 5], i: usize, j: usize| dot(&C[i], &C[j]);
+            let before: [[f64; 5]; 5] = core::array::from_fn(|i| core::array::from_fn(|j| gram(&C, i, j)));
+            chol_drop(&mut C, 5, l);
+            let keep: [usize; 4] = core::array::from_fn(|k| if k < l { k } else { k + 1 });
+            for (a, &i) in keep.iter().enumerate() {
+                assert!(C[a][a] > 0.0);
+                for (b, &j) in keep.iter().enumerate() {
+                    if b > a {
+                        assert_eq!(C[a][b], 0.0, "upper triangle");
+                    }
+                    assert!((gram(&C, a, b) - before[i][j]).abs() < 1e-12);
+                }
+            }
+            assert_eq!(C[4], [0.0; 5]);
         }
     }
 }
