@@ -60,7 +60,8 @@ fn lipmwalk_agrees_with_clarabel() {
 #[test]
 fn lipmwalk_ldp_path_agrees_with_clarabel_and_solve() {
     let dir = data_dir();
-    let first = DenseProblem::from_npz(&dir.join("LIPMWALK0.npz")).unwrap_or_else(|e| panic!("{e}"));
+    let first =
+        DenseProblem::from_npz(&dir.join("LIPMWALK0.npz")).unwrap_or_else(|e| panic!("{e}"));
     let (h0, qp0) = first.to_fixed::<16, 32>().unwrap();
     let solver = DualActiveSet::<16, 32>::new(&h0, QpSettings::default()).unwrap();
     // P and G are the same in all 30 files: one preparation serves all.
@@ -71,7 +72,12 @@ fn lipmwalk_ldp_path_agrees_with_clarabel_and_solve() {
         let p = DenseProblem::from_npz(&path).unwrap_or_else(|e| panic!("{e}"));
         let (h, qp) = p.to_fixed::<16, 32>().unwrap();
         assert_eq!(h, h0, "{}: P differs from LIPMWALK0", path.display());
-        assert_eq!(qp.gt, qp0.gt, "{}: G differs from LIPMWALK0", path.display());
+        assert_eq!(
+            qp.gt,
+            qp0.gt,
+            "{}: G differs from LIPMWALK0",
+            path.display()
+        );
         let own = ldp.solve(&ldp.load(&qp.q, &qp.h), &[false; 32], 200);
         let r = solve_clarabel(&p);
         let a = compare(&p, &own, &r);
@@ -89,5 +95,8 @@ fn lipmwalk_ldp_path_agrees_with_clarabel_and_solve() {
          solve {worst_vs_solve:.3e}, worst KKT residual {worst_kkt:.3e}"
     );
     assert!(worst_kkt <= 1e-8, "KKT residual {worst_kkt:e}");
-    assert!(worst_vs_solve <= 1e-9, "x differs from solve by {worst_vs_solve:e}");
+    assert!(
+        worst_vs_solve <= 1e-9,
+        "x differs from solve by {worst_vs_solve:e}"
+    );
 }

@@ -239,6 +239,7 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
         // Cholesky factor of M_A M_A' (scaled rows), row-major, zeros above
         // the diagonal kept exactly zero (the solves use full-length dots).
         let mut C = [[0.0f64; NV]; NV];
+        let mut cinv = [0.0f64; NV]; // 1 / C[i][i]
         let mut iters: u32 = 0;
         // The row being added and its multiplier (part of the iterate).
         let mut pending: Option<(usize, f64)> = None;
@@ -288,7 +289,7 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                 for (bi, &a) in b.iter_mut().zip(&act).take(nact_c) {
                     *bi = kp[usize::from(a)];
                 }
-                let (w, mut r) = chol_solve(&C, &b, nact_c);
+                let (w, mut r) = chol_solve(&C, &cinv, &b, nact_c);
                 // z = m_p - M_A' r: the component of m_p outside the active span.
                 let mut z = *mp;
                 self.sub_active(&mut z, &act, &r, nact_c);
@@ -303,7 +304,7 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                             *bi = dot(ma, &z);
                         }
                     }
-                    let r2 = chol_solve(&C, &b, nact_c).1;
+                    let r2 = chol_solve(&C, &cinv, &b, nact_c).1;
                     self.sub_active(&mut z, &act, &r2, nact_c);
                     for (ri, r2i) in r.iter_mut().zip(&r2) {
                         *ri += r2i;
@@ -349,13 +350,13 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                 if !dependent {
                     // u moves by -t z: slack_i grows by t mhat_i . z
                     // = t (K_ip - sum_j r_j K_i,A_j).
-                    for (si, &k) in s.iter_mut().zip(kp) {
+                    for (si, &k) in s[..m].iter_mut().zip(&kp[..m]) {
                         *si += t * k;
                     }
                     for (&a, &rj) in act.iter().zip(&r).take(nact_c) {
                         if let Some(ka) = self.K.get(usize::from(a)) {
                             let f = t * rj;
-                            for (si, &k) in s.iter_mut().zip(ka) {
+                            for (si, &k) in s[..m].iter_mut().zip(&ka[..m]) {
                                 *si -= f * k;
                             }
                         }
@@ -377,6 +378,9 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                     }
                     *row = w;
                     row[nact_c] = diag;
+                    if let Some(ci) = cinv.get_mut(nact_c) {
+                        *ci = 1.0 / diag;
+                    }
                     *a = p as u16;
                     *l = u_new;
                     *flag = true;
@@ -392,7 +396,7 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                 if let Some(flag) = blocked.get_mut(usize::from(row_l)) {
                     *flag = false;
                 }
-                chol_drop(&mut C, nact_c, l);
+                chol_drop(&mut C, &mut cinv, nact_c, l);
                 let last = nact_c.saturating_sub(1);
                 for i in l..last {
                     act[i] = act[i + 1];
@@ -479,10 +483,12 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
 const REFINE2: f64 = 1e-2;
 
 /// `(w, r)` with `C w = b`, `C' r = w` on the leading `nact x nact` block
-/// (`r = (C C')^-1 b`); `C` has zeros above the diagonal.
+/// (`r = (C C')^-1 b`); `C` has zeros above the diagonal, `cinv[i] = 1 /
+/// C[i][i]` (multiplications instead of a chain of divisions).
 #[inline(always)]
 fn chol_solve<const NV: usize>(
     C: &[[f64; NV]; NV],
+    cinv: &[f64; NV],
     b: &[f64; NV],
     nact: usize,
 ) -> ([f64; NV], [f64; NV]) {
@@ -490,7 +496,7 @@ fn chol_solve<const NV: usize>(
     let mut w = [0.0f64; NV];
     for i in 0..nact {
         // w[i..] is still zero, and so is C[i][i+1..]: a full-length dot.
-        w[i] = (b[i] - dot(&C[i], &w)) / C[i][i];
+        w[i] = (b[i] - dot(&C[i], &w)) * cinv[i];
     }
     let mut r = [0.0f64; NV];
     for i in (0..NV).rev().filter(|&i| i < nact) {
@@ -498,7 +504,7 @@ fn chol_solve<const NV: usize>(
         for k in (i + 1)..nact {
             acc -= C[k][i] * r[k];
         }
-        r[i] = acc / C[i][i];
+        r[i] = acc * cinv[i];
     }
     (w, r)
 }
@@ -506,7 +512,12 @@ fn chol_solve<const NV: usize>(
 /// Removes row `l` (of `nact`) from the Cholesky factor `C` of `M_A M_A'`:
 /// the rows below move up, and Givens rotations of column pairs restore the
 /// triangle (`C C'` stays the Gram matrix of the remaining rows).
-fn chol_drop<const NV: usize>(C: &mut [[f64; NV]; NV], nact: usize, l: usize) {
+fn chol_drop<const NV: usize>(
+    C: &mut [[f64; NV]; NV],
+    cinv: &mut [f64; NV],
+    nact: usize,
+    l: usize,
+) {
     let nact = nact.min(NV);
     if l >= nact {
         return;
@@ -516,15 +527,18 @@ fn chol_drop<const NV: usize>(C: &mut [[f64; NV]; NV], nact: usize, l: usize) {
         C[i] = C[i + 1];
     }
     C[last] = [0.0; NV];
+    cinv[last] = 0.0;
     // Rows k..last-1 now reach column k+1; rotate columns k, k+1.
     for k in l..last {
         let (a, b) = (C[k][k], C[k][k + 1]);
         if b == 0.0 {
+            cinv[k] = 1.0 / a;
             continue;
         }
         let (c, s, r) = givens(a, b);
         C[k][k] = r;
         C[k][k + 1] = 0.0;
+        cinv[k] = 1.0 / r;
         for row in C.iter_mut().take(last).skip(k + 1) {
             let (a, b) = (row[k], row[k + 1]);
             row[k] = c * a + s * b;
@@ -580,8 +594,14 @@ mod tests {
         for (i, (g, h)) in qp.rows().enumerate() {
             let slack = h - g.dot(&sol.x);
             assert!(sol.lambda[i] >= 0.0);
-            assert!(slack >= -1e-9 * g.norm().max(1.0), "row {i} violated by {slack}");
-            assert!((sol.lambda[i] * slack).abs() < 1e-9 * scale, "complementarity");
+            assert!(
+                slack >= -1e-9 * g.norm().max(1.0),
+                "row {i} violated by {slack}"
+            );
+            assert!(
+                (sol.lambda[i] * slack).abs() < 1e-9 * scale,
+                "complementarity"
+            );
             stat += g * sol.lambda[i];
         }
         assert!(stat.amax() < 1e-9 * scale, "stationarity {stat:?}");
@@ -714,9 +734,18 @@ mod tests {
             // duplicate rows (the second is linearly dependent once the first is active)
             &[([1.0, 1.0], 1.0), ([1.0, 1.0], 1.0), ([2.0, 2.0], 2.0)],
             // nearly parallel rows
-            &[([1.0, 1.0], 1.0), ([1.0, 1.0 + 1e-13], 1.0), ([1.0, 1.0 - 1e-9], 1.0)],
+            &[
+                ([1.0, 1.0], 1.0),
+                ([1.0, 1.0 + 1e-13], 1.0),
+                ([1.0, 1.0 - 1e-9], 1.0),
+            ],
             // three rows through the optimal vertex (degenerate vertex)
-            &[([1.0, 0.0], 0.0), ([0.0, 1.0], 0.0), ([1.0, 1.0], 0.0), ([1.0, 2.0], 0.0)],
+            &[
+                ([1.0, 0.0], 0.0),
+                ([0.0, 1.0], 0.0),
+                ([1.0, 1.0], 0.0),
+                ([1.0, 2.0], 0.0),
+            ],
             // a drop is needed
             &[([1.0, 1.0], -2.0), ([0.0, 1.0], 0.0), ([1.0, 0.0], -1.0)],
             // infeasible: opposite half-planes, and parallel duplicates of them
@@ -724,7 +753,12 @@ mod tests {
             // infeasible through a zero row with a negative right-hand side
             &[([1.0, 1.0], 1.0), ([0.0, 0.0], -1.0)],
             // infeasible triangle, one irrelevant row
-            &[([0.0, 1.0], 5.0), ([1.0, 1.0], -1.0), ([-1.0, 0.0], 0.0), ([0.0, -1.0], 0.0)],
+            &[
+                ([0.0, 1.0], 5.0),
+                ([1.0, 1.0], -1.0),
+                ([-1.0, 0.0], 0.0),
+                ([0.0, -1.0], 0.0),
+            ],
         ];
         for s in [&s, &dense] {
             for rows in cases {
@@ -733,7 +767,8 @@ mod tests {
                 assert_same(s, &qp, &[true; 8]);
             }
         }
-        let st: [QpStatus; 3] = [5, 6, 7].map(|k| assert_same(&solver2(), &qp2(cases[k]), &[false; 8]));
+        let st: [QpStatus; 3] =
+            [5, 6, 7].map(|k| assert_same(&solver2(), &qp2(cases[k]), &[false; 8]));
         assert!(st.iter().all(|s| s.is_infeasible()));
         // The zero-row certificate is e_1.
         let qp = qp2(cases[6]);
@@ -800,15 +835,22 @@ mod tests {
             let mut C = [[0.0f64; 5]; 5];
             for (i, row) in C.iter_mut().enumerate() {
                 for (j, c) in row.iter_mut().enumerate().take(i + 1) {
-                    *c = if i == j { 1.0 + rnd.next().abs() } else { rnd.next() };
+                    *c = if i == j {
+                        1.0 + rnd.next().abs()
+                    } else {
+                        rnd.next()
+                    };
                 }
             }
             let gram = |C: &[[f64; 5]; 5], i: usize, j: usize| dot(&C[i], &C[j]);
-            let before: [[f64; 5]; 5] = core::array::from_fn(|i| core::array::from_fn(|j| gram(&C, i, j)));
-            chol_drop(&mut C, 5, l);
+            let before: [[f64; 5]; 5] =
+                core::array::from_fn(|i| core::array::from_fn(|j| gram(&C, i, j)));
+            let mut cinv: [f64; 5] = core::array::from_fn(|i| 1.0 / C[i][i]);
+            chol_drop(&mut C, &mut cinv, 5, l);
             let keep: [usize; 4] = core::array::from_fn(|k| if k < l { k } else { k + 1 });
             for (a, &i) in keep.iter().enumerate() {
                 assert!(C[a][a] > 0.0);
+                assert!((cinv[a] * C[a][a] - 1.0).abs() < 1e-15);
                 for (b, &j) in keep.iter().enumerate() {
                     if b > a {
                         assert_eq!(C[a][b], 0.0, "upper triangle");
