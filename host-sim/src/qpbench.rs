@@ -274,6 +274,8 @@ mod tests {
         let row = solve_file(&f, 3, 50).unwrap();
         assert_eq!(row.status, QpStatus::Solved);
         assert_eq!(row.iterations, 1);
+        assert_eq!(row.ldp_iterations, 1);
+        assert_eq!(row.csv().split(',').count(), CSV_HEADER.split(',').count());
         // x = (0.5, 0.5, 1, 1, 1, 1): objective = 4 * (-1) + 2 * (0.25 - 1) = -5.5
         assert!((row.objective + 5.5).abs() < 1e-12, "{}", row.objective);
         assert!(
