@@ -51,7 +51,7 @@
 
 use nalgebra::SVector;
 
-use crate::qp::{DenseQp, DualActiveSet, QpSolution, QpStatus, ZERO_ROW2, dot, givens};
+use crate::qp::{DenseQp, DualActiveSet, QpSolution, QpStatus, RowNorms, ZERO_ROW2, dot, givens};
 
 /// The least-distance form of one constraint matrix `G` for one Hessian: build
 /// once with [`LdpSolver::prepare`], then [`LdpSolver::load`] and
@@ -60,6 +60,11 @@ use crate::qp::{DenseQp, DualActiveSet, QpSolution, QpStatus, ZERO_ROW2, dot, gi
 pub struct LdpSolver<const NV: usize, const NC: usize> {
     /// The solver whose Hessian factor defines the change of variables.
     solver: DualActiveSet<NV, NC>,
+    /// The rows of `G` (with `q = 0`, `h = 0`) and their norms, for the
+    /// fallback to [`DualActiveSet::solve_prepared`] (see [`PIVOT_FALLBACK`]).
+    qp: DenseQp<NV, NC>,
+    /// Row norms of `qp` for the fallback.
+    norms: RowNorms<NC>,
     /// `m_i / |m_i|` with `m_i = L^-1 g_i` (dimensionless; zero for zero rows).
     mhat: [[f64; NV]; NC],
     /// Gram matrix of the scaled rows, `K_ij = mhat_i . mhat_j` (unit diagonal
@@ -81,6 +86,10 @@ pub struct LdpSolver<const NV: usize, const NC: usize> {
 /// The per-`(q, h)` data of an LDP solve, from [`LdpSolver::load`].
 #[derive(Clone, Debug)]
 pub struct LdpLoaded<const NV: usize, const NC: usize> {
+    /// `q` and `h` as loaded, for the fallback.
+    q: SVector<f64, NV>,
+    /// Right-hand side `h` as loaded.
+    h: SVector<f64, NC>,
     /// `v = L^-1 q`, so `x = L^-T (u - v)`.
     v: [f64; NV],
     /// `|v|^2`: the objective is `1/2 |u|^2 - 1/2 |v|^2`.
@@ -103,8 +112,13 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
     pub fn prepare(solver: &DualActiveSet<NV, NC>, qp: &DenseQp<NV, NC>) -> Self {
         let m = qp.m.min(NC);
         let tol = solver.settings().tol_primal;
+        let mut rows = DenseQp::<NV, NC>::default();
+        rows.gt = qp.gt;
+        rows.m = m;
         let mut p = LdpSolver {
             solver: solver.clone(),
+            norms: solver.prepare_rows(&rows),
+            qp: rows,
             mhat: [[0.0; NV]; NC],
             K: [[0.0; NC]; NC],
             inv_mnorm: [0.0; NC],
@@ -157,11 +171,14 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
     /// ignored. Non-finite `q` or `h` make the solve a
     /// [`QpStatus::NumericalError`].
     pub fn load(&self, q: &SVector<f64, NV>, h: &SVector<f64, NC>) -> LdpLoaded<NV, NC> {
+        let (qv, hv) = (*q, *h);
         let q = &q.data.0[0];
         let h = h.as_slice();
         let tol = self.solver.settings().tol_primal;
         let v = self.solver.linv_mul(q);
         let mut ld = LdpLoaded {
+            q: qv,
+            h: hv,
             v,
             vv: dot(&v, &v),
             s0: [0.0; NC],
@@ -294,7 +311,7 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                 let mut z = *mp;
                 self.sub_active(&mut z, &act, &r, nact_c);
                 let mut z2 = dot(&z, &z);
-                if z2 < REFINE2 && nact_c < NV {
+                if z2 < REFINE2 {
                     // Cancellation: z carries rounding of order eps cond(M_A)^2.
                     // Project it once more (Gram-Schmidt "twice is enough"),
                     // r2 = (M_A M_A')^-1 M_A z, z -= M_A' r2, r += r2.
@@ -375,6 +392,10 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                     };
                     if !(diag > 0.0 && diag.is_finite()) {
                         break 'outer QpStatus::NumericalError;
+                    }
+                    if diag < PIVOT_FALLBACK {
+                        // The normal equations would lose too much accuracy.
+                        return self.fallback(loaded, prefer, max_iter);
                     }
                     *row = w;
                     row[nact_c] = diag;
@@ -464,6 +485,22 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
         sol
     }
 
+    /// [`DualActiveSet::solve_prepared`] on the loaded QP: the answer for an
+    /// active set too ill-conditioned for the normal equations of the LDP.
+    #[cold]
+    fn fallback(
+        &self,
+        loaded: &LdpLoaded<NV, NC>,
+        prefer: &[bool; NC],
+        max_iter: u32,
+    ) -> QpSolution<NV, NC> {
+        let mut qp = self.qp.clone();
+        qp.q = loaded.q;
+        qp.h = loaded.h;
+        self.solver
+            .solve_prepared(&qp, &self.norms, prefer, max_iter)
+    }
+
     /// `z -= M_A' r` over the first `nact` active rows (scaled rows).
     #[inline(always)]
     fn sub_active(&self, z: &mut [f64; NV], act: &[u16; NV], r: &[f64; NV], nact: usize) {
@@ -476,6 +513,16 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
         }
     }
 }
+
+/// A row whose component outside the span of the active rows is shorter than
+/// this (relative; the rows have unit norm), i.e. a row at an angle below
+/// about 1e-6 rad from that span yet not linearly dependent to
+/// `tol_dependence`, makes `M_A M_A'` too ill-conditioned (condition number
+/// above 1e12, so the normal equations lose all but a few digits): the solve
+/// restarts with [`DualActiveSet::solve_prepared`] on the same data, which
+/// works with an orthogonal factor. Rare: not on the LIPMWALK set or the
+/// controller's exported QPs (see `docs/solvers.md`).
+pub const PIVOT_FALLBACK: f64 = 1e-6;
 
 /// Below this squared norm of the new row's component outside the active span
 /// (the rows have unit norm: `|z| < 0.1`), the component is projected a second
@@ -580,6 +627,22 @@ mod tests {
         }
         assert!(gty.amax() <= 1e-10 * (1.0 + scale), "G'y = {gty:?}");
         assert!(hty < 0.0, "h'y = {hty}");
+    }
+
+    /// `(|G'y| / sum_i y_i |g_i|, h'y)` of a certificate `y >= 0`.
+    fn certificate_residual<const NV: usize, const NC: usize>(
+        qp: &DenseQp<NV, NC>,
+        y: &SVector<f64, NC>,
+    ) -> (f64, f64) {
+        let mut gty = SVector::<f64, NV>::zeros();
+        let (mut hty, mut scale) = (0.0, 0.0);
+        for (i, (g, h)) in qp.rows().enumerate() {
+            assert!(y[i] >= 0.0);
+            gty += g * y[i];
+            hty += h * y[i];
+            scale += y[i] * g.norm();
+        }
+        (if scale > 0.0 { gty.norm() / scale } else { 0.0 }, hty)
     }
 
     /// KKT conditions of a solution (stationarity, feasibility,
@@ -710,6 +773,87 @@ mod tests {
         }
     }
 
+    /// Random QPs built to be degenerate: duplicated, scaled, negated and
+    /// nearly parallel rows, zero rows, rows through one point, scales from
+    /// 1e-6 to 1e6. Every LDP result must be a valid solution or certificate
+    /// (or IterationLimit/NumericalError only where `solve` says the same), and
+    /// the status must match `solve`'s.
+    fn degenerate_family<const NV: usize, const NC: usize>(seed: u64, count: usize) -> usize {
+        let mut rnd = Rnd(seed);
+        let mut same_iters = 0;
+        for k in 0..count {
+            let H = random_hessian::<NV>(&mut rnd, k % 3 == 0);
+            let s = DualActiveSet::<NV, NC>::new(&H, QpSettings::default()).unwrap();
+            let mut qp = DenseQp::<NV, NC>::with_q(SVector::from_fn(|_, _| 5.0 * rnd.next()));
+            let x0 = SVector::<f64, NV>::from_fn(|_, _| rnd.next()); // a common point
+            while qp.m < NC {
+                let kind = (rnd.next().abs() * 7.0) as u32;
+                let last = qp.m.checked_sub(1).map(|i| qp.get_row(i).unwrap());
+                let (g, h) = match (kind, last) {
+                    (0, Some((g, h))) => (g, h), // duplicate
+                    (1, Some((g, h))) => {
+                        let c = 10f64.powf(3.0 * rnd.next());
+                        (g * c, h * c) // scaled copy
+                    }
+                    (2, Some((g, h))) => (-g, -h + 0.5 * rnd.next()), // opposite
+                    (3, Some((g, h))) => {
+                        let e = [1e-6, 1e-10, 1e-14][k % 3];
+                        (g + SVector::from_fn(|_, _| e * rnd.next()), h) // nearly parallel
+                    }
+                    (4, _) => (SVector::zeros(), rnd.next() + 0.2), // zero row
+                    (5, _) => {
+                        let g = SVector::<f64, NV>::from_fn(|_, _| rnd.next());
+                        let h = g.dot(&x0);
+                        (g, h) // through x0
+                    }
+                    _ => {
+                        let c = 10f64.powf(6.0 * rnd.next());
+                        let g = SVector::<f64, NV>::from_fn(|_, _| c * rnd.next());
+                        (g, c * (rnd.next() + 0.3))
+                    }
+                };
+                qp.push_row(&g, h).unwrap();
+            }
+            let a = s.solve(&qp, &[false; NC], 500);
+            let b = LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; NC], 500);
+            assert_eq!(a.status, b.status, "case {k}");
+            match b.status {
+                QpStatus::Solved => {
+                    let xs = a.x.amax().max(1.0);
+                    assert!(
+                        (a.x - b.x).amax() <= 1e-7 * xs,
+                        "case {k}: {} vs {}",
+                        a.x,
+                        b.x
+                    );
+                }
+                QpStatus::Infeasible => {
+                    // With nearly parallel rows `solve`'s certificate can be
+                    // inexact too: ours must be as good (to a factor 100).
+                    let (ra, ha) = certificate_residual(&qp, &a.lambda);
+                    let (rb, hb) = certificate_residual(&qp, &b.lambda);
+                    assert!(rb <= (100.0 * ra).max(1e-10), "case {k}: {rb:e} vs {ra:e}");
+                    assert!(hb < 0.0 || ha >= 0.0, "case {k}: h'y = {hb}");
+                }
+                _ => {}
+            }
+            same_iters += usize::from(a.iterations == b.iterations);
+        }
+        same_iters
+    }
+
+    #[test]
+    fn degenerate_random_qps_match_solve() {
+        let n6 = degenerate_family::<6, 24>(11, 400);
+        let n16 = degenerate_family::<16, 40>(12, 200);
+        // Rounding may change a tie between degenerate rows, so the paths may
+        // differ now and then; nearly always they are the same.
+        assert!(
+            n6 >= 380 && n16 >= 190,
+            "same iteration counts: {n6}/400, {n16}/200"
+        );
+    }
+
     fn solver2() -> DualActiveSet<2, 8> {
         DualActiveSet::new(&Matrix2::new(2.0, 0.0, 0.0, 2.0), QpSettings::default()).unwrap()
     }
@@ -774,6 +918,24 @@ mod tests {
         let qp = qp2(cases[6]);
         let sol = LdpSolver::prepare(&solver2(), &qp).solve_qp(&qp, &[false; 8], 10);
         assert_eq!(sol.lambda[1], 1.0);
+    }
+
+    #[test]
+    fn ill_conditioned_active_set_falls_back_to_solve() {
+        // min |x - c|^2 with c = (1e6, 0.05) inside the thin cone of the
+        // normals of x <= 0 and x + 1e-7 y <= 0: both are active at (0, 0).
+        // The row added second has a component of 1e-7 < PIVOT_FALLBACK
+        // outside the first, so the result is `solve_prepared`'s, bit for bit.
+        let s = solver2();
+        let mut qp = qp2(&[([1.0, 0.0], 0.0), ([1.0, 1e-7], 0.0)]);
+        qp.q = Vector2::new(-2e6, -0.1);
+        let a = s.solve(&qp, &[false; 8], 10);
+        let b = LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; 8], 10);
+        assert_eq!(a.status, QpStatus::Solved);
+        assert_eq!((a.status, a.iterations), (b.status, b.iterations));
+        assert_eq!(a.x, b.x);
+        assert_eq!(a.lambda, b.lambda);
+        assert_eq!(a.n_active, 2);
     }
 
     #[test]
