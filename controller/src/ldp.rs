@@ -112,9 +112,11 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
     pub fn prepare(solver: &DualActiveSet<NV, NC>, qp: &DenseQp<NV, NC>) -> Self {
         let m = qp.m.min(NC);
         let tol = solver.settings().tol_primal;
-        let mut rows = DenseQp::<NV, NC>::default();
-        rows.gt = qp.gt;
-        rows.m = m;
+        let rows = DenseQp::<NV, NC> {
+            gt: qp.gt,
+            m,
+            ..DenseQp::default()
+        };
         let mut p = LdpSolver {
             solver: solver.clone(),
             norms: solver.prepare_rows(&rows),
