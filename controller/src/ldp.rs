@@ -258,7 +258,7 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
         // Cholesky factor of M_A M_A' (scaled rows), row-major, zeros above
         // the diagonal kept exactly zero (the solves use full-length dots).
         let mut C = [[0.0f64; NV]; NV];
-        let mut cinv = [0.0f64; NV]; // 1 / C[i][i]
+        let mut Ci = [[0.0f64; NV]; NV]; // C^-1, lower triangular
         let mut iters: u32 = 0;
         // The row being added and its multiplier (part of the iterate).
         let mut pending: Option<(usize, f64)> = None;
@@ -308,7 +308,7 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                 for (bi, &a) in b.iter_mut().zip(&act).take(nact_c) {
                     *bi = kp[usize::from(a)];
                 }
-                let (w, mut r) = chol_solve(&C, &cinv, &b, nact_c);
+                let (mut w, mut r) = chol_solve(&Ci, &b, nact_c);
                 // z = m_p - M_A' r: the component of m_p outside the active span.
                 let mut z = *mp;
                 self.sub_active(&mut z, &act, &r, nact_c);
@@ -323,10 +323,13 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                             *bi = dot(ma, &z);
                         }
                     }
-                    let r2 = chol_solve(&C, &cinv, &b, nact_c).1;
+                    let (w2, r2) = chol_solve(&Ci, &b, nact_c);
                     self.sub_active(&mut z, &act, &r2, nact_c);
                     for (ri, r2i) in r.iter_mut().zip(&r2) {
                         *ri += r2i;
+                    }
+                    for (wi, w2i) in w.iter_mut().zip(&w2) {
+                        *wi += w2i;
                     }
                     z2 = dot(&z, &z);
                 }
@@ -401,8 +404,13 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                     }
                     *row = w;
                     row[nact_c] = diag;
-                    if let Some(ci) = cinv.get_mut(nact_c) {
-                        *ci = 1.0 / diag;
+                    // C^-1 gains the row [-(C^-T w)' / |z|, 1 / |z|] = [-r', 1] / |z|.
+                    if let Some(ci) = Ci.get_mut(nact_c) {
+                        let inv = 1.0 / diag;
+                        for (c, rk) in ci.iter_mut().zip(&r) {
+                            *c = -rk * inv;
+                        }
+                        ci[nact_c] = inv;
                     }
                     *a = p as u16;
                     *l = u_new;
@@ -419,7 +427,7 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                 if let Some(flag) = blocked.get_mut(usize::from(row_l)) {
                     *flag = false;
                 }
-                chol_drop(&mut C, &mut cinv, nact_c, l);
+                chol_drop(&mut C, &mut Ci, nact_c, l);
                 let last = nact_c.saturating_sub(1);
                 for i in l..last {
                     act[i] = act[i + 1];
@@ -531,39 +539,36 @@ pub const PIVOT_FALLBACK: f64 = 1e-6;
 /// time.
 const REFINE2: f64 = 1e-2;
 
-/// `(w, r)` with `C w = b`, `C' r = w` on the leading `nact x nact` block
-/// (`r = (C C')^-1 b`); `C` has zeros above the diagonal, `cinv[i] = 1 /
-/// C[i][i]` (multiplications instead of a chain of divisions).
+/// `(w, r)` with `w = C^-1 b`, `r = C^-T w = (C C')^-1 b` on the leading
+/// `nact x nact` block, from the inverse factor `Ci = C^-1` (lower triangular,
+/// zeros above the diagonal): two matrix-vector products, no chain of
+/// dependent divisions or dot products as in substitution.
 #[inline(always)]
 fn chol_solve<const NV: usize>(
-    C: &[[f64; NV]; NV],
-    cinv: &[f64; NV],
+    Ci: &[[f64; NV]; NV],
     b: &[f64; NV],
     nact: usize,
 ) -> ([f64; NV], [f64; NV]) {
-    let nact = nact.min(NV);
     let mut w = [0.0f64; NV];
-    for i in 0..nact {
-        // w[i..] is still zero, and so is C[i][i+1..]: a full-length dot.
-        w[i] = (b[i] - dot(&C[i], &w)) * cinv[i];
+    for (wi, row) in w.iter_mut().zip(Ci).take(nact) {
+        *wi = dot(row, b);
     }
     let mut r = [0.0f64; NV];
-    for i in (0..NV).rev().filter(|&i| i < nact) {
-        let mut acc = w[i];
-        for k in (i + 1)..nact {
-            acc -= C[k][i] * r[k];
+    for (&wi, row) in w.iter().zip(Ci).take(nact) {
+        for (rk, c) in r.iter_mut().zip(row) {
+            *rk += wi * c;
         }
-        r[i] = acc * cinv[i];
     }
     (w, r)
 }
 
 /// Removes row `l` (of `nact`) from the Cholesky factor `C` of `M_A M_A'`:
 /// the rows below move up, and Givens rotations of column pairs restore the
-/// triangle (`C C'` stays the Gram matrix of the remaining rows).
+/// triangle (`C C'` stays the Gram matrix of the remaining rows). The rows
+/// `l..` of the inverse factor `Ci` are then recomputed from `C Ci = I`.
 fn chol_drop<const NV: usize>(
     C: &mut [[f64; NV]; NV],
-    cinv: &mut [f64; NV],
+    Ci: &mut [[f64; NV]; NV],
     nact: usize,
     l: usize,
 ) {
@@ -576,23 +581,37 @@ fn chol_drop<const NV: usize>(
         C[i] = C[i + 1];
     }
     C[last] = [0.0; NV];
-    cinv[last] = 0.0;
+    Ci[last] = [0.0; NV];
     // Rows k..last-1 now reach column k+1; rotate columns k, k+1.
     for k in l..last {
         let (a, b) = (C[k][k], C[k][k + 1]);
         if b == 0.0 {
-            cinv[k] = 1.0 / a;
             continue;
         }
         let (c, s, r) = givens(a, b);
         C[k][k] = r;
         C[k][k + 1] = 0.0;
-        cinv[k] = 1.0 / r;
         for row in C.iter_mut().take(last).skip(k + 1) {
             let (a, b) = (row[k], row[k + 1]);
             row[k] = c * a + s * b;
             row[k + 1] = -s * a + c * b;
         }
+    }
+    // Row i of C Ci = I: C_ii Ci_i = e_i - sum_{k<i} C_ik Ci_k.
+    for i in l..last {
+        let mut row = [0.0f64; NV];
+        row[i] = 1.0;
+        for k in 0..i {
+            let f = C[i][k];
+            for (a, b) in row.iter_mut().zip(&Ci[k]) {
+                *a -= f * b;
+            }
+        }
+        let inv = 1.0 / C[i][i];
+        for a in row.iter_mut() {
+            *a *= inv;
+        }
+        Ci[i] = row;
     }
 }
 
@@ -1009,19 +1028,33 @@ mod tests {
             let gram = |C: &[[f64; 5]; 5], i: usize, j: usize| dot(&C[i], &C[j]);
             let before: [[f64; 5]; 5] =
                 core::array::from_fn(|i| core::array::from_fn(|j| gram(&C, i, j)));
-            let mut cinv: [f64; 5] = core::array::from_fn(|i| 1.0 / C[i][i]);
-            chol_drop(&mut C, &mut cinv, 5, l);
+            // Ci = C^-1 by forward substitution, column by column.
+            let mut Ci = [[0.0f64; 5]; 5];
+            for j in 0..5 {
+                for i in j..5 {
+                    let mut acc = if i == j { 1.0 } else { 0.0 };
+                    for k in j..i {
+                        acc -= C[i][k] * Ci[k][j];
+                    }
+                    Ci[i][j] = acc / C[i][i];
+                }
+            }
+            chol_drop(&mut C, &mut Ci, 5, l);
             let keep: [usize; 4] = core::array::from_fn(|k| if k < l { k } else { k + 1 });
             for (a, &i) in keep.iter().enumerate() {
                 assert!(C[a][a] > 0.0);
-                assert!((cinv[a] * C[a][a] - 1.0).abs() < 1e-15);
                 for (b, &j) in keep.iter().enumerate() {
                     if b > a {
                         assert_eq!(C[a][b], 0.0, "upper triangle");
+                        assert_eq!(Ci[a][b], 0.0, "upper triangle of the inverse");
                     }
                     assert!((gram(&C, a, b) - before[i][j]).abs() < 1e-12);
+                    // (C Ci)_ab = delta_ab
+                    let cci: f64 = (0..4).map(|k| C[a][k] * Ci[k][b]).sum();
+                    assert!((cci - f64::from(u8::from(a == b))).abs() < 1e-12);
                 }
             }
+            assert_eq!(Ci[4], [0.0; 5]);
             assert_eq!(C[4], [0.0; 5]);
         }
     }
