@@ -24,7 +24,9 @@
 //!   unconstrained minimiser) outside the timing: the same split as DAQP's
 //!   `setup_time` / `solve_time`;
 //! * `min_ldp_load_ns`: [`LdpSolver::load`] alone, so that
-//!   `min_ldp_ns + min_ldp_load_ns` is the per-`(q, h)` cost.
+//!   `min_ldp_ns + min_ldp_load_ns` is the per-`(q, h)` cost;
+//! * `min_ldp_prepare_ns`: [`LdpSolver::prepare`] alone (per `G`; what a
+//!   controller whose `G` changes every cycle would pay on top).
 //!
 //! Both other paths are checked against `solve` before timing (an error
 //! otherwise): `solve_prepared` bit for bit; the LDP path for the same status,
@@ -85,12 +87,14 @@ pub struct QpRow {
     pub min_ldp_ns: u64,
     /// Minimum time of the LDP load alone, ns.
     pub min_ldp_load_ns: u64,
+    /// Minimum time of the LDP prepare alone, ns.
+    pub min_ldp_prepare_ns: u64,
     /// Adds plus drops of the LDP solve.
     pub ldp_iterations: u32,
 }
 
 /// The CSV header of [`QpRow::csv`].
-pub const CSV_HEADER: &str = "file,n,m,status,iterations,objective,min_solve_ns,min_prepared_ns,min_ldp_ns,min_ldp_load_ns,ldp_iterations";
+pub const CSV_HEADER: &str = "file,n,m,status,iterations,objective,min_solve_ns,min_prepared_ns,min_ldp_ns,min_ldp_load_ns,ldp_iterations,min_ldp_prepare_ns";
 
 impl QpRow {
     /// One CSV line (no newline).
@@ -102,7 +106,7 @@ impl QpRow {
             QpStatus::NumericalError => "numerical_error",
         };
         format!(
-            "{},{},{},{},{},{:.17e},{},{},{},{},{}",
+            "{},{},{},{},{},{:.17e},{},{},{},{},{},{}",
             self.file.display(),
             self.n,
             self.m,
@@ -113,7 +117,8 @@ impl QpRow {
             self.min_prepared_ns,
             self.min_ldp_ns,
             self.min_ldp_load_ns,
-            self.ldp_iterations
+            self.ldp_iterations,
+            self.min_ldp_prepare_ns
         )
     }
 }
@@ -132,7 +137,7 @@ fn solve_fixed<const NV: usize, const NC: usize>(
     let prefer = [false; NC];
     let rows = solver.prepare_rows(&qp);
     let (mut best, mut best_prepared) = (u64::MAX, u64::MAX);
-    let (mut best_ldp, mut best_load) = (u64::MAX, u64::MAX);
+    let (mut best_ldp, mut best_load, mut best_prep) = (u64::MAX, u64::MAX, u64::MAX);
     let mut sol = solver.solve(&qp, &prefer, max_iter);
     let prepared = solver.solve_prepared(&qp, &rows, &prefer, max_iter);
     let same_x = prepared
@@ -172,6 +177,10 @@ fn solve_fixed<const NV: usize, const NC: usize>(
         let t0 = Instant::now();
         std::hint::black_box(ldp.load(std::hint::black_box(&qp.q), &qp.h));
         best_load = best_load.min(ns(t0));
+        let t0 = Instant::now();
+        let prepared = LdpSolver::prepare(&solver, std::hint::black_box(&qp));
+        best_prep = best_prep.min(ns(t0));
+        std::hint::black_box(&prepared);
     }
     Ok(QpRow {
         file: file.to_path_buf(),
@@ -189,6 +198,7 @@ fn solve_fixed<const NV: usize, const NC: usize>(
         min_ldp_ns: best_ldp,
         min_ldp_load_ns: best_load,
         ldp_iterations: lsol.iterations,
+        min_ldp_prepare_ns: best_prep,
     })
 }
 
