@@ -25,9 +25,11 @@
 //!   unconstrained minimiser `u = 0`, `d_i / |m_i|`; `O(m NV)`.
 //! * [`LdpSolver::solve`]: the Goldfarb–Idnani iterations on the LDP, then `x`.
 //!   The active set is represented by the Cholesky factor `C` of `M_A M_A'`
-//!   (`nact x nact`, lower triangular), extended by one row on an add and
-//!   restored by Givens rotations on a drop, so an add or drop costs
-//!   `O(nact^2 + nact NV)` instead of the `O(NV^2)` update of `J` in
+//!   (`nact x nact`, lower triangular) and its inverse `C^-1`: solves with
+//!   `M_A M_A'` are two small matrix-vector products, an add appends one row
+//!   to each (`O(nact)`), a drop restores `C` by Givens rotations and
+//!   recomputes the rows of `C^-1` below the dropped one, so an add or drop
+//!   costs `O(nact^2 + nact NV)` instead of the `O(NV^2)` update of `J` in
 //!   [`DualActiveSet::solve`]. The slacks of all rows are updated from `K`
 //!   (`O(m (nact + 1))` per step) instead of recomputed (`O(m NV)`); the primal
 //!   `u = -M_A' lambda_A` is formed once at the end.
@@ -42,6 +44,11 @@
 //! outside their span is below `tol_dependence |m_p|`), the same statuses,
 //! multipliers and Farkas certificate, and `iterations` counts adds plus drops.
 //! Rounding differs, so results agree to rounding, not bit for bit.
+//!
+//! Accuracy: the normal equations lose accuracy with `cond(M_A)^2`. A short
+//! component `z` of a new row outside the active span is projected twice, and
+//! an add whose pivot `|z|` is below [`PIVOT_FALLBACK`] restarts the solve with
+//! [`DualActiveSet::solve_prepared`] (orthogonal factor) on the same data.
 //!
 //! Memory: an [`LdpSolver`] holds `NC x NV` scaled rows and the `NC x NC` Gram
 //! matrix (8 KiB for `NC = 32`, 113 KiB for `NC = 120`), so it is meant for
