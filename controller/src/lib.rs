@@ -45,6 +45,7 @@ pub mod constraints;
 mod float;
 pub mod geometry;
 pub mod heading;
+pub mod ldp;
 pub mod lip;
 pub mod mpc;
 pub mod qp;
@@ -74,6 +75,7 @@ pub use geometry::{
     ClosestPoint, ConvexPolygon, GeometryError, PointLocation, closest_point_point_polygon,
 };
 pub use heading::{HeadingPlan, plan_heading, wrap_angle};
+pub use ldp::{LdpLoaded, LdpSolver};
 pub use lip::Lip;
 pub use mpc::{
     ActiveObstacle, Assembly, CommandSource, Config, ConfigError, Controller, CycleInfo,

@@ -47,7 +47,7 @@ use nalgebra::{ArrayStorage, SMatrix, SVector};
 /// Rows whose squared Euclidean norm is not above this (it is 0 for an exactly
 /// zero row or one whose squares underflow, `|g| < ~1e-162`) are treated as zero
 /// rows: satisfied when `h_i >= -tol`, infeasible otherwise.
-const ZERO_ROW2: f64 = 0.0;
+pub(crate) const ZERO_ROW2: f64 = 0.0;
 
 /// What one solve did. `Copy`, so it can travel in every cycle's diagnostics.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -401,7 +401,7 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
     // Inlined on hosts (vectorised into the callers); the compiler decides on
     // bare-metal targets, where one out-of-line copy saves flash.
     #[cfg_attr(not(target_os = "none"), inline(always))]
-    fn linv_mul(&self, g: &[f64; NV]) -> [f64; NV] {
+    pub(crate) fn linv_mul(&self, g: &[f64; NV]) -> [f64; NV] {
         let mut w = [0.0f64; NV];
         for (k, (col, &gk)) in self.Linv.data.0.iter().zip(g).enumerate() {
             if self.linv_diag {
@@ -420,7 +420,7 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
     // Inlined on hosts (vectorised into the callers); the compiler decides on
     // bare-metal targets, where one out-of-line copy saves flash.
     #[cfg_attr(not(target_os = "none"), inline(always))]
-    fn linvt_mul(&self, w: &[f64; NV]) -> [f64; NV] {
+    pub(crate) fn linvt_mul(&self, w: &[f64; NV]) -> [f64; NV] {
         let mut x = [0.0f64; NV];
         for (k, (xk, col)) in x.iter_mut().zip(&self.Linv.data.0).enumerate() {
             *xk = if self.linv_diag {
@@ -986,7 +986,7 @@ impl<const NV: usize, const NC: usize> QpBackend<NV, NC> for OwnSolver {
 /// `a . b` with four partial sums (independent add chains; `N` is a constant, so
 /// the loop unrolls and vectorises without bounds checks).
 #[inline(always)]
-fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
+pub(crate) fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
     let mut acc = [0.0f64; 2];
     for k in 0..N {
         acc[k % 2] += a[k] * b[k];
@@ -995,7 +995,7 @@ fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
 }
 
 /// Givens rotation `(c, s, r)` with `c a + s b = r`, `-s a + c b = 0`.
-fn givens(a: f64, b: f64) -> (f64, f64, f64) {
+pub(crate) fn givens(a: f64, b: f64) -> (f64, f64, f64) {
     // sqrt(a^2 + b^2) is within an ulp or two of hypot; hypot (slower, no
     // overflow or underflow) only when the squares leave the normal range.
     let r2 = a * a + b * b;

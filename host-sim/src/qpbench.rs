@@ -17,13 +17,27 @@
 //!   [`DualActiveSet::prepare_rows`] computed outside the timing: the figure for
 //!   a QP family whose `G` is fixed and only `q`, `h` change (LIPMWALK), and the
 //!   counterpart of DAQP's `solve_time`, which excludes DAQP's own transform of
-//!   the rows.
+//!   the rows;
+//! * `min_ldp_ns`: [`LdpSolver::solve`], the range-space (least-distance) path
+//!   for a fixed `G`, with [`LdpSolver::prepare`] (per `G`) and
+//!   [`LdpSolver::load`] (per `q`, `h`: `v = L^-1 q` and the slacks at the
+//!   unconstrained minimiser) outside the timing: the same split as DAQP's
+//!   `setup_time` / `solve_time`;
+//! * `min_ldp_load_ns`: [`LdpSolver::load`] alone, so that
+//!   `min_ldp_ns + min_ldp_load_ns` is the per-`(q, h)` cost;
+//! * `min_ldp_prepare_ns`: [`LdpSolver::prepare`] alone (per `G`; what a
+//!   controller whose `G` changes every cycle would pay on top).
+//!
+//! Both other paths are checked against `solve` before timing (an error
+//! otherwise): `solve_prepared` bit for bit; the LDP path for the same status,
+//! the objective to 1e-9 relative (`|a - b| <= 1e-9 max(1, |a|, |b|)`) and `x`
+//! to 1e-9 scaled (`max |x_a - x_b| <= 1e-9 max(1, max |x|)`).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Result, anyhow};
-use ldcbf_controller::{DualActiveSet, QpSettings, QpStatus};
+use ldcbf_controller::{DualActiveSet, LdpSolver, QpSettings, QpStatus};
 use ldcbf_reference::DenseProblem;
 
 /// The compiled solver sizes, listed once: defines [`SIZES`] and the dispatch
@@ -69,10 +83,18 @@ pub struct QpRow {
     pub min_ns: u64,
     /// Minimum time of the solve with prepared row norms over the repeats, ns.
     pub min_prepared_ns: u64,
+    /// Minimum time of the LDP solve (prepare and load outside), ns.
+    pub min_ldp_ns: u64,
+    /// Minimum time of the LDP load alone, ns.
+    pub min_ldp_load_ns: u64,
+    /// Minimum time of the LDP prepare alone, ns.
+    pub min_ldp_prepare_ns: u64,
+    /// Adds plus drops of the LDP solve.
+    pub ldp_iterations: u32,
 }
 
 /// The CSV header of [`QpRow::csv`].
-pub const CSV_HEADER: &str = "file,n,m,status,iterations,objective,min_solve_ns,min_prepared_ns";
+pub const CSV_HEADER: &str = "file,n,m,status,iterations,objective,min_solve_ns,min_prepared_ns,min_ldp_ns,min_ldp_load_ns,ldp_iterations,min_ldp_prepare_ns";
 
 impl QpRow {
     /// One CSV line (no newline).
@@ -84,7 +106,7 @@ impl QpRow {
             QpStatus::NumericalError => "numerical_error",
         };
         format!(
-            "{},{},{},{},{},{:.17e},{},{}",
+            "{},{},{},{},{},{:.17e},{},{},{},{},{},{}",
             self.file.display(),
             self.n,
             self.m,
@@ -92,7 +114,11 @@ impl QpRow {
             self.iterations,
             self.objective,
             self.min_ns,
-            self.min_prepared_ns
+            self.min_prepared_ns,
+            self.min_ldp_ns,
+            self.min_ldp_load_ns,
+            self.ldp_iterations,
+            self.min_ldp_prepare_ns
         )
     }
 }
@@ -111,6 +137,7 @@ fn solve_fixed<const NV: usize, const NC: usize>(
     let prefer = [false; NC];
     let rows = solver.prepare_rows(&qp);
     let (mut best, mut best_prepared) = (u64::MAX, u64::MAX);
+    let (mut best_ldp, mut best_load, mut best_prep) = (u64::MAX, u64::MAX, u64::MAX);
     let mut sol = solver.solve(&qp, &prefer, max_iter);
     let prepared = solver.solve_prepared(&qp, &rows, &prefer, max_iter);
     let same_x = prepared
@@ -126,6 +153,11 @@ fn solve_fixed<const NV: usize, const NC: usize>(
             prepared.status
         ));
     }
+    // The LDP path: `ldp` per G, `loaded` per (q, h), both outside the timing.
+    let ldp = Box::new(LdpSolver::prepare(&solver, &qp));
+    let loaded = ldp.load(&qp.q, &qp.h);
+    let lsol = ldp.solve(&loaded, &prefer, max_iter);
+    check_ldp(file, &sol, &lsol)?;
     let ns = |t0: Instant| u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX);
     for _ in 0..repeat.max(1) {
         let t0 = Instant::now();
@@ -139,6 +171,16 @@ fn solve_fixed<const NV: usize, const NC: usize>(
             max_iter,
         ));
         best_prepared = best_prepared.min(ns(t0));
+        let t0 = Instant::now();
+        std::hint::black_box(ldp.solve(std::hint::black_box(&loaded), &prefer, max_iter));
+        best_ldp = best_ldp.min(ns(t0));
+        let t0 = Instant::now();
+        std::hint::black_box(ldp.load(std::hint::black_box(&qp.q), &qp.h));
+        best_load = best_load.min(ns(t0));
+        let t0 = Instant::now();
+        let prepared = LdpSolver::prepare(&solver, std::hint::black_box(&qp));
+        best_prep = best_prep.min(ns(t0));
+        std::hint::black_box(&prepared);
     }
     Ok(QpRow {
         file: file.to_path_buf(),
@@ -153,7 +195,41 @@ fn solve_fixed<const NV: usize, const NC: usize>(
         },
         min_ns: best,
         min_prepared_ns: best_prepared,
+        min_ldp_ns: best_ldp,
+        min_ldp_load_ns: best_load,
+        ldp_iterations: lsol.iterations,
+        min_ldp_prepare_ns: best_prep,
     })
+}
+
+/// The LDP solution `b` agrees with `solve`'s `a`: same status; when solved,
+/// objective to 1e-9 relative and `x` to 1e-9 scaled.
+fn check_ldp<const NV: usize, const NC: usize>(
+    file: &Path,
+    a: &ldcbf_controller::QpSolution<NV, NC>,
+    b: &ldcbf_controller::QpSolution<NV, NC>,
+) -> Result<()> {
+    if a.status != b.status {
+        return Err(anyhow!(
+            "{}: solve and the LDP solve disagree on the status ({:?} vs {:?})",
+            file.display(),
+            a.status,
+            b.status
+        ));
+    }
+    if a.status.is_solved() {
+        let (oa, ob) = (a.objective, b.objective);
+        let dobj = (oa - ob).abs() / oa.abs().max(ob.abs()).max(1.0);
+        let dx = (a.x - b.x).amax() / a.x.amax().max(1.0);
+        if !(dobj <= 1e-9 && dx <= 1e-9) {
+            return Err(anyhow!(
+                "{}: solve and the LDP solve disagree (objective {oa} vs {ob}, scaled x \
+                 difference {dx:e})",
+                file.display()
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Reads and solves one file (see the module docs).
@@ -208,6 +284,8 @@ mod tests {
         let row = solve_file(&f, 3, 50).unwrap();
         assert_eq!(row.status, QpStatus::Solved);
         assert_eq!(row.iterations, 1);
+        assert_eq!(row.ldp_iterations, 1);
+        assert_eq!(row.csv().split(',').count(), CSV_HEADER.split(',').count());
         // x = (0.5, 0.5, 1, 1, 1, 1): objective = 4 * (-1) + 2 * (0.25 - 1) = -5.5
         assert!((row.objective + 5.5).abs() < 1e-12, "{}", row.objective);
         assert!(

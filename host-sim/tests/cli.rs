@@ -125,7 +125,8 @@ fn exported_qps_solve_again() {
     let lines: Vec<&str> = out.lines().collect();
     assert_eq!(
         lines[0],
-        "file,n,m,status,iterations,objective,min_solve_ns,min_prepared_ns"
+        "file,n,m,status,iterations,objective,min_solve_ns,min_prepared_ns,min_ldp_ns,\
+         min_ldp_load_ns,ldp_iterations,min_ldp_prepare_ns"
     );
     assert_eq!(lines.len(), 6);
     assert!(
