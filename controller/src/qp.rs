@@ -49,21 +49,6 @@ use nalgebra::{ArrayStorage, SMatrix, SVector};
 /// rows: satisfied when `h_i >= -tol`, infeasible otherwise.
 pub(crate) const ZERO_ROW2: f64 = 0.0;
 
-/// Smallest number of variables `NV` for which the row scan of a solve skips
-/// rows that provably hold (see the comment at the scan in `solve_with`). A
-/// constant: below it (the paper configuration, `NV = 6`, on the firmware) the
-/// test folds away and the scan is the plain one, which is faster there.
-const SKIP_MIN_NV: usize = 16;
-
-/// Overflow guard of the skip (dimensionless, units of `h` and `g x`): rows are
-/// skipped only while every `|h_i|` and `|g_i| |x|` is at most this, so the
-/// slacks that are not computed could not have overflowed.
-const SKIP_BIG: f64 = 1e300;
-
-/// Absolute allowance of the skip for underflow (in the units of `x`), added to
-/// every step length and to the threshold.
-const SKIP_TINY: f64 = 1e-140;
-
 /// What one solve did. `Copy`, so it can travel in every cycle's diagnostics.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum QpStatus {
@@ -292,10 +277,6 @@ pub struct RowNorms<const NC: usize> {
     m: usize,
     /// Every entry of the covered rows is finite.
     finite: bool,
-    /// Rows skipped and slacks computed by the row scans of the solves given
-    /// this (unit tests only).
-    #[cfg(test)]
-    scan_counts: (u64, u64),
 }
 
 impl<const NC: usize> RowNorms<NC> {
@@ -308,8 +289,6 @@ impl<const NC: usize> RowNorms<NC> {
             inv_hnorm: [0.0; NC],
             m,
             finite: true,
-            #[cfg(test)]
-            scan_counts: (0, 0),
         };
         for (g, n2) in qp.gt.data.0.iter().zip(&mut rows.norm2).take(m) {
             *n2 = dot(g, g);
@@ -339,9 +318,6 @@ pub struct DualActiveSet<const NV: usize, const NC: usize> {
 }
 
 impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
-    /// The row scan skips rows that provably hold (see `solve_with`).
-    const SKIP_ROWS: bool = NV >= SKIP_MIN_NV;
-
     /// A placeholder with `H = 0`, `L^-1 = 0` and zero tolerances, all storage
     /// zero, for `const` and `static` initialisers (e.g. an unconfigured
     /// controller). Not a solver: overwrite it with one from
@@ -467,7 +443,7 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         // The H^-1 norms are left to the solve, which computes them only for
         // rows found violated.
         let mut rows = RowNorms::euclidean(qp);
-        self.solve_with::<true>(
+        self.solve_with(
             qp,
             qp.h.as_slice(),
             &[false; NC],
@@ -500,7 +476,7 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
             *x = !on;
         }
         let mut rows = RowNorms::euclidean(qp);
-        self.solve_with::<true>(qp, h.as_slice(), &excluded, &mut rows, prefer, max_iter)
+        self.solve_with(qp, h.as_slice(), &excluded, &mut rows, prefer, max_iter)
     }
 
     /// The per-row data of `qp`'s constraint matrix that [`DualActiveSet::solve`]
@@ -541,7 +517,7 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         if rows.m != qp.m.min(NC) {
             rows.finite = false;
         }
-        self.solve_with::<true>(
+        self.solve_with(
             qp,
             qp.h.as_slice(),
             &[false; NC],
@@ -569,12 +545,8 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
 
     /// The solve proper, with the right-hand side `h` (`qp.h` or another), the
     /// rows `excluded[i]` left out, the Euclidean row norms in `rows` and the
-    /// H^-1 norms there or computed on demand (0 = not yet). With `SKIP`
-    /// (the solves' choice; `false` gives the plain scan, for the unit tests),
-    /// rows that provably hold are skipped in the row scan when
-    /// `NV >= SKIP_MIN_NV`; the result is bit for bit the same either way, the
-    /// unit tests compare the two.
-    fn solve_with<const SKIP: bool>(
+    /// H^-1 norms there or computed on demand (0 = not yet).
+    fn solve_with(
         &self,
         qp: &DenseQp<NV, NC>,
         h: &[f64],
@@ -615,8 +587,6 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         // A row is violated when `slack / |g| < -tol`, tested without the square
         // root as `slack < 0` and `slack^2 > tol^2 |g|^2`.
         let tol2 = tol * tol;
-        #[cfg(test)]
-        let scan_counts = &mut norms.scan_counts;
         let RowNorms {
             norm2, inv_hnorm, ..
         } = norms;
@@ -641,47 +611,6 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         for v in x.iter_mut() {
             *v = -*v;
         }
-
-        // Rows that provably hold are not scanned (see the comment at the
-        // scan). Every use tests the constants `Self::SKIP_ROWS && SKIP` itself
-        // (not a local holding them): the compiler drops the code for
-        // `NV < SKIP_MIN_NV` before optimising, so the firmware's solver is
-        // the plain one, instruction for instruction. `rel` bounds the relative
-        // rounding errors of the quantities below (4x the bound of a dot
-        // product of length NV, plus a few operations).
-        let rel = 4.0 * (NV as f64 + 8.0) * f64::EPSILON;
-        // Upper bound on the Euclidean length of the path of `x` so far.
-        let mut path = 0.0f64;
-        // Per row: the path length up to which it provably holds (-inf: not
-        // known), and `1 / |g_i|`.
-        let mut reach = [f64::NEG_INFINITY; NC];
-        let mut inv_norm = [0.0f64; NC];
-        // |x_0|, and the path length up to which the skip is allowed (overflow
-        // guard; -inf: never).
-        let mut x0_norm = 0.0f64;
-        let mut path_max = f64::NEG_INFINITY;
-        if Self::SKIP_ROWS && SKIP {
-            let mut g2_max = 0.0f64;
-            let mut h_max = 0.0f64;
-            for (((inv, &n2), &hi), &out) in inv_norm
-                .iter_mut()
-                .zip(norm2.iter())
-                .zip(h)
-                .zip(excluded)
-                .take(m)
-            {
-                if !out && n2 > ZERO_ROW2 {
-                    // finite: checked above
-                    g2_max = g2_max.max(n2);
-                    h_max = h_max.max(hi.abs());
-                    *inv = 1.0 / crate::float::sqrt(n2);
-                }
-            }
-            x0_norm = crate::float::sqrt(dot(&x, &x));
-            if h_max <= SKIP_BIG && x0_norm <= SKIP_BIG {
-                path_max = SKIP_BIG / crate::float::sqrt(g2_max).max(1.0) - x0_norm;
-            }
-        }
         let mut R = SMatrix::<f64, NV, NV>::zeros();
         let mut u = [0.0f64; NV]; // multipliers of the active rows
         let mut act = [0u16; NV];
@@ -699,58 +628,15 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
             let mut best_v = 0.0;
             let mut best_pref: Option<usize> = None;
             let mut best_pref_v = 0.0;
-            // Skipping rows that cannot be violated (`SKIP_ROWS` only). The slack
-            // normalised by |g_i| moves by at most the length of the step of x:
-            // `(h_i - g_i x')/|g_i| >= (h_i - g_i x)/|g_i| - |x' - x|`. `path` (P)
-            // bounds the length of x's path from above, so a row whose computed
-            // slack was `c_s` at path length `P_s` has, now, a normalised slack of
-            // at least `c_s/|g_i| - (P - P_s)`, up to rounding. It is stored as
-            // `reach_i = P_s + c_s/|g_i| (1 - rel)`, and the row is skipped while
-            // `P (1 + rel) + rel |x_0| + SKIP_TINY < reach_i`. That proves more
-            // than "not violated": the slack the plain scan would compute is
-            // >= 0 (so it would `continue` at the `slack >= 0.0` test, and it
-            // is finite), whatever the tolerance. Rounding: `rel` is 4x the
-            // relative error of `c_s/|g_i|` (norm, square root, division,
-            // product) and of each step length; the dot products' absolute errors
-            // at both points, at most `NV eps |g_i| |x|` each with
-            // `|x| <= |x_0| + P` along the path, are covered by the `rel` terms
-            // on the left (with the roundings of the sums); `P` is rounded up at
-            // every step (`(1 + 2 eps)`), and `SKIP_TINY` covers underflow.
-            // Overflow: only while `|g_i| (|x_0| + P) <= SKIP_BIG` and every
-            // `|h_i| <= SKIP_BIG` (`path_max`), so no skipped slack could have
-            // been infinite. A NaN or infinite `P`, `|x_0|` or `reach_i` compares
-            // false: nothing is skipped, and the plain scan reports the error.
-            // Rows that could be chosen are never skipped, and the others are
-            // scanned in the same order, so the choice is bit for bit the same.
-            let reach_now = if Self::SKIP_ROWS && SKIP && path <= path_max {
-                path * (1.0 + rel) + (rel * x0_norm + SKIP_TINY)
-            } else {
-                f64::NAN
-            };
             for i in 0..m {
                 // `i < m <= NC`: every index below is in bounds.
                 if is_active[i] || norm2[i] <= ZERO_ROW2 {
                     continue;
                 }
-                if Self::SKIP_ROWS && SKIP && reach_now < reach[i] {
-                    #[cfg(test)]
-                    {
-                        scan_counts.0 += 1;
-                    }
-                    continue; // provably holds: slack >= 0
-                }
-                #[cfg(test)]
-                {
-                    scan_counts.1 += 1;
-                }
                 let g = &rows[i];
                 let slack = h[i] - dot(g, &x);
                 if !slack.is_finite() {
                     break 'outer QpStatus::NumericalError;
-                }
-                if Self::SKIP_ROWS && SKIP {
-                    // below `path` when violated: not skipped next time
-                    reach[i] = path + slack * inv_norm[i] * (1.0 - rel);
                 }
                 if slack >= 0.0 || slack * slack <= tol2 * norm2[i] {
                     continue; // satisfied to tolerance
@@ -855,23 +741,8 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
                 }
                 u_new += t;
                 if !dependent {
-                    if Self::SKIP_ROWS && SKIP {
-                        let x_old = x;
-                        for (xk, zk) in x.iter_mut().zip(&z) {
-                            *xk += t * zk;
-                        }
-                        // The step actually taken (rounded x), its length
-                        // rounded up; the only place where `x` changes.
-                        let mut dx = [0.0f64; NV];
-                        for ((d, xn), xo) in dx.iter_mut().zip(&x).zip(&x_old) {
-                            *d = xn - xo;
-                        }
-                        let len = crate::float::sqrt(dot(&dx, &dx)) * (1.0 + rel) + SKIP_TINY;
-                        path = (path + len) * (1.0 + 2.0 * f64::EPSILON);
-                    } else {
-                        for (xk, zk) in x.iter_mut().zip(&z) {
-                            *xk += t * zk;
-                        }
+                    for (xk, zk) in x.iter_mut().zip(&z) {
+                        *xk += t * zk;
                     }
                 }
                 if t2 <= t1 {
@@ -1154,8 +1025,6 @@ fn rotate_columns<const NV: usize>(J: &mut SMatrix<f64, NV, NV>, i: usize, c: f6
 
 #[cfg(test)]
 mod tests {
-    extern crate std;
-
     use super::*;
     use nalgebra::{Matrix2, Vector2};
 
@@ -1511,158 +1380,5 @@ mod tests {
         let right = s.solve(&qp, &[true, false, false, false], 20);
         assert!((cold.x - right.x).amax() < 1e-12);
         assert!(right.iterations <= cold.iterations);
-    }
-
-    /// The bits of everything a solve returns.
-    fn solution_bits<const NV: usize, const NC: usize>(
-        sol: &QpSolution<NV, NC>,
-    ) -> (QpStatus, u32, usize, [u16; NV], u64, [u64; NV], [u64; NC]) {
-        (
-            sol.status,
-            sol.iterations,
-            sol.n_active,
-            sol.active,
-            sol.objective.to_bits(),
-            core::array::from_fn(|k| sol.x[k].to_bits()),
-            core::array::from_fn(|k| sol.lambda[k].to_bits()),
-        )
-    }
-
-    /// Random QPs of `NV >= SKIP_MIN_NV` variables, solved with the row skip and
-    /// with the plain scan (`solve_with::<false>`): the same status, iterations,
-    /// active set and bits of `x`, `lambda` and the objective; and the skip
-    /// does skip. Dense and diagonal Hessians, rows of mixed scales, warm-start
-    /// marks, rows left out, solved / infeasible / budget-limited QPs, and data
-    /// near the overflow guard.
-    fn skip_matches_plain_scan<const NV: usize, const NC: usize>(seed: u64, cases: usize) {
-        const { assert!(NV >= SKIP_MIN_NV) };
-        let mut rnd = uniform(seed);
-        let mut qp = std::boxed::Box::new(DenseQp::<NV, NC>::default());
-        let (mut skipped, mut computed) = (0u64, 0u64);
-        let mut statuses = [0usize; 4];
-        for k in 0..cases {
-            let H = if k % 2 == 0 {
-                SMatrix::<f64, NV, NV>::from_diagonal(&SVector::from_fn(|_, _| {
-                    0.1 + 10.0 * rnd().abs()
-                }))
-            } else {
-                let A = SMatrix::<f64, NV, NV>::from_fn(|_, _| rnd());
-                A.transpose() * A + SMatrix::identity() * 0.1
-            };
-            let s = DualActiveSet::<NV, NC>::new(&H, QpSettings::default()).unwrap();
-            // Mostly well-scaled; some QPs with huge or tiny data.
-            let scale = match k % 10 {
-                7 => 1e150,
-                8 => 1e-150,
-                9 => 1e290,
-                _ => 1.0,
-            };
-            qp.clear();
-            qp.q = SVector::from_fn(|_, _| 20.0 * scale * rnd());
-            let m = NC / 4 + (k * 37) % (NC - NC / 4 + 1);
-            let infeasible_rhs = k % 5 == 4;
-            for _ in 0..m {
-                let row_scale = libm::pow(10.0, 2.0 * rnd());
-                let g = SVector::<f64, NV>::from_fn(|_, _| rnd() * row_scale);
-                let h = if infeasible_rhs {
-                    rnd() - 0.1
-                } else {
-                    0.2 + rnd().abs()
-                } * row_scale
-                    * scale;
-                qp.push_row(&g, h).unwrap();
-            }
-            let prefer: [bool; NC] = core::array::from_fn(|_| rnd() > 0.9);
-            let excluded: [bool; NC] = core::array::from_fn(|_| k % 3 == 2 && rnd() > 0.7);
-            let budget = if k % 7 == 6 { 5 } else { 1000 };
-            let mut rows_skip = RowNorms::euclidean(&*qp);
-            let mut rows_plain = rows_skip.clone();
-            let with_skip = s.solve_with::<true>(
-                &qp,
-                qp.h.as_slice(),
-                &excluded,
-                &mut rows_skip,
-                &prefer,
-                budget,
-            );
-            let plain = s.solve_with::<false>(
-                &qp,
-                qp.h.as_slice(),
-                &excluded,
-                &mut rows_plain,
-                &prefer,
-                budget,
-            );
-            assert_eq!(solution_bits(&with_skip), solution_bits(&plain), "QP {k}");
-            assert_eq!(rows_plain.scan_counts.0, 0);
-            // Skipped plus computed is what the plain scan computed.
-            assert_eq!(
-                rows_skip.scan_counts.0 + rows_skip.scan_counts.1,
-                rows_plain.scan_counts.1,
-                "QP {k}"
-            );
-            skipped += rows_skip.scan_counts.0;
-            computed += rows_skip.scan_counts.1;
-            statuses[match plain.status {
-                QpStatus::Solved => 0,
-                QpStatus::Infeasible => 1,
-                QpStatus::IterationLimit => 2,
-                QpStatus::NumericalError => 3,
-            }] += 1;
-        }
-        std::println!(
-            "NV = {NV}, NC = {NC}: {cases} QPs (solved, infeasible, budget, error: \
-             {statuses:?}), {skipped} slacks skipped, {computed} computed"
-        );
-        assert!(statuses[0] > cases / 5 && statuses[1] > 0 && statuses[2] > 0);
-        assert!(
-            skipped > computed / 10,
-            "{skipped} skipped, {computed} computed"
-        );
-    }
-
-    #[test]
-    fn skip_matches_plain_scan_nv20() {
-        skip_matches_plain_scan::<20, 240>(0x9e37_79b9_7f4a_7c15, 300);
-    }
-
-    #[test]
-    fn skip_matches_plain_scan_nv40() {
-        skip_matches_plain_scan::<40, 480>(0xd1b5_4a32_d192_ed03, 150);
-    }
-
-    /// Non-finite numbers that appear during a solve give `NumericalError`
-    /// with and without the skip alike (the iterate overflows on the way).
-    #[test]
-    fn skip_keeps_numerical_errors() {
-        let s =
-            DualActiveSet::<16, 64>::new(&(SMatrix::identity() * 1e-300), QpSettings::default())
-                .unwrap();
-        let mut qp = DenseQp::<16, 64>::with_q(SVector::from_element(1e10));
-        for i in 0..64 {
-            let mut g = SVector::<f64, 16>::zeros();
-            g[i % 16] = if i < 16 { 1.0 } else { 1e-3 * i as f64 };
-            qp.push_row(&g, 1e5).unwrap();
-        }
-        let mut a = RowNorms::euclidean(&qp);
-        let mut b = a.clone();
-        let with_skip = s.solve_with::<true>(
-            &qp,
-            qp.h.as_slice(),
-            &[false; 64],
-            &mut a,
-            &[false; 64],
-            100,
-        );
-        let plain = s.solve_with::<false>(
-            &qp,
-            qp.h.as_slice(),
-            &[false; 64],
-            &mut b,
-            &[false; 64],
-            100,
-        );
-        assert_eq!(plain.status, QpStatus::NumericalError);
-        assert_eq!(solution_bits(&with_skip), solution_bits(&plain));
     }
 }
