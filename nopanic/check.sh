@@ -38,7 +38,8 @@ trap 'rm -f "$LOG"' EXIT
 echo "Linking the no-panic harness ($TARGET, release, panic-never)..."
 if cargo build --release --locked 2>"$LOG"; then
     echo "OK: no panicking branch is reachable from Controller::new, Controller::configure, Controller::step,"
-    echo "    ConvexPolygon::new or ConvexPolygon::hull in the release build for Cortex-M7."
+    echo "    ConvexPolygon::new, ConvexPolygon::hull, or DualActiveSet::new and LdpSolver (NV = 16, NC = 32)"
+    echo "    in the release build for Cortex-M7."
     exit 0
 fi
 

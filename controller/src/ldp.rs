@@ -313,7 +313,7 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                 // w = C^-1 M_A m_p, r = C^-T w = (M_A M_A')^-1 M_A m_p.
                 let mut b = [0.0f64; NV];
                 for (bi, &a) in b.iter_mut().zip(&act).take(nact_c) {
-                    *bi = kp[usize::from(a)];
+                    *bi = kp.get(usize::from(a)).copied().unwrap_or(0.0);
                 }
                 let (mut w, mut r) = chol_solve(&Ci, &b, nact_c);
                 // z = m_p - M_A' r: the component of m_p outside the active span.

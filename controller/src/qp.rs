@@ -343,9 +343,14 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
             return Err(HessianError::NotFinite);
         }
         let scale = H.amax().max(f64::MIN_POSITIVE);
-        for i in 0..NV {
-            for j in 0..i {
-                if (H[(i, j)] - H[(j, i)]).abs() > 1e-12 * scale {
+        // |H_ij - H_ji| for i > j; `cols[j][i]` is H_ij (column-major), read
+        // with checked access (bounds the optimiser could not prove for every
+        // NV, see nopanic/).
+        let cols = &H.data.0;
+        for (j, col) in cols.iter().enumerate() {
+            for (i, &hij) in col.iter().enumerate().skip(j + 1) {
+                let hji = cols.get(i).and_then(|c| c.get(j)).copied().unwrap_or(hij);
+                if (hij - hji).abs() > 1e-12 * scale {
                     return Err(HessianError::NotSymmetric);
                 }
             }
@@ -853,10 +858,14 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
             }
             d[nact] = alpha;
         }
-        for i in 0..=nact {
-            R[(i, nact)] = d[i];
+        // Column `nact` of R gets d[..=nact] (checked access, as in drop_row).
+        let Some(col) = R.data.0.get_mut(nact) else {
+            return false;
+        };
+        for (r, &di) in col.iter_mut().zip(&d).take(nact + 1) {
+            *r = di;
         }
-        R[(nact, nact)] != 0.0 && R[(nact, nact)].is_finite()
+        col.get(nact).is_some_and(|&r| r != 0.0 && r.is_finite())
     }
 
     /// Removes active row `l` (of `nact`): deletes column `l` of `R` and restores
@@ -882,10 +891,14 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
             let (c, s, rr) = givens(a, b);
             R[(col, col)] = rr;
             R[(col + 1, col)] = 0.0;
-            for k in (col + 1)..nact - 1 {
-                let (ra, rb) = (R[(col, k)], R[(col + 1, k)]);
-                R[(col, k)] = c * ra + s * rb;
-                R[(col + 1, k)] = -s * ra + c * rb;
+            // Columns k in col+1..nact-1 (checked access: the optimiser cannot
+            // prove the bounds for every NV, see nopanic/).
+            for rk in R.data.0.iter_mut().take(nact - 1).skip(col + 1) {
+                if let [.., ra, rb] = rk.get_mut(..col + 2).unwrap_or(&mut []) {
+                    let (a, b) = (*ra, *rb);
+                    *ra = c * a + s * b;
+                    *rb = -s * a + c * b;
+                }
             }
             rotate_columns(J, col, c, s);
         }
@@ -1166,6 +1179,14 @@ mod tests {
         let e =
             DualActiveSet::<2, 4>::new(&Matrix2::new(1.0, 0.5, 0.0, 1.0), QpSettings::default());
         assert_eq!(e.unwrap_err(), HessianError::NotSymmetric);
+        // Every pair is compared: an asymmetry in any one off-diagonal pair of a
+        // 6 x 6 Hessian is found, on either side of the diagonal.
+        for (i, j) in [(4, 2), (2, 4), (5, 0), (0, 5), (1, 0)] {
+            let mut h = SMatrix::<f64, 6, 6>::identity() * 2.0;
+            h[(i, j)] = 1e-6;
+            let e = DualActiveSet::<6, 4>::new(&h, QpSettings::default());
+            assert_eq!(e.unwrap_err(), HessianError::NotSymmetric, "({i}, {j})");
+        }
         let e = DualActiveSet::<2, 4>::new(
             &Matrix2::new(f64::NAN, 0.0, 0.0, 1.0),
             QpSettings::default(),

@@ -13,9 +13,10 @@ use core::ptr::{addr_of, addr_of_mut, read_volatile, write_volatile};
 
 use cortex_m_rt::entry;
 use ldcbf_controller::nalgebra::Vector2;
+use ldcbf_controller::nalgebra::{SMatrix, SVector};
 use ldcbf_controller::{
-    Config, Controller, ConvexPolygon, CycleInput, CycleOutput, PaperController, Side,
-    constraint_capacity,
+    Config, Controller, ConvexPolygon, CycleInput, CycleOutput, DenseQp, DualActiveSet, LdpSolver,
+    PaperController, QpSettings, Side, constraint_capacity,
 };
 
 #[cfg(not(feature = "never"))]
@@ -35,6 +36,13 @@ const NPTS: usize = 10;
 static mut RAW: [f64; 64] = [0.0; 64];
 /// Opaque obstacle point lists.
 static mut PTS: [[[f64; 2]; NPTS]; NPOLY] = [[[0.0; 2]; NPTS]; NPOLY];
+/// Variables and rows of the least-distance path's QP (LIPMWALK's sizes).
+const LNV: usize = 16;
+const LNC: usize = 32;
+/// Opaque QP data: H, G, q, h, prefer, sizes.
+static mut QPRAW: [f64; LNV * LNV + LNC * LNV + LNV + 2 * LNC + 2] =
+    [0.0; LNV * LNV + LNC * LNV + LNV + 2 * LNC + 2];
+
 /// Outputs, written so that nothing is dead code.
 static mut OUT: [f64; 16] = [0.0; 16];
 
@@ -193,6 +201,30 @@ fn main() -> ! {
         let mut out = summary(&a);
         for (o, x) in out.iter_mut().zip(summary(&b)) {
             *o += x;
+        }
+        // The least-distance path (`LdpSolver`) on an opaque QP.
+        // SAFETY: plain volatile read of a static that is never referenced.
+        let d = unsafe { read_volatile(addr_of!(QPRAW)) };
+        let hess = SMatrix::<f64, LNV, LNV>::from_fn(|i, j| d[i * LNV + j]);
+        if let Ok(solver) = DualActiveSet::<LNV, LNC>::new(&hess, QpSettings::default()) {
+            let o = LNV * LNV;
+            let mut qp = DenseQp::<LNV, LNC>::with_q(SVector::from_fn(|i, _| d[o + i]));
+            let o = o + LNV;
+            let m = len(d[o + LNC * LNV + 2 * LNC], LNC);
+            for k in 0..m {
+                let g = SVector::<f64, LNV>::from_fn(|i, _| d[o + k * LNV + i]);
+                let _ = qp.push_row(&g, d[o + LNC * LNV + k]);
+            }
+            let o = o + LNC * LNV;
+            let h = SVector::<f64, LNC>::from_fn(|i, _| d[o + i]);
+            let mut prefer = [false; LNC];
+            for (p, x) in prefer.iter_mut().zip(&d[o + LNC..o + 2 * LNC]) {
+                *p = *x > 0.0;
+            }
+            let ldp = LdpSolver::prepare(&solver, &qp);
+            let loaded = ldp.load(&qp.q, &h);
+            let sol = ldp.solve(&loaded, &prefer, len(d[o + 2 * LNC + 1], 10_000) as u32);
+            out[0] += sol.x[0] + sol.lambda[LNC - 1] + sol.objective;
         }
         publish(out);
     }
