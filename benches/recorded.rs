@@ -1,6 +1,6 @@
 //! Benchmarks of the controller on control cycles recorded from simulator runs
 //! (issue 5, items 1 and 3), at the paper's configuration
-//! (`PaperController`: N = 3, capacity 8 obstacles, row capacity 48).
+//! (`RobotController`: N = 3, capacity 8 obstacles, row capacity 72).
 //!
 //! # The recorded sets
 //!
@@ -59,8 +59,8 @@ use std::time::{Duration, Instant};
 
 use criterion::Criterion;
 use ldcbf_controller::{
-    CycleInput, CycleOutput, CycleStatus, DenseQp, DualActiveSet, PaperController, QpBackend,
-    QpSolution,
+    CycleInput, CycleOutput, CycleStatus, DenseQp, DualActiveSet, QpBackend, QpSolution,
+    RobotController,
 };
 use ldcbf_sim::deadline::{Case, random_cases};
 use ldcbf_sim::replay::{Recording, record_case};
@@ -142,7 +142,7 @@ struct Set {
     name: &'static str,
     runs: Vec<Recording>,
     /// One controller per run, with the run's configuration.
-    controllers: Vec<PaperController>,
+    controllers: Vec<RobotController>,
     qps: Vec<Qp>,
     /// `max_iter` of each run's configuration.
     max_iter: Vec<u32>,
@@ -158,7 +158,7 @@ impl Set {
                 r
             })
             .collect();
-        let controllers: Vec<PaperController> = runs
+        let controllers: Vec<RobotController> = runs
             .iter()
             .map(|r| r.controller().expect("config"))
             .collect();
@@ -244,7 +244,7 @@ impl Mode {
 }
 
 /// One pass over the set in `mode`, each call timed: (run, cycle, ns) in order.
-fn timed_pass(set: &Set, mode: Mode, ctls: &mut [PaperController]) -> Vec<(usize, usize, u64)> {
+fn timed_pass(set: &Set, mode: Mode, ctls: &mut [RobotController]) -> Vec<(usize, usize, u64)> {
     match mode {
         Mode::StepWarm | Mode::StepCold => set
             .inputs()
@@ -303,7 +303,7 @@ fn per_cycle_table(sets: &[Set], passes: usize) {
     println!("|---|---|---|---|---|---|---|---|---|---|---|");
     for set in sets {
         for mode in Mode::ALL {
-            let mut ctls: Vec<PaperController> = set
+            let mut ctls: Vec<RobotController> = set
                 .runs
                 .iter()
                 .map(|r| r.controller().expect("config"))
@@ -401,7 +401,7 @@ fn bench_set(cr: &mut Criterion, set: &Set) {
     let mut group = cr.benchmark_group(format!("sim_{}", set.name));
     for mode in [Mode::StepWarm, Mode::StepCold] {
         group.bench_function(mode.name(), |b| {
-            let mut ctls: Vec<PaperController> = set.controllers.clone();
+            let mut ctls: Vec<RobotController> = set.controllers.clone();
             let mut n = 0usize;
             b.iter(|| {
                 let (k, i, input) = &inputs[n];

@@ -80,7 +80,7 @@ pub use lip::Lip;
 pub use mpc::{
     ActiveObstacle, Assembly, CommandSource, Config, ConfigError, Controller, CycleInfo,
     CycleInput, CycleOutput, CycleStatus, InputError, LipState, PaperController, Plan, Prediction,
-    Side, constraint_capacity,
+    RobotController, Side, constraint_capacity,
 };
 pub use qp::{
     DenseQp, DualActiveSet, HessianError, OwnSolver, QpBackend, QpSettings, QpSolution, QpStatus,

@@ -73,6 +73,11 @@ pub const fn constraint_capacity(n: usize, nobs: usize, foot_clearance: bool) ->
 /// clearance rows.
 pub type PaperController = Controller<3, 6, { constraint_capacity(3, 8, false) }, 8>;
 
+/// The paper's horizon and obstacle capacity with room for the foot-clearance
+/// rows (`NC = 72`): a robot with a body and feet ([`Config::body_radius`],
+/// [`Config::foot_clearance`]). The simulator runs this one.
+pub type RobotController = Controller<3, 6, { constraint_capacity(3, 8, true) }, 8>;
+
 /// Which foot.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Side {
@@ -129,8 +134,23 @@ pub struct Config {
     pub delta: f64,
     /// Obstacles whose signed distance to `p_0` is at most this are active, m.
     pub r_active: f64,
-    /// Foot clearance `delta_foot` (m): `eta'(f_k - c) >= delta_foot`; `None` = off.
+    /// Foot clearance `delta_foot` (m): every footstep's footprint (the
+    /// `foot_length` x `foot_width` rectangle centred on `f_k`, long side along
+    /// the step's heading `theta_k`) keeps at least this distance from each
+    /// active obstacle's half-plane: `eta'(f_k - c) >= delta_foot + support`,
+    /// where `support` is the rectangle's extent along `eta`. `None` = off
+    /// (the paper's QP). With it on, the LDCBF margin also covers the CoM's arc
+    /// between step ends (see [`Config::barrier_margin`]).
     pub foot_clearance: Option<f64>,
+    /// Radius of the robot's body, m (>= 0): a disk around the CoM in the
+    /// horizontal plane that the barrier keeps out of every obstacle (the
+    /// LDCBF margin is `body_radius + delta`, plus the arc term of
+    /// [`Config::barrier_margin`]). 0 = a point CoM, as in the paper.
+    pub body_radius: f64,
+    /// Length of the foot's footprint along the heading, m (>= 0; 0 = a point foot).
+    pub foot_length: f64,
+    /// Width of the foot's footprint across the heading, m (>= 0; 0 = a point foot).
+    pub foot_width: f64,
     /// Within this distance of the goal the heading is frozen (`omega_bar = 0`), m.
     pub heading_freeze_radius: f64,
     /// Iteration budget of one QP solve (adds plus drops).
@@ -176,6 +196,9 @@ impl Default for Config {
             delta: 0.0,
             r_active: 4.0,
             foot_clearance: None,
+            body_radius: 0.0,
+            foot_length: 0.0,
+            foot_width: 0.0,
             heading_freeze_radius: 0.3,
             max_iter: 64,
             max_iter_cycle: 2048,
@@ -227,6 +250,9 @@ impl Config {
         delta: 0.0,
         r_active: 0.0,
         foot_clearance: None,
+        body_radius: 0.0,
+        foot_length: 0.0,
+        foot_width: 0.0,
         heading_freeze_radius: 0.0,
         max_iter: 0,
         max_iter_cycle: 0,
@@ -250,6 +276,53 @@ impl Config {
             max_iter_cycle: self.max_iter_cycle.saturating_mul(scale),
             ..self
         }
+    }
+
+    /// The margin of the step-end LDCBF rows, m: `h(p) = eta'(p - c) - margin`.
+    ///
+    /// `body_radius + delta` keeps the body disk `delta` clear of each
+    /// obstacle's half-plane at the step ends. With foot clearance on, it also
+    /// covers the CoM's continuous arc between step ends: during step `k` the
+    /// LIP gives, for `t` in `[0, T]`,
+    ///
+    /// ```text
+    /// e(p(t)) = (1 - w0 - wT) e(f_k) + w0 e(p_k) + wT e(p_{k+1}),
+    /// w0 = sinh(beta (T - t)) / sinh(beta T),  wT = sinh(beta t) / sinh(beta T),
+    /// ```
+    ///
+    /// with `e(p) = eta'(p - c)` (each axis of `p - f_k` solves `y'' = beta^2 y`
+    /// with the step-end values as boundary conditions). The weights are
+    /// `>= 0` and `w0 + wT >= 1 / cosh(beta T / 2)` (at `t = T / 2`), so `e`
+    /// along the arc is a convex combination of the two step-end values and
+    /// the stance foot's. With the foot rows keeping `e(f_k) >= F = foot_clearance
+    /// + min(foot_length, foot_width) / 2` and the step-end rows keeping
+    /// `e(p_k) >= body_radius + delta + mu`, the arc keeps
+    /// `e(p(t)) >= body_radius + delta` for every `t` when
+    /// `mu = (cosh(beta T / 2) - 1) max(0, body_radius + delta - F)`: that is the
+    /// term added here. Without foot rows only the step ends are guaranteed.
+    pub fn barrier_margin(&self) -> f64 {
+        let body = self.body_radius + self.delta;
+        match self.foot_clearance {
+            None => body,
+            Some(df) => {
+                let foot = df + 0.5 * self.foot_length.min(self.foot_width);
+                let beta = crate::float::sqrt(self.gravity / self.com_height);
+                let bulge = libm::cosh(0.5 * beta * self.step_duration) - 1.0;
+                body + bulge * (body - foot).max(0.0)
+            }
+        }
+    }
+
+    /// The margin of a foot-clearance row, m: `foot_clearance` (0 when off) plus
+    /// the extent along the unit normal `eta` (world frame) of the foot's
+    /// footprint, a `foot_length` x `foot_width` rectangle whose long axis is
+    /// the heading `theta` (rad).
+    pub fn foot_margin(&self, eta: &Vector2<f64>, theta: f64) -> f64 {
+        let (s, c) = libm::sincos(theta);
+        let along = (eta.x * c + eta.y * s).abs();
+        let across = (-eta.x * s + eta.y * c).abs();
+        self.foot_clearance.unwrap_or(0.0)
+            + 0.5 * (self.foot_length * along + self.foot_width * across)
     }
 
     /// Checks every field; the error names the first bad one.
@@ -299,6 +372,16 @@ impl Config {
             && !d.is_finite()
         {
             return err("foot_clearance", "must be finite when set");
+        }
+        let nonneg = |v: f64| v.is_finite() && v >= 0.0;
+        if !nonneg(self.body_radius) {
+            return err("body_radius", "must be finite and >= 0");
+        }
+        if !nonneg(self.foot_length) {
+            return err("foot_length", "must be finite and >= 0");
+        }
+        if !nonneg(self.foot_width) {
+            return err("foot_width", "must be finite and >= 0");
         }
         if !(self.heading_freeze_radius.is_finite() && self.heading_freeze_radius >= 0.0) {
             return err("heading_freeze_radius", "must be finite and >= 0");
@@ -505,7 +588,8 @@ pub struct CycleInfo {
     /// m/s for gait rows; 0 when all hold; the same units as `relax_gait` and
     /// `relax_safety`); NaN for `Hold`.
     pub max_violation: f64,
-    /// Smallest `h_j(p_0)` over the active obstacles (m), `+inf` if none.
+    /// Smallest `h_j(p_0)` over the active obstacles (m, with the margin
+    /// [`Config::barrier_margin`]), `+inf` if none.
     pub min_h0: f64,
     /// Uniform relaxation of the gait rows in the returned plan, m/s of the
     /// bounded body-frame velocity component (0 if none).
@@ -717,6 +801,8 @@ struct Core<const N: usize, const NV: usize, const NC: usize> {
     /// (else they are the all-zero placeholders and every step holds).
     configured: bool,
     config: Config,
+    /// [`Config::barrier_margin`], m (computed once at configure).
+    barrier_margin: f64,
     lip: Lip,
     model: Condensed<N>,
     solver: DualActiveSet<NV, NC>,
@@ -738,6 +824,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
         core: Core {
             configured: false,
             config: Config::UNSET,
+            barrier_margin: 0.0,
             lip: Lip::ZERO,
             model: Condensed::ZERO,
             solver: DualActiveSet::PLACEHOLDER,
@@ -795,6 +882,13 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
                 requirement: "gives a step map that cannot be inverted for the foot (beta T must be in [1.4e-3, 700])",
             });
         }
+        let barrier_margin = config.barrier_margin();
+        if !barrier_margin.is_finite() {
+            return Err(ConfigError {
+                field: "body_radius",
+                requirement: "gives a barrier margin that is not finite",
+            });
+        }
         let settings = QpSettings {
             tol_primal: config.tol_primal,
             ..QpSettings::default()
@@ -806,6 +900,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
         // Everything is checked: commit, field by field.
         let core = &mut self.core;
         core.config = config;
+        core.barrier_margin = barrier_margin;
         core.lip = lip;
         core.model = model;
         core.solver = solver;
@@ -1086,7 +1181,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                     &self.model,
                     &ob.half_plane,
                     cfg.gamma,
-                    cfg.delta,
+                    self.barrier_margin,
                     k,
                     &p0,
                     &v0,
@@ -1100,10 +1195,11 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                 }
             }
         }
-        if let Some(df) = cfg.foot_clearance {
+        if cfg.foot_clearance.is_some() {
             for ob in &out.obstacles[..out.n_obstacles.min(NOBS)] {
                 for k in 0..N {
                     let i = out.qp.m;
+                    let df = cfg.foot_margin(&ob.half_plane.eta, heading.theta[k]);
                     ok &= push_foot_row(&mut out.qp, &self.model, &ob.half_plane, df, k, &p0, &v0)
                         .is_ok();
                     if let Some(slot) = out.rows.get_mut(i) {
@@ -1156,7 +1252,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         let min_h0 = work
             .active_obstacles()
             .iter()
-            .map(|o| o.half_plane.h(&pred.p0, self.config.delta))
+            .map(|o| o.half_plane.h(&pred.p0, self.barrier_margin))
             .fold(f64::INFINITY, f64::min);
         let inside = work
             .active_obstacles()

@@ -11,6 +11,7 @@
 //!   the subgoals (SPEC 5);
 //! * [`perception`]: simulated 2D LiDAR, DBSCAN and one convex obstacle per
 //!   cluster, for unknown maps (SPEC 6);
+//! * [`robot`]: the robot's body disk and footprint (the `[robot]` table);
 //! * [`disturbance`]: pushes, CoM height mismatch, foot placement error and
 //!   state estimation noise (the `[disturbance]` table);
 //! * [`sim`]: the closed loop (controller at 20 Hz or once per step, with the own
@@ -43,6 +44,7 @@ pub mod plot;
 pub mod qpbench;
 pub mod replay;
 pub mod report;
+pub mod robot;
 pub mod robustness;
 pub mod scenario;
 pub mod sim;

@@ -27,7 +27,7 @@
 
 use anyhow::{Context, Result, bail};
 use ldcbf_controller::nalgebra::Vector2;
-use ldcbf_controller::{Config, CycleInput, CycleOutput, PaperController, Side};
+use ldcbf_controller::{Config, CycleInput, CycleOutput, RobotController, Side};
 
 use crate::deadline::Case;
 use crate::scenario::{MAX_VERTICES, Perception, Polygon};
@@ -184,8 +184,8 @@ impl Recording {
     }
 
     /// A fresh controller with the run's configuration (as the run started).
-    pub fn controller(&self) -> Result<PaperController> {
-        PaperController::new(self.config)
+    pub fn controller(&self) -> Result<RobotController> {
+        RobotController::new(self.config)
             .map_err(|e| anyhow::anyhow!("{}: controller: {e}", self.label))
     }
 

@@ -99,6 +99,7 @@ use toml::Spanned;
 use crate::disturbance::DisturbanceParams;
 use crate::perception::LidarParams;
 use crate::planner::RrtParams;
+use crate::robot::RobotParams;
 
 /// Vertex capacity of scenario polygons.
 pub const MAX_VERTICES: usize = 32;
@@ -500,10 +501,11 @@ pub fn random_scenario(seed: u64) -> Scenario {
         seed,
         generator: Some(params),
         controller: ControllerOverrides::default(),
-        config: Config::default(),
+        config: RobotParams::default().apply(Config::default()),
         rrt: RrtParams::default(),
         lidar: LidarParams::default(),
         disturbance: DisturbanceParams::default(),
+        robot: RobotParams::default(),
         obstacles,
     }
 }
@@ -555,6 +557,9 @@ pub struct Scenario {
     /// Disturbances of the plant and of the measured state (the `[disturbance]`
     /// table; all off by default, [`crate::disturbance`]).
     pub disturbance: DisturbanceParams,
+    /// The robot's body and feet (the `[robot]` table, [`crate::robot`]);
+    /// already applied to `config`.
+    pub robot: RobotParams,
     /// Obstacles, world frame: the file's, then the generated ones (the TRUE map).
     pub obstacles: Vec<Polygon>,
 }
@@ -631,6 +636,8 @@ struct RawScenario {
     lidar: Spanned<LidarParams>,
     #[serde(default = "spanned_default")]
     disturbance: Spanned<DisturbanceParams>,
+    #[serde(default = "spanned_default")]
+    robot: Spanned<RobotParams>,
 }
 
 fn spanned_default<T: Default>() -> Spanned<T> {
@@ -1115,8 +1122,18 @@ fn validate(
             message: m,
         });
     }
+    if let Err((f, m)) = raw.robot.get_ref().validate() {
+        let line = text.and_then(|t| find_key_line(t, "robot", f));
+        return Err(ScenarioError {
+            file: file.into(),
+            field: format!("robot.{f}"),
+            line,
+            message: m,
+        });
+    }
+    let robot = raw.robot.get_ref().clone();
     let overrides = raw.controller.get_ref().clone();
-    let config = overrides.apply(Config::default());
+    let config = robot.apply(overrides.apply(Config::default()));
     if let Err(e) = config.validate() {
         let field = format!("controller.{}", e.field);
         // The span of the `[controller]` table; the field line is found by key.
@@ -1128,11 +1145,11 @@ fn validate(
             message: e.requirement.into(),
         });
     }
-    if config.foot_clearance.is_some() {
+    if overrides.foot_clearance.is_some() && !robot.keep_feet_clear {
         return Err(err(
             "controller.foot_clearance",
             Some(raw.controller.span()),
-            "needs a controller with foot-clearance rows; the simulator's PaperController has none"
+            "sets the feet's extra clearance, but robot.keep_feet_clear = false turns the foot rows off"
                 .into(),
         ));
     }
@@ -1231,6 +1248,7 @@ fn validate(
         rrt: raw.rrt_star.get_ref().clone(),
         lidar: raw.lidar.get_ref().clone(),
         disturbance: raw.disturbance.get_ref().clone(),
+        robot,
         obstacles,
     })
 }

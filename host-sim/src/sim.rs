@@ -59,7 +59,7 @@ use std::time::Instant;
 
 use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_controller::{
-    CycleInput, CycleOutput, HalfPlane, OwnSolver, PaperController, QpBackend, Side,
+    CycleInput, CycleOutput, HalfPlane, OwnSolver, QpBackend, RobotController, Side,
     closest_point_point_polygon,
 };
 use ldcbf_reference::ClarabelBackend;
@@ -70,12 +70,12 @@ use crate::planner::{Plan, remaining_length};
 use crate::plant::{Plant, PlantParams};
 use crate::scenario::{Perception, Planner, Polygon, Scenario};
 
-/// Horizon of [`PaperController`].
+/// Horizon of [`RobotController`].
 pub const HORIZON: usize = 3;
-/// QP variables of [`PaperController`].
+/// QP variables of [`RobotController`].
 pub const NV: usize = 2 * HORIZON;
-/// QP row capacity of [`PaperController`].
-pub const NC: usize = ldcbf_controller::constraint_capacity(HORIZON, 8, false);
+/// QP row capacity of [`RobotController`].
+pub const NC: usize = ldcbf_controller::constraint_capacity(HORIZON, 8, true);
 
 /// Plant tick, s (1 kHz).
 pub const PLANT_DT: f64 = 1e-3;
@@ -389,7 +389,7 @@ pub fn run(scenario: &Scenario, options: SimOptions) -> Result<SimResult, SimErr
 /// (of the controller and the backend, so the originals are untouched), ns each;
 /// the minimum, or `u64::MAX` when `repeats <= 1`.
 fn time_on_clones<const V: usize, B: QpBackend<NV, NC> + Clone>(
-    controller: &PaperController,
+    controller: &RobotController,
     backend: &B,
     input: &CycleInput<'_, V>,
     repeats: u32,
@@ -415,7 +415,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
 ) -> Result<SimResult, SimError> {
     let cfg = scenario.config;
     let mut controller =
-        PaperController::new(cfg).map_err(|e| SimError(format!("controller: {e}")))?;
+        RobotController::new(cfg).map_err(|e| SimError(format!("controller: {e}")))?;
     let mut disturber = Disturber::new(
         &scenario.disturbance,
         scenario.seed,
