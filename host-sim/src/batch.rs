@@ -214,11 +214,13 @@ impl BatchRequest {
 pub struct RunRow {
     /// Seed.
     pub seed: u64,
-    /// `goal_reached`, `time_limit`, `stuck` or `diverged`.
+    /// Why the run ended: `goal_reached`, `time_limit`, `stuck` or `diverged`
+    /// (the summary's `ended`; a run whose body touched an obstacle has
+    /// `collision` set whatever its end).
     pub outcome: String,
-    /// Goal reached and no CoM sample inside a true obstacle.
+    /// Goal reached, the body never touched a true obstacle, no foot on one.
     pub success: bool,
-    /// Some CoM sample was inside a true obstacle.
+    /// The body touched a true obstacle (the summary's outcome `collided`).
     pub collision: bool,
     /// Footsteps landed.
     pub steps: u64,
@@ -252,17 +254,21 @@ pub struct RunRow {
     pub obstacles_seen_mean: f64,
     /// Wall-clock time of the whole run (simulation and summary), ms.
     pub wall_ms: f64,
+    /// Some footprint overlapped a true obstacle.
+    pub foot_collision: bool,
+    /// Minimum body clearance (CoM clearance minus the body radius), m.
+    pub min_body_clearance: f64,
 }
 
 const CSV_HEADER: &str = "seed,outcome,success,collision,steps,sim_time,final_distance,\
 min_com_clearance,min_footstep_clearance,max_violation,cycles,non_optimal_cycles,\
 compute_p50_ns,compute_p99_ns,compute_max_ns,planner_failed,subgoals,plan_time_ms,\
-obstacles_seen_mean,wall_ms";
+obstacles_seen_mean,wall_ms,foot_collision,min_body_clearance";
 
 impl RunRow {
     fn csv(&self) -> String {
         format!(
-            "{},{},{},{},{},{},{},{},{},{:e},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{:e},{},{},{},{},{},{},{},{},{},{},{},{}",
             self.seed,
             self.outcome,
             u8::from(self.success),
@@ -282,7 +288,9 @@ impl RunRow {
             self.subgoals,
             self.plan_time_ms,
             self.obstacles_seen_mean,
-            self.wall_ms
+            self.wall_ms,
+            u8::from(self.foot_collision),
+            self.min_body_clearance
         )
     }
 
@@ -324,6 +332,8 @@ impl RunRow {
             plan_time_ms: p(f[17], "plan_time_ms")?,
             obstacles_seen_mean: p(f[18], "obstacles_seen_mean")?,
             wall_ms: p(f[19], "wall_ms")?,
+            foot_collision: b(f[20], "foot_collision")?,
+            min_body_clearance: p(f[21], "min_body_clearance")?,
         })
     }
 }
@@ -399,8 +409,10 @@ pub struct Aggregate {
     pub success: usize,
     /// Runs that reached the goal (with or without a collision).
     pub reached: usize,
-    /// Runs with a CoM sample inside a true obstacle.
+    /// Runs whose body touched a true obstacle.
     pub collisions: usize,
+    /// Runs with a footprint overlapping a true obstacle.
+    pub foot_collisions: usize,
     /// Runs that ended stuck.
     pub stuck: usize,
     /// Runs that hit the time limit.
@@ -419,6 +431,10 @@ pub struct Aggregate {
     pub median_time: f64,
     /// Smallest CoM clearance to the true obstacles over all runs, m.
     pub min_com_clearance: f64,
+    /// Smallest body clearance over all runs, m.
+    pub min_body_clearance: f64,
+    /// Smallest footprint clearance over all runs, m.
+    pub min_footstep_clearance: f64,
     /// Runs with some non-optimal (relaxed or fallback) cycle.
     pub runs_with_non_optimal: usize,
     /// Median over runs of each run's compute p99, ns.
@@ -461,6 +477,7 @@ pub fn aggregate(rows: &[RunRow]) -> Aggregate {
         success: ok.len(),
         reached: count(&|r| r.outcome == "goal_reached"),
         collisions: count(&|r| r.collision),
+        foot_collisions: count(&|r| r.foot_collision),
         stuck: count(&|r| r.outcome == "stuck"),
         timeouts: count(&|r| r.outcome == "time_limit"),
         diverged: count(&|r| r.outcome == "diverged"),
@@ -472,6 +489,14 @@ pub fn aggregate(rows: &[RunRow]) -> Aggregate {
         min_com_clearance: rows
             .iter()
             .map(|r| r.min_com_clearance)
+            .fold(f64::INFINITY, f64::min),
+        min_body_clearance: rows
+            .iter()
+            .map(|r| r.min_body_clearance)
+            .fold(f64::INFINITY, f64::min),
+        min_footstep_clearance: rows
+            .iter()
+            .map(|r| r.min_footstep_clearance)
             .fold(f64::INFINITY, f64::min),
         runs_with_non_optimal: count(&|r| r.non_optimal_cycles > 0),
         compute_p99_median_ns: median(&mut p99).max(0.0) as u64,
@@ -501,12 +526,16 @@ pub fn markdown_table(cols: &[(String, Aggregate)]) -> String {
     let rows: Vec<Row<'_>> = vec![
         ("runs", Box::new(|a: &Aggregate| a.runs.to_string())),
         (
-            "success rate (goal, no collision)",
+            "success rate (goal, no body or foot collision)",
             Box::new(move |a: &Aggregate| pct(a.success, a.runs)),
         ),
         (
-            "collisions (CoM inside a true obstacle)",
+            "collisions (the body touched a true obstacle)",
             Box::new(|a: &Aggregate| a.collisions.to_string()),
+        ),
+        (
+            "foot collisions (a footprint on a true obstacle)",
+            Box::new(|a: &Aggregate| a.foot_collisions.to_string()),
         ),
         ("stuck", Box::new(|a: &Aggregate| a.stuck.to_string())),
         (
@@ -525,6 +554,23 @@ pub fn markdown_table(cols: &[(String, Aggregate)]) -> String {
         (
             "time to goal, mean / median [s]",
             Box::new(move |a: &Aggregate| format!("{} / {}", f1(a.mean_time), f1(a.median_time))),
+        ),
+        (
+            "min body / foot clearance [m]",
+            Box::new(|a: &Aggregate| {
+                let m = |v: f64| {
+                    if v.is_finite() {
+                        format!("{v:.3}")
+                    } else {
+                        "n/a".into()
+                    }
+                };
+                format!(
+                    "{} / {}",
+                    m(a.min_body_clearance),
+                    m(a.min_footstep_clearance)
+                )
+            }),
         ),
         (
             "min CoM clearance [m]",
@@ -717,7 +763,7 @@ pub fn run_batch(req: &BatchRequest) -> Result<BatchReport> {
                 let s = summarize(&r);
                 let row = RunRow {
                     seed,
-                    outcome: s.outcome.clone(),
+                    outcome: s.ended.clone(),
                     success: s.success,
                     collision: s.collision,
                     steps: s.steps as u64,
@@ -738,6 +784,8 @@ pub fn run_batch(req: &BatchRequest) -> Result<BatchReport> {
                     plan_time_ms: s.plan_time_ms.unwrap_or(0.0),
                     obstacles_seen_mean: s.obstacles_seen_mean,
                     wall_ms: t.elapsed().as_secs_f64() * 1e3,
+                    foot_collision: s.foot_collision,
+                    min_body_clearance: s.min_body_clearance.unwrap_or(f64::INFINITY),
                 };
                 if !row.success {
                     let n = failures.fetch_add(1, Ordering::Relaxed) + 1;
@@ -988,6 +1036,8 @@ mod tests {
             plan_time_ms: 0.0,
             obstacles_seen_mean: 8.0,
             wall_ms: 12.5,
+            foot_collision: true,
+            min_body_clearance: 0.09,
         };
         assert_eq!(RunRow::parse(&r.csv()).unwrap(), r);
     }

@@ -18,8 +18,10 @@
 //!   relaxations of an infeasible cycle, see `ldcbf_controller::relax`),
 //!   `foot_x, foot_y` (the swing target), `omega`
 //!   (rad/s), `landed` (1 when this target is where the foot landed).
-//! * `footsteps.csv`: `step, side, x, y, t, clearance`: the initial stance foot is
-//!   step 0; step `k` landed at the end of step `k - 1`.
+//! * `footsteps.csv`: `step, side, x, y, t, heading, clearance`: the initial
+//!   stance foot is step 0; step `k` landed at the end of step `k - 1`;
+//!   `heading` (rad) is the footprint's long axis, `clearance` (m) the
+//!   footprint's signed clearance to the true obstacles.
 //! * `trajectory.csv`: `t, px, py, vx, vy, theta, omega, stance, clearance` of the
 //!   CoM, every `trajectory_every`-th 1 kHz plant sample (every sample with 1;
 //!   the clearance minimum in the summary always uses every sample).
@@ -61,14 +63,26 @@ pub struct Summary {
     pub solver: String,
     /// Controller rate, e.g. `20 Hz` or `once per step`.
     pub mpc_rate: String,
-    /// Why the run ended: `goal_reached`, `time_limit` or `stuck`.
+    /// `collided` when the robot's body touched a true obstacle
+    /// (`collision`), else why the run ended: `goal_reached`, `time_limit`,
+    /// `stuck` or `diverged` (`ended`).
     pub outcome: String,
+    /// Why the run ended: `goal_reached`, `time_limit`, `stuck` or `diverged`.
+    pub ended: String,
     /// The CoM came within `success_radius` of the goal.
     pub reached_goal: bool,
-    /// Some 1 kHz CoM sample was strictly inside an obstacle (`min_com_clearance < 0`).
+    /// The body overlapped a true obstacle: some 1 kHz sample had
+    /// `min_body_clearance < -`[`crate::robot::CONTACT_TOLERANCE`] (for a
+    /// point robot, the CoM inside).
     pub collision: bool,
-    /// SPEC 4 success: `reached_goal && !collision`.
+    /// Some footstep's footprint overlapped a true obstacle
+    /// (`min_footstep_clearance < -`[`crate::robot::CONTACT_TOLERANCE`]).
+    pub foot_collision: bool,
+    /// Success: `reached_goal && !collision && !foot_collision` (SPEC 4, for a
+    /// robot with a body and feet).
     pub success: bool,
+    /// Radius of the robot's body disk, m (`[robot]`, [`crate::robot`]).
+    pub body_radius: f64,
     /// Footsteps landed (the initial stance foot not counted).
     pub steps: usize,
     /// Simulated time at the end, s.
@@ -80,8 +94,12 @@ pub struct Summary {
     pub min_com_clearance: Option<f64>,
     /// Time of that minimum, s.
     pub min_com_clearance_time: Option<f64>,
-    /// Minimum over all footsteps (initial stance included) of the signed distance
-    /// to the nearest obstacle, m (negative = a foot inside an obstacle).
+    /// The body's clearance: `min_com_clearance - body_radius`, m (negative =
+    /// the body overlapped an obstacle; null without obstacles).
+    pub min_body_clearance: Option<f64>,
+    /// Minimum over all footsteps (initial stance included) of the signed
+    /// clearance of the foot's footprint to the nearest obstacle, m (negative =
+    /// a foot overlapping an obstacle; a point foot's distance for a 0 x 0 foot).
     pub min_footstep_clearance: Option<f64>,
     /// Max over every cycle of `CycleInfo::max_violation`: the largest violation of
     /// that cycle's own QP rows (gait + LDCBF) by the plan it returned and the
@@ -277,7 +295,10 @@ pub fn summarize(r: &SimResult) -> Summary {
     }
     let ns: Vec<u64> = r.cycles.iter().map(|c| c.compute_ns).collect();
     let reached = r.outcome == crate::sim::Outcome::GoalReached;
-    let collision = has_obs && min_c < 0.0;
+    let min_body = sc.robot.body_clearance(min_c);
+    let tol = crate::robot::CONTACT_TOLERANCE;
+    let collision = has_obs && min_body < -tol;
+    let foot_collision = has_obs && min_foot < -tol;
     Summary {
         scenario: sc.name.clone(),
         source: sc.source.clone(),
@@ -287,15 +308,23 @@ pub fn summarize(r: &SimResult) -> Summary {
             crate::sim::Solver::Clarabel => "clarabel".into(),
         },
         mpc_rate: r.options.mpc_rate.to_string(),
-        outcome: r.outcome.name().into(),
+        outcome: if collision {
+            "collided".into()
+        } else {
+            r.outcome.name().into()
+        },
+        ended: r.outcome.name().into(),
         reached_goal: reached,
         collision,
-        success: reached && !collision,
+        foot_collision,
+        success: reached && !collision && !foot_collision,
+        body_radius: sc.robot.body_radius,
         steps: r.steps(),
         sim_time: r.sim_time(),
         final_distance: r.final_distance(),
         min_com_clearance: has_obs.then_some(min_c),
         min_com_clearance_time: has_obs.then_some(min_t),
+        min_body_clearance: has_obs.then_some(min_body),
         min_footstep_clearance: has_obs.then_some(min_foot),
         max_violation,
         max_violation_landed,
@@ -355,13 +384,20 @@ pub fn human_summary(s: &Summary) -> String {
         "scenario {} ({}), solver {}, MPC {}",
         s.scenario, s.source, s.solver, s.mpc_rate
     );
-    let verdict = match (s.outcome.as_str(), s.collision) {
-        ("goal_reached", false) => "goal reached".to_string(),
-        ("goal_reached", true) => "goal reached WITH COLLISION".to_string(),
-        (o, c) => format!(
-            "goal NOT reached ({o}){}",
-            if c { ", WITH COLLISION" } else { "" }
-        ),
+    let feet = if s.foot_collision {
+        ", A FOOT ON AN OBSTACLE"
+    } else {
+        ""
+    };
+    let verdict = match (s.ended.as_str(), s.collision) {
+        ("goal_reached", false) => format!("goal reached{feet}"),
+        ("goal_reached", true) => {
+            format!("COLLIDED (the body touched an obstacle), then reached the goal{feet}")
+        }
+        (o, false) => format!("goal NOT reached ({o}){feet}"),
+        (o, true) => {
+            format!("COLLIDED (the body touched an obstacle), goal NOT reached ({o}){feet}")
+        }
     };
     let _ = writeln!(
         o,
@@ -401,8 +437,10 @@ pub fn human_summary(s: &Summary) -> String {
     let f = |v: Option<f64>| v.map_or("n/a".to_string(), |x| format!("{x:.3} m"));
     let _ = writeln!(
         o,
-        "  min CoM clearance {}, min footstep clearance {}, max plan violation {:.1e}",
+        "  min body clearance {} (CoM {}, body radius {:.2} m), min foot clearance {}, max plan violation {:.1e}",
+        f(s.min_body_clearance),
         f(s.min_com_clearance),
+        s.body_radius,
         f(s.min_footstep_clearance),
         s.max_violation
     );
@@ -498,16 +536,17 @@ status,source,iterations,active_set,compute_ns,max_violation,cost,min_h0,relax_g
     }
     write_file(&dir.join("cycles.csv"), &s)?;
 
-    let mut s = String::from("step,side,x,y,t,clearance\n");
+    let mut s = String::from("step,side,x,y,t,heading,clearance\n");
     for f in &r.footsteps {
         let _ = writeln!(
             s,
-            "{},{},{},{},{:.3},{}",
+            "{},{},{},{},{:.3},{},{}",
             f.index,
             side_name(f.side),
             f.position.x,
             f.position.y,
             f.time,
+            f.heading,
             f.clearance
         );
     }

@@ -21,7 +21,16 @@
 //! comparable with the sources.
 
 use ldcbf_controller::Config;
+use ldcbf_controller::geometry::closest_point_point_polygon;
+use ldcbf_controller::nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
+
+use crate::scenario::Polygon;
+
+/// Contact tolerance, m: a clearance below `-CONTACT_TOLERANCE` is a collision.
+/// A barrier or foot row that is active holds to rounding (`1e-14` m), so a
+/// shape that touches an obstacle exactly is not counted as overlapping it.
+pub const CONTACT_TOLERANCE: f64 = 1e-9;
 
 /// The `[robot]` table. Lengths in metres.
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
@@ -98,11 +107,137 @@ impl RobotParams {
     pub fn foot_reach(&self) -> f64 {
         0.5 * self.foot_length.hypot(self.foot_width)
     }
+
+    /// The four corners of the footprint of a foot at `center` (m, world)
+    /// whose long axis points along `heading` (rad), counter-clockwise.
+    pub fn footprint(&self, center: Vector2<f64>, heading: f64) -> [Vector2<f64>; 4] {
+        let along = Vector2::new(heading.cos(), heading.sin()) * (0.5 * self.foot_length);
+        let across = Vector2::new(-heading.sin(), heading.cos()) * (0.5 * self.foot_width);
+        [
+            center - along - across,
+            center + along - across,
+            center + along + across,
+            center - along + across,
+        ]
+    }
+
+    /// Signed clearance of the footprint at `center`, `heading` to the nearest
+    /// of `obstacles`, m: the distance between the two shapes when apart,
+    /// minus the penetration depth when they overlap; `+inf` without obstacles.
+    pub fn foot_clearance(&self, center: Vector2<f64>, heading: f64, obstacles: &[Polygon]) -> f64 {
+        let foot = self.footprint(center, heading);
+        obstacles
+            .iter()
+            .map(|o| signed_distance_convex(&foot, o))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// Signed clearance of the body disk to the nearest obstacle, m (negative =
+    /// the body overlaps an obstacle), from the CoM's signed distance to it.
+    pub fn body_clearance(&self, com_clearance: f64) -> f64 {
+        com_clearance - self.body_radius
+    }
+}
+
+/// Signed distance between a convex quadrilateral `a` (possibly degenerate: a
+/// segment or a point, corners counter-clockwise) and the convex polygon `b`,
+/// m: the gap when they are apart; when they overlap, minus the smallest
+/// translation that separates them (the least overlap of their projections on
+/// the edge normals of both, the separating axis theorem).
+pub fn signed_distance_convex(a: &[Vector2<f64>; 4], b: &Polygon) -> f64 {
+    let bv = b.vertices();
+    // Separation axes: the edge normals of both shapes (degenerate edges skipped).
+    let mut depth = f64::INFINITY;
+    let mut separated = false;
+    let edges_a = (0..4).map(|i| (a[i], a[(i + 1) % 4]));
+    let edges_b = (0..bv.len()).map(|i| (bv[i], bv[(i + 1) % bv.len()]));
+    for (p, q) in edges_a.chain(edges_b) {
+        let d = q - p;
+        let len = d.norm();
+        if len < 1e-12 {
+            continue;
+        }
+        let n = Vector2::new(d.y, -d.x) / len;
+        let (amin, amax) = project(a.iter(), &n);
+        let (bmin, bmax) = project(bv.iter(), &n);
+        let overlap = (amax - bmin).min(bmax - amin);
+        if overlap <= 0.0 {
+            separated = true;
+            break;
+        }
+        depth = depth.min(overlap);
+    }
+    if !separated && depth.is_finite() {
+        return -depth;
+    }
+    // Apart (or `a` is a point or a segment): the least vertex-to-shape distance.
+    let from_a = a
+        .iter()
+        .map(|v| closest_point_point_polygon(v, b).signed_distance)
+        .fold(f64::INFINITY, f64::min);
+    if from_a <= 0.0 {
+        return from_a;
+    }
+    let from_b = bv
+        .iter()
+        .flat_map(|v| (0..4).map(move |i| distance_point_segment(v, &a[i], &a[(i + 1) % 4])))
+        .fold(f64::INFINITY, f64::min);
+    from_a.min(from_b)
+}
+
+fn project<'a>(points: impl Iterator<Item = &'a Vector2<f64>>, n: &Vector2<f64>) -> (f64, f64) {
+    points.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), p| {
+        let t = p.dot(n);
+        (lo.min(t), hi.max(t))
+    })
+}
+
+fn distance_point_segment(p: &Vector2<f64>, a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
+    let d = b - a;
+    let l2 = d.norm_squared();
+    let t = if l2 > 0.0 {
+        ((p - a).dot(&d) / l2).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (p - (a + d * t)).norm()
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn square(c: [f64; 2], h: f64) -> Polygon {
+        Polygon::new(&[
+            [c[0] - h, c[1] - h],
+            [c[0] + h, c[1] - h],
+            [c[0] + h, c[1] + h],
+            [c[0] - h, c[1] + h],
+        ])
+        .unwrap()
+    }
+
+    #[test]
+    fn foot_clearance_is_the_gap_or_minus_the_depth() {
+        let r = RobotParams::default(); // foot 0.22 x 0.10
+        let obs = [square([1.0, 0.0], 0.5)]; // x in [0.5, 1.5]
+        // Heading along x: the foot's tip at x = c + 0.11.
+        let gap = r.foot_clearance(Vector2::new(0.2, 0.0), 0.0, &obs);
+        assert!((gap - (0.5 - 0.31)).abs() < 1e-12, "{gap}");
+        // Across: the foot's side at x = c + 0.05.
+        let gap = r.foot_clearance(Vector2::new(0.2, 0.0), core::f64::consts::FRAC_PI_2, &obs);
+        assert!((gap - (0.5 - 0.25)).abs() < 1e-12, "{gap}");
+        // Overlapping by 0.04 m along x.
+        let pen = r.foot_clearance(Vector2::new(0.43, 0.0), 0.0, &obs);
+        assert!((pen + 0.04).abs() < 1e-12, "{pen}");
+        // Diagonal gap: corner to corner.
+        let obs = [square([1.0, 1.0], 0.5)];
+        let d = r.foot_clearance(Vector2::new(0.0, 0.0), 0.0, &obs);
+        assert!((d - (0.5f64 - 0.11).hypot(0.5 - 0.05)).abs() < 1e-12, "{d}");
+        // A point foot is the point's signed distance.
+        let d = RobotParams::POINT.foot_clearance(Vector2::new(0.7, 1.0), 0.3, &obs);
+        assert!((d + 0.2).abs() < 1e-12, "{d}");
+    }
 
     #[test]
     fn apply_sets_body_and_feet() {

@@ -185,9 +185,10 @@ pub struct RobustRun {
     pub fall_time: Option<f64>,
     /// Goal reached and no collision.
     pub success: bool,
-    /// Some CoM sample before any fall was inside a true obstacle.
+    /// The body touched a true obstacle before any fall (outcome `collided`).
     pub collision: bool,
-    /// Minimum true CoM clearance before any fall, m (`+inf` without obstacles).
+    /// Minimum true body clearance (CoM clearance minus the body radius) before
+    /// any fall, m (`+inf` without obstacles).
     pub min_clearance: f64,
     /// Footsteps landed.
     pub steps: usize,
@@ -228,8 +229,9 @@ fn one_run(
         ..SimOptions::default()
     };
     let r = run(sc, opts).with_context(|| label.clone())?;
-    let (fall_time, min_clearance) = fall_and_clearance(&r, r.disturbance.plant_com_height);
-    let collision = !sc.obstacles.is_empty() && min_clearance < 0.0;
+    let (fall_time, min_com) = fall_and_clearance(&r, r.disturbance.plant_com_height);
+    let min_clearance = sc.robot.body_clearance(min_com);
+    let collision = !sc.obstacles.is_empty() && min_clearance < -crate::robot::CONTACT_TOLERANCE;
     let reached = r.outcome == Outcome::GoalReached;
     Ok(RobustRun {
         condition,

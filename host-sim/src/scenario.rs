@@ -1227,6 +1227,38 @@ fn validate(
             Some(p)
         }
     };
+    // Impossible scenarios: the body must fit at the start and at the goal.
+    let n_file = raw.obstacles.len();
+    for (what, p, span) in [
+        ("start", start, raw.start.span()),
+        ("goal", goal, raw.goal.span()),
+    ] {
+        if let Some((i, d)) = obstacles
+            .iter()
+            .enumerate()
+            .map(|(i, o)| (i, closest_point_point_polygon(&p, o).signed_distance))
+            .find(|&(_, d)| d <= robot.body_radius)
+        {
+            let name = if i < n_file {
+                format!("obstacles[{i}]")
+            } else {
+                format!("generated obstacle {} (seed {seed})", i - n_file)
+            };
+            let how = if d <= 0.0 {
+                format!("is inside {name} ({:.3} m deep)", -d)
+            } else {
+                format!(
+                    "is {d:.3} m from {name}, within the robot's body radius {} m (robot.body_radius)",
+                    robot.body_radius
+                )
+            };
+            return Err(err(
+                what,
+                Some(span),
+                format!("{how}: the robot cannot stand there"),
+            ));
+        }
+    }
     Ok(Scenario {
         name: raw.name,
         description: raw.description,

@@ -280,7 +280,11 @@ pub struct Footstep {
     pub side: Side,
     /// Time it became the stance foot, s.
     pub time: f64,
-    /// Signed distance to the nearest obstacle, m (negative = inside).
+    /// Heading of the foot's long axis (the robot's heading when it landed), rad.
+    pub heading: f64,
+    /// Signed clearance of the foot's footprint ([`crate::robot::RobotParams::footprint`])
+    /// to the nearest obstacle, m (negative = the foot overlaps an obstacle; a
+    /// point foot's signed distance when the footprint is 0 x 0).
     pub clearance: f64,
 }
 
@@ -439,6 +443,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         MpcRate::PerStep => None,
     };
     let obstacles = &scenario.obstacles;
+    let robot = &scenario.robot;
     // Global planner: subgoals, the goal last.
     let mut navigation = Navigation::default();
     if scenario.planner == Planner::RrtStar {
@@ -484,7 +489,8 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         position: plant.stance_foot,
         side: plant.stance_side,
         time: 0.0,
-        clearance: clearance(&plant.stance_foot, obstacles),
+        heading: plant.heading,
+        clearance: robot.foot_clearance(plant.stance_foot, plant.heading, obstacles),
     }];
     let mut samples = Vec::with_capacity(max_ticks.min(1 << 20) as usize + 1);
     let mut best_distance = f64::INFINITY;
@@ -509,7 +515,8 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                 position: foot,
                 side: plant.stance_side,
                 time: plant.time(),
-                clearance: clearance(&foot, obstacles),
+                heading: plant.heading,
+                clearance: robot.foot_clearance(foot, plant.heading, obstacles),
             });
         }
         // 2. Control.
