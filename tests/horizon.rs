@@ -182,21 +182,21 @@ fn print(label: &str, n: usize, r: &LoopResult) {
 /// Runs the three horizons on one scenario and subgoal list.
 fn all_horizons(label: &str, sc: &Scenario, subgoals: &[V2], limit: f64) -> [LoopResult; 3] {
     let sw = sc.rrt.switch_radius;
-    let r3 = closed_loop::<3, 6, { constraint_capacity(3, 8, false) }>(
+    let r3 = closed_loop::<3, 6, { constraint_capacity(3, 8, true) }>(
         sc,
         config_for(sc.config, 3),
         subgoals,
         sw,
         limit,
     );
-    let r10 = closed_loop::<10, 20, { constraint_capacity(10, 8, false) }>(
+    let r10 = closed_loop::<10, 20, { constraint_capacity(10, 8, true) }>(
         sc,
         config_for(sc.config, 10),
         subgoals,
         sw,
         limit,
     );
-    let r20 = closed_loop::<20, 40, { constraint_capacity(20, 8, false) }>(
+    let r20 = closed_loop::<20, 40, { constraint_capacity(20, 8, true) }>(
         sc,
         config_for(sc.config, 20),
         subgoals,

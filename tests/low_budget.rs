@@ -51,7 +51,7 @@ use ldcbf_sim::deadline::{Case, random_cases, shipped_cases};
 use ldcbf_sim::scenario::Perception;
 use ldcbf_sim::sim::{HORIZON, NC, NV, SimOptions, SimResult, clearance, run};
 
-type Controller = ldcbf_controller::PaperController;
+type Controller = ldcbf_controller::RobotController;
 type Asm = Assembly<HORIZON, NV, NC, 8>;
 type U = SVector<f64, NV>;
 

@@ -422,18 +422,25 @@ pub struct Aggregate {
     /// Runs whose planner failed.
     pub planner_failures: usize,
     /// Mean steps to the goal over successful runs.
+    #[serde(deserialize_with = "f64_or_nan")]
     pub mean_steps: f64,
     /// Median steps to the goal over successful runs.
+    #[serde(deserialize_with = "f64_or_nan")]
     pub median_steps: f64,
     /// Mean time to the goal over successful runs, s.
+    #[serde(deserialize_with = "f64_or_nan")]
     pub mean_time: f64,
     /// Median time to the goal over successful runs, s.
+    #[serde(deserialize_with = "f64_or_nan")]
     pub median_time: f64,
     /// Smallest CoM clearance to the true obstacles over all runs, m.
+    #[serde(deserialize_with = "f64_or_nan")]
     pub min_com_clearance: f64,
     /// Smallest body clearance over all runs, m.
+    #[serde(deserialize_with = "f64_or_nan")]
     pub min_body_clearance: f64,
     /// Smallest footprint clearance over all runs, m.
+    #[serde(deserialize_with = "f64_or_nan")]
     pub min_footstep_clearance: f64,
     /// Runs with some non-optimal (relaxed or fallback) cycle.
     pub runs_with_non_optimal: usize,
@@ -443,6 +450,12 @@ pub struct Aggregate {
     pub compute_p99_max_ns: u64,
     /// Slowest controller call of all runs, ns.
     pub compute_max_ns: u64,
+}
+
+/// JSON has no NaN or infinity: serde_json writes them as `null`. Reads a
+/// `null` back as NaN (a mean over no runs, a clearance without obstacles).
+fn f64_or_nan<'de, D: serde::Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 fn median(v: &mut [f64]) -> f64 {

@@ -1351,7 +1351,7 @@ regular = { center = [4.0, 2.0], radius = 1.0, sides = 25 }
     fn non_convex_obstacle_is_named_with_its_line() {
         let text = OK.replace(
             "[[1.0, 1.0], [2.0, 1.0], [1.5, 2.0]]",
-            "[[0.0, 0.0], [2.0, 0.0], [1.0, 0.5], [2.0, 2.0], [0.0, 2.0]]",
+            "[[1.0, 1.0], [3.0, 1.0], [2.0, 1.5], [3.0, 3.0], [1.0, 3.0]]",
         );
         let e = parse_str(&text, "t.toml", &LoadOptions::default()).unwrap_err();
         assert_eq!(e.field, "obstacles[0].vertices");
@@ -1359,8 +1359,8 @@ regular = { center = [4.0, 2.0], radius = 1.0, sides = 25 }
         assert!(e.message.contains("hull = true"), "{e}");
         // With hull = true it is accepted.
         let text = text.replace(
-            "vertices = [[0.0, 0.0]",
-            "hull = true\nvertices = [[0.0, 0.0]",
+            "vertices = [[1.0, 1.0], [3.0",
+            "hull = true\nvertices = [[1.0, 1.0], [3.0",
         );
         assert!(parse_str(&text, "t.toml", &LoadOptions::default()).is_ok());
     }
