@@ -24,6 +24,13 @@
 //!
 //! [controller]             # overrides of ldcbf_controller::Config fields
 //! delta = 0.3
+//! foot_clearance = 0.02    # m the feet keep beyond their footprint (default 0)
+//!
+//! [robot]                  # optional: the body and feet (crate::robot::RobotParams)
+//! body_radius = 0.25       # m, body disk around the CoM (0 = a point CoM)
+//! foot_length = 0.22       # m, footprint along the heading
+//! foot_width = 0.10        # m, footprint across the heading
+//! keep_feet_clear = true   # foot rows on (false = the paper's QP, no foot rows)
 //!
 //! [[obstacles]]            # a convex polygon, vertices in either order ...
 //! vertices = [[1.0, 1.0], [2.0, 1.0], [1.5, 2.0]]
@@ -67,6 +74,10 @@
 //!
 //! `planner = "rrt_star"` needs a known map: it is refused together with
 //! `perception = "lidar"` (planning on the perceived map is not implemented).
+//!
+//! A scenario the robot cannot stand in is an error: a start or goal inside an
+//! obstacle, or within `robot.body_radius` of one, names the field (`start`,
+//! `goal`) and the obstacle (`obstacles[i]`, or the generated one and the seed).
 //!
 //! Without `hull = true` a vertex list must already be a convex polygon
 //! ([`ConvexPolygon::new`]); a non-convex list is an error naming the obstacle.

@@ -104,7 +104,52 @@ fn bad_scenarios() -> Vec<(&'static str, Vec<u8>, Vec<&'static str>)> {
                 .into_bytes(),
             vec!["type.toml:8:", "time_limit"],
         ),
+        // Impossible scenarios: no room for the robot's body at the start or goal.
+        (
+            "start_inside.toml",
+            impossible("{ x = 1.1, y = 0.0 }", "[5.0, 0.0]", ""),
+            vec!["start_inside.toml:2:", "`start`", "is inside obstacles[0]"],
+        ),
+        (
+            "start_near.toml",
+            impossible("{ x = 0.9, y = 0.0 }", "[5.0, 0.0]", ""),
+            vec![
+                "start_near.toml:2:",
+                "`start`",
+                "obstacles[0]",
+                "body radius 0.25 m",
+            ],
+        ),
+        (
+            "goal_inside.toml",
+            impossible("{ x = -2.0, y = 0.0 }", "[1.1, 0.5]", ""),
+            vec!["goal_inside.toml:3:", "`goal`", "is inside obstacles[0]"],
+        ),
+        (
+            "goal_near.toml",
+            impossible(
+                "{ x = -2.0, y = 0.0 }",
+                "[0.6, 0.0]",
+                "[robot]\nbody_radius = 0.45\n",
+            ),
+            vec![
+                "goal_near.toml:3:",
+                "`goal`",
+                "obstacles[0]",
+                "body radius 0.45 m",
+            ],
+        ),
     ]
+}
+
+/// A scenario with one wall (x in [1.0, 1.2], y in [-1, 1]), `start` and `goal`
+/// as TOML values, and extra tables.
+fn impossible(start: &str, goal: &str, extra: &str) -> Vec<u8> {
+    format!(
+        "name = \"x\"\nstart = {start}\ngoal = {goal}\n{extra}\
+         [[obstacles]]\nvertices = [[1.0, -1.0], [1.2, -1.0], [1.2, 1.0], [1.0, 1.0]]\n"
+    )
+    .into_bytes()
 }
 
 /// The fixture of a scenario case (a missing file has none).
