@@ -66,7 +66,7 @@ fn paper_reaches_the_goal_safely() {
 #[test]
 fn maze_walks_safely_into_the_dead_end_without_subgoals() {
     let (r, s) = simulate("maze");
-    assert_eq!(r.scenario.config.delta, 0.2, "documented override");
+    assert_eq!(r.scenario.config.delta, 0.05, "documented override");
     assert_safe(&s);
     assert_eq!(r.outcome, Outcome::Stuck, "{s:#?}");
     assert!(!s.reached_goal);
