@@ -100,25 +100,27 @@ fn rrt_star_is_deterministic_for_a_seed_and_stays_clear() {
         iterations: 800,
         ..sc.rrt.clone()
     };
-    let a = plan(sc.start, sc.goal, &sc.obstacles, &params, 11).unwrap();
-    let b = plan(sc.start, sc.goal, &sc.obstacles, &params, 11).unwrap();
+    let r = sc.robot.body_radius;
+    let a = plan(sc.start, sc.goal, &sc.obstacles, &params, r, 11).unwrap();
+    let b = plan(sc.start, sc.goal, &sc.obstacles, &params, r, 11).unwrap();
     assert_eq!(a.tree.nodes, b.tree.nodes);
     assert_eq!(a.tree.parent, b.tree.parent);
     assert_eq!(a.path, b.path);
     assert_eq!(a.subgoals, b.subgoals);
     assert_eq!(a.cost, b.cost);
-    let c = plan(sc.start, sc.goal, &sc.obstacles, &params, 12).unwrap();
+    let c = plan(sc.start, sc.goal, &sc.obstacles, &params, r, 12).unwrap();
     assert_ne!(a.tree.nodes, c.tree.nodes, "another seed, another tree");
-    // Every point of the subgoal polyline keeps the margin to the true
-    // obstacles, up to half a cell diagonal (the grid's resolution).
-    let tol = params.resolution * core::f64::consts::FRAC_1_SQRT_2;
+    // Every point of the subgoal polyline keeps the body radius plus the margin
+    // to the true obstacles, up to half a cell diagonal (the grid's resolution).
+    let tol = a.grid.resolution * core::f64::consts::FRAC_1_SQRT_2;
+    assert_eq!(a.inflation, r + a.margin_used);
     let mut prev = sc.start;
     for q in &a.subgoals {
         for k in 0..=100 {
             let p = prev + (q - prev) * (f64::from(k) / 100.0);
             for o in &sc.obstacles {
                 let d = closest_point_point_polygon(&p, o).signed_distance;
-                assert!(d >= params.margin - tol, "{p:?} is {d} m from an obstacle");
+                assert!(d >= a.inflation - tol, "{p:?} is {d} m from an obstacle");
             }
         }
         prev = *q;
@@ -138,16 +140,48 @@ fn rrt_star_is_deterministic_for_a_seed_and_stays_clear() {
 /// the goal directly and says why.
 #[test]
 fn planner_failure_is_reported_and_the_run_goes_on() {
-    let (r, s) = simulate(
-        "trap",
-        &[
-            ("planner", "\"rrt_star\""),
-            ("goal", "[3.2, 3.2]"), // inside the inflated back wall
-            ("time_limit", "3.0"),
-        ],
-    );
+    // A goal in a closed room whose only opening is a 6 cm slit: a point
+    // would pass, the 0.5 m body cannot, and every margin down to the body
+    // radius alone fails.
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("slit.toml");
+    let wall = |x0: f64, y0: f64, x1: f64, y1: f64| {
+        format!(
+            "[[obstacles]]\nvertices = [[{x0}, {y0}], [{x1}, {y0}], [{x1}, {y1}], [{x0}, {y1}]]\n"
+        )
+    };
+    let room = [
+        wall(3.0, -2.0, 3.1, -0.03),
+        wall(3.0, 0.03, 3.1, 2.0),
+        wall(3.0, 2.0, 7.0, 2.1),
+        wall(3.0, -2.1, 7.0, -2.0),
+        wall(6.9, -2.0, 7.0, 2.0),
+    ]
+    .concat();
+    std::fs::write(
+        &file,
+        format!(
+            "name = \"slit\"\nstart = {{ x = 0.0, y = 0.0 }}\ngoal = [5.0, 0.0]\n\
+             planner = \"rrt_star\"\ntime_limit = 20.0\n[rrt_star]\niterations = 300\n{room}"
+        ),
+    )
+    .unwrap();
+    let sc = load(file.to_str().unwrap(), &LoadOptions::default()).unwrap();
+    let r = run(&sc, SimOptions::default()).expect("simulation starts");
+    let s = summarize(&r);
     assert!(r.navigation.plan.is_none());
     let err = s.planner_error.clone().expect("planner failed");
-    assert!(err.contains("goal"), "{err}");
-    assert_eq!(r.navigation.subgoals, vec![Vector2::new(3.2, 3.2)]);
+    assert!(err.contains("no path"), "{err}");
+    assert_eq!(s.plan_attempts, Some(4), "margins 0.15, 0.075, 0.0375, 0");
+    assert!(
+        s.planner_fallback
+            .as_deref()
+            .unwrap()
+            .contains("straight at the goal")
+    );
+    assert_eq!(r.navigation.subgoals, vec![sc.goal]);
+    // The body never gets through the slit, nor into the walls.
+    assert!(!s.reached_goal && !s.success, "{s:#?}");
+    assert!(!s.collision && !s.foot_collision, "{s:#?}");
+    assert!(r.samples.iter().all(|p| p.position.x < 3.0));
 }

@@ -5,11 +5,21 @@
 //!
 //! # Pipeline ([`plan`])
 //!
-//! 1. **Occupancy grid** ([`OccupancyGrid::build`]): square cells of
-//!    `resolution` over the bounding box of start, goal and obstacles grown by
-//!    `padding`. A cell is occupied when its centre is within `margin` of an
-//!    obstacle (signed distance `<= margin`): the obstacles inflated by the margin.
-//!    Everything outside the box counts as occupied.
+//! 0. **Inflation, with retries.** The obstacles are inflated by the robot's
+//!    body radius plus `margin` (the clearance wanted beyond the body). When no
+//!    path is found, the plan is tried again with the margin halved, quartered
+//!    and 0 (the body radius alone), on a finer grid each time
+//!    ([`attempt_resolution`]), so that every passage at least `2 body_radius +
+//!    2 resolution` wide is found; the first path found is kept, and the plan
+//!    says which margin it used and after how many attempts.
+//! 1. **Occupancy grid** ([`OccupancyGrid::build`]): square cells over the
+//!    bounding box of start, goal and obstacles grown by `padding`. A cell is
+//!    occupied when its centre is within the inflation of an obstacle (signed
+//!    distance `<= inflation`). Everything outside the box counts as occupied.
+//!    A start (or goal) in an occupied cell, as a start 0.3 m from a wall is,
+//!    is planned from (to) the nearest free cell centre within `inflation + 2
+//!    resolution` of it instead: that point becomes the first subgoal (the
+//!    goal keeps its place as the last subgoal).
 //! 2. **Clearance** ([`OccupancyGrid::clearance`]): an exact Euclidean distance
 //!    transform (Felzenszwalb-Huttenlocher, two 1-D passes) gives, for every
 //!    cell, the distance from its centre to the nearest occupied cell centre, m.
@@ -26,6 +36,11 @@
 //!    `cost(j) + dist(j, k) * exp(-clearance(k)) < cost(k)` (costs of `k`'s
 //!    subtree are updated). After all samples the goal is joined to the
 //!    cheapest reachable node within `neighbor_radius`.
+//!    When the tree does not reach the goal (sampling misses narrow passages:
+//!    a door 0.1 m wider than the body leaves a free band a few cells wide),
+//!    an A* search over the free cells of the same grid (8-connected, no corner
+//!    cutting, the same edge cost) gives the path instead: it finds every
+//!    passage with connected free cells, and the plan says so (`grid_searched`).
 //! 4. **Subgoals**: the path's nodes after the start, the goal last. With
 //!    `shortcut`, a greedy pass keeps, from each kept node, the farthest later
 //!    node that the straight segment still reaches through free cells.
@@ -56,7 +71,9 @@ use crate::scenario::Polygon;
 pub struct RrtParams {
     /// Side of a grid cell, m.
     pub resolution: f64,
-    /// Obstacle inflation of the occupancy grid, m.
+    /// Clearance wanted beyond the robot's body radius, m: the obstacles are
+    /// inflated by `body_radius + margin` (retried down to the body radius
+    /// alone when no path is found; see the module docs).
     pub margin: f64,
     /// The planning box is the bounding box of start, goal and obstacles grown by
     /// this much on every side, m.
@@ -85,7 +102,7 @@ impl Default for RrtParams {
     fn default() -> Self {
         RrtParams {
             resolution: 0.1,
-            margin: 0.4,
+            margin: 0.15,
             padding: 1.0,
             iterations: 3000,
             step: 0.5,
@@ -364,6 +381,18 @@ pub struct Plan {
     /// The subgoals handed to the controller in order (after the start; the goal
     /// last), m: the path's nodes, shortcut when `shortcut` is set.
     pub subgoals: Vec<Vector2<f64>>,
+    /// Inflation of the grid the path was found on: body radius + `margin_used`, m.
+    pub inflation: f64,
+    /// The margin beyond the body radius that found the path, m.
+    pub margin_used: f64,
+    /// Attempts made (1 = found with the scenario's margin).
+    pub attempts: u32,
+    /// The nearest free cell centre the plan starts from when the start sat in
+    /// the inflated zone (the first subgoal), m.
+    pub entry: Option<Vector2<f64>>,
+    /// The RRT* tree did not reach the goal and the path came from the grid
+    /// search (A*) on the same grid and cost ([`plan`]).
+    pub grid_searched: bool,
 }
 
 impl Plan {
@@ -424,15 +453,15 @@ impl core::fmt::Display for PlanError {
                 f,
                 "the occupancy grid would have {cells:.0} cells (max {MAX_CELLS}); raise rrt_star.resolution"
             ),
-            PlanError::StartBlocked => {
-                f.write_str("the start is within rrt_star.margin of an obstacle (an occupied cell)")
-            }
-            PlanError::GoalBlocked => {
-                f.write_str("the goal is within rrt_star.margin of an obstacle (an occupied cell)")
-            }
+            PlanError::StartBlocked => f.write_str(
+                "no free cell near the start (the body radius and rrt_star.margin cover it)",
+            ),
+            PlanError::GoalBlocked => f.write_str(
+                "no free cell near the goal (the body radius and rrt_star.margin cover it)",
+            ),
             PlanError::NoPath { nodes } => write!(
                 f,
-                "no path to the goal in a tree of {nodes} nodes (more rrt_star.iterations or a smaller margin may help)"
+                "no path to the goal in a tree of {nodes} nodes, even with the obstacles inflated by the body radius alone (more rrt_star.iterations may help)"
             ),
         }
     }
@@ -440,18 +469,101 @@ impl core::fmt::Display for PlanError {
 
 impl std::error::Error for PlanError {}
 
-/// Plans from `start` to `goal` around `obstacles` (see the module docs). The
-/// same arguments always give the same plan.
+/// The margins beyond the body radius tried in order: `margin`, `margin / 2`,
+/// `margin / 4`, 0 (just `0` when `margin` is 0), m.
+pub fn attempt_margins(margin: f64) -> Vec<f64> {
+    if margin > 0.0 {
+        vec![margin, 0.5 * margin, 0.25 * margin, 0.0]
+    } else {
+        vec![0.0]
+    }
+}
+
+/// Grid resolution of an attempt with `margin` beyond the body, m: at most
+/// `resolution`, at most half the margin, and not below a quarter of
+/// `resolution` nor 2.5 cm (so the last attempt, margin 0, still has cell
+/// centres across a passage 0.1 m wider than the body).
+pub fn attempt_resolution(resolution: f64, margin: f64) -> f64 {
+    resolution.min((0.5 * margin).max(0.25 * resolution).max(0.025))
+}
+
+/// Plans from `start` to `goal` around `obstacles` for a robot whose body is a
+/// disk of `body_radius` (m), retrying with smaller margins (see the module
+/// docs). The same arguments always give the same plan; the error is the last
+/// attempt's.
 pub fn plan(
     start: Vector2<f64>,
     goal: Vector2<f64>,
     obstacles: &[Polygon],
     params: &RrtParams,
+    body_radius: f64,
     seed: u64,
 ) -> Result<Plan, PlanError> {
     params
         .validate()
         .map_err(|(f, m)| PlanError::Settings(f, m))?;
+    if !(body_radius.is_finite() && body_radius >= 0.0) {
+        return Err(PlanError::Settings(
+            "margin",
+            format!("the body radius must be finite and >= 0, got {body_radius}"),
+        ));
+    }
+    let margins = attempt_margins(params.margin);
+    let mut last = PlanError::NoPath { nodes: 0 };
+    for (k, &m) in margins.iter().enumerate() {
+        let res = attempt_resolution(params.resolution, m);
+        match plan_once(start, goal, obstacles, params, body_radius + m, res, seed) {
+            Ok(mut p) => {
+                p.margin_used = m;
+                p.attempts = k as u32 + 1;
+                return Ok(p);
+            }
+            Err(e @ PlanError::GridTooLarge { .. }) => return Err(e),
+            Err(e) => last = e,
+        }
+    }
+    Err(last)
+}
+
+/// The nearest free cell centre to `p` within `reach` (m), if any.
+fn nearest_free(grid: &OccupancyGrid, p: [f64; 2], reach: f64) -> Option<[f64; 2]> {
+    let r = (reach / grid.resolution).ceil() as isize + 1;
+    let (ci, cj) = grid.cell_of(p)?;
+    let mut best: Option<([f64; 2], f64)> = None;
+    for dj in -r..=r {
+        for di in -r..=r {
+            let (i, j) = (ci as isize + di, cj as isize + dj);
+            if i < 0 || j < 0 || i >= grid.width as isize || j >= grid.height as isize {
+                continue;
+            }
+            let (i, j) = (i as usize, j as usize);
+            if grid.is_occupied(i, j) {
+                continue;
+            }
+            let c = [
+                grid.origin.x + (i as f64 + 0.5) * grid.resolution,
+                grid.origin.y + (j as f64 + 0.5) * grid.resolution,
+            ];
+            let d = dist(c, p);
+            if d <= reach && best.is_none_or(|(_, bd)| d < bd) {
+                best = Some((c, d));
+            }
+        }
+    }
+    best.map(|(c, _)| c)
+}
+
+/// One RRT* attempt on a grid of obstacles inflated by `inflation` (m) with
+/// cells of `resolution` (m).
+fn plan_once(
+    start: Vector2<f64>,
+    goal: Vector2<f64>,
+    obstacles: &[Polygon],
+    params: &RrtParams,
+    inflation: f64,
+    resolution: f64,
+    seed: u64,
+) -> Result<Plan, PlanError> {
     // Planning box.
     let mut lo = start.inf(&goal);
     let mut hi = start.sup(&goal);
@@ -461,22 +573,23 @@ pub fn plan(
             hi = hi.sup(v);
         }
     }
-    let pad = Vector2::repeat(params.padding + params.margin);
-    let grid = OccupancyGrid::build(
-        obstacles,
-        params.margin,
-        lo - pad,
-        hi + pad,
-        params.resolution,
-    )?;
-    let s = [start.x, start.y];
-    let g = [goal.x, goal.y];
-    if !grid.is_free(s) {
-        return Err(PlanError::StartBlocked);
-    }
-    if !grid.is_free(g) {
-        return Err(PlanError::GoalBlocked);
-    }
+    let pad = Vector2::repeat(params.padding + inflation);
+    let grid = OccupancyGrid::build(obstacles, inflation, lo - pad, hi + pad, resolution)?;
+    let reach = inflation + 2.0 * resolution;
+    let goal_in = [goal.x, goal.y];
+    let mut entry = None;
+    let s = if grid.is_free([start.x, start.y]) {
+        [start.x, start.y]
+    } else {
+        let e = nearest_free(&grid, [start.x, start.y], reach).ok_or(PlanError::StartBlocked)?;
+        entry = Some(Vector2::new(e[0], e[1]));
+        e
+    };
+    let g = if grid.is_free(goal_in) {
+        goal_in
+    } else {
+        nearest_free(&grid, goal_in, reach).ok_or(PlanError::GoalBlocked)?
+    };
     let weight = |p: [f64; 2]| (-grid.clearance(p).min(params.clearance_cap)).exp();
 
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5252_545f_5354_4152); // "RRT_STAR"
@@ -587,40 +700,156 @@ pub fn plan(
         parent: parent.clone(),
         cost: cost.clone(),
     };
-    let Some((last, total)) = best else {
-        return Err(PlanError::NoPath { nodes: nodes.len() });
+    let (mut path, total, searched) = match best {
+        Some((last, total)) => {
+            let mut idx = vec![last];
+            while let Some(p) = parent[*idx.last().expect("non-empty")] {
+                idx.push(p);
+            }
+            idx.reverse();
+            let path: Vec<[f64; 2]> = idx.iter().map(|&k| nodes[k]).collect();
+            (path, total, false)
+        }
+        // Sampling misses narrow passages (a door 0.1 m wider than the body
+        // leaves a free band of a few cells): the grid search is complete on
+        // the grid, so a passage with free cells through it is found.
+        None => match grid_search(&grid, s, g, params.clearance_cap) {
+            Some((path, cost)) => (path, cost, true),
+            None => return Err(PlanError::NoPath { nodes: nodes.len() }),
+        },
     };
-    let mut idx = vec![last];
-    while let Some(p) = parent[*idx.last().expect("non-empty")] {
-        idx.push(p);
-    }
-    idx.reverse();
-    let mut path: Vec<[f64; 2]> = idx.iter().map(|&k| nodes[k]).collect();
     if dist(*path.last().expect("non-empty"), g) > 1e-12 {
         path.push(g);
     }
-    let kept: Vec<[f64; 2]> = if params.shortcut {
-        let mut out = Vec::new();
-        let mut i = 0usize;
+    if entry.is_some() {
+        path.insert(0, [start.x, start.y]);
+    }
+    // The grid's free space ends `inflation` from the obstacles; from the
+    // nearest free cell the last leg goes to the goal itself.
+    let goal_leg = dist(g, goal_in) > 1e-12;
+    // From an entry point the first leg (start -> entry) is kept as is: the
+    // start is in the inflated zone, so no shortcut may begin there.
+    let first = usize::from(entry.is_some());
+    let mut kept: Vec<[f64; 2]> = path[1..=first].to_vec();
+    if params.shortcut {
+        let mut i = first;
         while i + 1 < path.len() {
             let mut j = path.len() - 1;
             while j > i + 1 && !grid.segment_free(path[i], path[j]) {
                 j -= 1;
             }
-            out.push(path[j]);
+            kept.push(path[j]);
             i = j;
         }
-        out
     } else {
-        path[1..].to_vec()
-    };
+        kept.extend_from_slice(&path[first + 1..]);
+    }
+    if goal_leg {
+        path.push(goal_in);
+        kept.push(goal_in);
+    }
     Ok(Plan {
         grid,
         tree,
         path: path.iter().map(|&p| to_v(p)).collect(),
         cost: total,
         subgoals: kept.iter().map(|&p| to_v(p)).collect(),
+        inflation,
+        margin_used: 0.0, // set by `plan`
+        attempts: 1,
+        entry,
+        grid_searched: searched,
     })
+}
+
+/// A* over the free cells of `grid` (8-connected, no corner cutting) from the
+/// cell of `s` to the cell of `g`, with the report's edge cost (length times
+/// `exp(-clearance)` of the cell entered, clearance capped at `cap`) and the
+/// straight-line distance times `exp(-cap)` as the (admissible) heuristic.
+/// Returns the path `s`, cell centres..., `g` and its cost, or `None` when the
+/// two cells are not connected.
+fn grid_search(
+    grid: &OccupancyGrid,
+    s: [f64; 2],
+    g: [f64; 2],
+    cap: f64,
+) -> Option<(Vec<[f64; 2]>, f64)> {
+    use std::cmp::Reverse;
+    use std::collections::BinaryHeap;
+    let (si, sj) = grid.cell_of(s)?;
+    let (gi, gj) = grid.cell_of(g)?;
+    let (w, h) = (grid.width, grid.height);
+    let idx = |i: usize, j: usize| j * w + i;
+    let centre = |k: usize| {
+        [
+            grid.origin.x + ((k % w) as f64 + 0.5) * grid.resolution,
+            grid.origin.y + ((k / w) as f64 + 0.5) * grid.resolution,
+        ]
+    };
+    let weight = |k: usize| (-grid.clearance[k].min(cap)).exp();
+    let h_scale = (-cap).exp();
+    let goal = idx(gi, gj);
+    let heur = |k: usize| dist(centre(k), centre(goal)) * h_scale;
+    let mut best = vec![f64::INFINITY; w * h];
+    let mut from = vec![usize::MAX; w * h];
+    let mut heap = BinaryHeap::new();
+    let start = idx(si, sj);
+    best[start] = 0.0;
+    // Costs are >= 0 and finite: their bits order like the numbers.
+    heap.push(Reverse((heur(start).to_bits(), start)));
+    while let Some(Reverse((_, k))) = heap.pop() {
+        if k == goal {
+            let mut cells = vec![k];
+            while let Some(&p) = cells.last().map(|&c| &from[c]) {
+                if p == usize::MAX {
+                    break;
+                }
+                cells.push(p);
+            }
+            cells.reverse();
+            let mut path = vec![s];
+            path.extend(cells.iter().skip(1).map(|&c| centre(c)));
+            path.pop(); // the goal cell's centre: `g` itself follows
+            path.push(g);
+            return Some((path, best[goal]));
+        }
+        let (i, j) = ((k % w) as isize, (k / w) as isize);
+        for (di, dj) in [
+            (1, 0),
+            (-1, 0),
+            (0, 1),
+            (0, -1),
+            (1, 1),
+            (1, -1),
+            (-1, 1),
+            (-1, -1),
+        ] {
+            let (ni, nj) = (i + di, j + dj);
+            if ni < 0 || nj < 0 || ni >= w as isize || nj >= h as isize {
+                continue;
+            }
+            let (ni, nj) = (ni as usize, nj as usize);
+            if grid.is_occupied(ni, nj)
+                || (di != 0 && dj != 0)
+                    && (grid.is_occupied(ni, j as usize) || grid.is_occupied(i as usize, nj))
+            {
+                continue;
+            }
+            let n = idx(ni, nj);
+            let step = if di != 0 && dj != 0 {
+                core::f64::consts::SQRT_2
+            } else {
+                1.0
+            } * grid.resolution;
+            let c = best[k] + step * weight(n);
+            if c < best[n] {
+                best[n] = c;
+                from[n] = k;
+                heap.push(Reverse(((c + heur(n)).to_bits(), n)));
+            }
+        }
+    }
+    None
 }
 
 #[cfg(test)]
@@ -682,8 +911,9 @@ mod tests {
             ..RrtParams::default()
         };
         let (s, g) = (Vector2::new(0.0, 0.0), Vector2::new(5.0, 0.0));
-        let a = plan(s, g, &obs, &p, 3).unwrap();
-        let b = plan(s, g, &obs, &p, 3).unwrap();
+        let a = plan(s, g, &obs, &p, 0.25, 3).unwrap();
+        let b = plan(s, g, &obs, &p, 0.25, 3).unwrap();
+        assert_eq!((a.attempts, a.margin_used, a.inflation), (1, 0.15, 0.4));
         assert_eq!(a.subgoals, b.subgoals);
         assert_eq!(a.tree.nodes, b.tree.nodes);
         assert_eq!(*a.subgoals.last().unwrap(), g);
@@ -714,10 +944,94 @@ mod tests {
             Vector2::new(5.0, 0.0),
             &obs,
             &RrtParams::default(),
+            0.25,
             0,
         )
         .unwrap_err();
         assert_eq!(e, PlanError::StartBlocked);
+    }
+
+    /// A closed room (x in [-1, 5], y in [-4, 4]) split by a thin wall (5 cm)
+    /// at x = 2 with a door of `width` centred at `y`: the door is the only
+    /// way from x < 2 to x > 2.
+    fn doorway(width: f64, y: f64) -> Vec<Polygon> {
+        let r = |x0: f64, y0: f64, x1: f64, y1: f64| {
+            Polygon::new(&[[x0, y0], [x1, y0], [x1, y1], [x0, y1]]).unwrap()
+        };
+        vec![
+            r(2.0, -4.0, 2.05, y - 0.5 * width),
+            r(2.0, y + 0.5 * width, 2.05, 4.0),
+            r(-1.0, -4.2, 5.0, -4.0),
+            r(-1.0, 4.0, 5.0, 4.2),
+            r(-1.2, -4.2, -1.0, 4.2),
+            r(5.0, -4.2, 5.2, 4.2),
+        ]
+    }
+
+    /// Smallest distance of the subgoal polyline (from `s`) to the obstacles, m.
+    fn path_clearance(s: Vector2<f64>, sub: &[Vector2<f64>], obs: &[Polygon]) -> f64 {
+        let mut prev = s;
+        let mut m = f64::INFINITY;
+        for q in sub {
+            for k in 0..=200 {
+                let p = prev + (q - prev) * (k as f64 / 200.0);
+                for o in obs {
+                    m = m.min(closest_point_point_polygon(&p, o).signed_distance);
+                }
+            }
+            prev = *q;
+        }
+        m
+    }
+
+    #[test]
+    fn every_door_the_body_fits_is_found() {
+        let r = 0.25;
+        let (s, g) = (Vector2::new(0.0, 0.0), Vector2::new(4.0, 0.3));
+        for (w, y) in [
+            (2.0 * r + 0.1, 1.3),
+            (0.7, -1.1),
+            (0.8, 2.0),
+            (1.0, -2.6),
+            (1.6, 0.0),
+        ] {
+            let obs = doorway(w, y);
+            let p = plan(s, g, &obs, &RrtParams::default(), r, 7)
+                .unwrap_or_else(|e| panic!("door {w} m at y = {y}: {e}"));
+            let c = path_clearance(s, &p.subgoals, &obs);
+            assert!(c >= r - 1e-9, "door {w} m: path {c} m from a wall");
+            assert!(p.inflation >= r);
+            // Wide doors keep the whole margin; the narrowest needs retries.
+            if w >= 1.0 {
+                assert_eq!(p.attempts, 1, "door {w} m");
+            }
+            if w < 2.0 * (r + 0.15) {
+                assert!(p.attempts > 1, "door {w} m needs a smaller margin");
+            }
+        }
+        // A door narrower than the body is not passed.
+        let obs = doorway(2.0 * r - 0.02, 0.0);
+        assert!(plan(s, g, &obs, &RrtParams::default(), r, 7).is_err());
+    }
+
+    #[test]
+    fn a_start_near_a_wall_plans_from_the_nearest_free_cell() {
+        // Centre 0.3-0.6 m from the wall face, facing it; the goal behind it.
+        let obs = doorway(0.9, 2.5);
+        for d in [0.3, 0.45, 0.6] {
+            let s = Vector2::new(2.0 - d, 0.0);
+            let g = Vector2::new(4.0, 0.0);
+            let p = plan(s, g, &obs, &RrtParams::default(), 0.25, 11)
+                .unwrap_or_else(|e| panic!("start {d} m from the wall: {e}"));
+            let blocked = d < 0.25 + 0.15 + 0.05;
+            assert_eq!(p.entry.is_some(), blocked, "start {d} m");
+            if let Some(e) = p.entry {
+                assert_eq!(p.subgoals[0], e);
+                assert!((e - s).norm() <= p.inflation + 2.0 * p.grid.resolution);
+            }
+            assert_eq!(*p.subgoals.last().unwrap(), g);
+            assert!(path_clearance(s, &p.subgoals, &obs) >= 0.25 - 1e-9);
+        }
     }
 
     #[test]

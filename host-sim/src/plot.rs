@@ -996,13 +996,13 @@ pub fn planner_png(r: &SimResult, path: &Path) -> Result<()> {
     root.fill(&WHITE).map_err(e)?;
     let (title_area, chart_area) = root.split_vertically(layout.title_h);
     let title = format!(
-        "{}: RRT* {} nodes, {} subgoals, path {:.2} m (grid {} m, margin {} m)",
+        "{}: RRT* {} nodes, {} subgoals, path {:.2} m (grid {} m, inflation {:.3} m)",
         sc.name,
         plan.tree.nodes.len(),
         plan.subgoals.len(),
         plan.subgoal_length(sc.start),
-        sc.rrt.resolution,
-        sc.rrt.margin
+        plan.grid.resolution,
+        plan.inflation
     );
     let mut chart = map_chart(
         &title_area,
@@ -1053,7 +1053,10 @@ pub fn planner_png(r: &SimResult, path: &Path) -> Result<()> {
     chart
         .draw_series(cells)
         .map_err(e)?
-        .label(format!("occupied cell (obstacle + {} m)", sc.rrt.margin))
+        .label(format!(
+            "occupied cell (obstacle + {:.3} m)",
+            plan.inflation
+        ))
         .legend(|(x, y)| Rectangle::new([(x - 6, y - 6), (x + 6, y + 6)], GRID_OCC.filled()));
     for (i, o) in sc.obstacles.iter().enumerate() {
         let v: Vec<(f64, f64)> = o.vertices().iter().map(|p| (p.x, p.y)).collect();

@@ -140,6 +140,16 @@ pub struct Summary {
     pub perception: String,
     /// Why planning failed, if it did (the run then walked to the goal directly).
     pub planner_error: Option<String>,
+    /// What the controller did instead when planning failed: `walked straight
+    /// at the goal` (null when planning succeeded or there is no planner).
+    pub planner_fallback: Option<String>,
+    /// Margin beyond the body radius that found the path, m (null without a plan).
+    pub plan_margin: Option<f64>,
+    /// Planning attempts made, with smaller margins each (null without a planner).
+    pub plan_attempts: Option<u32>,
+    /// The path came from the grid search because the RRT* tree did not reach
+    /// the goal (null without a plan; `crate::planner`).
+    pub plan_grid_searched: Option<bool>,
     /// Wall-clock planning time, ms (null without a planner).
     pub plan_time_ms: Option<f64>,
     /// Nodes of the RRT* tree (null without a plan).
@@ -346,6 +356,19 @@ pub fn summarize(r: &SimResult) -> Summary {
         planner: sc.planner.name().into(),
         perception: sc.perception.name().into(),
         planner_error: r.navigation.error.clone(),
+        planner_fallback: r
+            .navigation
+            .error
+            .as_ref()
+            .map(|_| "walked straight at the goal (the MPC alone)".to_string()),
+        plan_margin: r.navigation.plan.as_ref().map(|p| p.margin_used),
+        plan_grid_searched: r.navigation.plan.as_ref().map(|p| p.grid_searched),
+        plan_attempts: (sc.planner != crate::scenario::Planner::None).then(|| {
+            r.navigation.plan.as_ref().map_or(
+                crate::planner::attempt_margins(sc.rrt.margin).len() as u32,
+                |p| p.attempts,
+            )
+        }),
         plan_time_ms: (sc.planner != crate::scenario::Planner::None)
             .then(|| r.navigation.plan_time_ns as f64 / 1e6),
         tree_nodes: r.navigation.plan.as_ref().map(|p| p.tree.nodes.len()),
@@ -409,20 +432,29 @@ pub fn human_summary(s: &Summary) -> String {
             Some(err) => {
                 let _ = writeln!(
                     o,
-                    "  planner {}: FAILED ({err}); walked to the goal directly",
-                    s.planner
+                    "  planner {}: FAILED after {} attempts ({err}); {}",
+                    s.planner,
+                    s.plan_attempts.unwrap_or(0),
+                    s.planner_fallback.as_deref().unwrap_or("")
                 );
             }
             None => {
                 let _ = writeln!(
                     o,
-                    "  planner {}: {} nodes in {:.1} ms, {} subgoals ({} passed), path {:.2} m",
+                    "  planner {}: {} nodes in {:.1} ms, {} subgoals ({} passed), path {:.2} m, margin {:.3} m beyond the body (attempt {}){}",
                     s.planner,
                     s.tree_nodes.unwrap_or(0),
                     s.plan_time_ms.unwrap_or(0.0),
                     s.subgoals,
                     s.subgoals_reached,
-                    s.path_length.unwrap_or(0.0)
+                    s.path_length.unwrap_or(0.0),
+                    s.plan_margin.unwrap_or(0.0),
+                    s.plan_attempts.unwrap_or(0),
+                    if s.plan_grid_searched == Some(true) {
+                        ", path from the grid search (the tree missed the passage)"
+                    } else {
+                        ""
+                    }
                 );
             }
         }

@@ -453,6 +453,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
             scenario.goal,
             obstacles,
             &scenario.rrt,
+            scenario.robot.body_radius,
             scenario.seed,
         );
         navigation.plan_time_ns = u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX);
