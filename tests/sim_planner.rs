@@ -6,7 +6,6 @@
 //! Runs in-process with the own QP solver at 20 Hz, no figures.
 
 use ldcbf_controller::closest_point_point_polygon;
-use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_sim::planner::{RrtParams, plan};
 use ldcbf_sim::scenario::{LoadOptions, Planner, load};
 use ldcbf_sim::sim::{Outcome, SimOptions, SimResult, run};

@@ -294,8 +294,8 @@ impl Config {
     /// with the step-end values as boundary conditions). The weights are
     /// `>= 0` and `w0 + wT >= 1 / cosh(beta T / 2)` (at `t = T / 2`), so `e`
     /// along the arc is a convex combination of the two step-end values and
-    /// the stance foot's. With the foot rows keeping `e(f_k) >= F = foot_clearance
-    /// + min(foot_length, foot_width) / 2` and the step-end rows keeping
+    /// the stance foot's. With the foot rows keeping `e(f_k) >= F`, where
+    /// `F = foot_clearance + min(foot_length, foot_width) / 2`, and the step-end rows keeping
     /// `e(p_k) >= body_radius + delta + mu`, the arc keeps
     /// `e(p(t)) >= body_radius + delta` for every `t` when
     /// `mu = (cosh(beta T / 2) - 1) max(0, body_radius + delta - F)`: that is the
