@@ -11,6 +11,8 @@
 //!   the subgoals (SPEC 5);
 //! * [`perception`]: simulated 2D LiDAR, DBSCAN and one convex obstacle per
 //!   cluster, for unknown maps (SPEC 6);
+//! * [`families`]: seeded layout families for a robot with a body (corridors,
+//!   doorways, cups, wall starts, clutter, thin walls);
 //! * [`robot`]: the robot's body disk and footprint (the `[robot]` table);
 //! * [`disturbance`]: pushes, CoM height mismatch, foot placement error and
 //!   state estimation noise (the `[disturbance]` table);
@@ -37,6 +39,7 @@ pub mod app;
 pub mod batch;
 pub mod deadline;
 pub mod disturbance;
+pub mod families;
 pub mod perception;
 pub mod planner;
 pub mod plant;

@@ -762,6 +762,36 @@ fn plan_once(
     })
 }
 
+/// Whether a disk of radius just under `inflation` (m) can move from `a` to
+/// `b` among `obstacles`: both in free cells of an occupancy grid of the
+/// obstacles inflated by `inflation` with cells of `resolution` (m), and
+/// connected through free cells (8-connected, no corner cutting). A path of
+/// free cell centres keeps at least `inflation - resolution / sqrt 2` from
+/// every obstacle.
+pub fn connected(
+    a: Vector2<f64>,
+    b: Vector2<f64>,
+    obstacles: &[Polygon],
+    inflation: f64,
+    resolution: f64,
+) -> bool {
+    let mut lo = a.inf(&b);
+    let mut hi = a.sup(&b);
+    for o in obstacles {
+        for v in o.vertices() {
+            lo = lo.inf(v);
+            hi = hi.sup(v);
+        }
+    }
+    let pad = Vector2::repeat(inflation + 1.0);
+    let Ok(grid) = OccupancyGrid::build(obstacles, inflation, lo - pad, hi + pad, resolution)
+    else {
+        return false;
+    };
+    let (pa, pb) = ([a.x, a.y], [b.x, b.y]);
+    grid.is_free(pa) && grid.is_free(pb) && grid_search(&grid, pa, pb, 0.0).is_some()
+}
+
 /// A* over the free cells of `grid` (8-connected, no corner cutting) from the
 /// cell of `s` to the cell of `g`, with the report's edge cost (length times
 /// `exp(-clearance)` of the cell entered, clearance capped at `cap`) and the

@@ -43,7 +43,9 @@
 //! regular = { center = [4.0, 2.0], radius = 1.0, sides = 20, rotation = 0.0 }
 //!
 //! [generator]              # optional: adds seeded random convex obstacles
-//! kind = "random_polygons"
+//! kind = "random_polygons" # or a family (crate::families: corridor, doorway,
+//!                          # cup, wall_start, clutter, thin), which also draws
+//!                          # the start, heading and goal (the file's are replaced)
 //! count = 8
 //! min_gap = 0.0            # optional: minimum distance between two polygons, m
 //!
@@ -284,7 +286,10 @@ impl ControllerOverrides {
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct RandomParams {
-    /// Generator kind; only `"random_polygons"`.
+    /// Generator kind: `"random_polygons"` (the fields below), or a family of
+    /// [`crate::families`] (`corridor`, `doorway`, `cup`, `wall_start`,
+    /// `clutter`, `thin`), which draws the start, heading, goal and obstacles
+    /// itself and ignores the other fields.
     #[serde(default = "default_kind")]
     pub kind: String,
     /// Number of polygons.
@@ -352,12 +357,15 @@ impl Default for RandomParams {
 impl RandomParams {
     /// Checks the ranges; the error names the bad field.
     pub fn validate(&self) -> Result<(), (&'static str, String)> {
-        if self.kind != "random_polygons" {
+        if self.kind != "random_polygons"
+            && !crate::families::FAMILIES.contains(&self.kind.as_str())
+        {
             return Err((
                 "kind",
                 format!(
-                    "unknown generator kind {:?} (only \"random_polygons\")",
-                    self.kind
+                    "unknown generator kind {:?} (\"random_polygons\" or a family: {})",
+                    self.kind,
+                    crate::families::FAMILIES.join(", ")
                 ),
             ));
         }
@@ -1164,8 +1172,9 @@ fn validate(
                 .into(),
         ));
     }
-    let start = Vector2::new(st.x, st.y);
-    let goal = Vector2::new(g[0], g[1]);
+    let mut start = Vector2::new(st.x, st.y);
+    let mut start_heading = st.heading;
+    let mut goal = Vector2::new(g[0], g[1]);
     let mut obstacles = Vec::with_capacity(raw.obstacles.len());
     for (i, ob) in raw.obstacles.iter().enumerate() {
         let field = format!("obstacles[{i}]");
@@ -1232,9 +1241,18 @@ fn validate(
             if let Err((f, m)) = p.validate() {
                 return Err(err(&format!("generator.{f}"), Some(gs.span()), m));
             }
-            let extra = random_obstacles(seed, &p, start, goal)
-                .map_err(|m| err("generator", Some(gs.span()), m))?;
-            obstacles.extend(extra);
+            if p.kind == "random_polygons" {
+                let extra = random_obstacles(seed, &p, start, goal)
+                    .map_err(|m| err("generator", Some(gs.span()), m))?;
+                obstacles.extend(extra);
+            } else {
+                let layout = crate::families::generate(&p.kind, seed, robot.body_radius)
+                    .map_err(|m| err("generator", Some(gs.span()), m))?;
+                start = layout.start;
+                start_heading = layout.heading;
+                goal = layout.goal;
+                obstacles.extend(layout.obstacles);
+            }
             Some(p)
         }
     };
@@ -1276,7 +1294,7 @@ fn validate(
         note: raw.note,
         source: file.into(),
         start,
-        start_heading: st.heading,
+        start_heading,
         stance: raw.stance.into(),
         goal,
         time_limit: *raw.time_limit.get_ref(),
