@@ -116,12 +116,11 @@ fn corridor(d: &mut Draw) -> Layout {
     let h = 0.5 * w;
     let mut obstacles = Vec::new();
     let start = Vector2::new(0.5, 0.0);
-    let goal;
-    if d.coin() {
+    let goal = if d.coin() {
         // Straight.
         obstacles.push(rect(0.0, -h - t1, l1, -h));
         obstacles.push(rect(0.0, h, l1, h + t2));
-        goal = Vector2::new(l1 - 0.5, 0.0);
+        Vector2::new(l1 - 0.5, 0.0)
     } else {
         // An L: along x to the bend, then along +y (or -y) for l2.
         let l2 = d.unif(4.0, 10.0);
@@ -135,8 +134,8 @@ fn corridor(d: &mut Draw) -> Layout {
         // Second leg: walls at x = l1 - w (inner) and x = l1 (outer).
         obstacles.push(rect(l1 - w - t2, inner_y, l1 - w, s * (h + l2)));
         obstacles.push(rect(l1, outer_y, l1 + t1, s * (h + l2)));
-        goal = Vector2::new(l1 - h, s * (h + l2 - 0.5));
-    }
+        Vector2::new(l1 - h, s * (h + l2 - 0.5))
+    };
     Layout {
         start,
         heading: 0.0,
