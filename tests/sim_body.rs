@@ -98,3 +98,68 @@ fn shipped_scenarios_keep_body_and_feet_out() {
     }
     assert!(failures.is_empty(), "body or foot collisions: {failures:?}");
 }
+
+/// The scenario families (`host-sim/src/families.rs`), 20 seeds each, at
+/// `delta = 0.05`: the MPC alone and with RRT* subgoals on the known map, and
+/// the MPC alone with LiDAR perception. No body or foot overlaps a true
+/// obstacle in any run.
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "360 closed loops: run with --release (.ci/run does)"
+)]
+fn families_keep_body_and_feet_out() {
+    use ldcbf_sim::scenario::Planner;
+    let tmp = tempfile::tempdir().unwrap();
+    let mut failures = Vec::new();
+    for family in [
+        "corridor",
+        "doorway",
+        "cup",
+        "wall-start",
+        "clutter",
+        "thin",
+    ] {
+        for (planner, perception) in [
+            (Planner::None, Perception::Known),
+            (Planner::RrtStar, Perception::Known),
+            (Planner::None, Perception::Lidar),
+        ] {
+            let mut req = BatchRequest::new(family, SeedRange { start: 0, end: 20 });
+            req.planner = Some(planner);
+            req.perception = Some(perception);
+            req.sets = vec![("delta".into(), "0.05".into())];
+            req.out = Some(tmp.path().join(format!(
+                "{family}-{}-{}",
+                planner.name(),
+                perception.name()
+            )));
+            let a = run_batch(&req).unwrap().aggregate;
+            println!(
+                "{family:10} {:8} {:5}: success {:2}/20, body collisions {}, foot collisions {}, \
+                 min body {:+.3} m, min foot {:+.3} m",
+                planner.name(),
+                perception.name(),
+                a.success,
+                a.collisions,
+                a.foot_collisions,
+                a.min_body_clearance,
+                a.min_footstep_clearance
+            );
+            if a.collisions + a.foot_collisions > 0 {
+                failures.push(format!(
+                    "{family} {} {}: {} body, {} foot",
+                    planner.name(),
+                    perception.name(),
+                    a.collisions,
+                    a.foot_collisions
+                ));
+            }
+            // With the subgoals every family is crossed.
+            if planner == Planner::RrtStar {
+                assert!(a.success >= 18, "{family} with RRT*: {} of 20", a.success);
+            }
+        }
+    }
+    assert!(failures.is_empty(), "{failures:?}");
+}
