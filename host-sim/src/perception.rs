@@ -43,7 +43,7 @@
 //!      `angle(b) + h`, `h = min(dphi / 2, 0.25)`, so the neighbouring rays are
 //!      outside it) by two lines parallel to the segment's fitted line: the near
 //!      line, as close to the sensor as it can be without crossing the seen free
-//!      part of any ray in the sector, and the far line `min_thickness` behind
+//!      part of any ray in the sector (only the segment's own rays are), and the far line `min_thickness` behind
 //!      the farthest point. A ray counts as seen free up to `3 noise_sigma +
 //!      free_margin` short of its hit point. A segment whose sector is too wide
 //!      or too oblique to its line for this (a ray within about 84 degrees of the
@@ -51,9 +51,15 @@
 //!      is normal to the ray.
 //!
 //! Guarantee (tested by a property test in `tests/sim_perception.rs`): no
-//! piece contains the sensor, and for every ray the segment from the sensor to
-//! its hit point shortened by `3 noise_sigma + free_margin`, or to `range` when
-//! it hit nothing, does not enter any piece's interior. So the controller is
+//! piece contains the sensor, and for every ray the segment from the sensor
+//! along the ray's direction to its measured range (the distance of its hit
+//! point) shortened by `3 noise_sigma + free_margin`, or to `range` when it
+//! hit nothing, does not enter any piece's interior. The seen free part of a
+//! ray is taken along the ray's own direction, not toward its noisy hit point:
+//! the per-axis noise turns into a bearing error (about 2 degrees at 0.3 m,
+//! more than the ray spacing), and a neighbouring ray's noisy point would
+//! otherwise fall inside a needle tip's sector and push its piece back behind
+//! the tip, i.e. hide an obstacle pointing at the robot. So the controller is
 //! never told that free space it saw (nor the robot's own position) is an
 //! obstacle, whatever the clusters join: a U-shaped cup, two walls meeting at a
 //! corner. The price: a piece holds its points only up to the noise (a point
@@ -382,8 +388,6 @@ pub fn infer_obstacles(
     {
         label[usable[k]] = l;
     }
-    // Every hit, for the free-space bound of each piece.
-    let seen: Vec<Vector2<f64>> = rays.iter().flatten().copied().collect();
     let dphi = core::f64::consts::TAU / n as f64;
     let lambda = params.breakpoint_angle;
     let linked = |a: usize, b: usize| -> bool {
@@ -436,7 +440,6 @@ pub fn infer_obstacles(
                 heading,
                 rays: n,
                 tol,
-                seen: &seen,
                 params,
             };
             segment_piece(&ctx, &chain[a..=b], &p[a..=b], &mut out);
@@ -525,7 +528,6 @@ struct PieceContext<'a> {
     heading: f64,
     rays: usize,
     tol: f64,
-    seen: &'a [Vector2<f64>],
     params: &'a LidarParams,
 }
 
@@ -580,18 +582,12 @@ fn segment_piece(
         // at most 0.5 rad wide.
         return;
     }
-    // Near line: no seen-free ray part inside the sector crosses it. A ray
-    // lies in the sector when its direction is within [tl, tr].
-    let in_sector = |d: Vector2<f64>| cross2(bl, d) >= 0.0 && cross2(d, br) >= 0.0;
+    // Near line: no seen-free ray part of the sector (its own rays, along
+    // their directions, to their ranges minus `tol`) crosses it.
     let mut near = 1e-3f64;
-    for q in ctx.seen {
-        let d = q - o;
-        let r = d.norm();
-        if r <= 1e-12 || !in_sector(d) {
-            continue;
-        }
-        let e = d * ((r - ctx.tol).max(0.0) / r);
-        near = near.max(w.dot(&e));
+    for (&j, p) in idx.iter().zip(pts) {
+        let r = (p - o).norm();
+        near = near.max(w.dot(&ray_direction(ctx.heading, j, n)) * (r - ctx.tol));
     }
     let far = pts.iter().map(|p| w.dot(&(p - o))).fold(near, f64::max) + ctx.params.min_thickness;
     let at = |b: Vector2<f64>, c: f64| o + b * (c / w.dot(&b));
@@ -602,10 +598,6 @@ fn segment_piece(
     if let Ok(p) = Polygon::new(&arr) {
         out.push(p);
     }
-}
-
-fn cross2(a: Vector2<f64>, b: Vector2<f64>) -> f64 {
-    a.x * b.y - a.y * b.x
 }
 
 fn cross3(o: Vector2<f64>, a: Vector2<f64>, b: Vector2<f64>) -> f64 {
