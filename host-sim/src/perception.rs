@@ -22,8 +22,9 @@
 //!      Aldon, "Line extraction in 2D range images for mobile robotics",
 //!      J. Intelligent and Robotic Systems 40, 2004): consecutive rays `j-1`,
 //!      `j` belong to one chain when both hit points are in the same DBSCAN
-//!      cluster and `|p_j - p_(j-1)| <= r_(j-1) sin(dphi) / sin(lambda - dphi)
-//!      + 3 sqrt(2) noise_sigma` (`dphi` the ray spacing, `lambda` =
+//!      cluster and
+//!      `|p_j - p_(j-1)| <= r_(j-1) sin(dphi) / sin(lambda - dphi) + 3 sqrt(2) noise_sigma`
+//!      (`r` the range, `dphi` the ray spacing, `lambda` =
 //!      `breakpoint_angle`: a surface seen at less than `lambda` of incidence
 //!      is cut; `sqrt 2` because both points are noisy). A missed ray, a
 //!      DBSCAN noise point or a hit nearer than the free-space tolerance (below)
@@ -49,6 +50,15 @@
 //!      or too oblique to its line for this (a ray within about 84 degrees of the
 //!      line's normal is required) is halved, down to single rays, whose piece
 //!      is normal to the ray.
+//!   4. **Convex merge**: neighbouring pieces of a cluster (adjacent rays, also
+//!      across a breakpoint) are replaced by their
+//!      convex hull, trimmed where a ray of their joint sector enters it by at
+//!      most `line_tolerance` (noise), and kept apart when one enters deeper
+//!      (see `merge_pieces`): a convex obstacle seen from outside (a box
+//!      corner, a blob) is one piece again, a concave corner (inside a U, two
+//!      walls meeting) stays cut. This keeps the obstacle count per scan near
+//!      that of one hull per cluster (the controller keeps only the nearest
+//!      few).
 //!
 //! Guarantee (tested by a property test in `tests/sim_perception.rs`): no
 //! piece contains the sensor, and for every ray the segment from the sensor
@@ -75,6 +85,7 @@
 //! The controller then sees only these inferred polygons; the simulator still
 //! measures clearance against the true ones.
 
+use ldcbf_controller::geometry::closest_point_point_polygon;
 use ldcbf_controller::nalgebra::Vector2;
 use rand_chacha::ChaCha8Rng;
 use rand_chacha::rand_core::SeedableRng;
@@ -432,20 +443,199 @@ pub fn infer_obstacles(
         chains.push(cur);
     }
     let mut out = Vec::new();
+    let ctx = PieceContext {
+        origin,
+        heading,
+        rays: n,
+        tol,
+        params,
+    };
+    let mut pieces: Vec<(Option<usize>, Piece)> = Vec::new();
     for chain in chains {
         let p: Vec<Vector2<f64>> = chain.iter().filter_map(|&u| rays[u % n]).collect();
+        let mut segs = Vec::new();
         for (a, b) in split_and_merge(&p, params.line_tolerance) {
-            let ctx = PieceContext {
-                origin,
-                heading,
-                rays: n,
-                tol,
-                params,
-            };
-            segment_piece(&ctx, &chain[a..=b], &p[a..=b], &mut out);
+            segment_piece(&ctx, &chain[a..=b], &p[a..=b], &mut segs);
+        }
+        let l = label[chain[0] % n];
+        pieces.extend(segs.into_iter().map(|s| (l, s)));
+    }
+    // Step 4: neighbouring pieces of one cluster (adjacent rays, across
+    // breakpoints too) whose trimmed convex hull keeps out of the free space
+    // of every ray of their sectors become one piece.
+    let point = |u: usize| rays[u % n];
+    let mut cur: Option<(Option<usize>, Piece)> = None;
+    for (l, next) in pieces {
+        let Some((lc, c)) = cur.take() else {
+            cur = Some((l, next));
+            continue;
+        };
+        let merged = (lc == l && next.first <= c.last + 1)
+            .then(|| merge_pieces(&ctx, &c, &next, point))
+            .flatten();
+        match merged {
+            Some(m) => cur = Some((l, m)),
+            None => {
+                out.push(c.poly);
+                cur = Some((l, next));
+            }
         }
     }
+    out.extend(cur.map(|(_, c)| c.poly));
     out
+}
+
+/// A convex piece, the unwrapped ray indices of its sector, and for each of
+/// those rays the normal (away from the sensor) of the segment piece it came
+/// from.
+struct Piece {
+    first: usize,
+    last: usize,
+    poly: Polygon,
+    normals: Vec<Vector2<f64>>,
+}
+
+/// The convex hull of two neighbouring pieces of one chain (`b` after `a`),
+/// trimmed where it enters seen free space, if it is a valid piece.
+///
+/// For every ray of the joint sector whose free part (along its direction,
+/// to its range `range(u)` minus the free-space tolerance) enters the hull,
+/// the hull is cut by the line through that free part's end, parallel to the
+/// ray's own segment (its normal `w` has `w . d > 0`, so the whole free part
+/// lies on the cut-away side). The merge is refused when a ray entered deeper
+/// than `line_tolerance` (the hull bridges a concave corner: the pieces stay
+/// apart), when a hit point (`point(u)`, m) ends up farther than 1 mm more
+/// from the merged piece than from its own piece, when the sector is wider than [`MAX_SECTOR`], or when the result
+/// has more than `max_vertices` vertices. Rays outside the sector never enter:
+/// the hull lies inside the sector.
+fn merge_pieces(
+    ctx: &PieceContext<'_>,
+    a: &Piece,
+    b: &Piece,
+    point: impl Fn(usize) -> Option<Vector2<f64>>,
+) -> Option<Piece> {
+    let range = |u: usize| point(u).map_or(0.0, |q| (q - ctx.origin).norm());
+    let (first, last) = (a.first, b.last.max(a.last));
+    let n = ctx.rays;
+    let h = (0.5 * core::f64::consts::TAU / n as f64).min(0.25);
+    let span = ray_angle(ctx.heading, last, n) - ray_angle(ctx.heading, first, n) + 2.0 * h;
+    if span > MAX_SECTOR || b.first < a.first {
+        return None;
+    }
+    let normals: Vec<Vector2<f64>> = (first..=last)
+        .map(|u| {
+            if u <= a.last {
+                a.normals[u - a.first]
+            } else {
+                b.normals[u - b.first]
+            }
+        })
+        .collect();
+    let pts: Vec<Vector2<f64>> = a
+        .poly
+        .vertices()
+        .iter()
+        .chain(b.poly.vertices())
+        .copied()
+        .collect();
+    let mut hull = convex_hull(&pts);
+    for u in first..=last {
+        let d = ray_direction(ctx.heading, u, n);
+        let free = range(u) - ctx.tol;
+        if free <= 0.0 {
+            continue;
+        }
+        let Some(t_in) = ray_entry(&hull, ctx.origin, d, free) else {
+            continue;
+        };
+        if free - t_in > ctx.params.line_tolerance {
+            return None;
+        }
+        let w = normals[u - first];
+        let e = ctx.origin + d * free;
+        hull = clip_half_plane(&hull, w, w.dot(&e));
+        if hull.len() < 3 {
+            return None;
+        }
+    }
+    if hull.len() > ctx.params.max_vertices.min(MAX_VERTICES) {
+        return None;
+    }
+    // Cuts only shrink the hull; check every ray once more all the same.
+    for u in first..=last {
+        let free = range(u) - ctx.tol;
+        if free > 0.0
+            && ray_entry(&hull, ctx.origin, ray_direction(ctx.heading, u, n), free).is_some()
+        {
+            return None;
+        }
+    }
+    let arr: Vec<[f64; 2]> = hull.iter().map(|p| [p.x, p.y]).collect();
+    let poly = Polygon::new(&arr).ok()?;
+    // The cuts must not lose points: each hit stays as near to the merged
+    // piece as it was to its own (up to 1 mm).
+    let dist = |q: &Polygon, p: &Vector2<f64>| closest_point_point_polygon(p, q).signed_distance;
+    for u in first..=last {
+        if let Some(p) = point(u) {
+            let own = dist(&a.poly, &p).min(dist(&b.poly, &p));
+            if dist(&poly, &p) > own.max(0.0) + 1e-3 {
+                return None;
+            }
+        }
+    }
+    Some(Piece {
+        first,
+        last,
+        poly,
+        normals,
+    })
+}
+
+/// The part of the CCW convex polygon `h` where `w . x >= c`
+/// (Sutherland-Hodgman against one line), CCW.
+fn clip_half_plane(h: &[Vector2<f64>], w: Vector2<f64>, c: f64) -> Vec<Vector2<f64>> {
+    let mut out = Vec::with_capacity(h.len() + 1);
+    for i in 0..h.len() {
+        let (p, q) = (h[i], h[(i + 1) % h.len()]);
+        let (fp, fq) = (w.dot(&p) - c, w.dot(&q) - c);
+        if fp >= 0.0 {
+            out.push(p);
+        }
+        if (fp >= 0.0) != (fq >= 0.0) {
+            out.push(p + (q - p) * (fp / (fp - fq)));
+        }
+    }
+    convex_hull(&out)
+}
+
+/// Where the segment from `o` along the unit direction `d` to length `len`
+/// (m) first gets more than 1e-10 m into the interior of the CCW convex
+/// polygon `h`, if it does: the distance from `o` (Cyrus-Beck clipping).
+fn ray_entry(h: &[Vector2<f64>], o: Vector2<f64>, d: Vector2<f64>, len: f64) -> Option<f64> {
+    let (mut t0, mut t1) = (0.0f64, len);
+    for i in 0..h.len() {
+        let (p, q) = (h[i], h[(i + 1) % h.len()]);
+        let e = (q - p).normalize();
+        let nrm = Vector2::new(-e.y, e.x); // inward for CCW
+        let f0 = nrm.dot(&(o - p)) - 1e-10;
+        let fd = nrm.dot(&d);
+        if fd.abs() < 1e-15 {
+            if f0 <= 0.0 {
+                return None;
+            }
+            continue;
+        }
+        let t = -f0 / fd;
+        if fd > 0.0 {
+            t0 = t0.max(t);
+        } else {
+            t1 = t1.min(t);
+        }
+        if t0 >= t1 {
+            return None;
+        }
+    }
+    Some(t0)
 }
 
 /// How far short of its hit a ray is taken as seen free, m:
@@ -545,7 +735,7 @@ fn segment_piece(
     ctx: &PieceContext<'_>,
     idx: &[usize],
     pts: &[Vector2<f64>],
-    out: &mut Vec<Polygon>,
+    out: &mut Vec<Piece>,
 ) {
     let o = ctx.origin;
     let n = ctx.rays;
@@ -596,7 +786,12 @@ fn segment_piece(
     // The quadrilateral has positive area (near < far, tl < tr); a sliver
     // below the polygon tolerances (a sector of nanometres) is dropped.
     if let Ok(p) = Polygon::new(&arr) {
-        out.push(p);
+        out.push(Piece {
+            first,
+            last,
+            poly: p,
+            normals: vec![w; last - first + 1],
+        });
     }
 }
 
