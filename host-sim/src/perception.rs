@@ -38,7 +38,7 @@
 //!      split point belongs to both halves); then neighbouring segments are
 //!      merged while the total-least-squares line of their union stays within
 //!      `line_tolerance` of every point, so a straight wall stays one piece.
-//!   3. **Pieces extruded away from the sensor** ([`segment_piece`]): a segment
+//!   3. **Pieces extruded away from the sensor** (`segment_piece`): a segment
 //!      covering rays `a..=b` becomes the quadrilateral cut from the angular
 //!      sector of those rays (bounded by the rays at `angle(a) - h` and
 //!      `angle(b) + h`, `h = min(dphi / 2, 0.25)`, so the neighbouring rays are
@@ -505,9 +505,10 @@ struct Piece {
 /// lies on the cut-away side). The merge is refused when a ray entered deeper
 /// than `line_tolerance` (the hull bridges a concave corner: the pieces stay
 /// apart), when a hit point (`point(u)`, m) ends up farther than 1 mm more
-/// from the merged piece than from its own piece, when the sector is wider than [`MAX_SECTOR`], or when the result
-/// has more than `max_vertices` vertices. Rays outside the sector never enter:
-/// the hull lies inside the sector.
+/// from the merged piece than from its own piece, when the sector is wider
+/// than [`MAX_SECTOR`], or when the result has more than `max_vertices`
+/// vertices. Rays outside the sector never enter: the hull lies inside the
+/// sector.
 fn merge_pieces(
     ctx: &PieceContext<'_>,
     a: &Piece,
