@@ -58,8 +58,9 @@ pub const DEFAULT_CLOCK_MHZ: f64 = 400.0;
 /// The shipped closed loops a deadline study runs by default (and the CI
 /// check): every shipped scenario except the `random` family (which is
 /// `--random N`), `maze` and `trap` both without and with RRT* subgoals,
-/// `crowded` with its seed 0.
-pub const SHIPPED_CASES: [&str; 8] = [
+/// `crowded` with its seed 0, the LiDAR regressions `cup-mouth` and
+/// `corner-start`.
+pub const SHIPPED_CASES: [&str; 10] = [
     "simple",
     "circles",
     "paper",
@@ -68,6 +69,8 @@ pub const SHIPPED_CASES: [&str; 8] = [
     "trap",
     "trap+rrt_star",
     "crowded@0",
+    "cup-mouth",
+    "corner-start",
 ];
 
 /// The scenario family of `--random N`.
