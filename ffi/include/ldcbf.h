@@ -39,6 +39,13 @@
 #define LDCBF_MAX_VERTICES 32
 
 /**
+ * Largest number of points one obstacle may be given as (its hull has at
+ * most [`LDCBF_MAX_VERTICES`] corners). A larger count is rejected before
+ * any point is read: a guard against garbage counts.
+ */
+#define LDCBF_MAX_POINTS 1024
+
+/**
  * Bytes of storage a controller needs, on every supported target (at least
  * `sizeof` the controller; [`ldcbf_controller_size`] gives the exact figure
  * for this build).
@@ -115,14 +122,14 @@ enum LdcbfResult
    */
   LDCBF_RESULT_INVALID_ARGUMENT = 8,
   /**
-   * More than [`LDCBF_MAX_OBSTACLES`] obstacles, or more points in all than
-   * a buffer can hold.
+   * More than [`LDCBF_MAX_OBSTACLES`] obstacles.
    */
   LDCBF_RESULT_TOO_MANY_OBSTACLES = 9,
   /**
    * An obstacle's points do not span a convex polygon of at most
    * [`LDCBF_MAX_VERTICES`] corners (not finite, beyond 1e6 m, fewer than 3
-   * distinct points, collinear); [`ldcbf_last_error`] says which and why.
+   * distinct points, collinear), or it has more than [`LDCBF_MAX_POINTS`]
+   * points; [`ldcbf_last_error`] says which and why.
    */
   LDCBF_RESULT_INVALID_OBSTACLE = 10,
 };
@@ -711,7 +718,8 @@ LdcbfResult ldcbf_reset(struct LdcbfController *ctl);
  * the result says why: a pointer error (`NullPointer`, `Misaligned`,
  * `NotInitialized`, `Overlap`), [`LdcbfResult::InvalidArgument`] (stance side
  * neither 0 nor 1), [`LdcbfResult::TooManyObstacles`],
- * [`LdcbfResult::InvalidObstacle`] ([`ldcbf_last_error`] names the obstacle).
+ * [`LdcbfResult::InvalidObstacle`] (an invalid obstacle, or more than
+ * [`LDCBF_MAX_POINTS`] points for one; [`ldcbf_last_error`] names it).
  *
  * # Safety
  * As [`ldcbf_configure`] for `ctl`; `input` and `out`, if non-NULL and

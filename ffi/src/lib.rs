@@ -93,6 +93,11 @@ pub const LDCBF_MAX_OBSTACLES: usize = 64;
 /// Largest number of corners of an obstacle's convex hull.
 pub const LDCBF_MAX_VERTICES: usize = 32;
 
+/// Largest number of points one obstacle may be given as (its hull has at
+/// most [`LDCBF_MAX_VERTICES`] corners). A larger count is rejected before
+/// any point is read: a guard against garbage counts.
+pub const LDCBF_MAX_POINTS: usize = 1024;
+
 /// Bytes of storage a controller needs, on every supported target (at least
 /// `sizeof` the controller; [`ldcbf_controller_size`] gives the exact figure
 /// for this build).
@@ -162,12 +167,12 @@ pub enum LdcbfResult {
     /// A scalar argument is out of its range (a side that is neither 0 nor 1,
     /// a duration that is not finite); [`ldcbf_last_error`] names it.
     InvalidArgument = 8,
-    /// More than [`LDCBF_MAX_OBSTACLES`] obstacles, or more points in all than
-    /// a buffer can hold.
+    /// More than [`LDCBF_MAX_OBSTACLES`] obstacles.
     TooManyObstacles = 9,
     /// An obstacle's points do not span a convex polygon of at most
     /// [`LDCBF_MAX_VERTICES`] corners (not finite, beyond 1e6 m, fewer than 3
-    /// distinct points, collinear); [`ldcbf_last_error`] says which and why.
+    /// distinct points, collinear), or it has more than [`LDCBF_MAX_POINTS`]
+    /// points; [`ldcbf_last_error`] says which and why.
     InvalidObstacle = 10,
 }
 
@@ -425,8 +430,9 @@ enum LastError {
     Config(ConfigError),
     Flag(&'static str),
     Argument(&'static str),
+    Pointer(&'static str),
     TooManyObstacles(u32),
-    TooManyPoints,
+    TooManyPoints(u32, u32),
     Obstacle(u32, GeometryError),
 }
 
@@ -439,13 +445,18 @@ impl core::fmt::Display for LastError {
                 write!(f, "invalid controller setting `{field}`: must be 0 or 1")
             }
             LastError::Argument(what) => write!(f, "invalid argument: {what}"),
+            LastError::Pointer(name) => write!(
+                f,
+                "pointer argument `{name}` is NULL, misaligned or overlaps the controller"
+            ),
             LastError::TooManyObstacles(n) => write!(
                 f,
                 "{n} obstacles given, at most {LDCBF_MAX_OBSTACLES} (LDCBF_MAX_OBSTACLES) are accepted"
             ),
-            LastError::TooManyPoints => {
-                f.write_str("the obstacles' point counts add up to more than a buffer can hold")
-            }
+            LastError::TooManyPoints(i, n) => write!(
+                f,
+                "obstacle {i}: {n} points given, at most {LDCBF_MAX_POINTS} (LDCBF_MAX_POINTS) are accepted"
+            ),
             LastError::Obstacle(i, e) => write!(f, "obstacle {i}: {e}"),
         }
     }
@@ -804,6 +815,8 @@ pub unsafe extern "C" fn ldcbf_configure(
         return e;
     }
     if let Err(e) = check_ptr(config).and(check_disjoint(config, size_of::<LdcbfConfig>(), ctl)) {
+        // SAFETY: a tagged controller, exclusively ours for the call.
+        unsafe { (*ctl).last_error = LastError::Pointer("config") };
         return e;
     }
     // SAFETY: non-NULL, aligned, readable by contract; `LdcbfConfig` is plain
@@ -860,7 +873,8 @@ pub unsafe extern "C" fn ldcbf_reset(ctl: *mut LdcbfController) -> LdcbfResult {
 /// the result says why: a pointer error (`NullPointer`, `Misaligned`,
 /// `NotInitialized`, `Overlap`), [`LdcbfResult::InvalidArgument`] (stance side
 /// neither 0 nor 1), [`LdcbfResult::TooManyObstacles`],
-/// [`LdcbfResult::InvalidObstacle`] ([`ldcbf_last_error`] names the obstacle).
+/// [`LdcbfResult::InvalidObstacle`] (an invalid obstacle, or more than
+/// [`LDCBF_MAX_POINTS`] points for one; [`ldcbf_last_error`] names it).
 ///
 /// # Safety
 /// As [`ldcbf_configure`] for `ctl`; `input` and `out`, if non-NULL and
@@ -881,12 +895,22 @@ pub unsafe extern "C" fn ldcbf_step(
     if let Err(e) = unsafe { check_controller(ctl) } {
         return e;
     }
-    if let Err(e) = check_ptr(input)
-        .and(check_ptr(out))
-        .and(check_disjoint(input, size_of::<LdcbfInput>(), ctl))
-        .and(check_disjoint(out, size_of::<LdcbfOutput>(), ctl))
-    {
-        return e;
+    let pointers = [
+        (
+            "input",
+            check_ptr(input).and(check_disjoint(input, size_of::<LdcbfInput>(), ctl)),
+        ),
+        (
+            "out",
+            check_ptr(out).and(check_disjoint(out, size_of::<LdcbfOutput>(), ctl)),
+        ),
+    ];
+    for (name, check) in pointers {
+        if let Err(e) = check {
+            // SAFETY: a tagged controller, exclusively ours for the call.
+            unsafe { (*ctl).last_error = LastError::Pointer(name) };
+            return e;
+        }
     }
     // SAFETY: non-NULL, aligned, readable by contract; plain data except
     // `stance_side`, a `u32` checked below.
@@ -931,6 +955,9 @@ pub unsafe extern "C" fn ldcbf_step(
     LdcbfResult::Ok
 }
 
+/// The point count of each obstacle and all their points `{x, y}`.
+type ObstacleSlices<'a> = (&'a [u32], &'a [[f64; 2]]);
+
 /// The caller's obstacle arrays as slices: `n` point counts and the points
 /// they add up to, checked for NULL, alignment, size and overlap with the
 /// controller.
@@ -942,11 +969,11 @@ unsafe fn obstacle_slices<'a>(
     points: *const f64,
     counts: *const u32,
     n: u32,
-) -> Result<(&'a [u32], &'a [[f64; 2]]), (LdcbfResult, LastError)> {
+) -> Result<ObstacleSlices<'a>, (LdcbfResult, LastError)> {
     if n == 0 {
         return Ok((&[], &[]));
     }
-    let bad = |r: LdcbfResult, what: &'static str| (r, LastError::Argument(what));
+    let bad = |r: LdcbfResult, what: &'static str| (r, LastError::Pointer(what));
     if usize::try_from(n).map_or(true, |n| n > LDCBF_MAX_OBSTACLES) {
         return Err((
             LdcbfResult::TooManyObstacles,
@@ -955,27 +982,39 @@ unsafe fn obstacle_slices<'a>(
     }
     let n = n as usize; // <= LDCBF_MAX_OBSTACLES, checked above
     check_ptr(counts)
-        .and(check_disjoint(counts, n * size_of::<u32>(), ctl))
+        .and(check_disjoint(
+            counts,
+            n.saturating_mul(size_of::<u32>()),
+            ctl,
+        ))
         .map_err(|r| bad(r, "point_counts"))?;
     // SAFETY: non-NULL, aligned, readable for `n` values by contract, at most
     // `LDCBF_MAX_OBSTACLES * 4` bytes, outside the controller.
     let counts = unsafe { core::slice::from_raw_parts(counts, n) };
-    let total = counts
-        .iter()
-        .try_fold(0usize, |s, &c| s.checked_add(c as usize))
-        .filter(|&t| t <= isize::MAX as usize / size_of::<[f64; 2]>())
-        .ok_or((LdcbfResult::TooManyObstacles, LastError::TooManyPoints))?;
+    let mut total = 0usize;
+    for (i, &c) in (0u32..).zip(counts) {
+        if c as usize > LDCBF_MAX_POINTS {
+            return Err((LdcbfResult::InvalidObstacle, LastError::TooManyPoints(i, c)));
+        }
+        // At most LDCBF_MAX_OBSTACLES * LDCBF_MAX_POINTS: cannot overflow.
+        total = total.saturating_add(c as usize);
+    }
     if total == 0 {
         // Every obstacle is empty: reported by `load_obstacles`.
         return Ok((counts, &[]));
     }
     let pts = points.cast::<[f64; 2]>();
     check_ptr(pts)
-        .and(check_disjoint(pts, total * size_of::<[f64; 2]>(), ctl))
+        .and(check_disjoint(
+            pts,
+            total.saturating_mul(size_of::<[f64; 2]>()),
+            ctl,
+        ))
         .map_err(|r| bad(r, "points"))?;
     // SAFETY: non-NULL, aligned (`[f64; 2]` has the alignment of `f64`),
-    // readable for `2 * total` doubles by contract, size within `isize::MAX`
-    // (checked), outside the controller.
+    // readable for `2 * total` doubles by contract, at most
+    // `LDCBF_MAX_OBSTACLES * LDCBF_MAX_POINTS * 16` bytes (1 MiB), outside the
+    // controller.
     let pts = unsafe { core::slice::from_raw_parts(pts, total) };
     Ok((counts, pts))
 }
@@ -988,8 +1027,9 @@ fn load_obstacles(
 ) -> Result<(), LastError> {
     buf.clear();
     for (i, &c) in (0u32..).zip(counts) {
+        // `pts` holds exactly the sum of the counts (`obstacle_slices`).
         let Some((these, rest)) = pts.split_at_checked(c as usize) else {
-            return Err(LastError::TooManyPoints);
+            return Err(LastError::TooManyPoints(i, c));
         };
         pts = rest;
         let poly = ConvexPolygon::hull(these).map_err(|e| LastError::Obstacle(i, e))?;
