@@ -11,7 +11,8 @@ fn committed_header_is_up_to_date() {
         .expect("ffi/cbindgen.toml parses");
     let mut generated = Vec::new();
     cbindgen::Builder::new()
-        .with_crate(crate_dir)
+        // The one source file, parsed directly: no nested `cargo metadata`.
+        .with_src(crate_dir.join("src/lib.rs"))
         .with_config(config)
         .generate()
         .expect("cbindgen generates the header")
