@@ -42,11 +42,13 @@
 //! ## No panics
 //!
 //! No function here panics: every pointer is checked for NULL and alignment
-//! before use, slices are read with `get`, sums of caller-given counts are
-//! checked, and the controller itself is proved panic-free at link time
-//! (`nopanic/`). With the `std` feature (default; it links std, whose panic
-//! handler a host `staticlib`/`cdylib` needs) a panic would in any case abort
-//! the process at the `extern "C"` boundary rather than unwind into C.
+//! before use, slices are read with `get`, caller-given counts are bounded
+//! before use. This is proved at link time together with the controller
+//! under it: `nopanic/` links every function of this API, called with opaque
+//! pointers and values, with `panic-never` (release build for Cortex-M7). With
+//! the `std` feature (default; it links std, whose panic handler a host
+//! `staticlib`/`cdylib` needs) a panic would in any case abort the process at
+//! the `extern "C"` boundary rather than unwind into C.
 #![no_std]
 // The C boundary is unsafe by nature: raw pointers in, `#[no_mangle]` symbols
 // out. Every `unsafe` block says why it is sound.

@@ -33,9 +33,9 @@ use panic_never as _;
 mod ldcbf_ffi;
 
 use ldcbf_ffi::{
-    LdcbfConfig, LdcbfController, LdcbfInput, LdcbfOutput, ldcbf_config_default,
-    ldcbf_configure, ldcbf_cycle_status_name, ldcbf_init, ldcbf_last_error, ldcbf_lip_propagate,
-    ldcbf_reset, ldcbf_result_name, ldcbf_step,
+    LdcbfConfig, LdcbfController, LdcbfInput, LdcbfOutput, ldcbf_config_default, ldcbf_configure,
+    ldcbf_cycle_status_name, ldcbf_init, ldcbf_last_error, ldcbf_lip_propagate, ldcbf_reset,
+    ldcbf_result_name, ldcbf_step,
 };
 
 /// Opaque words: pointer values, sizes, counts, scalars.
