@@ -46,9 +46,10 @@
 #define LDCBF_MAX_POINTS 1024
 
 /**
- * Bytes of storage a controller needs, on every supported target (at least
- * `sizeof` the controller; [`ldcbf_controller_size`] gives the exact figure
- * for this build).
+ * Bytes of storage a controller needs: at least `sizeof` the controller
+ * (checked at compile time on every target the library is built for: x86-64,
+ * aarch64 and thumbv7em in CI; [`ldcbf_controller_size`] gives the exact
+ * figure of this build).
  */
 #define LDCBF_CONTROLLER_SIZE 40960
 
@@ -307,7 +308,11 @@ typedef uint32_t LdcbfCommandSource;
  * The controller: opaque to C, held in storage the caller provides (see
  * [`ldcbf_init`]). Holds the [`RobotController`] (model, factored Hessian,
  * warm-start memory, workspace), the buffer for one cycle's obstacles, and
- * the last error.
+ * the last error. It holds no pointer into itself or to the caller's
+ * memory, so a byte copy of the storage (`memcpy` to another suitably
+ * aligned buffer) is an independent controller in the same state. Not
+ * thread-safe: one thread at a time may call functions on one controller;
+ * different controllers are independent.
  */
 typedef struct LdcbfController LdcbfController;
 
@@ -652,8 +657,9 @@ LdcbfResult ldcbf_config_default(struct LdcbfConfig *config);
 /**
  * Sets up a controller, unconfigured, in the caller's `storage` of
  * `storage_size` bytes, and writes its handle (the same address as `storage`)
- * to `*out`. Allocates nothing. The storage must stay valid, and must not be
- * moved or copied, while the controller is used; there is nothing to free.
+ * to `*out`. Allocates nothing. The storage must stay valid while the
+ * controller is used; there is nothing to free. Calling it again on the same
+ * storage starts over (unconfigured).
  *
  * Until [`ldcbf_configure`] succeeds every [`ldcbf_step`] returns the hold
  * command with [`LdcbfInputError::NotConfigured`].

@@ -140,6 +140,59 @@ fn sizes_fit_the_exported_constants() {
     assert!(ldcbf_controller_size() <= LDCBF_CONTROLLER_SIZE);
     assert!(LDCBF_CONTROLLER_ALIGN.is_multiple_of(ldcbf_controller_align()));
     assert_eq!(ldcbf_api_version(), LDCBF_API_VERSION);
+    // The exported capacities are the controller's.
+    let c = RobotController::new(Config::default()).unwrap();
+    assert_eq!(
+        c.last_assembly().obstacles.len(),
+        LDCBF_MAX_ACTIVE_OBSTACLES
+    );
+    assert_eq!(
+        c.last_assembly().prediction.heading.theta.len(),
+        LDCBF_HORIZON
+    );
+}
+
+#[test]
+fn a_byte_copy_is_an_independent_controller_in_the_same_state() {
+    let mut a = storage();
+    let ctl_a = configured(&mut a, &default_config());
+    let (points, counts) = two_obstacles();
+    let mut input = input_at_rest();
+    input.goal = [4.0, 5.0];
+    let mut out_a = sentinel();
+    let mut out_b = sentinel();
+    for i in 0..5 {
+        input.time_in_step = f64::from(i) * 0.05;
+        assert_eq!(
+            step(ctl_a, &input, &points, &counts, &mut out_a),
+            LdcbfResult::Ok
+        );
+    }
+    let mut b = storage();
+    b.0.copy_from_slice(&a.0);
+    let ctl_b = b.0.as_mut_ptr().cast::<LdcbfController>();
+    drop(a); // the copy does not depend on the original
+    let mut c = storage();
+    let ctl_c = configured(&mut c, &default_config());
+    for i in 0..5 {
+        input.time_in_step = f64::from(i) * 0.05;
+        assert_eq!(
+            step(ctl_c, &input, &points, &counts, &mut out_a),
+            LdcbfResult::Ok
+        );
+    }
+    for i in 5..8 {
+        input.time_in_step = f64::from(i) * 0.05;
+        assert_eq!(
+            step(ctl_b, &input, &points, &counts, &mut out_b),
+            LdcbfResult::Ok
+        );
+        assert_eq!(
+            step(ctl_c, &input, &points, &counts, &mut out_a),
+            LdcbfResult::Ok
+        );
+        assert_eq!(format!("{out_a:?}"), format!("{out_b:?}"), "cycle {i}");
+    }
 }
 
 #[test]
