@@ -877,8 +877,8 @@ pub unsafe extern "C" fn ldcbf_reset(ctl: *mut LdcbfController) -> LdcbfResult {
 /// Returns `Ok` when the controller ran (whatever the cycle's status: see
 /// `out->status`; a measurement that is NaN or out of range gives
 /// [`LdcbfCycleStatus::InvalidInput`] and the hold command, as in Rust).
-/// Otherwise nothing is written, the controller's memory is unchanged, and
-/// the result says why: a pointer error (`NullPointer`, `Misaligned`,
+/// Otherwise `*out` is not written, the controller's warm-start and
+/// fallback memory are unchanged, and the result says why: a pointer error (`NullPointer`, `Misaligned`,
 /// `NotInitialized`, `Overlap`), [`LdcbfResult::InvalidArgument`] (stance side
 /// neither 0 nor 1), [`LdcbfResult::TooManyObstacles`],
 /// [`LdcbfResult::InvalidObstacle`] (an invalid obstacle, or more than
