@@ -143,13 +143,7 @@ fn closed_loop<const N: usize, const NV: usize, const NC: usize>(
 }
 
 fn scenario(name: &str, sets: &[(&str, &str)]) -> Scenario {
-    let opts = LoadOptions {
-        seed: None,
-        sets: sets
-            .iter()
-            .map(|(k, v)| (k.to_string(), v.to_string()))
-            .collect(),
-    };
+    let opts = LoadOptions::with_sets(sets);
     load(name, &opts).expect("shipped scenario loads")
 }
 

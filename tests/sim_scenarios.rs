@@ -17,13 +17,7 @@ fn simulate(name: &str) -> (SimResult, Summary) {
 }
 
 fn simulate_with(name: &str, sets: &[(&str, &str)]) -> (SimResult, Summary) {
-    let opts = LoadOptions {
-        seed: None,
-        sets: sets
-            .iter()
-            .map(|(k, v)| (k.to_string(), v.to_string()))
-            .collect(),
-    };
+    let opts = LoadOptions::with_sets(sets);
     let sc = load(name, &opts).expect("shipped scenario loads");
     let r = run(&sc, SimOptions::default()).expect("simulation starts");
     let s = summarize(&r);

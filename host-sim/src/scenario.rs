@@ -732,6 +732,20 @@ pub struct LoadOptions {
     pub sets: Vec<(String, String)>,
 }
 
+impl LoadOptions {
+    /// No seed override and the `--set` pairs `sets`, in order (e.g.
+    /// `&[("planner", "\"none\"")]`).
+    pub fn with_sets(sets: &[(&str, &str)]) -> LoadOptions {
+        LoadOptions {
+            seed: None,
+            sets: sets
+                .iter()
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+                .collect(),
+        }
+    }
+}
+
 /// The directory of the shipped scenarios: `./scenarios` when it exists,
 /// otherwise the repository's `scenarios/` next to this crate.
 pub fn scenario_dir() -> PathBuf {
