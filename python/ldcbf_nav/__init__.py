@@ -50,6 +50,11 @@ __all__ = [
 
 __version__ = "0.1.0"
 
+# The exceptions are defined in the extension; show them under the package.
+for _exc in (ArgumentError, ConfigError, ScenarioError):
+    _exc.__module__ = __name__
+del _exc
+
 ScenarioSpec = Union[str, "os.PathLike[str]", Mapping[str, Any]]
 
 
