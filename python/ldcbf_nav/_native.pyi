@@ -1,12 +1,26 @@
 """Type stubs of the native module ``ldcbf_nav._native`` (built from src/lib.rs)."""
 
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, TypedDict, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, TypedDict, Union, final
 
 import numpy as np
 import numpy.typing as npt
 
-FloatArray = npt.NDArray[np.float64]
-ArrayLike = npt.ArrayLike
+_FloatArray = npt.NDArray[np.float64]
+_ArrayLike = npt.ArrayLike
+
+__all__ = [
+    "ArgumentError",
+    "CONFIG_FIELDS",
+    "ConfigError",
+    "Controller",
+    "QP_SIZES",
+    "ScenarioError",
+    "default_config",
+    "humanoid_config",
+    "load_scenario",
+    "simulate",
+    "solve_qp",
+]
 
 CONFIG_FIELDS: List[str]
 """Names of the controller settings (``ldcbf_controller::Config`` fields)."""
@@ -30,19 +44,19 @@ class ScenarioError(ArgumentError):
     file: str
     line: Optional[int]
 
-class Plan(TypedDict):
+class _Plan(TypedDict):
     """The predicted plan of a cycle."""
 
-    x0: FloatArray
+    x0: _FloatArray
     """``[px, py, vx, vy, theta]`` predicted at the end of the current step."""
-    states: FloatArray
+    states: _FloatArray
     """``(N, 5)``: ``x_1 .. x_N`` as rows ``[px, py, vx, vy, theta]``."""
-    feet: FloatArray
+    feet: _FloatArray
     """``(N, 2)``: footsteps ``f_0 .. f_{N-1}``."""
     first_side: str
     """Side of ``f_0`` (the current swing foot): ``"left"`` or ``"right"``."""
 
-class Info(TypedDict):
+class _Info(TypedDict):
     """Diagnostics of one cycle (``ldcbf_controller::CycleInfo``)."""
 
     qp_status: Optional[str]
@@ -61,10 +75,10 @@ class Info(TypedDict):
     relax_safety: float
     relax_capture: float
 
-class StepOutput(TypedDict):
+class _StepOutput(TypedDict):
     """What :meth:`Controller.step` returns (``ldcbf_controller::CycleOutput``)."""
 
-    foot_target: FloatArray
+    foot_target: _FloatArray
     """Where the current swing foot should land, m (2,)."""
     turning_rate: float
     """Turning rate for the next step, rad/s."""
@@ -72,9 +86,10 @@ class StepOutput(TypedDict):
     """``optimal``, ``infeasible``, ``budget_exhausted``, ``numerical_failure`` or ``invalid_input``."""
     input_error: Optional[str]
     """With ``invalid_input``: ``state``, ``stance_foot``, ``time_in_step``, ``goal`` or ``not_configured``."""
-    plan: Plan
-    info: Info
+    plan: _Plan
+    info: _Info
 
+@final
 class Controller:
     """The LDCBF footstep MPC (``ldcbf_controller::Controller``).
 
@@ -83,7 +98,7 @@ class Controller:
     rows possible; the simulator's) or ``"paper"`` (no foot rows).
     """
 
-    def __init__(self, config: Optional[Mapping[str, Any]] = None, *, size: str = "robot") -> None: ...
+    def __new__(cls, config: Optional[Mapping[str, Any]] = None, *, size: str = "robot") -> "Controller": ...
     @property
     def config(self) -> Dict[str, Any]:
         """Every setting in use."""
@@ -100,16 +115,16 @@ class Controller:
         """Forgets the warm-start and fallback memory."""
     def step(
         self,
-        com_position: ArrayLike,
-        com_velocity: ArrayLike,
+        com_position: _ArrayLike,
+        com_velocity: _ArrayLike,
         heading: float,
         turning_rate: float,
-        stance_foot: ArrayLike,
+        stance_foot: _ArrayLike,
         stance_side: str,
         time_in_step: float,
-        goal: ArrayLike,
-        obstacles: Optional[Sequence[ArrayLike]] = None,
-    ) -> StepOutput:
+        goal: _ArrayLike,
+        obstacles: Optional[Sequence[_ArrayLike]] = None,
+    ) -> _StepOutput:
         """One control cycle; ``obstacles`` are convex ``(k, 2)`` vertex arrays."""
 
 def default_config() -> Dict[str, Any]:
@@ -119,10 +134,10 @@ def humanoid_config() -> Dict[str, Any]:
     """The simulator's default humanoid: body disk 0.25 m, feet 0.22 x 0.10 m, foot rows on."""
 
 def solve_qp(
-    P: ArrayLike,
-    q: ArrayLike,
-    G: Optional[ArrayLike] = None,
-    h: Optional[ArrayLike] = None,
+    P: _ArrayLike,
+    q: _ArrayLike,
+    G: Optional[_ArrayLike] = None,
+    h: Optional[_ArrayLike] = None,
     *,
     max_iter: int = 1000,
     tol_primal: float = 1e-10,
