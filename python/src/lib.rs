@@ -502,13 +502,13 @@ impl PyController {
     /// Horizon `N`: footsteps planned per cycle.
     #[getter]
     fn horizon(&self) -> usize {
-        3
+        with_controller!(&self.inner, c => horizon_of(c.as_ref()))
     }
 
     /// Obstacle capacity: at most this many (the nearest) are used per cycle.
     #[getter]
     fn obstacle_capacity(&self) -> usize {
-        8
+        with_controller!(&self.inner, c => obstacle_capacity_of(c.as_ref()))
     }
 
     /// Forgets the warm-start and fallback memory (as a new controller).
@@ -553,8 +553,26 @@ impl PyController {
     }
 
     fn __repr__(&self) -> String {
-        format!("Controller(size={:?}, horizon=3)", self.size)
+        format!(
+            "Controller(size={:?}, horizon={})",
+            self.size,
+            self.horizon()
+        )
     }
+}
+
+/// The horizon `N` of a controller type.
+fn horizon_of<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>(
+    _: &ldcbf_controller::Controller<N, NV, NC, NOBS>,
+) -> usize {
+    N
+}
+
+/// The obstacle capacity `NOBS` of a controller type.
+fn obstacle_capacity_of<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>(
+    _: &ldcbf_controller::Controller<N, NV, NC, NOBS>,
+) -> usize {
+    NOBS
 }
 
 /// A cycle's output as a dict (see [`PyController::step`]).

@@ -120,3 +120,16 @@ def test_columns_are_numpy(in_repo):
     # trajectory_every=1 keeps every 1 kHz sample.
     assert len(res["trajectory"]["t"]) == round(res["summary"]["sim_time"] * 1000) + 1
     assert res["subgoals"].shape == (1, 2)
+
+
+def test_solver_and_rate_options(in_repo):
+    clar = ldcbf_nav.simulate("simple", solver="clarabel", time_limit=2)
+    assert clar["summary"]["solver"] == "clarabel"
+    per_step = ldcbf_nav.simulate("simple", mpc_rate="step", time_limit=2)
+    assert per_step["summary"]["mpc_rate"] == "once per step"
+    # One cycle at the start of each 0.4 s step (the last at the 2 s limit).
+    np.testing.assert_allclose(per_step["cycles"]["t"], np.arange(6) * 0.4, atol=1e-12)
+    at10 = ldcbf_nav.simulate("simple", mpc_rate=10, time_limit=2)
+    np.testing.assert_allclose(at10["cycles"]["t"], np.arange(21) * 0.1, atol=1e-12)
+    at20 = ldcbf_nav.simulate("simple", time_limit=2)
+    np.testing.assert_allclose(at20["cycles"]["t"], np.arange(41) * 0.05, atol=1e-12)
