@@ -6,7 +6,10 @@
 #      (deterministic, -icount), flash/RAM/stack budgets (tests/firmware_qemu.rs);
 #   2. the link-time no-panic proof (nopanic/check.sh);
 #   3. the controller's tests cross-built for aarch64-unknown-linux-gnu and run
-#      under qemu-aarch64.
+#      under qemu-aarch64;
+#   4. the C API (ffi/) cross-built for aarch64: its unit tests under
+#      qemu-aarch64, and the C example walk.c cross-compiled and run under
+#      qemu-aarch64, its cycles equal to the Rust controller's bit for bit.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -39,3 +42,20 @@ section "controller tests on aarch64-unknown-linux-gnu (qemu-aarch64)"
 CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc \
 CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER="qemu-aarch64 -L /usr/aarch64-linux-gnu" \
     cargo test --locked -p ldcbf-controller --target aarch64-unknown-linux-gnu
+
+section "C API (ffi/) on aarch64-unknown-linux-gnu: unit tests, walk.c equals Rust bit for bit"
+export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc
+export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER="qemu-aarch64 -L /usr/aarch64-linux-gnu"
+cargo test --locked -p ldcbf-ffi --lib --target aarch64-unknown-linux-gnu
+cargo build --locked --release -p ldcbf-ffi --target aarch64-unknown-linux-gnu
+ffi_out="$(mktemp -d)"
+aarch64-linux-gnu-gcc -std=c11 -O2 -Wall -Wextra -Wpedantic -Werror -ffp-contract=off \
+    -I ffi/include ffi/examples/walk.c \
+    target/aarch64-unknown-linux-gnu/release/libldcbf_ffi.a -lm -lpthread -ldl \
+    -o "$ffi_out/walk-aarch64"
+qemu-aarch64 -L /usr/aarch64-linux-gnu "$ffi_out/walk-aarch64" | tail -n 1
+qemu-aarch64 -L /usr/aarch64-linux-gnu "$ffi_out/walk-aarch64" --hex >"$ffi_out/walk-aarch64.txt"
+# Compared on the host with the Rust controller run there.
+LDCBF_WALK_HEX="$ffi_out/walk-aarch64.txt" \
+    cargo test --locked -p ldcbf-ffi --test walk_c -- --nocapture
+rm -rf "$ffi_out"

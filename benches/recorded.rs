@@ -11,8 +11,9 @@
 //! to reproduce every logged output bit for bit (`Recording::verify`), so the
 //! benchmarks replay exactly the simulator's cycles:
 //!
-//! * `maze`: the runs `maze` (no subgoals; the walk ends stuck in the dead end
-//!   after about 63 s, many cycles pressed against walls) and `maze+rrt_star`;
+//! * `maze`: the runs `maze+none` (no subgoals; the walk ends stuck in the
+//!   dead end after about 63 s, many cycles pressed against walls) and
+//!   `maze+rrt_star` (the scenario as shipped);
 //! * `paper`: the run `paper`;
 //! * `random`: the runs `random@0` .. `random@9` (seeds 0..9 of the paper's
 //!   random family, known map).
@@ -210,7 +211,7 @@ impl Set {
 fn sets() -> Vec<Set> {
     let parse = |s: &str| s.parse::<Case>().expect("case");
     vec![
-        Set::record("maze", &[parse("maze"), parse("maze+rrt_star")]),
+        Set::record("maze", &[parse("maze+none"), parse("maze+rrt_star")]),
         Set::record("paper", &[parse("paper")]),
         Set::record("random", &random_cases(RANDOM_SEEDS)),
     ]

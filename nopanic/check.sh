@@ -12,7 +12,7 @@ set -euo pipefail
 cd "$(dirname "$0")"
 
 TARGET=thumbv7em-none-eabihf
-ELF="target/$TARGET/release/ldcbf-nopanic"
+ELFS=("target/$TARGET/release/ldcbf-nopanic" "target/$TARGET/release/ldcbf-nopanic-ffi")
 
 list_sites() {
     echo "Building with panic-halt to list the surviving panic call sites..."
@@ -24,7 +24,12 @@ list_sites() {
         echo "See README.md, 'Finding a regression', for the manual recipe." >&2
         return 2
     fi
-    python3 list_panics.py "$objdump" addr2line "$ELF"
+    local status=0 elf
+    for elf in "${ELFS[@]}"; do
+        echo "== $elf"
+        python3 list_panics.py "$objdump" addr2line "$elf" || status=1
+    done
+    return $status
 }
 
 if [[ "${1:-}" == "--list" ]]; then
@@ -38,7 +43,8 @@ trap 'rm -f "$LOG"' EXIT
 echo "Linking the no-panic harness ($TARGET, release, panic-never)..."
 if cargo build --release --locked 2>"$LOG"; then
     echo "OK: no panicking branch is reachable from Controller::new, Controller::configure, Controller::step,"
-    echo "    ConvexPolygon::new, ConvexPolygon::hull, or DualActiveSet::new and LdpSolver (NV = 16, NC = 32)"
+    echo "    ConvexPolygon::new, ConvexPolygon::hull, or DualActiveSet::new and LdpSolver (NV = 16, NC = 32),"
+    echo "    nor from any function of the C API (ffi/: ldcbf_init, ldcbf_configure, ldcbf_step, ...)"
     echo "    in the release build for Cortex-M7."
     exit 0
 fi
@@ -46,7 +52,7 @@ fi
 if grep -q "error(panic-never)" "$LOG"; then
     cat >&2 <<'EOF'
 
-FAILED: the controller has a reachable panicking branch.
+FAILED: the controller or the C API (ffi/) has a reachable panicking branch.
 The optimised release build for Cortex-M7 still calls the panic handler, so for
 some input `Controller::step`, `Controller::new`, `ConvexPolygon::new` or
 `ConvexPolygon::hull` could panic (usually an index the optimiser cannot prove in

@@ -101,11 +101,12 @@ fn shipped_scenarios_keep_body_and_feet_out() {
 
 /// The scenario families (`host-sim/src/families.rs`), 20 seeds each, at
 /// `delta = 0.05`: the MPC alone and with RRT* subgoals on the known map (the
-/// guarantee's domain): no body or foot overlaps a true obstacle in any run.
-/// The LiDAR runs are printed, not asserted: with perception the guarantee
-/// holds for the perceived pieces only, and 1 of these 120 runs (`corridor`
-/// seed 19, a corridor narrower than twice the barrier margin plus the hit
-/// noise) touches a wall (docs/results.md).
+/// guarantee's domain), and the MPC alone with LiDAR perception: no body or
+/// foot overlaps a true obstacle in any run. (With perception the guarantee
+/// holds for the perceived pieces; that the true walls stay clear too rests
+/// on the pieces holding the hits and on a straight wall staying one piece:
+/// with the former split tolerance of 0.03 m, `corridor` seed 19 touched a
+/// wall; the cases that still touch on other seeds are in docs/results.md.)
 #[test]
 #[cfg_attr(
     debug_assertions,
@@ -149,7 +150,7 @@ fn families_keep_body_and_feet_out() {
                 a.min_body_clearance,
                 a.min_footstep_clearance
             );
-            if perception == Perception::Known && a.collisions + a.foot_collisions > 0 {
+            if a.collisions + a.foot_collisions > 0 {
                 failures.push(format!(
                     "{family} {} {}: {} body, {} foot",
                     planner.name(),

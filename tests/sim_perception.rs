@@ -470,7 +470,11 @@ proptest! {
             .map(|q| ldcbf_controller::closest_point_point_polygon(&o, q).signed_distance)
             .fold(f64::INFINITY, f64::min);
         prop_assume!(clear >= 0.05);
-        let params = LidarParams { noise_sigma: l.sigma, ..LidarParams::default() };
+        let params = LidarParams {
+            noise_sigma: l.sigma,
+            line_tolerance: LidarParams::default().line_tolerance.max(4.0 * l.sigma),
+            ..LidarParams::default()
+        };
         let mut lidar = Lidar::new(params.clone(), l.seed).unwrap();
         let rays = lidar.scan_rays(o, l.heading, &obstacles);
         let polys = infer_obstacles(&rays, o, l.heading, &params);

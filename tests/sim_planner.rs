@@ -82,10 +82,12 @@ fn trap_reaches_the_goal_with_rrt_star() {
 }
 
 /// Report 4.2 + 5.1: the maze, a dead end for the MPC alone (see
-/// `sim_scenarios.rs`), is solved with subgoals.
+/// `sim_scenarios.rs`), is solved with subgoals: the scenario as shipped
+/// (`run maze`, the README's first command) plans them.
 #[test]
 fn maze_reaches_the_goal_with_rrt_star() {
-    let (r, s) = simulate("maze", &[("planner", "\"rrt_star\"")]);
+    let (r, s) = simulate("maze", &[]);
+    assert_eq!(r.scenario.planner, Planner::RrtStar, "maze ships with RRT*");
     assert_eq!(r.outcome, Outcome::GoalReached, "{s:#?}");
     assert!(s.success);
     assert_no_collision(&s);

@@ -105,8 +105,14 @@ impl Shard {
     /// The seeds of `range` in this shard, ascending.
     pub fn seeds(&self, range: SeedRange) -> Vec<u64> {
         (range.start..range.end)
-            .filter(|s| (s - range.start) % u64::from(self.count) == u64::from(self.index - 1))
+            .filter(|s| self.holds(s - range.start))
             .collect()
+    }
+
+    /// Whether item `k` (0-based) of a study belongs to this shard: `k mod
+    /// count == index - 1` (interleaved).
+    pub fn holds(&self, k: u64) -> bool {
+        k % u64::from(self.count) == u64::from(self.index - 1)
     }
 }
 

@@ -7,12 +7,12 @@
 //! ldcbf-sim list
 //! ldcbf-sim batch --family random --seeds 0..200 [--planner none|rrt_star]
 //!                 [--perception known|lidar] [--jobs J] [--shard I/N] [--out DIR] [--set k=v ...]
-//! ldcbf-sim merge DIR... --out DIR [--allow-partial]
+//! ldcbf-sim merge DIR... --out DIR [--allow-partial]   (batch or robustness shards)
 //! ldcbf-sim table DIR...
 //! ldcbf-sim deadline [CASES...] [--random N] [--deadline-us D] [--clock-mhz F]
 //!                    [--set k=v ...] [--jobs J] [--repeat K] [--instructions FILE]
 //! ldcbf-sim robustness [CASES...] [--random N] [--delta D,D,...] [--set k=v ...]
-//!                      [--jobs J] [--out DIR]
+//!                      [--jobs J] [--shard I/N] [--out DIR]
 //! ```
 //!
 //! Exit status: 0 success; 1 error, with one `error: ...` line on stderr and no
@@ -110,15 +110,17 @@ enum Command {
         #[arg(long)]
         quiet: bool,
     },
-    /// Merge the shard directories of one batch study into one directory.
+    /// Merge the shard directories of one batch or robustness study into one
+    /// directory.
     Merge {
-        /// Shard directories written by `batch --shard I/N`.
+        /// Shard directories written by `batch --shard I/N` or
+        /// `robustness --shard I/N --out DIR`.
         #[arg(required = true)]
         dirs: Vec<PathBuf>,
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
-        /// Merge even if some seeds of the study are missing.
+        /// Merge even if some seeds (runs) of the study are missing.
         #[arg(long)]
         allow_partial: bool,
     },
@@ -133,8 +135,9 @@ enum Command {
     /// case, as a Markdown table.
     Deadline {
         /// Cases `NAME[+rrt_star|+none][@SEED]` (a shipped scenario or a path),
-        /// e.g. `maze+rrt_star`, `crowded@0` [default: simple circles paper maze
-        /// maze+rrt_star trap trap+rrt_star crowded@0].
+        /// e.g. `maze+none`, `crowded@0` [default: simple circles paper
+        /// maze+none maze+rrt_star trap trap+rrt_star crowded@0 cup-mouth
+        /// corner-start].
         #[arg(value_name = "CASES")]
         cases: Vec<ldcbf_sim::deadline::Case>,
         /// Also run seeds 0..N of the `random` family (pooled into one row).
@@ -196,9 +199,15 @@ enum Command {
         /// Worker threads [default: one per core].
         #[arg(long)]
         jobs: Option<usize>,
-        /// Also write DIR/runs.csv (every run) and DIR/table.md.
+        /// Also write DIR/runs.csv (every run), DIR/table.md and
+        /// DIR/summary.json (what the study is, for `merge`).
         #[arg(long)]
         out: Option<PathBuf>,
+        /// Run only shard I of N (1-based) of the runs (interleaved in the
+        /// order condition, delta, case), for studies split across machines;
+        /// needs --out; combine the shard directories with `merge`.
+        #[arg(long, default_value = "1/1")]
+        shard: Shard,
         /// No progress bar.
         #[arg(long)]
         quiet: bool,
@@ -364,6 +373,20 @@ fn main() -> ExitCode {
             dirs,
             out,
             allow_partial,
+        } if ldcbf_sim::robustness::is_robustness_dir(&dirs[0]) => {
+            match ldcbf_sim::robustness::merge(&dirs, &out, allow_partial) {
+                Ok(rep) => {
+                    out!("{}", ldcbf_sim::robustness::markdown(&rep));
+                    outln!("wrote {}/: runs.csv summary.json table.md", out.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => fail(e),
+            }
+        }
+        Command::Merge {
+            dirs,
+            out,
+            allow_partial,
         } => match ldcbf_sim::batch::merge(&dirs, &out, allow_partial) {
             Ok(rep) => {
                 print_batch(&rep);
@@ -418,9 +441,11 @@ fn main() -> ExitCode {
             sets,
             jobs,
             out,
+            shard,
             quiet,
         } => {
             let mut req = ldcbf_sim::robustness::RobustnessRequest::new();
+            req.shard = shard;
             if !cases.is_empty() {
                 req.cases = cases;
             }

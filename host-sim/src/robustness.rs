@@ -26,15 +26,25 @@
 //! in runs that never fell, falls, stuck, time limit, the minimum over all runs
 //! of each run's minimum true CoM clearance before any fall (m), and the minimum
 //! and 5th percentile (nearest rank) over the runs that never fell.
+//!
+//! Sharding, as for `batch`: `--shard i/n` runs the runs `k` (0-based, in
+//! request order: condition, delta, shipped cases, random seeds) with
+//! `k mod n == i - 1` and writes its own directory (`--out` is then required);
+//! [`merge`] (`ldcbf-sim merge`) checks that the directories come from one
+//! study and puts them together. The merged `runs.csv` is the unsharded
+//! study's, byte for byte, and so is `table.md` but for its last line (runs,
+//! jobs and wall time).
 
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Context, Result, anyhow, bail};
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 
+use crate::batch::Shard;
 use crate::deadline::{Case, random_cases, shipped_cases};
 use crate::report::OutputDir;
 use crate::scenario::Scenario;
@@ -49,7 +59,7 @@ pub const FALL_OFFSET_RATIO: f64 = 0.5;
 pub const DEFAULT_DELTAS: [f64; 3] = [0.0, 0.05, 0.1];
 
 /// One disturbance setting of a study.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Condition {
     /// Which disturbance (`none`, `push`, `height`, `foot`, `noise`).
     pub disturbance: String,
@@ -141,8 +151,11 @@ pub struct RobustnessRequest {
     pub jobs: usize,
     /// Progress bar on stderr.
     pub progress: bool,
-    /// Directory for `runs.csv` and `table.md` (none: nothing written).
+    /// Directory for `runs.csv`, `table.md` and `summary.json` (none: nothing
+    /// written; required for a shard).
     pub out: Option<PathBuf>,
+    /// The part of the study to run ([`Shard::ALL`]: all of it).
+    pub shard: Shard,
 }
 
 impl RobustnessRequest {
@@ -158,6 +171,7 @@ impl RobustnessRequest {
             jobs: std::thread::available_parallelism().map_or(1, |n| n.get()),
             progress: false,
             out: None,
+            shard: Shard::ALL,
         }
     }
 }
@@ -316,21 +330,119 @@ pub fn cell_stats(runs: &[&RobustRun]) -> CellStats {
     }
 }
 
-/// A finished study.
+/// A finished study, or a shard of one, or shards merged.
 #[derive(Clone, Debug)]
 pub struct RobustnessReport {
+    /// Labels of the shipped group's cases, as requested.
+    pub cases: Vec<String>,
+    /// Seeds `0..random` of the `random` family.
+    pub random: u64,
     /// The conditions, as requested.
     pub conditions: Vec<Condition>,
     /// The margins, m.
     pub deltas: Vec<f64>,
-    /// Every run, in request order (condition, delta, shipped cases, random seeds).
+    /// Every run of this shard, in request order (condition, delta, shipped
+    /// cases, random seeds).
     pub runs: Vec<RobustRun>,
-    /// Wall-clock time of the whole study, s.
+    /// Runs of the whole study (conditions x deltas x cases).
+    pub study_runs: usize,
+    /// Wall-clock time of the study, s (summed over the shards if merged).
     pub wall_time_s: f64,
-    /// Worker threads.
+    /// Worker threads (0 if merged).
     pub jobs: usize,
     /// The overrides applied to every run.
     pub sets: Vec<(String, String)>,
+    /// The shard these runs are ([`Shard::ALL`] for a whole or merged study).
+    pub shard: Shard,
+    /// How many shards the study was split into (1 if it ran whole).
+    pub shard_count: u32,
+    /// Shards merged into this report (empty unless written by [`merge`]).
+    pub merged_shards: Vec<u32>,
+}
+
+/// `summary.json` of a robustness directory: what the study is, and which
+/// part of it the directory holds.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RobustnessMeta {
+    /// Always [`KIND`] (how `merge` recognises the directory).
+    pub kind: String,
+    /// `ldcbf-sim` version that wrote it.
+    pub version: String,
+    /// Labels of the shipped group's cases.
+    pub cases: Vec<String>,
+    /// Seeds `0..random` of the `random` family.
+    pub random: u64,
+    /// The conditions.
+    pub conditions: Vec<Condition>,
+    /// The margins, m.
+    pub deltas: Vec<f64>,
+    /// The overrides applied to every run.
+    pub sets: Vec<(String, String)>,
+    /// Shard of this directory (`1/1` for a whole or merged study).
+    pub shard: Shard,
+    /// How many shards the study was split into (1 if it ran whole).
+    pub shard_count: u32,
+    /// Shards merged into this directory (empty unless written by `merge`).
+    pub merged_shards: Vec<u32>,
+    /// Worker threads (0 for a merged study).
+    pub jobs: usize,
+    /// Wall-clock time, s (sum over the shards for a merged study).
+    pub wall_time_s: f64,
+    /// Runs in this directory.
+    pub runs: usize,
+    /// Runs of the whole study.
+    pub study_runs: usize,
+}
+
+/// `meta.kind` of a robustness directory's `summary.json`.
+pub const KIND: &str = "ldcbf-sim robustness";
+
+impl RobustnessMeta {
+    fn of(rep: &RobustnessReport) -> Self {
+        RobustnessMeta {
+            kind: KIND.into(),
+            version: env!("CARGO_PKG_VERSION").into(),
+            cases: rep.cases.clone(),
+            random: rep.random,
+            conditions: rep.conditions.clone(),
+            deltas: rep.deltas.clone(),
+            sets: rep.sets.clone(),
+            shard: rep.shard,
+            shard_count: rep.shard_count,
+            merged_shards: rep.merged_shards.clone(),
+            jobs: rep.jobs,
+            wall_time_s: rep.wall_time_s,
+            runs: rep.runs.len(),
+            study_runs: rep.study_runs,
+        }
+    }
+
+    /// The fields two shards of one study must share.
+    fn study_key(&self) -> String {
+        format!(
+            "{:?}",
+            (
+                &self.cases,
+                self.random,
+                &self.conditions,
+                &self.deltas,
+                &self.sets,
+                self.shard_count
+            )
+        )
+    }
+
+    /// Labels of every case of the study (shipped, then random), with its group.
+    fn all_cases(&self) -> Vec<(&'static str, String)> {
+        let mut v: Vec<(&'static str, String)> =
+            self.cases.iter().map(|c| ("shipped", c.clone())).collect();
+        v.extend(
+            random_cases(self.random)
+                .iter()
+                .map(|c| ("random", c.label())),
+        );
+        v
+    }
 }
 
 /// Runs the study (all scenarios are loaded, and all errors reported, before
@@ -342,6 +454,12 @@ pub fn run_robustness(req: &RobustnessRequest) -> Result<RobustnessReport> {
     if req.deltas.iter().any(|d| !(d.is_finite() && *d >= 0.0)) {
         bail!("every delta must be finite and >= 0");
     }
+    if req.shard != Shard::ALL && req.out.is_none() {
+        bail!(
+            "--shard {} needs --out (merge reads the shard directories)",
+            req.shard
+        );
+    }
     if let Some(out) = &req.out {
         // Before the study, not after it: a bad --out fails at once.
         OutputDir::preflight(out).with_context(|| format!("--out {}", out.display()))?;
@@ -349,13 +467,19 @@ pub fn run_robustness(req: &RobustnessRequest) -> Result<RobustnessReport> {
     let mut cases: Vec<(&'static str, Case)> =
         req.cases.iter().map(|c| ("shipped", c.clone())).collect();
     cases.extend(random_cases(req.random).into_iter().map(|c| ("random", c)));
+    let study_runs = req.conditions.len() * req.deltas.len() * cases.len();
     let mut jobs = Vec::new();
+    let mut k = 0u64;
     for (ci, cond) in req.conditions.iter().enumerate() {
         for &delta in &req.deltas {
             let mut sets = req.sets.clone();
             sets.extend(cond.sets.iter().cloned());
             sets.push(("delta".into(), format!("{delta}")));
             for (group, case) in &cases {
+                k += 1;
+                if !req.shard.holds(k - 1) {
+                    continue;
+                }
                 let sc = case.load(&sets).with_context(|| {
                     format!(
                         "condition {} {}, delta {delta}",
@@ -365,6 +489,12 @@ pub fn run_robustness(req: &RobustnessRequest) -> Result<RobustnessReport> {
                 jobs.push((ci, delta, *group, case.label(), sc));
             }
         }
+    }
+    if jobs.is_empty() && req.shard != Shard::ALL {
+        bail!(
+            "shard {} of a study of {study_runs} runs holds no run (more shards than runs)",
+            req.shard
+        );
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(req.jobs)
@@ -400,21 +530,303 @@ pub fn run_robustness(req: &RobustnessRequest) -> Result<RobustnessReport> {
     bar.finish_and_clear();
     let runs: Vec<RobustRun> = runs.into_iter().collect::<Result<_>>()?;
     let rep = RobustnessReport {
+        cases: req.cases.iter().map(Case::label).collect(),
+        random: req.random,
         conditions: req.conditions.clone(),
         deltas: req.deltas.clone(),
         runs,
+        study_runs,
         wall_time_s: t0.elapsed().as_secs_f64(),
         jobs: req.jobs,
         sets: req.sets.clone(),
+        shard: req.shard,
+        shard_count: req.shard.count,
+        merged_shards: Vec::new(),
     };
     if let Some(out) = &req.out {
-        let dir = OutputDir::create(out)
-            .with_context(|| format!("cannot create output directory {}", out.display()))?;
-        std::fs::write(dir.path().join("runs.csv"), runs_csv(&rep))?;
-        std::fs::write(dir.path().join("table.md"), markdown(&rep))?;
-        dir.commit()
-            .with_context(|| format!("cannot move the results into {}", out.display()))?;
+        write_dir(out, &rep)?;
     }
+    Ok(rep)
+}
+
+/// Writes `runs.csv`, `table.md` and `summary.json` into `out` (atomically).
+fn write_dir(out: &Path, rep: &RobustnessReport) -> Result<PathBuf> {
+    let dir = OutputDir::create(out)
+        .with_context(|| format!("cannot create output directory {}", out.display()))?;
+    std::fs::write(dir.path().join("runs.csv"), runs_csv(rep))?;
+    std::fs::write(dir.path().join("table.md"), markdown(rep))?;
+    let json = serde_json::to_string_pretty(&RobustnessMeta::of(rep))?;
+    std::fs::write(dir.path().join("summary.json"), json + "\n")?;
+    dir.commit()
+        .with_context(|| format!("cannot move the results into {}", out.display()))
+}
+
+/// Whether `dir` holds a `summary.json` written by `robustness --out` (so
+/// `merge` knows which kind of study it merges).
+pub fn is_robustness_dir(dir: &Path) -> bool {
+    #[derive(Deserialize)]
+    struct Kind {
+        kind: String,
+    }
+    std::fs::read_to_string(dir.join("summary.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str::<Kind>(&t).ok())
+        .is_some_and(|k| k.kind == KIND)
+}
+
+/// Reads a directory written by `robustness --out` or by [`merge`]: its
+/// summary and its runs (each checked against the run the study has at that
+/// place), with their 0-based indices in the whole study.
+pub fn read_dir(dir: &Path) -> Result<(RobustnessMeta, Vec<(usize, RobustRun)>)> {
+    if !dir.is_dir() {
+        bail!(
+            "{}: no such robustness directory (give the directory written by `robustness --out` or `merge`)",
+            dir.display()
+        );
+    }
+    let sj = dir.join("summary.json");
+    let text = std::fs::read_to_string(&sj).map_err(|e| anyhow!("{}: {e}", sj.display()))?;
+    let meta: RobustnessMeta = serde_json::from_str(&text)
+        .map_err(|e| anyhow!("{}: not a robustness summary: {e}", sj.display()))?;
+    if meta.kind != KIND {
+        bail!(
+            "{}: field `meta.kind` is {:?}, not {KIND:?}",
+            sj.display(),
+            meta.kind
+        );
+    }
+    if meta.shard_count == 0
+        || meta.shard.count
+            != if meta.merged_shards.is_empty() {
+                meta.shard_count
+            } else {
+                1
+            }
+        || meta
+            .merged_shards
+            .iter()
+            .any(|&i| i == 0 || i > meta.shard_count)
+    {
+        bail!(
+            "{}: inconsistent shard fields (shard {}, shard_count {}, merged_shards {:?})",
+            sj.display(),
+            meta.shard,
+            meta.shard_count,
+            meta.merged_shards
+        );
+    }
+    let cases = meta.all_cases();
+    let per_cell = cases.len();
+    if meta.study_runs != meta.conditions.len() * meta.deltas.len() * per_cell {
+        bail!(
+            "{}: study_runs {} does not match the study it describes",
+            sj.display(),
+            meta.study_runs
+        );
+    }
+    // Indices in the study of this directory's runs, in order.
+    let indices: Vec<usize> = if meta.merged_shards.is_empty() {
+        (0..meta.study_runs)
+            .filter(|&k| meta.shard.holds(k as u64))
+            .collect()
+    } else {
+        (0..meta.study_runs)
+            .filter(|&k| {
+                meta.merged_shards.iter().any(|&i| {
+                    Shard {
+                        index: i,
+                        count: meta.shard_count,
+                    }
+                    .holds(k as u64)
+                })
+            })
+            .collect()
+    };
+    let csv = dir.join("runs.csv");
+    let text = std::fs::read_to_string(&csv).map_err(|e| anyhow!("{}: {e}", csv.display()))?;
+    let mut lines = text.lines();
+    if lines.next() != Some(RUNS_HEADER) {
+        bail!(
+            "{}:1: unexpected header (not a runs.csv written by ldcbf-sim robustness)",
+            csv.display()
+        );
+    }
+    let rows: Vec<&str> = lines.filter(|l| !l.trim().is_empty()).collect();
+    if rows.len() != meta.runs || rows.len() != indices.len() {
+        bail!(
+            "{}: {} rows but summary.json says {} runs of shard {} (truncated file?)",
+            csv.display(),
+            rows.len(),
+            meta.runs,
+            meta.shard
+        );
+    }
+    let mut out = Vec::with_capacity(rows.len());
+    for (i, (line, &k)) in rows.iter().zip(&indices).enumerate() {
+        let ci = k / (meta.deltas.len() * per_cell);
+        let di = (k / per_cell) % meta.deltas.len();
+        let (group, label) = &cases[k % per_cell];
+        let run = parse_run(
+            line,
+            &meta.conditions[ci],
+            ci,
+            meta.deltas[di],
+            group,
+            label,
+        )
+        .map_err(|e| anyhow!("{}:{}: {e}", csv.display(), i + 2))?;
+        out.push((k, run));
+    }
+    Ok((meta, out))
+}
+
+/// Parses a line of `runs.csv`, which must be the run of `condition`, `delta`
+/// and case `label`.
+fn parse_run(
+    line: &str,
+    cond: &Condition,
+    condition: usize,
+    delta: f64,
+    group: &'static str,
+    label: &str,
+) -> Result<RobustRun> {
+    let f: Vec<&str> = line.split(',').collect();
+    if f.len() != 13 {
+        bail!("{} fields, expected 13", f.len());
+    }
+    let expect = [
+        cond.disturbance.clone(),
+        cond.magnitude.replace(',', ";"),
+        format!("{delta}"),
+        group.to_string(),
+        label.to_string(),
+    ];
+    if f[..5] != expect {
+        bail!(
+            "run {:?} where the study has {:?} (not the same study, or rows out of order)",
+            f[..5].join(","),
+            expect.join(",")
+        );
+    }
+    let outcome = [
+        Outcome::GoalReached,
+        Outcome::TimeLimit,
+        Outcome::Stuck,
+        Outcome::Diverged,
+    ]
+    .into_iter()
+    .find(|o| o.name() == f[5])
+    .ok_or_else(|| anyhow!("unknown outcome {:?}", f[5]))?;
+    let flag = |s: &str, name: &str| match s {
+        "0" => Ok(false),
+        "1" => Ok(true),
+        _ => Err(anyhow!("{name}: expected 0 or 1, got {s:?}")),
+    };
+    let num = |s: &str, name: &str| {
+        s.parse::<f64>()
+            .map_err(|_| anyhow!("{name}: not a number: {s:?}"))
+    };
+    let count = |s: &str, name: &str| {
+        s.parse::<usize>()
+            .map_err(|_| anyhow!("{name}: not a count: {s:?}"))
+    };
+    let fell = flag(f[6], "fell")?;
+    let fall_time = if f[7].is_empty() {
+        None
+    } else {
+        Some(num(f[7], "fall_time")?)
+    };
+    if fell != fall_time.is_some() {
+        bail!("fell and fall_time disagree");
+    }
+    Ok(RobustRun {
+        condition,
+        delta,
+        group,
+        label: label.to_string(),
+        outcome,
+        fall_time,
+        success: flag(f[8], "success")?,
+        collision: flag(f[9], "collision")?,
+        min_clearance: num(f[10], "min_clearance")?,
+        steps: count(f[11], "steps")?,
+        non_optimal_cycles: count(f[12], "non_optimal_cycles")?,
+    })
+}
+
+/// Merges shard directories of one robustness study into `out`: checks that
+/// they come from the same study (cases, random seeds, conditions, margins,
+/// overrides, shard count) and that no shard appears twice and, unless
+/// `allow_partial`, that every shard is there; writes the three files of the
+/// whole study (nothing on error).
+pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<RobustnessReport> {
+    if inputs.is_empty() {
+        bail!("merge needs at least one robustness directory");
+    }
+    let mut parts = Vec::new();
+    for d in inputs {
+        parts.push(read_dir(d)?);
+    }
+    let m0 = parts[0].0.clone();
+    let key = m0.study_key();
+    let mut shards: Vec<u32> = Vec::new();
+    let mut runs: Vec<(usize, RobustRun)> = Vec::new();
+    let mut wall = 0.0;
+    for ((meta, r), dir) in parts.into_iter().zip(inputs) {
+        if meta.study_key() != key {
+            bail!(
+                "{}: not the same study as {} (cases, random seeds, conditions, deltas, overrides and shard count must agree)",
+                dir.display(),
+                inputs[0].display()
+            );
+        }
+        let mine = if meta.merged_shards.is_empty() {
+            vec![meta.shard.index]
+        } else {
+            meta.merged_shards.clone()
+        };
+        for s in mine {
+            if shards.contains(&s) {
+                bail!(
+                    "{}: shard {s}/{} given twice",
+                    dir.display(),
+                    meta.shard_count
+                );
+            }
+            shards.push(s);
+        }
+        wall += meta.wall_time_s;
+        runs.extend(r);
+    }
+    shards.sort_unstable();
+    runs.sort_by_key(|(k, _)| *k);
+    if !allow_partial && runs.len() < m0.study_runs {
+        let missing: Vec<String> = (1..=m0.shard_count)
+            .filter(|s| !shards.contains(s))
+            .map(|s| format!("{s}/{}", m0.shard_count))
+            .collect();
+        bail!(
+            "incomplete study: {} of {} runs (missing shards: {}); pass --allow-partial to merge anyway",
+            runs.len(),
+            m0.study_runs,
+            missing.join(", ")
+        );
+    }
+    let rep = RobustnessReport {
+        cases: m0.cases,
+        random: m0.random,
+        conditions: m0.conditions,
+        deltas: m0.deltas,
+        runs: runs.into_iter().map(|(_, r)| r).collect(),
+        study_runs: m0.study_runs,
+        wall_time_s: wall,
+        jobs: 0,
+        sets: m0.sets,
+        shard: Shard::ALL,
+        shard_count: m0.shard_count,
+        merged_shards: shards,
+    };
+    write_dir(out, &rep)?;
     Ok(rep)
 }
 
@@ -472,9 +884,14 @@ pub fn markdown(rep: &RobustnessReport) -> String {
                 .collect::<Vec<_>>(),
         )
         .runs;
+        let per_row = if rep.runs.len() == rep.study_runs {
+            format!("{n} runs per row")
+        } else {
+            "part of the study: the runs per row are the success column's".into()
+        };
         let _ = writeln!(
             s,
-            "\n{} ({n} runs per row)\n",
+            "\n{} ({per_row})\n",
             if group == "shipped" {
                 "Shipped cases"
             } else {
@@ -513,11 +930,32 @@ pub fn markdown(rep: &RobustnessReport) -> String {
         }
     }
     let extra: Vec<String> = rep.sets.iter().map(|(k, v)| format!("{k}={v}")).collect();
+    // Unsharded: `N runs, J jobs, wall time T s` (as before sharding existed).
+    let (part, jobs, summed) = if !rep.merged_shards.is_empty() {
+        let shards: Vec<String> = rep.merged_shards.iter().map(u32::to_string).collect();
+        (
+            format!(
+                " of {} (merged shards {} of {})",
+                rep.study_runs,
+                shards.join(", "),
+                rep.shard_count
+            ),
+            String::new(),
+            " summed over the shards",
+        )
+    } else if rep.shard != Shard::ALL {
+        (
+            format!(" of {} (shard {})", rep.study_runs, rep.shard),
+            format!(", {} jobs", rep.jobs),
+            "",
+        )
+    } else {
+        (String::new(), format!(", {} jobs", rep.jobs), "")
+    };
     let _ = writeln!(
         s,
-        "\n{} runs, {} jobs, wall time {:.1} s{}",
+        "\n{} runs{part}{jobs}, wall time {:.1} s{summed}{}",
         rep.runs.len(),
-        rep.jobs,
         rep.wall_time_s,
         if extra.is_empty() {
             String::new()

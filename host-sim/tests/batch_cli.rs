@@ -81,3 +81,33 @@ fn batch_shards_merge_and_table_from_the_command_line() {
         .collect();
     assert!(left.is_empty(), "{left:?}");
 }
+
+#[test]
+fn robustness_shards_merge_from_the_command_line() {
+    // `simple` alone under the nine default conditions, one margin: 9 runs.
+    let tmp = tempfile::tempdir().unwrap();
+    let p = tmp.path();
+    let study = ["robustness", "simple", "--random", "0", "--delta", "0"];
+    let run = |extra: &[&str]| {
+        let args: Vec<&str> = study.iter().chain(extra).copied().collect();
+        let o = sim(&args, p);
+        assert!(o.status.success(), "{args:?}: {}", text(&o.stderr));
+    };
+    run(&["--jobs", "2", "--quiet", "--out", "whole"]);
+    run(&["--shard", "1/2", "--jobs", "1", "--quiet", "--out", "s1"]);
+    run(&["--shard", "2/2", "--jobs", "1", "--quiet", "--out", "s2"]);
+    // Without --out a shard is refused.
+    let args: Vec<&str> = study.iter().chain(&["--shard", "1/2"]).copied().collect();
+    fails(&args, "needs --out");
+    // `merge` recognises robustness directories; the result is the whole study.
+    let o = sim(&["merge", "s2", "s1", "--out", "m"], p);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(text(&o.stdout).contains("9 runs of 9 (merged shards 1, 2 of 2)"));
+    let read = |d: &str| std::fs::read(p.join(d).join("runs.csv")).unwrap();
+    assert_eq!(read("m"), read("whole"));
+    // A missing shard: refused, nothing written.
+    let o = sim(&["merge", "s1", "--out", "m1"], p);
+    assert!(!o.status.success());
+    assert!(text(&o.stderr).contains("missing shards: 2/2"));
+    assert!(!p.join("m1").exists());
+}

@@ -49,6 +49,9 @@ fn run_maze_main_command_writes_everything() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["scenario"], "maze");
     assert_eq!(summary["collision"], false);
+    // The front door shows success: maze plans RRT* subgoals by default.
+    assert_eq!(summary["outcome"], "goal_reached", "{summary}");
+    assert!(out.contains("goal reached"), "{out}");
     assert!(summary["compute"]["p99_ns"].as_u64().unwrap() > 0);
     // Nothing else (no temporary directory) next to it.
     let entries: Vec<_> = std::fs::read_dir(tmp.path().join("out"))
