@@ -890,6 +890,7 @@ fn apply_set(table: &mut toml::Table, key: &str, value: &str) -> Result<(), Stri
         "rrt_star",
         "lidar",
         "disturbance",
+        "robot",
     ];
     let mut parts: Vec<&str> = key.split('.').collect();
     if parts.iter().any(|p| p.is_empty()) {
@@ -1444,6 +1445,10 @@ regular = { center = [4.0, 2.0], radius = 1.0, sides = 25 }
         };
         let e = parse_str(OK, "t.toml", &o).unwrap_err();
         assert_eq!(e.field, "bogus");
+        // The [robot] table as one key, as well as its fields.
+        let o = LoadOptions::with_sets(&[("robot", "{ body_radius = 0.2 }")]);
+        let s = parse_str(OK, "t.toml", &o).unwrap();
+        assert_eq!(s.robot.body_radius, 0.2);
     }
 
     #[test]
