@@ -198,6 +198,63 @@ impl ObstacleIndex {
     }
 }
 
+/// Margin of [`Candidates`], m: the list is queried `r_active + 0.5` m around
+/// the `p_0` of the cycle that queried it, and reused while later `p_0` stay
+/// within 0.5 m of it (about one step of walking).
+pub const CANDIDATE_MARGIN: f64 = 0.5;
+
+/// A cycle's candidates, reused from cycle to cycle while they still cover
+/// the cycle's disk: one R-tree query every step or so instead of every
+/// cycle. A list queried at `c` within `R` holds every box within `R - |p -
+/// c|` of any `p` (triangle inequality), so while `|p_0 - c| +`
+/// [`ObstacleQuery::padded_radius`] `<= R` it still holds every obstacle the
+/// cycle can select, in increasing order: the controller's result is the
+/// same bit for bit (it tests each candidate exactly); it only tests a few
+/// more (the disk's area grows by `((r + m) / r)^2`, 1.27 for `r_active = 4`
+/// m and the margin 0.5 m).
+#[derive(Clone, Debug, Default)]
+pub struct Candidates {
+    list: Vec<u32>,
+    center: Vector2<f64>,
+    reach: f64,
+    valid: bool,
+}
+
+impl Candidates {
+    /// The candidates for `query` (a superset of the obstacles the cycle can
+    /// select, increasing indices), queried from `index` again only when the
+    /// last list does not cover the query's disk. `index` must be the same
+    /// index on every call (else [`Candidates::clear`] first).
+    pub fn update(&mut self, index: &ObstacleIndex, query: &ObstacleQuery) -> &[u32] {
+        let need = query.padded_radius();
+        let covered = self.valid && (query.center - self.center).norm() + need <= self.reach;
+        if !covered {
+            self.center = query.center;
+            self.reach = need + CANDIDATE_MARGIN;
+            // Padded once more for the rounding of the query itself.
+            let r = ObstacleQuery {
+                center: self.center,
+                radius: self.reach,
+            }
+            .padded_radius();
+            index.within_into(&self.center, r, &mut self.list);
+            self.valid = true;
+        }
+        &self.list
+    }
+
+    /// Forgets the list (the next [`Candidates::update`] queries).
+    pub fn clear(&mut self) {
+        self.list.clear();
+        self.valid = false;
+    }
+
+    /// The current list (empty after [`Candidates::clear`]).
+    pub fn list(&self) -> &[u32] {
+        &self.list
+    }
+}
+
 /// The linear scan that [`ObstacleIndex::within_into`] replaces: indices, in
 /// increasing order, of the obstacles whose bounding box is within `radius` (m)
 /// of `center` (m, world). For tests and benchmarks.
@@ -265,6 +322,37 @@ mod tests {
         // Far outside the map: nothing.
         index.within_into(&Vector2::new(100.0, 100.0), 4.0, &mut out);
         assert!(out.is_empty());
+    }
+
+    #[test]
+    fn candidates_are_reused_while_they_cover_the_disk() {
+        let map: Vec<Polygon> = (0..400)
+            .map(|i| square(f64::from(i % 20), f64::from(i / 20), 0.1))
+            .collect();
+        let index = ObstacleIndex::new(&map).unwrap();
+        let mut cache = Candidates::default();
+        let q = |x: f64| ObstacleQuery {
+            center: Vector2::new(x, 10.0),
+            radius: 4.0,
+        };
+        let first = cache.update(&index, &q(5.0)).to_vec();
+        assert_eq!(cache.center.x, 5.0);
+        let mut exact = Vec::new();
+        for x in [5.2, 5.49, 4.6] {
+            // Within the margin: the same list, which holds the exact query's.
+            assert_eq!(cache.update(&index, &q(x)), &first[..]);
+            assert_eq!(cache.center.x, 5.0);
+            index.candidates_into(&q(x), &mut exact);
+            assert!(exact.iter().all(|j| first.binary_search(j).is_ok()));
+            assert!(exact.len() < first.len());
+        }
+        // Past it: queried again around the new centre.
+        cache.update(&index, &q(5.6));
+        assert_eq!(cache.center.x, 5.6);
+        cache.clear();
+        assert!(cache.list().is_empty());
+        cache.update(&index, &q(5.6));
+        assert!(!cache.list().is_empty());
     }
 
     #[test]

@@ -24,7 +24,8 @@
 //!    foot and side, time in step), the goal and the obstacle list, and
 //!    `Controller::step_with` is called. With the known map, the candidates
 //!    come from the map's R-tree ([`crate::obstacle_index`], built once before
-//!    the first tick) around `Controller::obstacle_query`, and
+//!    the first tick) around `Controller::obstacle_query` (reused while they
+//!    cover the cycle, [`crate::obstacle_index::Candidates`]), and
 //!    `Controller::step_among_with` is called on them: bit for bit the
 //!    result of `step_with` on the whole map, at a cost that does not grow with
 //!    it. The wall-clock time is measured with [`Instant`] around that query
@@ -71,7 +72,7 @@ use ldcbf_controller::{
 use ldcbf_reference::ClarabelBackend;
 
 use crate::disturbance::{DisturbanceLog, Disturber};
-use crate::obstacle_index::ObstacleIndex;
+use crate::obstacle_index::{Candidates, ObstacleIndex};
 use crate::perception::Lidar;
 use crate::planner::{Plan, remaining_length};
 use crate::plant::{Plant, PlantParams};
@@ -398,42 +399,43 @@ pub fn run(scenario: &Scenario, options: SimOptions) -> Result<SimResult, SimErr
 }
 
 /// One controller call: `step_with` on the whole obstacle list, or, with an
-/// index of that list, `step_among_with` on the candidates the index finds
-/// around `obstacle_query` (written into `candidates`; bit for bit the same
-/// output, see [`crate::obstacle_index`]).
+/// index of that list, `step_among_with` on the candidates around
+/// `obstacle_query` (`candidates`: the index queried again only when the last
+/// list does not cover this cycle; bit for bit the same output, see
+/// [`crate::obstacle_index`]).
 fn control<const V: usize, B: QpBackend<NV, NC>>(
     controller: &mut RobotController,
     backend: &mut B,
     input: &CycleInput<'_, V>,
     index: Option<&ObstacleIndex>,
-    candidates: &mut Vec<u32>,
+    candidates: &mut Candidates,
 ) -> CycleOutput<HORIZON> {
     let Some(index) = index else {
         return controller.step_with(input, backend);
     };
     match controller.obstacle_query(input) {
-        Ok(q) => index.candidates_into(&q, candidates),
+        Ok(q) => controller.step_among_with(input, candidates.update(index, &q), backend),
         // The controller rejects the input before reading any obstacle.
-        Err(_) => candidates.clear(),
+        Err(_) => controller.step_among_with(input, &[], backend),
     }
-    controller.step_among_with(input, candidates, backend)
 }
 
-/// Times [`control`] `repeats - 1` times on clones (of the controller and the
-/// backend, so the originals are untouched), ns each; the minimum, or
-/// `u64::MAX` when `repeats <= 1`.
+/// Times [`control`] `repeats - 1` times on clones (of the controller, the
+/// backend and the candidates, so the originals are untouched), ns each; the
+/// minimum, or `u64::MAX` when `repeats <= 1`.
 fn time_on_clones<const V: usize, B: QpBackend<NV, NC> + Clone>(
     controller: &RobotController,
     backend: &B,
     input: &CycleInput<'_, V>,
     index: Option<&ObstacleIndex>,
+    candidates: &Candidates,
     repeats: u32,
 ) -> u64 {
     let mut best = u64::MAX;
-    let mut candidates = Vec::new();
     for _ in 1..repeats {
         let mut c = controller.clone();
         let mut b = backend.clone();
+        let mut candidates = candidates.clone();
         let t0 = Instant::now();
         let out = control(&mut c, &mut b, input, index, &mut candidates);
         let ns = u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX);
@@ -480,7 +482,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
     // clearances of the samples and footsteps (the linear scans' values).
     let map_index = ObstacleIndex::new(obstacles).map_err(SimError)?;
     let index = (scenario.perception == Perception::Known).then_some(&map_index);
-    let mut candidates: Vec<u32> = Vec::new();
+    let mut candidates = Candidates::default();
     let robot = &scenario.robot;
     // Global planner: subgoals, the goal last.
     let mut navigation = Navigation::default();
@@ -599,8 +601,14 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                 goal: subgoals[current],
                 obstacles: cycle_obstacles,
             };
-            let on_clones =
-                time_on_clones(&controller, backend, &input, index, options.timing_repeats);
+            let on_clones = time_on_clones(
+                &controller,
+                backend,
+                &input,
+                index,
+                &candidates,
+                options.timing_repeats,
+            );
             let t0 = Instant::now();
             let output = control(&mut controller, backend, &input, index, &mut candidates);
             let compute_ns = u64::try_from(t0.elapsed().as_nanos())
