@@ -18,9 +18,10 @@
 //! Two ways to run a cycle:
 //!
 //! * `indexed`: `Controller::obstacle_query`, the candidates
-//!   (`ldcbf_sim::obstacle_index::Candidates`: the R-tree queried `r_active`
-//!   + 0.5 m around `p_0`, the list reused while it covers later cycles) and
-//!   `Controller::step_among`: what the simulator does with a known map;
+//!   (`ldcbf_sim::obstacle_index::Candidates`: the R-tree queried 0.5 m
+//!   beyond `r_active` around `p_0`, the list reused while it covers later
+//!   cycles) and `Controller::step_among`: what the simulator does with a
+//!   known map;
 //! * `queried`: the same with the R-tree queried every cycle
 //!   (`ObstacleIndex::candidates_into`, sorted indices), no reuse;
 //! * `full`: `Controller::step` on the whole map (before issue 14).

@@ -7,9 +7,12 @@
 //! the 250 µs deadline before the QP is even built. Instead the host keeps the
 //! map's axis-aligned bounding boxes in an R-tree ([`rstar`], bulk-loaded once
 //! when the run starts) and, each cycle, asks the controller where it will
-//! look ([`Controller::obstacle_query`]: `p_0` and `r_active`), queries the
-//! tree for the boxes within that disk, sorts the indices and passes them to
-//! [`Controller::step_among`], which tests only those.
+//! look ([`Controller::obstacle_query`]: `p_0` and `r_active`), takes the
+//! boxes within that disk (queried from the tree `r_active` +
+//! [`CANDIDATE_MARGIN`] around `p_0` and reused while they cover later cycles,
+//! [`Candidates`]), sorted by index, and passes them to
+//! [`Controller::step_among`], which tests only those. `benches/map_scaling.rs`
+//! and `docs/benchmarks.md` give the cost against the map's size.
 //!
 //! # Why the results are bit for bit those of a full scan
 //!
