@@ -199,7 +199,8 @@ fn worst_case_iterations_stay_within_the_configured_budget() {
 
 /// The default set covers every shipped scenario but the `random` family
 /// (which the 200 seeds cover) and the layout families of
-/// `ldcbf_sim::families` (run by `batch` and `tests/sim_body.rs`): a new
+/// `ldcbf_sim::families` (run by `batch` and `tests/sim_body.rs`), and the
+/// large maps (`LARGE_MAP_CASES`, run by `tests/obstacle_index.rs`): a new
 /// scenario file must be added to `SHIPPED_CASES`.
 #[test]
 fn shipped_cases_cover_every_shipped_scenario() {
@@ -214,10 +215,11 @@ fn shipped_cases_cover_every_shipped_scenario() {
         sc.generator
             .is_some_and(|g| ldcbf_sim::families::FAMILIES.contains(&g.kind.as_str()))
     };
-    for n in names
-        .iter()
-        .filter(|n| n.as_str() != "random" && !is_family(n))
-    {
+    for n in names.iter().filter(|n| {
+        n.as_str() != "random"
+            && !ldcbf_sim::deadline::LARGE_MAP_CASES.contains(&n.as_str())
+            && !is_family(n)
+    }) {
         assert!(
             cases.iter().any(|c| &c.scenario == n),
             "scenario {n} is not in ldcbf_sim::deadline::SHIPPED_CASES"

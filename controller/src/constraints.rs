@@ -125,10 +125,11 @@ pub enum RowKind {
     ReachLatUpper,
     /// Leg reachability, `-lat'(f_k - p_k) <= l_max`.
     ReachLatLower,
-    /// LDCBF row of the obstacle with this index in the caller's obstacle slice.
-    Ldcbf(u16),
+    /// LDCBF row of the obstacle with this index in the caller's obstacle slice
+    /// (`CycleInput::obstacles`, also when the caller passes candidates).
+    Ldcbf(u32),
     /// Foot clearance row of the obstacle with this index in the caller's slice.
-    FootClearance(u16),
+    FootClearance(u32),
 }
 
 impl RowKind {

@@ -12,6 +12,9 @@
 //! 2. fixes the turning rate `omega_bar` and the headings `theta_k` ([`heading`]);
 //! 3. selects the obstacles within `r_active`, nearest first, and linearises each
 //!    as a half-plane at the boundary point closest to `p_0` ([`geometry`]);
+//!    a caller with a large map passes only the candidates its spatial index
+//!    finds around [`Controller::obstacle_query`] ([`Controller::step_among`]),
+//!    with the same result;
 //! 4. builds the condensed QP over the next `N` footsteps `f_0 .. f_{N-1}`
 //!    ([`constraints`]), solved in the equivalent, well-conditioned variables
 //!    `z = [p_1x, p_1y, ..., p_Nx, p_Ny]` (the predicted CoM positions, from which
@@ -79,8 +82,8 @@ pub use ldp::{LdpLoaded, LdpSolver};
 pub use lip::Lip;
 pub use mpc::{
     ActiveObstacle, Assembly, CommandSource, Config, ConfigError, Controller, CycleInfo,
-    CycleInput, CycleOutput, CycleStatus, InputError, LipState, PaperController, Plan, Prediction,
-    RobotController, Side, constraint_capacity,
+    CycleInput, CycleOutput, CycleStatus, InputError, LipState, ObstacleQuery, PaperController,
+    Plan, Prediction, RobotController, Side, constraint_capacity,
 };
 pub use qp::{
     DenseQp, DualActiveSet, HessianError, OwnSolver, QpBackend, QpSettings, QpSolution, QpStatus,

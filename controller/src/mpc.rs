@@ -433,6 +433,42 @@ pub struct CycleInput<'a, const V: usize> {
     pub obstacles: &'a [ConvexPolygon<V>],
 }
 
+/// The disk, world frame W, that holds every obstacle a cycle can select:
+/// [`Controller::obstacle_query`] for a caller that keeps its map in a spatial
+/// index and passes only the candidates to [`Controller::step_among`].
+///
+/// A cycle selects obstacle `j` only if `closest_point_point_polygon(center,
+/// P_j).signed_distance <= radius` (`center` is the cycle's `p_0`, `radius` is
+/// [`Config::r_active`]). Such a polygon has a point within `radius` of
+/// `center` (its closest point, or `center` itself when inside), so its
+/// axis-aligned bounding box is within `radius` of `center` too: an index
+/// query for the boxes within [`ObstacleQuery::padded_radius`] of `center`
+/// returns every obstacle the cycle can select (the padding covers the
+/// rounding of both distance computations).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ObstacleQuery {
+    /// The cycle's `p_0`, the predicted CoM position at the end of the current
+    /// step, m (world frame W): exactly the point the selection measures from.
+    pub center: Vector2<f64>,
+    /// [`Config::r_active`], m.
+    pub radius: f64,
+}
+
+impl ObstacleQuery {
+    /// `radius` plus a margin for rounding, m: `radius (1 + 1e-9) + 1e-9 (1 +
+    /// |center|_inf)`, i.e. about 1e-7 m for a centre 100 m from the origin.
+    /// The controller's signed distance and an index's box distance are each
+    /// within a few units in the last place of the true distance (relative
+    /// error about 1e-15 for coordinates up to 1e6 m), far inside this margin,
+    /// so a box within the true `radius` is always within `padded_radius` as
+    /// computed. A larger query only passes a few more candidates, which the
+    /// controller tests exactly.
+    pub fn padded_radius(&self) -> f64 {
+        let scale = 1.0 + self.center.x.abs().max(self.center.y.abs());
+        self.radius * (1.0 + 1e-9) + 1e-9 * scale
+    }
+}
+
 /// Largest accepted CoM speed (m/s) and turning rate (rad/s): far beyond any
 /// walking robot; larger values are treated as corrupted measurements.
 pub const MAX_RATE: f64 = 100.0;
@@ -620,8 +656,9 @@ pub struct CycleOutput<const N: usize> {
 /// An obstacle used in this cycle's QP.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ActiveObstacle {
-    /// Index in the caller's obstacle slice.
-    pub index: u16,
+    /// Index in the caller's obstacle slice [`CycleInput::obstacles`] (also
+    /// with [`Controller::step_among`], whose candidates are such indices).
+    pub index: u32,
     /// Signed distance from `p_0`, m.
     pub distance: f64,
     /// The LDCBF half-plane.
@@ -986,7 +1023,8 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
         input: &CycleInput<'_, V>,
         out: &mut Assembly<N, NV, NC, NOBS>,
     ) -> Result<(), InputError> {
-        self.core.assemble(input, out)
+        self.core
+            .assemble(input, input.obstacles.iter().enumerate(), out)
     }
 
     /// One control cycle (SPEC section 2): predict, plan headings, assemble and
@@ -1003,19 +1041,98 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
         backend: &mut B,
     ) -> CycleOutput<N> {
         let Controller { core, memory, work } = self;
-        match core.assemble(input, work) {
+        match core.assemble(input, input.obstacles.iter().enumerate(), work) {
             Ok(()) => core.solve_assembled(memory, input, work, backend),
             Err(e) => hold(memory, input, e),
         }
     }
+
+    /// Where this cycle will look for obstacles: its `p_0` (the CoM predicted
+    /// at the end of the current step, computed exactly as [`Controller::step`]
+    /// computes it) and [`Config::r_active`]. For a caller whose map is too
+    /// large to scan every cycle: query a spatial index with it, then call
+    /// [`Controller::step_among`] with the result. `Err` when `step` would
+    /// reject the input (the obstacles do not matter then). Costs one LIP
+    /// propagation; reads no obstacle.
+    pub fn obstacle_query<const V: usize>(
+        &self,
+        input: &CycleInput<'_, V>,
+    ) -> Result<ObstacleQuery, InputError> {
+        let mut time_clamped = false;
+        let (p0, _, _) = self.core.end_of_step(input, &mut time_clamped)?;
+        Ok(ObstacleQuery {
+            center: p0,
+            radius: self.core.config.r_active,
+        })
+    }
+
+    /// [`Controller::step`] considering only the obstacles
+    /// `input.obstacles[i]` for `i` in `candidates`, in the candidates' order;
+    /// entries out of range are skipped. The output is bit for bit that of
+    /// `step` on the whole slice when `candidates` is in increasing order and
+    /// holds every obstacle within [`ObstacleQuery::radius`] of
+    /// [`ObstacleQuery::center`] ([`Controller::obstacle_query`]; a superset is
+    /// fine): `step` skips every other obstacle without side effect, keeps the
+    /// rest in slice order (nearer first, ties in slice order), and identifies
+    /// them (in [`ActiveObstacle::index`], the row ids and so the warm start) by
+    /// their index in `input.obstacles`, which is unchanged. The cost is that
+    /// of the candidates only, whatever the length of `input.obstacles`.
+    pub fn step_among<const V: usize>(
+        &mut self,
+        input: &CycleInput<'_, V>,
+        candidates: &[u32],
+    ) -> CycleOutput<N> {
+        self.step_among_with(input, candidates, &mut OwnSolver)
+    }
+
+    /// [`Controller::step_among`] with another QP solver.
+    pub fn step_among_with<const V: usize, B: QpBackend<NV, NC>>(
+        &mut self,
+        input: &CycleInput<'_, V>,
+        candidates: &[u32],
+        backend: &mut B,
+    ) -> CycleOutput<N> {
+        let Controller { core, memory, work } = self;
+        match core.assemble(input, among(input.obstacles, candidates), work) {
+            Ok(()) => core.solve_assembled(memory, input, work, backend),
+            Err(e) => hold(memory, input, e),
+        }
+    }
+
+    /// [`Controller::assemble`] considering only the `candidates`, as
+    /// [`Controller::step_among`] does.
+    pub fn assemble_among<const V: usize>(
+        &self,
+        input: &CycleInput<'_, V>,
+        candidates: &[u32],
+        out: &mut Assembly<N, NV, NC, NOBS>,
+    ) -> Result<(), InputError> {
+        self.core
+            .assemble(input, among(input.obstacles, candidates), out)
+    }
+}
+
+/// `(index, obstacle)` for each in-range index of `candidates`, in order.
+fn among<'a, const V: usize>(
+    obstacles: &'a [ConvexPolygon<V>],
+    candidates: &'a [u32],
+) -> impl Iterator<Item = (usize, &'a ConvexPolygon<V>)> + 'a {
+    candidates.iter().filter_map(move |&i| {
+        let i = i as usize;
+        obstacles.get(i).map(|p| (i, p))
+    })
 }
 
 impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
-    fn assemble<const V: usize, const NOBS: usize>(
+    /// Validates the measured input and predicts `(p_0, v_0, tau)`: the CoM
+    /// state at the end of the current step (step 1 of SPEC section 2) and the
+    /// time left until then, s. Sets `time_clamped` once the time in step is
+    /// known to be finite.
+    fn end_of_step<const V: usize>(
         &self,
         input: &CycleInput<'_, V>,
-        out: &mut Assembly<N, NV, NC, NOBS>,
-    ) -> Result<(), InputError> {
+        time_clamped: &mut bool,
+    ) -> Result<(Vector2<f64>, Vector2<f64>, f64), InputError> {
         if !self.configured {
             return Err(InputError::NotConfigured);
         }
@@ -1045,7 +1162,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         }
         let t_step = cfg.step_duration;
         let t_in = crate::clamp(input.time_in_step, 0.0, t_step);
-        out.time_clamped = t_in != input.time_in_step;
+        *time_clamped = t_in != input.time_in_step;
         let tau = t_step - t_in;
 
         // 1. Predict x_0 at the end of the current step.
@@ -1058,6 +1175,21 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         if !(finite2(&p0) && finite2(&v0)) {
             return Err(InputError::State);
         }
+        Ok((p0, v0, tau))
+    }
+
+    /// Steps 1-5 of SPEC section 2 into `out`, the obstacles being `obstacles`:
+    /// `(index in input.obstacles, polygon)` in the order the selection sees
+    /// them (all of `input.obstacles`, or a caller's candidates).
+    fn assemble<'o, const V: usize, const NOBS: usize>(
+        &self,
+        input: &CycleInput<'_, V>,
+        obstacles: impl Iterator<Item = (usize, &'o ConvexPolygon<V>)>,
+        out: &mut Assembly<N, NV, NC, NOBS>,
+    ) -> Result<(), InputError> {
+        let (p0, v0, tau) = self.end_of_step(input, &mut out.time_clamped)?;
+        let cfg = &self.config;
+        let t_step = cfg.step_duration;
         let theta0 = wrap_angle(input.heading + input.turning_rate * tau);
         if !theta0.is_finite() {
             return Err(InputError::State);
@@ -1083,18 +1215,18 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         // Active obstacles: within r_active of p_0, nearest first, at most NOBS.
         out.n_obstacles = 0;
         out.obstacles_truncated = false;
-        for (idx, poly) in input.obstacles.iter().enumerate() {
-            if idx > u16::MAX as usize {
+        for (idx, poly) in obstacles {
+            let Ok(index) = u32::try_from(idx) else {
                 out.obstacles_truncated = true;
                 break;
-            }
+            };
             let cp = closest_point_point_polygon(&p0, poly);
             // NaN distances (impossible for validated polygons) are skipped too.
             if cp.signed_distance.is_nan() || cp.signed_distance > cfg.r_active {
                 continue;
             }
             let cand = ActiveObstacle {
-                index: idx as u16,
+                index,
                 distance: cp.signed_distance,
                 half_plane: HalfPlane {
                     c: cp.point,

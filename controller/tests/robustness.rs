@@ -150,7 +150,7 @@ fn check_plan_clearance(ctl: &Ctl, out: &CycleOutput<N>, obstacles: &[Poly]) {
         if ob.distance < 0.0 {
             continue; // p_0 inside: the half-plane does not bound the polygon
         }
-        let poly = &obstacles[usize::from(ob.index)];
+        let poly = &obstacles[ob.index as usize];
         let bounds = ldcbf_bounds(ctl, out, j);
         for (k, (s, l)) in out.plan.states.iter().zip(bounds).enumerate() {
             let d = signed_distance(&s.position, poly);
@@ -548,7 +548,7 @@ fn more_obstacles_than_capacity_keeps_the_nearest() {
         .last_assembly()
         .active_obstacles()
         .iter()
-        .map(|o| usize::from(o.index))
+        .map(|o| o.index as usize)
         .collect();
     let nearest: Vec<usize> = by_distance[..8].iter().map(|&(_, i)| i).collect();
     assert_eq!(used, nearest);

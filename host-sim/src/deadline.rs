@@ -75,6 +75,13 @@ pub const SHIPPED_CASES: [&str; 10] = [
     "corner-start",
 ];
 
+/// The large maps a deadline study runs by default besides [`SHIPPED_CASES`]
+/// (kept out of them, which the iteration and budget tests run in debug
+/// builds): `large-map`, 10,000 polygons, whose cycles cost what a small map's
+/// do because the controller is handed only the map index's candidates
+/// ([`crate::obstacle_index`]; `tests/obstacle_index.rs` runs it).
+pub const LARGE_MAP_CASES: [&str; 1] = ["large-map"];
+
 /// The scenario family of `--random N`.
 pub const RANDOM_FAMILY: &str = "random";
 
@@ -630,11 +637,14 @@ pub struct DeadlineRequest {
 }
 
 impl DeadlineRequest {
-    /// The CLI's defaults: the shipped cases, no random seeds, 250 µs at
-    /// 400 MHz, one job, one timing per cycle, no instruction file.
+    /// The CLI's defaults: the shipped cases and [`LARGE_MAP_CASES`], no
+    /// random seeds, 250 µs at 400 MHz, one job, one timing per cycle, no
+    /// instruction file.
     pub fn new() -> Self {
+        let mut cases = shipped_cases();
+        cases.extend(LARGE_MAP_CASES.iter().map(|s| Case::new(s)));
         DeadlineRequest {
-            cases: shipped_cases(),
+            cases,
             random: 0,
             sets: Vec::new(),
             deadline_us: DEFAULT_DEADLINE_US,

@@ -11,6 +11,8 @@
 //!   the subgoals (SPEC 5);
 //! * [`perception`]: simulated 2D LiDAR, DBSCAN and one convex obstacle per
 //!   cluster, for unknown maps (SPEC 6);
+//! * [`obstacle_index`]: the known map's R-tree, so that a control cycle's
+//!   cost does not grow with the map;
 //! * [`families`]: seeded layout families for a robot with a body (corridors,
 //!   doorways, cups, wall starts, clutter, thin walls);
 //! * [`robot`]: the robot's body disk and footprint (the `[robot]` table);
@@ -40,6 +42,7 @@ pub mod batch;
 pub mod deadline;
 pub mod disturbance;
 pub mod families;
+pub mod obstacle_index;
 pub mod perception;
 pub mod planner;
 pub mod plant;

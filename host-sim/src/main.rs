@@ -135,9 +135,8 @@ enum Command {
     /// case, as a Markdown table.
     Deadline {
         /// Cases `NAME[+rrt_star|+none][@SEED]` (a shipped scenario or a path),
-        /// e.g. `maze+none`, `crowded@0` [default: simple circles paper
-        /// maze+none maze+rrt_star trap trap+rrt_star crowded@0 cup-mouth
-        /// corner-start].
+        /// e.g. `maze+none`, `crowded@0` [default: the shipped cases,
+        /// `ldcbf_sim::deadline::SHIPPED_CASES`, and `large-map`].
         #[arg(value_name = "CASES")]
         cases: Vec<ldcbf_sim::deadline::Case>,
         /// Also run seeds 0..N of the `random` family (pooled into one row).

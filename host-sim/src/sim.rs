@@ -22,8 +22,14 @@
 //!    every step (`MpcRate::PerStep`), a [`CycleInput`] is built from the plant's
 //!    true state (CoM position, velocity, heading, the turning rate in force, stance
 //!    foot and side, time in step), the goal and the obstacle list, and
-//!    `Controller::step_with` is called. Its wall-clock time is measured with
-//!    [`Instant`] around that call only; with [`SimOptions::timing_repeats`]
+//!    `Controller::step_with` is called. With the known map, the candidates
+//!    come from the map's R-tree ([`crate::obstacle_index`], built once before
+//!    the first tick) around `Controller::obstacle_query` (reused while they
+//!    cover the cycle, [`crate::obstacle_index::Candidates`]), and
+//!    `Controller::step_among_with` is called on them: bit for bit the
+//!    result of `step_with` on the whole map, at a cost that does not grow with
+//!    it. The wall-clock time is measured with [`Instant`] around that query
+//!    and call only; with [`SimOptions::timing_repeats`]
 //!    `K > 1`, the same call is first timed `K - 1` times on clones of the
 //!    controller (and of the QP backend) made just before it, i.e. on the same
 //!    input and the same state, and the cycle's time is the minimum of the `K`
@@ -38,7 +44,8 @@
 //!    used to advance the subgoal) are the true ones plus a seeded Gaussian
 //!    draw; the LiDAR scans from the true pose.
 //! 3. **Record** the 1 kHz sample (and its clearance to every TRUE obstacle,
-//!    unless [`SimOptions::record_clearance`] is off), then
+//!    [`clearance`] found through the map's index, unless
+//!    [`SimOptions::record_clearance`] is off), then
 //!    check the end conditions: goal reached (`|p - goal| <= success_radius`),
 //!    time limit, or stuck: the remaining path length
 //!    ([`crate::planner::remaining_length`]: distance to the current subgoal plus
@@ -65,6 +72,7 @@ use ldcbf_controller::{
 use ldcbf_reference::ClarabelBackend;
 
 use crate::disturbance::{DisturbanceLog, Disturber};
+use crate::obstacle_index::{Candidates, ObstacleIndex};
 use crate::perception::Lidar;
 use crate::planner::{Plan, remaining_length};
 use crate::plant::{Plant, PlantParams};
@@ -223,7 +231,8 @@ pub struct CycleRecord {
     pub goal: Vector2<f64>,
     /// What the controller returned.
     pub output: CycleOutput<HORIZON>,
-    /// Wall-clock time of the controller call, ns: with
+    /// Wall-clock time of the controller call (with the known map, the index
+    /// query and the call), ns: with
     /// [`SimOptions::timing_repeats`] `K > 1`, the minimum over the `K` timings
     /// of the call on the same input and state.
     pub compute_ns: u64,
@@ -389,21 +398,46 @@ pub fn run(scenario: &Scenario, options: SimOptions) -> Result<SimResult, SimErr
     }
 }
 
-/// Times `controller.step_with(input, backend)` `repeats - 1` times on clones
-/// (of the controller and the backend, so the originals are untouched), ns each;
-/// the minimum, or `u64::MAX` when `repeats <= 1`.
+/// One controller call: `step_with` on the whole obstacle list, or, with an
+/// index of that list, `step_among_with` on the candidates around
+/// `obstacle_query` (`candidates`: the index queried again only when the last
+/// list does not cover this cycle; bit for bit the same output, see
+/// [`crate::obstacle_index`]).
+fn control<const V: usize, B: QpBackend<NV, NC>>(
+    controller: &mut RobotController,
+    backend: &mut B,
+    input: &CycleInput<'_, V>,
+    index: Option<&ObstacleIndex>,
+    candidates: &mut Candidates,
+) -> CycleOutput<HORIZON> {
+    let Some(index) = index else {
+        return controller.step_with(input, backend);
+    };
+    match controller.obstacle_query(input) {
+        Ok(q) => controller.step_among_with(input, candidates.update(index, &q), backend),
+        // The controller rejects the input before reading any obstacle.
+        Err(_) => controller.step_among_with(input, &[], backend),
+    }
+}
+
+/// Times [`control`] `repeats - 1` times on clones (of the controller, the
+/// backend and the candidates, so the originals are untouched), ns each; the
+/// minimum, or `u64::MAX` when `repeats <= 1`.
 fn time_on_clones<const V: usize, B: QpBackend<NV, NC> + Clone>(
     controller: &RobotController,
     backend: &B,
     input: &CycleInput<'_, V>,
+    index: Option<&ObstacleIndex>,
+    candidates: &Candidates,
     repeats: u32,
 ) -> u64 {
     let mut best = u64::MAX;
     for _ in 1..repeats {
         let mut c = controller.clone();
         let mut b = backend.clone();
+        let mut candidates = candidates.clone();
         let t0 = Instant::now();
-        let out = c.step_with(input, &mut b);
+        let out = control(&mut c, &mut b, input, index, &mut candidates);
         let ns = u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX);
         // Keep the computation (the clone and its output are dropped unused).
         std::hint::black_box((&out, &c));
@@ -443,6 +477,12 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         MpcRate::PerStep => None,
     };
     let obstacles = &scenario.obstacles;
+    // The true map's index: the controller's candidates with the known map
+    // (with LiDAR its few obstacles per scan are passed whole), and the
+    // clearances of the samples and footsteps (the linear scans' values).
+    let map_index = ObstacleIndex::new(obstacles).map_err(SimError)?;
+    let index = (scenario.perception == Perception::Known).then_some(&map_index);
+    let mut candidates = Candidates::default();
     let robot = &scenario.robot;
     // Global planner: subgoals, the goal last.
     let mut navigation = Navigation::default();
@@ -491,7 +531,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         side: plant.stance_side,
         time: 0.0,
         heading: plant.heading,
-        clearance: robot.foot_clearance(plant.stance_foot, plant.heading, obstacles),
+        clearance: map_index.foot_clearance(robot, plant.stance_foot, plant.heading, obstacles),
     }];
     let mut samples = Vec::with_capacity(max_ticks.min(1 << 20) as usize + 1);
     let mut best_distance = f64::INFINITY;
@@ -517,7 +557,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                 side: plant.stance_side,
                 time: plant.time(),
                 heading: plant.heading,
-                clearance: robot.foot_clearance(foot, plant.heading, obstacles),
+                clearance: map_index.foot_clearance(robot, foot, plant.heading, obstacles),
             });
         }
         // 2. Control.
@@ -561,9 +601,16 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                 goal: subgoals[current],
                 obstacles: cycle_obstacles,
             };
-            let on_clones = time_on_clones(&controller, backend, &input, options.timing_repeats);
+            let on_clones = time_on_clones(
+                &controller,
+                backend,
+                &input,
+                index,
+                &candidates,
+                options.timing_repeats,
+            );
             let t0 = Instant::now();
-            let output = controller.step_with(&input, backend);
+            let output = control(&mut controller, backend, &input, index, &mut candidates);
             let compute_ns = u64::try_from(t0.elapsed().as_nanos())
                 .unwrap_or(u64::MAX)
                 .min(on_clones);
@@ -583,7 +630,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                 asm.obstacles[..asm.n_obstacles]
                     .iter()
                     .map(|o| ActiveHalfPlane {
-                        obstacle: usize::from(o.index),
+                        obstacle: o.index as usize,
                         half_plane: o.half_plane,
                     })
                     .collect()
@@ -619,7 +666,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
             turning_rate: plant.turning_rate,
             stance_side: plant.stance_side,
             clearance: if options.record_clearance {
-                clearance(&plant.position, obstacles)
+                map_index.clearance(&plant.position, obstacles)
             } else {
                 f64::NAN
             },

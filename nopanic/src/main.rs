@@ -43,6 +43,9 @@ const LNC: usize = 32;
 static mut QPRAW: [f64; LNV * LNV + LNC * LNV + LNV + 2 * LNC + 2] =
     [0.0; LNV * LNV + LNC * LNV + LNV + 2 * LNC + 2];
 
+/// Opaque candidate lists for `step_among` (any indices, in or out of range).
+static mut CAND: [u32; 16] = [0; 16];
+
 /// Outputs, written so that nothing is dead code.
 static mut OUT: [f64; 16] = [0.0; 16];
 
@@ -204,6 +207,16 @@ fn main() -> ! {
         let mut out = summary(&a);
         for (o, x) in out.iter_mut().zip(summary(&b)) {
             *o += x;
+        }
+        // The large-map path: the query and a step among opaque candidates.
+        // SAFETY: plain volatile read of a static that is never referenced.
+        let cand = unsafe { read_volatile(addr_of!(CAND)) };
+        let among = paper.step_among(&inp, &cand[..len(r[57], cand.len())]);
+        for (o, x) in out.iter_mut().zip(summary(&among)) {
+            *o += x;
+        }
+        if let Ok(q) = foot.obstacle_query(&inp) {
+            out[1] += q.center.x + q.center.y + q.padded_radius();
         }
         // The least-distance path (`LdpSolver`) on an opaque QP.
         // SAFETY: plain volatile read of a static that is never referenced.
