@@ -1,9 +1,9 @@
 //! Range-space (least-distance) dual active-set solve for a fixed constraint
 //! matrix: the same QPs, the same rules and the same results as
-//! [`DualActiveSet::solve`], organised for many solves with one `G` (only `q`
+//! [`DualActiveSetOf::solve`], organised for many solves with one `G` (only `q`
 //! and `h` change, as in a linear MPC with fixed constraints).
 //!
-//! With `H = L L'` (the factor kept by [`DualActiveSet`]), the change of
+//! With `H = L L'` (the factor kept by [`DualActiveSetOf`]), the change of
 //! variables `u = L'x + v`, `v = L^-1 q` turns
 //!
 //! ```text
@@ -30,13 +30,13 @@
 //!   to each (`O(nact)`), a drop restores `C` by Givens rotations and
 //!   recomputes the rows of `C^-1` below the dropped one, so an add or drop
 //!   costs `O(nact^2 + nact NV)` instead of the `O(NV^2)` update of `J` in
-//!   [`DualActiveSet::solve`]. The slacks of all rows are updated from `K`
+//!   [`DualActiveSetOf::solve`]. The slacks of all rows are updated from `K`
 //!   (`O(m (nact + 1))` per step) instead of recomputed (`O(m NV)`); the primal
 //!   `u = -M_A' lambda_A` is formed once at the end.
 //!
 //! This is the form DAQP (Arnström, Bemporad, Axehill 2022) works in; DAQP
 //! keeps an `L D L'` factor of `M_A M_A'` and recomputes slacks by products
-//! with `M`. The iterations are the ones of [`DualActiveSet::solve`]: the same
+//! with `M`. The iterations are the ones of [`DualActiveSetOf::solve`]: the same
 //! choice of row to add (most negative slack in the metric of `H^-1`, marked
 //! rows first), the same partial and full steps, the same tolerances with the
 //! same meaning (a row is violated when `slack / |g_i| < -tol_primal`; a new
@@ -48,7 +48,11 @@
 //! Accuracy: the normal equations lose accuracy with `cond(M_A)^2`. A short
 //! component `z` of a new row outside the active span is projected twice, and
 //! an add whose pivot `|z|` is below [`PIVOT_FALLBACK`] restarts the solve with
-//! [`DualActiveSet::solve_prepared`] (orthogonal factor) on the same data.
+//! [`DualActiveSetOf::solve_prepared`] (orthogonal factor) on the same data.
+//!
+//! Like [`crate::qp`], written once over nalgebra's dimension types:
+//! [`LdpSolver`] and [`LdpLoaded`] are the static sizes (`Const`, no heap),
+//! `LdpSolverDyn` and `LdpLoadedDyn` the run-time sizes (feature `alloc`).
 //!
 //! Memory: an [`LdpSolver`] holds `NC x NV` scaled rows and the `NC x NC` Gram
 //! matrix (8 KiB for `NC = 32`, 113 KiB for `NC = 120`), so it is meant for
@@ -56,54 +60,69 @@
 //! does not use it.
 #![allow(non_snake_case)]
 
-use nalgebra::SVector;
+use nalgebra::{Const, DefaultAllocator, Dim, OMatrix, OVector, U1};
 
-use crate::qp::{DenseQp, DualActiveSet, QpSolution, QpStatus, RowNorms, ZERO_ROW2, dot, givens};
+use crate::qp::{
+    DenseQpOf, DualActiveSetOf, QpAllocator, QpSolutionOf, QpStatus, RowNormsOf, ZERO_ROW2, column,
+    column_mut, columns, columns_mut, copy_into, dot, givens, shift_down,
+};
 
-/// The least-distance form of one constraint matrix `G` for one Hessian: build
-/// once with [`LdpSolver::prepare`], then [`LdpSolver::load`] and
-/// [`LdpSolver::solve`] per `(q, h)`.
+/// The least-distance form of one constraint matrix `G` for one Hessian, for
+/// any dimension types (see [`LdpSolver`] for the static sizes): build once
+/// with [`LdpSolverOf::prepare`], then [`LdpSolverOf::load`] and
+/// [`LdpSolverOf::solve`] per `(q, h)`.
 #[derive(Clone, Debug)]
-pub struct LdpSolver<const NV: usize, const NC: usize> {
+pub struct LdpSolverOf<NV: Dim, NC: Dim>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
     /// The solver whose Hessian factor defines the change of variables.
-    solver: DualActiveSet<NV, NC>,
+    solver: DualActiveSetOf<NV, NC>,
     /// The rows of `G` (with `q = 0`, `h = 0`) and their norms, for the
-    /// fallback to [`DualActiveSet::solve_prepared`] (see [`PIVOT_FALLBACK`]).
-    qp: DenseQp<NV, NC>,
+    /// fallback to [`DualActiveSetOf::solve_prepared`] (see [`PIVOT_FALLBACK`]).
+    qp: DenseQpOf<NV, NC>,
     /// Row norms of `qp` for the fallback.
-    norms: RowNorms<NC>,
-    /// `m_i / |m_i|` with `m_i = L^-1 g_i` (dimensionless; zero for zero rows).
-    mhat: [[f64; NV]; NC],
+    norms: RowNormsOf<NC>,
+    /// Column `i`: `m_i / |m_i|` with `m_i = L^-1 g_i` (dimensionless; zero
+    /// for zero rows).
+    mhat: OMatrix<f64, NV, NC>,
     /// Gram matrix of the scaled rows, `K_ij = mhat_i . mhat_j` (unit diagonal
-    /// for non-zero rows); rows `m..NC` are zero.
-    K: [[f64; NC]; NC],
+    /// for non-zero rows; symmetric, so column `i` is row `i`); rows `m..NC`
+    /// are zero.
+    K: OMatrix<f64, NC, NC>,
     /// `1 / |m_i|` (units of `1 / (G L^-T)`), 0 for zero rows.
-    inv_mnorm: [f64; NC],
+    inv_mnorm: OVector<f64, NC>,
     /// Violation threshold on the squared scaled slack:
     /// `tol_primal^2 |g_i|^2 / |m_i|^2`.
-    thr: [f64; NC],
+    thr: OVector<f64, NC>,
     /// Row `i` is a zero row (`|g_i|^2` or `|m_i|^2` is 0): never added.
-    zero: [bool; NC],
+    zero: OVector<bool, NC>,
     /// Rows covered.
     m: usize,
     /// Every entry of `M` and `K` is finite.
     finite: bool,
 }
 
-/// The per-`(q, h)` data of an LDP solve, from [`LdpSolver::load`].
+/// [`LdpSolverOf`] with the sizes as constants (no heap).
+pub type LdpSolver<const NV: usize, const NC: usize> = LdpSolverOf<Const<NV>, Const<NC>>;
+
+/// The per-`(q, h)` data of an LDP solve, from [`LdpSolverOf::load`].
 #[derive(Clone, Debug)]
-pub struct LdpLoaded<const NV: usize, const NC: usize> {
+pub struct LdpLoadedOf<NV: Dim, NC: Dim>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
     /// `q` and `h` as loaded, for the fallback.
-    q: SVector<f64, NV>,
+    q: OVector<f64, NV>,
     /// Right-hand side `h` as loaded.
-    h: SVector<f64, NC>,
+    h: OVector<f64, NC>,
     /// `v = L^-1 q`, so `x = L^-T (u - v)`.
-    v: [f64; NV],
+    v: OVector<f64, NV>,
     /// `|v|^2`: the objective is `1/2 |u|^2 - 1/2 |v|^2`.
     vv: f64,
     /// Scaled slacks at `u = 0`: `d_i / |m_i| = (h_i - g_i x_unc) / |m_i|`
     /// with `x_unc = -H^-1 q` (0 for zero rows).
-    s0: [f64; NC],
+    s0: OVector<f64, NC>,
     /// A zero row with `h_i < -tol_primal` (the problem is infeasible).
     zero_infeasible: Option<usize>,
     /// Rows covered (must match the solver's).
@@ -112,61 +131,107 @@ pub struct LdpLoaded<const NV: usize, const NC: usize> {
     finite: bool,
 }
 
-impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
+/// [`LdpLoadedOf`] with the sizes as constants (no heap).
+pub type LdpLoaded<const NV: usize, const NC: usize> = LdpLoadedOf<Const<NV>, Const<NC>>;
+
+#[cfg(feature = "alloc")]
+mod dynamic {
+    use nalgebra::Dyn;
+
+    use super::{LdpLoadedOf, LdpSolverOf};
+
+    /// [`LdpSolverOf`] with run-time sizes.
+    pub type LdpSolverDyn = LdpSolverOf<Dyn, Dyn>;
+    /// [`LdpLoadedOf`] with run-time sizes.
+    pub type LdpLoadedDyn = LdpLoadedOf<Dyn, Dyn>;
+}
+
+#[cfg(feature = "alloc")]
+pub use dynamic::{LdpLoadedDyn, LdpSolverDyn};
+
+impl<NV: Dim, NC: Dim> LdpSolverOf<NV, NC>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
     /// The LDP form of the rows of `qp` (its `q` and `h` are not used) for the
-    /// Hessian of `solver`. Non-finite rows, or rows whose squared norms
-    /// overflow, make every later solve a [`QpStatus::NumericalError`].
-    pub fn prepare(solver: &DualActiveSet<NV, NC>, qp: &DenseQp<NV, NC>) -> Self {
-        let m = qp.m.min(NC);
+    /// Hessian of `solver`. Non-finite rows, rows whose squared norms
+    /// overflow, or a `qp` with another number of variables make every later
+    /// solve a [`QpStatus::NumericalError`].
+    pub fn prepare(solver: &DualActiveSetOf<NV, NC>, qp: &DenseQpOf<NV, NC>) -> Self {
+        let (nv, nc) = qp.gt.shape_generic();
+        let n = nv.value();
+        let m = qp.m.min(nc.value());
         let tol = solver.settings().tol_primal;
-        let rows = DenseQp::<NV, NC> {
-            gt: qp.gt,
+        let rows = DenseQpOf {
+            q: OVector::zeros_generic(nv, U1),
+            gt: qp.gt.clone(),
+            h: OVector::zeros_generic(nc, U1),
             m,
-            ..DenseQp::default()
         };
-        let mut p = LdpSolver {
+        let mut p = LdpSolverOf {
             solver: solver.clone(),
             norms: solver.prepare_rows(&rows),
             qp: rows,
-            mhat: [[0.0; NV]; NC],
-            K: [[0.0; NC]; NC],
-            inv_mnorm: [0.0; NC],
-            thr: [0.0; NC],
-            zero: [false; NC],
+            mhat: OMatrix::zeros_generic(nv, nc),
+            K: OMatrix::zeros_generic(nc, nc),
+            inv_mnorm: OVector::zeros_generic(nc, U1),
+            thr: OVector::zeros_generic(nc, U1),
+            zero: OVector::from_element_generic(nc, U1, false),
             m,
-            finite: true,
+            finite: solver.nv() == n,
         };
-        for (i, g) in qp.gt.data.0.iter().enumerate().take(m) {
+        let mhat = p.mhat.as_mut_slice();
+        let (inv_mnorm, thr, zero) = (
+            p.inv_mnorm.as_mut_slice(),
+            p.thr.as_mut_slice(),
+            p.zero.as_mut_slice(),
+        );
+        for (i, g) in columns(qp.gt.as_slice(), n).enumerate().take(m) {
             let n2 = dot(g, g);
             let mi = solver.linv_mul(g);
-            let mn2 = dot(&mi, &mi);
+            let mn2 = dot(mi.as_slice(), mi.as_slice());
             if !(n2.is_finite() && mn2.is_finite()) {
                 p.finite = false;
                 continue;
             }
             if n2 <= ZERO_ROW2 || mn2 <= 0.0 {
-                p.zero[i] = true;
+                if let Some(z) = zero.get_mut(i) {
+                    *z = true;
+                }
                 continue;
             }
             let inv = 1.0 / libm::sqrt(mn2);
-            for (a, b) in p.mhat[i].iter_mut().zip(&mi) {
-                *a = b * inv;
+            if let Some(col) = column_mut(mhat, n, i) {
+                for (a, b) in col.iter_mut().zip(mi.iter()) {
+                    *a = b * inv;
+                }
             }
-            p.inv_mnorm[i] = inv;
-            p.thr[i] = tol * tol * n2 * inv * inv;
+            if let (Some(a), Some(b)) = (inv_mnorm.get_mut(i), thr.get_mut(i)) {
+                *a = inv;
+                *b = tol * tol * n2 * inv * inv;
+            }
         }
+        let nck = nc.value();
+        let K = p.K.as_mut_slice();
         for i in 0..m {
             for j in 0..=i {
-                let k = dot(&p.mhat[i], &p.mhat[j]);
-                p.K[i][j] = k;
-                p.K[j][i] = k;
+                let k = match (column(mhat, n, i), column(mhat, n, j)) {
+                    (Some(a), Some(b)) => dot(a, b),
+                    _ => 0.0,
+                };
+                if let Some(e) = K.get_mut(j * nck + i) {
+                    *e = k;
+                }
+                if let Some(e) = K.get_mut(i * nck + j) {
+                    *e = k;
+                }
             }
         }
         p
     }
 
     /// The solver this LDP was prepared for.
-    pub fn solver(&self) -> &DualActiveSet<NV, NC> {
+    pub fn solver(&self) -> &DualActiveSetOf<NV, NC> {
         &self.solver
     }
 
@@ -177,99 +242,150 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
 
     /// The per-`(q, h)` data: `v = L^-1 q` and the scaled slacks at the
     /// unconstrained minimiser. `h` entries beyond the prepared `m` are
-    /// ignored. Non-finite `q` or `h` make the solve a
-    /// [`QpStatus::NumericalError`].
-    pub fn load(&self, q: &SVector<f64, NV>, h: &SVector<f64, NC>) -> LdpLoaded<NV, NC> {
-        let (qv, hv) = (*q, *h);
-        let q = &q.data.0[0];
-        let h = h.as_slice();
+    /// ignored. Non-finite `q` or `h` (or a `q` or `h` of another length) make
+    /// the solve a [`QpStatus::NumericalError`].
+    pub fn load(&self, q: &OVector<f64, NV>, h: &OVector<f64, NC>) -> LdpLoadedOf<NV, NC> {
+        let n = self.mhat.nrows();
         let tol = self.solver.settings().tol_primal;
-        let v = self.solver.linv_mul(q);
-        let mut ld = LdpLoaded {
-            q: qv,
-            h: hv,
+        let v = self.solver.linv_mul(q.as_slice());
+        let vv = dot(v.as_slice(), v.as_slice());
+        let mut ld = LdpLoadedOf {
+            q: q.clone(),
+            h: h.clone(),
             v,
-            vv: dot(&v, &v),
-            s0: [0.0; NC],
+            vv,
+            s0: OVector::zeros_generic(self.inv_mnorm.shape_generic().0, U1),
             zero_infeasible: None,
             m: self.m,
-            finite: q.iter().all(|a| a.is_finite()),
+            finite: q.iter().all(|a| a.is_finite())
+                && q.len() == n
+                && h.len() == self.inv_mnorm.len(),
         };
-        for i in 0..self.m.min(NC) {
-            let hi = h[i];
+        let vs = ld.v.as_slice();
+        let mhat = self.mhat.as_slice();
+        // Plain indices below a bound every slice visibly meets.
+        let m = self
+            .m
+            .min(ld.s0.len())
+            .min(self.zero.len())
+            .min(self.inv_mnorm.len());
+        let (s0, zero, inv_mnorm) = (
+            &mut ld.s0.as_mut_slice()[..m],
+            &self.zero.as_slice()[..m],
+            &self.inv_mnorm.as_slice()[..m],
+        );
+        let hs = h.as_slice();
+        for i in 0..m {
+            let hi = hs.get(i).copied().unwrap_or(f64::NAN);
             if !hi.is_finite() {
                 ld.finite = false;
             }
-            if self.zero[i] {
+            if zero[i] {
                 if hi < -tol && ld.zero_infeasible.is_none() {
                     ld.zero_infeasible = Some(i);
                 }
                 continue;
             }
             // d_i / |m_i| = h_i / |m_i| + mhat_i . v
-            ld.s0[i] = hi * self.inv_mnorm[i] + dot(&self.mhat[i], &v);
+            let mv = column(mhat, n, i).map_or(0.0, |mi| dot(mi, vs));
+            s0[i] = hi * inv_mnorm[i] + mv;
         }
         ld
     }
 
-    /// [`LdpSolver::load`] and [`LdpSolver::solve`] with `qp.q` and `qp.h`
+    /// [`LdpSolverOf::load`] and [`LdpSolverOf::solve`] with `qp.q` and `qp.h`
     /// (`qp`'s rows must be the prepared ones; they are not read).
     pub fn solve_qp(
         &self,
-        qp: &DenseQp<NV, NC>,
-        prefer: &[bool; NC],
+        qp: &DenseQpOf<NV, NC>,
+        prefer: &[bool],
         max_iter: u32,
-    ) -> QpSolution<NV, NC> {
+    ) -> QpSolutionOf<NV, NC> {
         let ld = self.load(&qp.q, &qp.h);
         self.solve(&ld, prefer, max_iter)
     }
 
     /// Solves the loaded QP with at most `max_iter` adds plus drops; `prefer[i]`
     /// marks row `i` as expected active (warm start). Same contract as
-    /// [`DualActiveSet::solve`]. A `loaded` from a solver with another row count
+    /// [`DualActiveSetOf::solve`]. A `loaded` from a solver with another row count
     /// gives [`QpStatus::NumericalError`].
     pub fn solve(
         &self,
-        loaded: &LdpLoaded<NV, NC>,
-        prefer: &[bool; NC],
+        loaded: &LdpLoadedOf<NV, NC>,
+        prefer: &[bool],
         max_iter: u32,
-    ) -> QpSolution<NV, NC> {
-        let m = self.m.min(NC);
-        let mut sol = QpSolution {
-            x: SVector::zeros(),
-            lambda: SVector::zeros(),
+    ) -> QpSolutionOf<NV, NC> {
+        let (nv, nc) = self.mhat.shape_generic();
+        let n = nv.value();
+        let m = self.m.min(nc.value());
+        let mut sol = QpSolutionOf {
+            x: OVector::zeros_generic(nv, U1),
+            lambda: OVector::zeros_generic(nc, U1),
             objective: 0.0,
             status: QpStatus::NumericalError,
             iterations: 0,
-            active: [0; NV],
+            active: OVector::from_element_generic(nv, U1, 0),
             n_active: 0,
         };
-        if !self.finite || !loaded.finite || loaded.m != self.m {
+        if !self.finite
+            || !loaded.finite
+            || loaded.m != self.m
+            || loaded.s0.len() != nc.value()
+            || m > usize::from(u16::MAX)
+        {
             return sol;
         }
         if let Some(i) = loaded.zero_infeasible {
             // 0'x <= h with h < 0: y = e_i certifies it.
             sol.status = QpStatus::Infeasible;
-            if let Some(y) = sol.lambda.get_mut(i) {
+            if let Some(y) = sol.lambda.as_mut_slice().get_mut(i) {
                 *y = 1.0;
             }
             return sol;
         }
         let tol_dep = self.solver.settings().tol_dependence;
         let tol_dep2 = tol_dep * tol_dep;
-        let mut s = loaded.s0; // scaled slacks of all rows
-        let mut blocked = self.zero; // active or zero rows: not scanned
-        let mut lam = [0.0f64; NV]; // scaled multipliers of the active rows
-        let mut act = [0u16; NV];
+        let nck = nc.value();
+        let mhat = self.mhat.as_slice();
+        let Kall = self.K.as_slice();
+        let thr = self.thr.as_slice();
+        let mut s = loaded.s0.clone(); // scaled slacks of all rows
+        let mut blocked = self.zero.clone(); // active or zero rows: not scanned
+        let mut lam = OVector::<f64, NV>::zeros_generic(nv, U1); // scaled multipliers
+        let mut act = OVector::<u16, NV>::from_element_generic(nv, U1, 0);
+        // Cholesky factor of M_A M_A' (scaled rows), row `i` stored as the
+        // `i`-th chunk of `n`, zeros above the diagonal kept exactly zero (the
+        // solves use full-length dots).
+        let mut C = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
+        let mut Ci = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv); // C^-1, lower triangular
+        let mut b = OVector::<f64, NV>::zeros_generic(nv, U1);
+        let mut w = OVector::<f64, NV>::zeros_generic(nv, U1);
+        let mut r = OVector::<f64, NV>::zeros_generic(nv, U1);
+        let mut w2 = OVector::<f64, NV>::zeros_generic(nv, U1);
+        let mut r2 = OVector::<f64, NV>::zeros_generic(nv, U1);
+        let mut z = OVector::<f64, NV>::zeros_generic(nv, U1);
+        let (s, blocked, lam, act, C, Ci) = (
+            s.as_mut_slice(),
+            blocked.as_mut_slice(),
+            lam.as_mut_slice(),
+            act.as_mut_slice(),
+            C.as_mut_slice(),
+            Ci.as_mut_slice(),
+        );
+        let (b, w, r, w2, r2, z) = (
+            b.as_mut_slice(),
+            w.as_mut_slice(),
+            r.as_mut_slice(),
+            w2.as_mut_slice(),
+            r2.as_mut_slice(),
+            z.as_mut_slice(),
+        );
         let mut nact: usize = 0;
-        // Cholesky factor of M_A M_A' (scaled rows), row-major, zeros above
-        // the diagonal kept exactly zero (the solves use full-length dots).
-        let mut C = [[0.0f64; NV]; NV];
-        let mut Ci = [[0.0f64; NV]; NV]; // C^-1, lower triangular
         let mut iters: u32 = 0;
         // The row being added and its multiplier (part of the iterate).
         let mut pending: Option<(usize, f64)> = None;
-        let mut farkas: Option<(usize, [f64; NV])> = None;
+        // On infeasibility: the row `p` whose `-r` (in `r`) certifies it.
+        let mut farkas: Option<usize> = None;
 
         let status = 'outer: loop {
             // Step 1: the most violated row in the H^-1 metric (marked first).
@@ -277,9 +393,12 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
             let mut best_v = 0.0;
             let mut best_pref: Option<usize> = None;
             let mut best_pref_v = 0.0;
-            for i in 0..m {
-                let si = s[i];
-                if blocked[i] || si >= 0.0 || si * si <= self.thr[i] {
+            // Plain indices below a bound every slice visibly meets.
+            let mm = m.min(s.len()).min(blocked.len()).min(thr.len());
+            let (sv, bv, tv) = (&s[..mm], &blocked[..mm], &thr[..mm]);
+            for i in 0..mm {
+                let si = sv[i];
+                if bv[i] || si >= 0.0 || si * si <= tv[i] {
                     continue;
                 }
                 if !si.is_finite() {
@@ -289,7 +408,7 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                     best_v = si;
                     best = Some(i);
                 }
-                if prefer[i] && si < best_pref_v {
+                if prefer.get(i).copied().unwrap_or(false) && si < best_pref_v {
                     best_pref_v = si;
                     best_pref = Some(i);
                 }
@@ -298,7 +417,7 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                 None => break QpStatus::Solved,
                 Some(p) => p,
             };
-            let (Some(mp), Some(kp)) = (self.mhat.get(p), self.K.get(p)) else {
+            let (Some(mp), Some(kp)) = (column(mhat, n, p), column(Kall, nck, p)) else {
                 break QpStatus::NumericalError;
             };
             pending = Some((p, 0.0));
@@ -309,44 +428,45 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                 if iters >= max_iter {
                     break 'outer QpStatus::IterationLimit;
                 }
-                let nact_c = nact.min(NV);
+                let nact_c = nact.min(n);
                 // w = C^-1 M_A m_p, r = C^-T w = (M_A M_A')^-1 M_A m_p.
-                let mut b = [0.0f64; NV];
-                for (bi, &a) in b.iter_mut().zip(&act).take(nact_c) {
+                b.fill(0.0);
+                for (bi, &a) in b.iter_mut().zip(act.iter()).take(nact_c) {
                     *bi = kp.get(usize::from(a)).copied().unwrap_or(0.0);
                 }
-                let (mut w, mut r) = chol_solve(&Ci, &b, nact_c);
+                chol_solve(Ci, n, b, nact_c, w, r);
                 // z = m_p - M_A' r: the component of m_p outside the active span.
-                let mut z = *mp;
-                self.sub_active(&mut z, &act, &r, nact_c);
-                let mut z2 = dot(&z, &z);
+                copy_into(z, mp);
+                sub_active(mhat, n, z, act, r, nact_c);
+                let mut z2 = dot(z, z);
                 if z2 < REFINE2 {
                     // Cancellation: z carries rounding of order eps cond(M_A)^2.
                     // Project it once more (Gram-Schmidt "twice is enough"),
                     // r2 = (M_A M_A')^-1 M_A z, z -= M_A' r2, r += r2.
-                    let mut b = [0.0f64; NV];
-                    for (bi, &a) in b.iter_mut().zip(&act).take(nact_c) {
-                        if let Some(ma) = self.mhat.get(usize::from(a)) {
-                            *bi = dot(ma, &z);
+                    b.fill(0.0);
+                    for (bi, &a) in b.iter_mut().zip(act.iter()).take(nact_c) {
+                        if let Some(ma) = column(mhat, n, usize::from(a)) {
+                            *bi = dot(ma, z);
                         }
                     }
-                    let (w2, r2) = chol_solve(&Ci, &b, nact_c);
-                    self.sub_active(&mut z, &act, &r2, nact_c);
-                    for (ri, r2i) in r.iter_mut().zip(&r2) {
+                    chol_solve(Ci, n, b, nact_c, w2, r2);
+                    sub_active(mhat, n, z, act, r2, nact_c);
+                    for (ri, r2i) in r.iter_mut().zip(r2.iter()) {
                         *ri += r2i;
                     }
-                    for (wi, w2i) in w.iter_mut().zip(&w2) {
+                    for (wi, w2i) in w.iter_mut().zip(w2.iter()) {
                         *wi += w2i;
                     }
-                    z2 = dot(&z, &z);
+                    z2 = dot(z, z);
                 }
                 // Partial (dual) step length t1 and the row to drop.
                 let mut t1 = f64::INFINITY;
                 let mut drop: Option<usize> = None;
-                let rmax = r[..nact_c].iter().fold(0.0f64, |a, b| a.max(b.abs()));
-                for i in 0..nact_c {
-                    if r[i] > 1e-14 * rmax.max(1.0) {
-                        let t = lam[i] / r[i];
+                let ra = r.get(..nact_c).unwrap_or(&[]);
+                let rmax = ra.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+                for (i, (&ri, &li)) in ra.iter().zip(lam.iter()).enumerate() {
+                    if ri > 1e-14 * rmax.max(1.0) {
+                        let t = li / ri;
                         if t < t1 {
                             t1 = t;
                             drop = Some(i);
@@ -355,37 +475,35 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                 }
                 // Full (primal) step length t2 (|mhat_p| = 1).
                 // With NV rows active (independent) the span is everything.
-                let dependent = z2 <= tol_dep2 || nact_c >= NV;
-                let t2 = if dependent { f64::INFINITY } else { -s[p] / z2 };
+                let dependent = z2 <= tol_dep2 || nact_c >= n;
+                let sp = s.get(p).copied().unwrap_or(0.0);
+                let t2 = if dependent { f64::INFINITY } else { -sp / z2 };
                 if !(t1.is_finite() || t2.is_finite()) {
                     if t1.is_nan() || t2.is_nan() {
                         break 'outer QpStatus::NumericalError;
                     }
                     // m_p = M_A' r with every r_j <= 0: y_p = 1, y_A = -r.
-                    let mut neg_r = r;
-                    for y in neg_r.iter_mut() {
-                        *y = -*y;
-                    }
-                    farkas = Some((p, neg_r));
+                    farkas = Some(p);
                     break 'outer QpStatus::Infeasible;
                 }
                 let t = t1.min(t2);
                 iters += 1;
-                for i in 0..nact_c {
-                    lam[i] -= t * r[i];
+                for (li, &ri) in lam.iter_mut().zip(r.iter()).take(nact_c) {
+                    *li -= t * ri;
                 }
                 u_new += t;
                 pending = Some((p, u_new));
                 if !dependent {
                     // u moves by -t z: slack_i grows by t mhat_i . z
                     // = t (K_ip - sum_j r_j K_i,A_j).
-                    for (si, &k) in s[..m].iter_mut().zip(&kp[..m]) {
+                    let sm = s.get_mut(..m).unwrap_or(&mut []);
+                    for (si, &k) in sm.iter_mut().zip(kp) {
                         *si += t * k;
                     }
-                    for (&a, &rj) in act.iter().zip(&r).take(nact_c) {
-                        if let Some(ka) = self.K.get(usize::from(a)) {
+                    for (&a, &rj) in act.iter().zip(r.iter()).take(nact_c) {
+                        if let Some(ka) = column(Kall, nck, usize::from(a)) {
                             let f = t * rj;
-                            for (si, &k) in s[..m].iter_mut().zip(&ka[..m]) {
+                            for (si, &k) in sm.iter_mut().zip(ka) {
                                 *si -= f * k;
                             }
                         }
@@ -395,7 +513,7 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                     // Full step: p becomes active; C gains the row [w', |z|].
                     let diag = libm::sqrt(z2);
                     let (Some(row), Some(a), Some(l), Some(flag)) = (
-                        C.get_mut(nact_c),
+                        column_mut(C, n, nact_c),
                         act.get_mut(nact_c),
                         lam.get_mut(nact_c),
                         blocked.get_mut(p),
@@ -409,20 +527,26 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                         // The normal equations would lose too much accuracy.
                         return self.fallback(loaded, prefer, max_iter);
                     }
-                    *row = w;
-                    row[nact_c] = diag;
+                    copy_into(row, w);
+                    if let Some(e) = row.get_mut(nact_c) {
+                        *e = diag;
+                    }
                     // C^-1 gains the row [-(C^-T w)' / |z|, 1 / |z|] = [-r', 1] / |z|.
-                    if let Some(ci) = Ci.get_mut(nact_c) {
+                    if let Some(ci) = column_mut(Ci, n, nact_c) {
                         let inv = 1.0 / diag;
-                        for (c, rk) in ci.iter_mut().zip(&r) {
+                        for (c, rk) in ci.iter_mut().zip(r.iter()) {
                             *c = -rk * inv;
                         }
-                        ci[nact_c] = inv;
+                        if let Some(e) = ci.get_mut(nact_c) {
+                            *e = inv;
+                        }
                     }
                     *a = p as u16;
                     *l = u_new;
                     *flag = true;
-                    s[p] = 0.0;
+                    if let Some(sp) = s.get_mut(p) {
+                        *sp = 0.0;
+                    }
                     nact = nact_c + 1;
                     pending = None;
                     continue 'outer;
@@ -434,64 +558,68 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                 if let Some(flag) = blocked.get_mut(usize::from(row_l)) {
                     *flag = false;
                 }
-                chol_drop(&mut C, &mut Ci, nact_c, l);
+                chol_drop(C, Ci, nv, nact_c, l);
                 let last = nact_c.saturating_sub(1);
-                for i in l..last {
-                    act[i] = act[i + 1];
-                    lam[i] = lam[i + 1];
+                shift_down(act, l, last);
+                shift_down(lam, l, last);
+                if let Some(e) = lam.get_mut(last) {
+                    *e = 0.0;
                 }
-                lam[last] = 0.0;
                 nact = last;
             }
         };
 
-        let nact = nact.min(NV);
+        let nact = nact.min(n);
         // u = -M_A' lambda_A - u_new m_p (scaled rows, scaled multipliers).
-        let mut u = [0.0f64; NV];
-        for (&a, &la) in act.iter().zip(&lam).take(nact) {
-            if let Some(ma) = self.mhat.get(usize::from(a)) {
-                for (uk, mk) in u.iter_mut().zip(ma) {
+        let mut u = OVector::<f64, NV>::zeros_generic(nv, U1);
+        let us = u.as_mut_slice();
+        for (&a, &la) in act.iter().zip(lam.iter()).take(nact) {
+            if let Some(ma) = column(mhat, n, usize::from(a)) {
+                for (uk, mk) in us.iter_mut().zip(ma) {
                     *uk -= la * mk;
                 }
             }
         }
         if let Some((p, un)) = pending
-            && let Some(mp) = self.mhat.get(p)
+            && let Some(mp) = column(mhat, n, p)
         {
-            for (uk, mk) in u.iter_mut().zip(mp) {
+            for (uk, mk) in us.iter_mut().zip(mp) {
                 *uk -= un * mk;
             }
         }
-        let mut uv = u;
-        for (a, b) in uv.iter_mut().zip(&loaded.v) {
+        let mut uv = u.clone();
+        for (a, b) in uv.iter_mut().zip(loaded.v.iter()) {
             *a -= b;
         }
-        sol.x = SVector::from(self.solver.linvt_mul(&uv));
-        sol.objective = 0.5 * (dot(&u, &u) - loaded.vv);
+        sol.x = self.solver.linvt_mul(uv.as_slice());
+        sol.objective = 0.5 * (dot(u.as_slice(), u.as_slice()) - loaded.vv);
         // Multipliers in the units of G: lambda_i = lambda_hat_i / |m_i|.
+        let lambda = sol.lambda.as_mut_slice();
+        let inv_mnorm = self.inv_mnorm.as_slice();
         match farkas {
-            Some((p, neg_r)) => {
-                let scale = self.inv_mnorm.get(p).copied().unwrap_or(1.0);
-                if let Some(y) = sol.lambda.get_mut(p) {
+            Some(p) => {
+                let scale = inv_mnorm.get(p).copied().unwrap_or(1.0);
+                if let Some(y) = lambda.get_mut(p) {
                     *y = 1.0;
                 }
-                for (&a, &y) in act.iter().zip(&neg_r).take(nact) {
+                for (&a, &rj) in act.iter().zip(r.iter()).take(nact) {
                     let a = usize::from(a);
-                    if let (Some(l), Some(&inv)) = (sol.lambda.get_mut(a), self.inv_mnorm.get(a)) {
+                    let y = -rj;
+                    if let (Some(l), Some(&inv)) = (lambda.get_mut(a), inv_mnorm.get(a)) {
                         *l = (y * inv / scale).max(0.0);
                     }
                 }
             }
             None => {
-                for (&a, &la) in act.iter().zip(&lam).take(nact) {
+                for (&a, &la) in act.iter().zip(lam.iter()).take(nact) {
                     let a = usize::from(a);
-                    if let (Some(l), Some(&inv)) = (sol.lambda.get_mut(a), self.inv_mnorm.get(a)) {
+                    if let (Some(l), Some(&inv)) = (lambda.get_mut(a), inv_mnorm.get(a)) {
                         *l = (la * inv).max(0.0);
                     }
                 }
             }
         }
-        sol.active = act;
+        copy_into(sol.active.as_mut_slice(), act);
         sol.n_active = nact;
         sol.iterations = iters;
         sol.status = if sol.x.iter().all(|v| v.is_finite()) && sol.objective.is_finite() {
@@ -502,30 +630,31 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
         sol
     }
 
-    /// [`DualActiveSet::solve_prepared`] on the loaded QP: the answer for an
+    /// [`DualActiveSetOf::solve_prepared`] on the loaded QP: the answer for an
     /// active set too ill-conditioned for the normal equations of the LDP.
     #[cold]
     fn fallback(
         &self,
-        loaded: &LdpLoaded<NV, NC>,
-        prefer: &[bool; NC],
+        loaded: &LdpLoadedOf<NV, NC>,
+        prefer: &[bool],
         max_iter: u32,
-    ) -> QpSolution<NV, NC> {
+    ) -> QpSolutionOf<NV, NC> {
         let mut qp = self.qp.clone();
-        qp.q = loaded.q;
-        qp.h = loaded.h;
+        qp.q = loaded.q.clone();
+        qp.h = loaded.h.clone();
         self.solver
             .solve_prepared(&qp, &self.norms, prefer, max_iter)
     }
+}
 
-    /// `z -= M_A' r` over the first `nact` active rows (scaled rows).
-    #[inline(always)]
-    fn sub_active(&self, z: &mut [f64; NV], act: &[u16; NV], r: &[f64; NV], nact: usize) {
-        for (&a, &rj) in act.iter().zip(r).take(nact) {
-            if let Some(ma) = self.mhat.get(usize::from(a)) {
-                for (zk, mk) in z.iter_mut().zip(ma) {
-                    *zk -= rj * mk;
-                }
+/// `z -= M_A' r` over the first `nact` active rows (scaled rows, columns of
+/// `mhat` with `n` entries each).
+#[inline(always)]
+fn sub_active(mhat: &[f64], n: usize, z: &mut [f64], act: &[u16], r: &[f64], nact: usize) {
+    for (&a, &rj) in act.iter().zip(r).take(nact) {
+        if let Some(ma) = column(mhat, n, usize::from(a)) {
+            for (zk, mk) in z.iter_mut().zip(ma) {
+                *zk -= rj * mk;
             }
         }
     }
@@ -536,7 +665,7 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
 /// about 1e-6 rad from that span yet not linearly dependent to
 /// `tol_dependence`, makes `M_A M_A'` too ill-conditioned (condition number
 /// above 1e12, so the normal equations lose all but a few digits): the solve
-/// restarts with [`DualActiveSet::solve_prepared`] on the same data, which
+/// restarts with [`DualActiveSetOf::solve_prepared`] on the same data, which
 /// works with an orthogonal factor. Rare: not on the LIPMWALK set or the
 /// controller's exported QPs (see `docs/solvers.md`).
 pub const PIVOT_FALLBACK: f64 = 1e-6;
@@ -546,86 +675,109 @@ pub const PIVOT_FALLBACK: f64 = 1e-6;
 /// time.
 const REFINE2: f64 = 1e-2;
 
-/// `(w, r)` with `w = C^-1 b`, `r = C^-T w = (C C')^-1 b` on the leading
-/// `nact x nact` block, from the inverse factor `Ci = C^-1` (lower triangular,
-/// zeros above the diagonal): two matrix-vector products, no chain of
-/// dependent divisions or dot products as in substitution.
+/// `w = C^-1 b`, `r = C^-T w = (C C')^-1 b` on the leading `nact x nact`
+/// block, from the inverse factor `Ci = C^-1` (lower triangular, zeros above
+/// the diagonal, row `i` the `i`-th chunk of `n`): two matrix-vector
+/// products, no chain of dependent divisions or dot products as in
+/// substitution. `w` and `r` are overwritten.
 #[inline(always)]
-fn chol_solve<const NV: usize>(
-    Ci: &[[f64; NV]; NV],
-    b: &[f64; NV],
-    nact: usize,
-) -> ([f64; NV], [f64; NV]) {
-    let mut w = [0.0f64; NV];
-    for (wi, row) in w.iter_mut().zip(Ci).take(nact) {
+fn chol_solve(Ci: &[f64], n: usize, b: &[f64], nact: usize, w: &mut [f64], r: &mut [f64]) {
+    w.fill(0.0);
+    for (wi, row) in w.iter_mut().zip(columns(Ci, n)).take(nact) {
         *wi = dot(row, b);
     }
-    let mut r = [0.0f64; NV];
-    for (&wi, row) in w.iter().zip(Ci).take(nact) {
+    r.fill(0.0);
+    for (&wi, row) in w.iter().zip(columns(Ci, n)).take(nact) {
         for (rk, c) in r.iter_mut().zip(row) {
             *rk += wi * c;
         }
     }
-    (w, r)
 }
 
-/// Removes row `l` (of `nact`) from the Cholesky factor `C` of `M_A M_A'`:
-/// the rows below move up, and Givens rotations of column pairs restore the
-/// triangle (`C C'` stays the Gram matrix of the remaining rows). The rows
-/// `l..` of the inverse factor `Ci` are then recomputed from `C Ci = I`.
-fn chol_drop<const NV: usize>(
-    C: &mut [[f64; NV]; NV],
-    Ci: &mut [[f64; NV]; NV],
-    nact: usize,
-    l: usize,
-) {
-    let nact = nact.min(NV);
+/// Removes row `l` (of `nact`) from the Cholesky factor `C` of `M_A M_A'`
+/// (`n x n`, row `i` the `i`-th chunk of `n`): the rows below move up, and
+/// Givens rotations of column pairs restore the triangle (`C C'` stays the
+/// Gram matrix of the remaining rows). The rows `l..` of the inverse factor
+/// `Ci` are then recomputed from `C Ci = I`.
+#[inline]
+fn chol_drop<NV: Dim>(C: &mut [f64], Ci: &mut [f64], nv: NV, nact: usize, l: usize) {
+    let n = nv.value();
+    let nact = nact.min(n);
     if l >= nact {
         return;
     }
     let last = nact - 1;
     for i in l..last {
-        C[i] = C[i + 1];
+        if let Some((head, tail)) = C.split_at_mut_checked((i + 1).saturating_mul(n))
+            && let (Some(dst), Some(src)) = (head.get_mut(i * n..), tail.get(..n))
+        {
+            for (d, &s) in dst.iter_mut().zip(src) {
+                *d = s;
+            }
+        }
     }
-    C[last] = [0.0; NV];
-    Ci[last] = [0.0; NV];
+    if let Some(row) = column_mut(C, n, last) {
+        row.fill(0.0);
+    }
+    if let Some(row) = column_mut(Ci, n, last) {
+        row.fill(0.0);
+    }
     // Rows k..last-1 now reach column k+1; rotate columns k, k+1.
     for k in l..last {
-        let (a, b) = (C[k][k], C[k][k + 1]);
+        let Some(rk) = column_mut(C, n, k) else {
+            break;
+        };
+        let Some(&[a, b]) = rk.get(k..k + 2) else {
+            break;
+        };
         if b == 0.0 {
             continue;
         }
         let (c, s, r) = givens(a, b);
-        C[k][k] = r;
-        C[k][k + 1] = 0.0;
-        for row in C.iter_mut().take(last).skip(k + 1) {
-            let (a, b) = (row[k], row[k + 1]);
-            row[k] = c * a + s * b;
-            row[k + 1] = -s * a + c * b;
+        if let Some([x, y]) = rk.get_mut(k..k + 2) {
+            *x = r;
+            *y = 0.0;
+        }
+        for row in columns_mut(C, n).take(last).skip(k + 1) {
+            if let Some([x, y]) = row.get_mut(k..k + 2) {
+                let (a, b) = (*x, *y);
+                *x = c * a + s * b;
+                *y = -s * a + c * b;
+            }
         }
     }
     // Row i of C Ci = I: C_ii Ci_i = e_i - sum_{k<i} C_ik Ci_k.
     for i in l..last {
-        let mut row = [0.0f64; NV];
-        row[i] = 1.0;
-        for k in 0..i {
-            let f = C[i][k];
-            for (a, b) in row.iter_mut().zip(&Ci[k]) {
+        let Some((above, rest)) = Ci.split_at_mut_checked(i.saturating_mul(n)) else {
+            break;
+        };
+        let Some(row) = rest.get_mut(..n) else {
+            break;
+        };
+        let Some(ci) = column(C, n, i) else {
+            break;
+        };
+        row.fill(0.0);
+        if let Some(e) = row.get_mut(i) {
+            *e = 1.0;
+        }
+        for (&f, cik) in ci.iter().zip(columns(above, n)).take(i) {
+            for (a, b) in row.iter_mut().zip(cik) {
                 *a -= f * b;
             }
         }
-        let inv = 1.0 / C[i][i];
+        let inv = 1.0 / ci.get(i).copied().unwrap_or(0.0);
         for a in row.iter_mut() {
             *a *= inv;
         }
-        Ci[i] = row;
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::qp::QpSettings;
+    use crate::qp::{DenseQp, DualActiveSet, QpSettings, QpSolution};
+    use nalgebra::SVector;
     use nalgebra::{Matrix2, SMatrix, Vector2};
 
     /// Deterministic uniform numbers in [-1, 1) (64-bit LCG).
@@ -1046,7 +1198,13 @@ mod tests {
                     Ci[i][j] = acc / C[i][i];
                 }
             }
-            chol_drop(&mut C, &mut Ci, 5, l);
+            chol_drop(
+                C.as_flattened_mut(),
+                Ci.as_flattened_mut(),
+                Const::<5>,
+                5,
+                l,
+            );
             let keep: [usize; 4] = core::array::from_fn(|k| if k < l { k } else { k + 1 });
             for (a, &i) in keep.iter().enumerate() {
                 assert!(C[a][a] > 0.0);

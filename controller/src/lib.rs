@@ -75,7 +75,9 @@ pub use geometry::{
     ClosestPoint, ConvexPolygon, GeometryError, PointLocation, closest_point_point_polygon,
 };
 pub use heading::{HeadingPlan, plan_heading, wrap_angle};
-pub use ldp::{LdpLoaded, LdpSolver};
+pub use ldp::{LdpLoaded, LdpLoadedOf, LdpSolver, LdpSolverOf};
+#[cfg(feature = "alloc")]
+pub use ldp::{LdpLoadedDyn, LdpSolverDyn};
 pub use lip::Lip;
 pub use mpc::{
     ActiveObstacle, Assembly, CommandSource, Config, ConfigError, Controller, CycleInfo,
@@ -83,6 +85,8 @@ pub use mpc::{
     RobotController, Side, constraint_capacity,
 };
 pub use qp::{
-    DenseQp, DualActiveSet, HessianError, OwnSolver, QpBackend, QpSettings, QpSolution, QpStatus,
-    RowNorms,
+    DenseQp, DenseQpOf, DualActiveSet, DualActiveSetOf, HessianError, OwnSolver, QpAllocator,
+    QpBackend, QpSettings, QpSolution, QpSolutionOf, QpStatus, RowNorms, RowNormsOf,
 };
+#[cfg(feature = "alloc")]
+pub use qp::{DenseQpDyn, DualActiveSetDyn, QpSolutionDyn, RowNormsDyn};

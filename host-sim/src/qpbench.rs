@@ -4,9 +4,12 @@
 //! other solvers on identical problems (`run --export-qps DIR` writes every
 //! cycle's QP of a simulation in the same layout).
 //!
-//! The solver is sized at compile time; a file is solved at the smallest
-//! supported size `(NV, NC)` with `NV = n` and `NC >= m` (see [`SIZES`]). The
-//! Hessian is factored once per file, outside the timing, as the controller does
+//! The solver is one algorithm at every size (generic over nalgebra's
+//! dimension types, see `ldcbf_controller::qp`): a file is solved at the
+//! smallest compiled static size `(NV, NC)` with `NV = n` and `NC >= m` (see
+//! [`SIZES`]; the controller's and LIPMWALK's sizes), and at run-time sizes
+//! (`Dyn`, heap buffers) otherwise; the CSV's `path` column says which
+//! (`static` or `dynamic`). The Hessian is factored once per file, outside the timing, as the controller does
 //! once per configuration. Two times are reported, each the minimum over `repeat`
 //! calls (cold start), in nanoseconds:
 //!
@@ -37,7 +40,10 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Result, anyhow};
-use ldcbf_controller::{DualActiveSet, LdpSolver, QpSettings, QpStatus};
+use ldcbf_controller::nalgebra::{Const, DefaultAllocator, Dim, Dyn, OMatrix, OVector, U1};
+use ldcbf_controller::{
+    DenseQpOf, DualActiveSetOf, LdpSolverOf, QpAllocator, QpSettings, QpSolutionOf, QpStatus,
+};
 use ldcbf_reference::DenseProblem;
 
 /// The compiled solver sizes, listed once: defines [`SIZES`] and the dispatch
@@ -91,10 +97,13 @@ pub struct QpRow {
     pub min_ldp_prepare_ns: u64,
     /// Adds plus drops of the LDP solve.
     pub ldp_iterations: u32,
+    /// Which instance of the solver ran: `static` (compiled sizes, stack
+    /// buffers) or `dynamic` (run-time sizes, heap buffers).
+    pub path: &'static str,
 }
 
 /// The CSV header of [`QpRow::csv`].
-pub const CSV_HEADER: &str = "file,n,m,status,iterations,objective,min_solve_ns,min_prepared_ns,min_ldp_ns,min_ldp_load_ns,ldp_iterations,min_ldp_prepare_ns";
+pub const CSV_HEADER: &str = "file,n,m,status,iterations,objective,min_solve_ns,min_prepared_ns,min_ldp_ns,min_ldp_load_ns,ldp_iterations,min_ldp_prepare_ns,path";
 
 impl QpRow {
     /// One CSV line (no newline).
@@ -106,7 +115,7 @@ impl QpRow {
             QpStatus::NumericalError => "numerical_error",
         };
         format!(
-            "{},{},{},{},{},{:.17e},{},{},{},{},{},{}",
+            "{},{},{},{},{},{:.17e},{},{},{},{},{},{},{}",
             self.file.display(),
             self.n,
             self.m,
@@ -118,23 +127,53 @@ impl QpRow {
             self.min_ldp_ns,
             self.min_ldp_load_ns,
             self.ldp_iterations,
-            self.min_ldp_prepare_ns
+            self.min_ldp_prepare_ns,
+            self.path
         )
     }
 }
 
-fn solve_fixed<const NV: usize, const NC: usize>(
+/// `P` and the rows of `p` at the dimensions `(nv, nc)` (`nv = n`, `nc >= m`).
+fn to_generic<NV: Dim, NC: Dim>(
+    p: &DenseProblem,
+    nv: NV,
+    nc: NC,
+) -> (OMatrix<f64, NV, NV>, DenseQpOf<NV, NC>)
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
+    let n = p.n;
+    let h = OMatrix::from_fn_generic(nv, nv, |i, j| p.P[i * n + j]);
+    let q = OVector::from_fn_generic(nv, U1, |i, _| p.q[i]);
+    let mut qp = DenseQpOf::with_capacity(q, nc);
+    for i in 0..p.m {
+        let g = OVector::from_fn_generic(nv, U1, |j, _| p.G[i * n + j]);
+        // `nc >= m` by the callers: the row fits.
+        let _ = qp.push_row(&g, p.h[i]);
+    }
+    (h, qp)
+}
+
+/// Solves and times one file at the dimensions `(nv, nc)`: the same code for
+/// the static (`Const`) and the dynamic (`Dyn`) instances.
+fn solve_at<NV: Dim, NC: Dim>(
     file: &Path,
     p: &DenseProblem,
+    (nv, nc): (NV, NC),
     repeat: usize,
     max_iter: u32,
-) -> Result<QpRow> {
-    let (h, qp) = p
-        .to_fixed::<NV, NC>()
-        .map_err(|e| anyhow!("{}: {e}", file.display()))?;
-    let solver = DualActiveSet::<NV, NC>::new(&h, QpSettings::default())
+    path: &'static str,
+) -> Result<QpRow>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
+    if p.m > nc.value() {
+        return Err(anyhow!("{}: {} rows do not fit", file.display(), p.m));
+    }
+    let (h, qp) = to_generic(p, nv, nc);
+    let solver = DualActiveSetOf::<NV, NC>::new(&h, QpSettings::default())
         .map_err(|e| anyhow!("{}: field `P`: {e}", file.display()))?;
-    let prefer = [false; NC];
+    let prefer = vec![false; nc.value()];
     let rows = solver.prepare_rows(&qp);
     let (mut best, mut best_prepared) = (u64::MAX, u64::MAX);
     let (mut best_ldp, mut best_load, mut best_prep) = (u64::MAX, u64::MAX, u64::MAX);
@@ -154,7 +193,7 @@ fn solve_fixed<const NV: usize, const NC: usize>(
         ));
     }
     // The LDP path: `ldp` per G, `loaded` per (q, h), both outside the timing.
-    let ldp = Box::new(LdpSolver::prepare(&solver, &qp));
+    let ldp = Box::new(LdpSolverOf::prepare(&solver, &qp));
     let loaded = ldp.load(&qp.q, &qp.h);
     let lsol = ldp.solve(&loaded, &prefer, max_iter);
     check_ldp(file, &sol, &lsol)?;
@@ -178,7 +217,7 @@ fn solve_fixed<const NV: usize, const NC: usize>(
         std::hint::black_box(ldp.load(std::hint::black_box(&qp.q), &qp.h));
         best_load = best_load.min(ns(t0));
         let t0 = Instant::now();
-        let prepared = LdpSolver::prepare(&solver, std::hint::black_box(&qp));
+        let prepared = LdpSolverOf::prepare(&solver, std::hint::black_box(&qp));
         best_prep = best_prep.min(ns(t0));
         std::hint::black_box(&prepared);
     }
@@ -199,16 +238,20 @@ fn solve_fixed<const NV: usize, const NC: usize>(
         min_ldp_load_ns: best_load,
         ldp_iterations: lsol.iterations,
         min_ldp_prepare_ns: best_prep,
+        path,
     })
 }
 
 /// The LDP solution `b` agrees with `solve`'s `a`: same status; when solved,
 /// objective to 1e-9 relative and `x` to 1e-9 scaled.
-fn check_ldp<const NV: usize, const NC: usize>(
+fn check_ldp<NV: Dim, NC: Dim>(
     file: &Path,
-    a: &ldcbf_controller::QpSolution<NV, NC>,
-    b: &ldcbf_controller::QpSolution<NV, NC>,
-) -> Result<()> {
+    a: &QpSolutionOf<NV, NC>,
+    b: &QpSolutionOf<NV, NC>,
+) -> Result<()>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
     if a.status != b.status {
         return Err(anyhow!(
             "{}: solve and the LDP solve disagree on the status ({:?} vs {:?})",
@@ -220,7 +263,7 @@ fn check_ldp<const NV: usize, const NC: usize>(
     if a.status.is_solved() {
         let (oa, ob) = (a.objective, b.objective);
         let dobj = (oa - ob).abs() / oa.abs().max(ob.abs()).max(1.0);
-        let dx = (a.x - b.x).amax() / a.x.amax().max(1.0);
+        let dx = (&a.x - &b.x).amax() / a.x.amax().max(1.0);
         if !(dobj <= 1e-9 && dx <= 1e-9) {
             return Err(anyhow!(
                 "{}: solve and the LDP solve disagree (objective {oa} vs {ob}, scaled x \
@@ -238,26 +281,14 @@ pub fn solve_file(file: &Path, repeat: usize, max_iter: u32) -> Result<QpRow> {
     macro_rules! dispatch {
         ($(($nv:literal, $nc:literal)),*) => {
             $(if p.n == $nv && p.m <= $nc {
-                return solve_fixed::<$nv, $nc>(file, &p, repeat, max_iter);
+                let dims = (Const::<$nv>, Const::<$nc>);
+                return solve_at(file, &p, dims, repeat, max_iter, "static");
             })*
         };
     }
-    dispatch!(
-        (6, 48),
-        (6, 72),
-        (6, 120),
-        (10, 80),
-        (16, 32),
-        (16, 128),
-        (20, 160)
-    );
-    Err(anyhow!(
-        "{}: a QP with n = {}, m = {} has no compiled solver size (supported (n, max m): {:?})",
-        file.display(),
-        p.n,
-        p.m,
-        SIZES
-    ))
+    with_sizes!(dispatch);
+    // No compiled size: the same solver at run-time sizes.
+    solve_at(file, &p, (Dyn(p.n), Dyn(p.m)), repeat, max_iter, "dynamic")
 }
 
 #[cfg(test)]
@@ -265,7 +296,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn solves_a_small_file_and_rejects_unsupported_sizes() {
+    fn solves_a_small_file_at_a_static_size_and_another_at_a_dynamic_one() {
         let dir = tempfile::tempdir().unwrap();
         // min sum (x_i - 1)^2 over 6 variables with x_0 + x_1 <= 1.
         let mut p = DenseProblem {
@@ -288,22 +319,31 @@ mod tests {
         assert_eq!(row.csv().split(',').count(), CSV_HEADER.split(',').count());
         // x = (0.5, 0.5, 1, 1, 1, 1): objective = 4 * (-1) + 2 * (0.25 - 1) = -5.5
         assert!((row.objective + 5.5).abs() < 1e-12, "{}", row.objective);
+        assert_eq!(row.path, "static");
+        assert!(row.csv().ends_with(",static"));
         assert!(
             row.csv()
                 .starts_with(&format!("{},6,1,solved,1,", f.display()))
         );
-        let q = DenseProblem {
+        // n = 7 has no compiled size: the dynamic instance solves it.
+        // min sum (x_i - 1)^2 with x_0 + ... + x_6 <= 0: x_i = 0, objective -7.
+        let mut q = DenseProblem {
             n: 7,
-            m: 0,
+            m: 1,
             P: vec![0.0; 49],
-            q: vec![0.0; 7],
-            G: vec![],
-            h: vec![],
+            q: vec![-2.0; 7],
+            G: vec![1.0; 7],
+            h: vec![0.0],
         };
+        for i in 0..7 {
+            q.P[i * 7 + i] = 2.0;
+        }
         let g = dir.path().join("b.npz");
         q.write_npz(&g).unwrap();
-        let e = solve_file(&g, 1, 50).unwrap_err().to_string();
-        assert!(e.contains("b.npz") && e.contains("n = 7"), "{e}");
+        let row = solve_file(&g, 1, 50).unwrap();
+        assert_eq!(row.status, QpStatus::Solved);
+        assert_eq!(row.path, "dynamic");
+        assert!(row.objective.abs() < 1e-12, "{}", row.objective);
         let e = solve_file(&dir.path().join("missing.npz"), 1, 50)
             .unwrap_err()
             .to_string();

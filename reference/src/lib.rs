@@ -611,7 +611,7 @@ impl<const NV: usize, const NC: usize> QpBackend<NV, NC> for ClarabelBackend {
                 RefStatus::Failed => QpStatus::NumericalError,
             },
             iterations: r.iterations,
-            active: [0; NV],
+            active: SVector::from([0; NV]),
             n_active: 0,
         };
         if out.status == QpStatus::Infeasible {
