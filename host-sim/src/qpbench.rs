@@ -13,22 +13,22 @@
 //! once per configuration. Two times are reported, each the minimum over `repeat`
 //! calls (cold start), in nanoseconds:
 //!
-//! * `min_solve_ns`: [`DualActiveSet::solve`], which starts from the raw rows of
+//! * `min_solve_ns`: [`DualActiveSetOf::solve`], which starts from the raw rows of
 //!   `G` (row norms included), as the controller's cycle does (its `G` changes
 //!   every cycle);
-//! * `min_prepared_ns`: [`DualActiveSet::solve_prepared`] with the row norms of
-//!   [`DualActiveSet::prepare_rows`] computed outside the timing: the figure for
+//! * `min_prepared_ns`: [`DualActiveSetOf::solve_prepared`] with the row norms of
+//!   [`DualActiveSetOf::prepare_rows`] computed outside the timing: the figure for
 //!   a QP family whose `G` is fixed and only `q`, `h` change (LIPMWALK), and the
 //!   counterpart of DAQP's `solve_time`, which excludes DAQP's own transform of
 //!   the rows;
-//! * `min_ldp_ns`: [`LdpSolver::solve`], the range-space (least-distance) path
-//!   for a fixed `G`, with [`LdpSolver::prepare`] (per `G`) and
-//!   [`LdpSolver::load`] (per `q`, `h`: `v = L^-1 q` and the slacks at the
+//! * `min_ldp_ns`: [`LdpSolverOf::solve`], the range-space (least-distance) path
+//!   for a fixed `G`, with [`LdpSolverOf::prepare`] (per `G`) and
+//!   [`LdpSolverOf::load`] (per `q`, `h`: `v = L^-1 q` and the slacks at the
 //!   unconstrained minimiser) outside the timing: the same split as DAQP's
 //!   `setup_time` / `solve_time`;
-//! * `min_ldp_load_ns`: [`LdpSolver::load`] alone, so that
+//! * `min_ldp_load_ns`: [`LdpSolverOf::load`] alone, so that
 //!   `min_ldp_ns + min_ldp_load_ns` is the per-`(q, h)` cost;
-//! * `min_ldp_prepare_ns`: [`LdpSolver::prepare`] alone (per `G`; what a
+//! * `min_ldp_prepare_ns`: [`LdpSolverOf::prepare`] alone (per `G`; what a
 //!   controller whose `G` changes every cycle would pay on top).
 //!
 //! Both other paths are checked against `solve` before timing (an error
