@@ -40,9 +40,11 @@ use anyhow::{Result, anyhow};
 use ldcbf_controller::{DualActiveSet, LdpSolver, QpSettings, QpStatus};
 use ldcbf_reference::DenseProblem;
 
-/// The compiled solver sizes, listed once: defines [`SIZES`] and the dispatch
-/// in [`solve_file`].
-macro_rules! with_sizes {
+/// The compiled solver sizes `(NV, NC)`, listed once: `with_qp_sizes!(m)`
+/// expands to `m!((6, 48), (6, 72), ...)`. It defines [`SIZES`], the dispatch
+/// in [`solve_file`] and the Python package's `solve_qp`.
+#[macro_export]
+macro_rules! with_qp_sizes {
     ($m:ident) => {
         $m!(
             (6, 48),
@@ -62,7 +64,7 @@ macro_rules! size_list {
 
 /// Supported `(n, max m)`: the controller's configurations (N = 3 with 8 or 16
 /// obstacles and with foot clearance, N = 5, N = 10) and the external LIPMWALK set.
-pub const SIZES: [(usize, usize); 7] = with_sizes!(size_list);
+pub const SIZES: [(usize, usize); 7] = with_qp_sizes!(size_list);
 
 /// One file's result.
 #[derive(Clone, Debug, PartialEq)]
@@ -242,15 +244,7 @@ pub fn solve_file(file: &Path, repeat: usize, max_iter: u32) -> Result<QpRow> {
             })*
         };
     }
-    dispatch!(
-        (6, 48),
-        (6, 72),
-        (6, 120),
-        (10, 80),
-        (16, 32),
-        (16, 128),
-        (20, 160)
-    );
+    with_qp_sizes!(dispatch);
     Err(anyhow!(
         "{}: a QP with n = {}, m = {} has no compiled solver size (supported (n, max m): {:?})",
         file.display(),

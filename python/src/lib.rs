@@ -1101,15 +1101,7 @@ fn solve_qp<'py>(
             })*
         };
     }
-    dispatch!(
-        (6, 48),
-        (6, 72),
-        (6, 120),
-        (10, 80),
-        (16, 32),
-        (16, 128),
-        (20, 160)
-    );
+    ldcbf_sim::with_qp_sizes!(dispatch);
     Err(arg_err(
         py,
         "P",
