@@ -278,6 +278,36 @@ impl Config {
         }
     }
 
+    /// The names of every field, in declaration order (for hosts that read or
+    /// set them by name: the scenario files, the Python package).
+    pub const FIELDS: [&'static str; 25] = [
+        "gravity",
+        "com_height",
+        "step_duration",
+        "vx_min",
+        "vx_max",
+        "vy_min",
+        "vy_max",
+        "l_max",
+        "alpha",
+        "omega_max",
+        "gamma",
+        "delta",
+        "r_active",
+        "foot_clearance",
+        "body_radius",
+        "foot_length",
+        "foot_width",
+        "heading_freeze_radius",
+        "max_iter",
+        "max_iter_cycle",
+        "relax_bisections",
+        "max_gait_relaxation",
+        "capture_fraction",
+        "warm_start",
+        "tol_primal",
+    ];
+
     /// The margin of the step-end LDCBF rows, m: `h(p) = eta'(p - c) - margin`.
     ///
     /// `body_radius + delta` keeps the body disk `delta` clear of each
@@ -1708,6 +1738,23 @@ fn output_is_finite<const N: usize>(o: &CycleOutput<N>) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `Config::FIELDS` is the struct's field list, in order (read off its
+    /// derived `Debug`, which names every field).
+    #[test]
+    fn config_fields_are_the_struct_fields() {
+        extern crate std;
+        use std::string::String;
+        use std::vec::Vec;
+        let dbg = std::format!("{:?}", Config::default());
+        let body = dbg.trim_start_matches("Config {").trim_end_matches('}');
+        let names: Vec<String> = body
+            .split(", ")
+            .filter_map(|kv| kv.split_once(": ").map(|(k, _)| String::from(k.trim())))
+            .filter(|k| k.chars().all(|c| c.is_ascii_lowercase() || c == '_'))
+            .collect();
+        assert_eq!(names, Config::FIELDS.to_vec());
+    }
 
     type Ctl = PaperController;
     type Poly = ConvexPolygon<16>;

@@ -215,31 +215,17 @@ pub struct ControllerOverrides {
     pub tol_primal: Option<f64>,
 }
 
-/// Names of the [`Config`] fields that `[controller]` (and `--set`) accept.
-pub const CONTROLLER_FIELDS: &[&str] = &[
-    "gravity",
-    "com_height",
-    "step_duration",
-    "vx_min",
-    "vx_max",
-    "vy_min",
-    "vy_max",
-    "l_max",
-    "alpha",
-    "omega_max",
-    "gamma",
-    "delta",
-    "r_active",
-    "foot_clearance",
-    "heading_freeze_radius",
-    "max_iter",
-    "max_iter_cycle",
-    "relax_bisections",
-    "max_gait_relaxation",
-    "capture_fraction",
-    "warm_start",
-    "tol_primal",
-];
+/// The robot's fields of [`Config`]: set in `[robot]`
+/// ([`crate::robot::RobotParams`]), not in `[controller]`.
+pub const ROBOT_FIELDS: [&str; 3] = ["body_radius", "foot_length", "foot_width"];
+
+/// Names of the [`Config`] fields that `[controller]` (and `--set`) accept:
+/// [`Config::FIELDS`] but the robot's.
+pub fn controller_fields() -> impl Iterator<Item = &'static str> {
+    Config::FIELDS
+        .into_iter()
+        .filter(|f| !ROBOT_FIELDS.contains(f))
+}
 
 impl ControllerOverrides {
     /// `base` with every set field replaced.
@@ -912,13 +898,13 @@ fn apply_set(table: &mut toml::Table, key: &str, value: &str) -> Result<(), Stri
         return Err("empty key component".into());
     }
     if parts.len() == 1 && !top_level.contains(&parts[0]) {
-        if CONTROLLER_FIELDS.contains(&parts[0]) {
+        if controller_fields().any(|f| f == parts[0]) {
             parts.insert(0, "controller");
         } else {
             return Err(format!(
                 "unknown key (scenario keys: {}; controller fields: {})",
                 top_level.join(", "),
-                CONTROLLER_FIELDS.join(", ")
+                controller_fields().collect::<Vec<_>>().join(", ")
             ));
         }
     }

@@ -246,33 +246,7 @@ fn polygon_list<'py>(py: Python<'py>, polys: &[Polygon]) -> PyResult<Bound<'py, 
 // ------------------------------------------------------------------ config
 
 /// Names of the [`Config`] fields, in declaration order.
-const CONFIG_FIELDS: [&str; 25] = [
-    "gravity",
-    "com_height",
-    "step_duration",
-    "vx_min",
-    "vx_max",
-    "vy_min",
-    "vy_max",
-    "l_max",
-    "alpha",
-    "omega_max",
-    "gamma",
-    "delta",
-    "r_active",
-    "foot_clearance",
-    "body_radius",
-    "foot_length",
-    "foot_width",
-    "heading_freeze_radius",
-    "max_iter",
-    "max_iter_cycle",
-    "relax_bisections",
-    "max_gait_relaxation",
-    "capture_fraction",
-    "warm_start",
-    "tol_primal",
-];
+const CONFIG_FIELDS: [&str; 25] = Config::FIELDS;
 
 /// The `f64` fields of [`Config`], as `(name, accessor)` pairs, written once.
 macro_rules! f64_fields {
