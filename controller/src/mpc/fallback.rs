@@ -1,7 +1,7 @@
-//! The fallback commands (see the module docs of [`crate::mpc`]): when the
-//! priority scheme cannot finish, the previous cycle's plan (shifted) or the
-//! capture steps, whichever keeps more of this cycle's rows, rolled out on the
-//! LIP; for an invalid input, the hold command.
+//! The fallback commands (the rules are in the module docs of [`crate::mpc`]):
+//! when the priority scheme cannot finish, the previous cycle's plan (shifted)
+//! or the capture steps, chosen by this cycle's rows, rolled out on the LIP;
+//! for an invalid input, the hold command.
 
 use nalgebra::{SVector, Vector2};
 
