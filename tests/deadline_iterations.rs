@@ -28,7 +28,7 @@
 //! command, which is what a relaxation that ran out of budget returns).
 //!
 //! An upper bound for an infeasible cycle from the structure of
-//! `controller/src/relax.rs` (`relax_bisections` = 12): each search for a
+//! `controller/src/relax/` (`relax_bisections` = 12): each search for a
 //! smallest relaxation makes at most 12 probes, the whole scheme at most
 //! 2 x 12 = 24 (a shared count, which also covers the one solve of
 //! reachability and the capturability bound at the start of stage 3), plus

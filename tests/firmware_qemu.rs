@@ -646,7 +646,7 @@ fn budgets(max_opt: u64, max_all: u64, flash: u64, ram_loop: u64, ram_startup: u
             ceiling: TARGET_INSTRUCTIONS,
         },
         Budget {
-            // Infeasible cycles run the priority scheme (controller/src/relax.rs):
+            // Infeasible cycles run the priority scheme (controller/src/relax/):
             // the nominal solve and two or three probes (7 of the 15 recorded
             // ones take three). Met (max ~87k) since the firmware uses the
             // FPU's square root (feature `hw-sqrt`) and the probes solve the

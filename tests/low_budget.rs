@@ -22,8 +22,8 @@
 //!
 //! 1. the command and the whole plan are finite and keep leg reachability
 //!    (this cycle's reachability rows hold);
-//! 2. its source is the documented fallback (`controller/src/mpc.rs`, module
-//!    docs): the plan is exactly one of the two candidates, the previous cycle's
+//! 2. its source is the documented fallback (`controller/src/mpc/mod.rs`,
+//!    module docs): the plan is exactly one of the two candidates, the previous cycle's
 //!    plan shifted by one step when a step ended in between (none after an
 //!    invalid input or at the first cycle), or the capture steps
 //!    `f_k = p_k + clamp_box(R(theta_k)' v_k / beta, l_max)` rolled out from the
@@ -115,8 +115,8 @@ fn layouts_fitting(ctl: &Controller, asm: &Asm, out: &CycleOutput<HORIZON>) -> V
         .collect()
 }
 
-/// The capture steps from the predicted state (mpc.rs module docs): the feet and
-/// the CoM positions they lead to.
+/// The capture steps from the predicted state (mpc/mod.rs module docs): the
+/// feet and the CoM positions they lead to.
 fn capture_steps(
     asm: &Asm,
     lip: &Lip,
@@ -140,7 +140,7 @@ fn capture_steps(
 }
 
 /// The previous plan's footsteps shifted by `shift` steps, the last one
-/// extrapolated by the last stride (mpc.rs, `previous_plan`).
+/// extrapolated by the last stride (mpc/fallback.rs, `previous_plan`).
 fn shifted(old: &[Vector2<f64>; HORIZON], shift: usize) -> [Vector2<f64>; HORIZON] {
     let mut f = [Vector2::zeros(); HORIZON];
     for (k, fk) in f.iter_mut().enumerate() {

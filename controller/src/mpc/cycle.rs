@@ -1,0 +1,545 @@
+//! One control cycle (SPEC section 2): the measured input ([`CycleInput`],
+//! rejected with an [`InputError`] when not finite or beyond [`MAX_RATE`] or
+//! [`crate::geometry::MAX_COORDINATE`]), the prediction of `x_0`, the
+//! headings, the QP's cost and rows, the solve with its warm start, the
+//! priority scheme of [`crate::relax`] for an infeasible QP, and the plan of
+//! the solution. The fallback commands are in `fallback`, the obstacle
+//! selection in `select`.
+
+use nalgebra::{SVector, Vector2};
+
+use super::fallback::hold;
+use super::select::among;
+use super::{
+    Assembly, CommandSource, Controller, Core, CycleInfo, CycleOutput, CycleStatus, LipState,
+    Memory, Plan, Prediction, Side,
+};
+use crate::constraints::{
+    GaitBounds, RowId, RowKind, push_foot_row, push_gait_rows, push_ldcbf_row,
+};
+use crate::geometry::{ConvexPolygon, MAX_COORDINATE};
+use crate::heading::{plan_heading, wrap_angle};
+use crate::qp::{OwnSolver, QpBackend, QpSolution, QpStatus};
+use crate::relax;
+
+/// The measured state and context of one control cycle. World frame W.
+#[derive(Clone, Copy, Debug)]
+pub struct CycleInput<'a, const V: usize> {
+    /// CoM position, m.
+    pub com_position: Vector2<f64>,
+    /// CoM velocity, m/s.
+    pub com_velocity: Vector2<f64>,
+    /// Heading (yaw), rad.
+    pub heading: f64,
+    /// Current turning rate (the last commanded `omega`), rad/s.
+    pub turning_rate: f64,
+    /// Position of the current stance foot, m.
+    pub stance_foot: Vector2<f64>,
+    /// Which foot is the stance foot.
+    pub stance_side: Side,
+    /// Time already spent in the current step, s, in `[0, T]` (clamped otherwise).
+    pub time_in_step: f64,
+    /// Goal or current subgoal, m.
+    pub goal: Vector2<f64>,
+    /// Obstacles (validated convex polygons, world frame).
+    pub obstacles: &'a [ConvexPolygon<V>],
+}
+
+/// Largest accepted CoM speed (m/s) and turning rate (rad/s): far beyond any
+/// walking robot; larger values are treated as corrupted measurements.
+pub const MAX_RATE: f64 = 100.0;
+
+/// Which input was not finite or out of its physical range (positions within
+/// [`crate::geometry::MAX_COORDINATE`], speed and turning rate within
+/// [`MAX_RATE`], heading within `MAX_COORDINATE` rad).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InputError {
+    /// CoM position, velocity, heading or turning rate.
+    State,
+    /// Stance foot position.
+    StanceFoot,
+    /// Time in step.
+    TimeInStep,
+    /// Goal.
+    Goal,
+    /// Not a measurement: the controller has no valid configuration yet (it
+    /// is [`Controller::UNCONFIGURED`] and no [`Controller::configure`] has
+    /// succeeded).
+    NotConfigured,
+}
+
+impl core::fmt::Display for InputError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            InputError::State => "CoM state, heading or turning rate is not finite or out of range",
+            InputError::StanceFoot => "stance foot position is not finite or out of range",
+            InputError::TimeInStep => "time in step is not finite",
+            InputError::Goal => "goal is not finite or out of range",
+            InputError::NotConfigured => "the controller is not configured",
+        })
+    }
+}
+
+impl core::error::Error for InputError {}
+
+impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
+    Controller<N, NV, NC, NOBS>
+{
+    /// Steps 1-2 and 5 of SPEC section 2: prediction, headings, obstacle selection
+    /// and all QP rows, written into `out`. Pure: uses no warm-start memory.
+    /// `Err(InputError::NotConfigured)` (and `out` unchanged) on an
+    /// unconfigured controller.
+    pub fn assemble<const V: usize>(
+        &self,
+        input: &CycleInput<'_, V>,
+        out: &mut Assembly<N, NV, NC, NOBS>,
+    ) -> Result<(), InputError> {
+        self.core
+            .assemble(input, input.obstacles.iter().enumerate(), out)
+    }
+
+    /// One control cycle (SPEC section 2): predict, plan headings, assemble and
+    /// solve the QP, and return the command. Never panics on any input; the
+    /// command is always finite (see the module docs for the fallbacks).
+    pub fn step<const V: usize>(&mut self, input: &CycleInput<'_, V>) -> CycleOutput<N> {
+        self.step_with(input, &mut OwnSolver)
+    }
+
+    /// [`Controller::step`] with another QP solver (for the reference closed loop).
+    pub fn step_with<const V: usize, B: QpBackend<NV, NC>>(
+        &mut self,
+        input: &CycleInput<'_, V>,
+        backend: &mut B,
+    ) -> CycleOutput<N> {
+        let Controller { core, memory, work } = self;
+        match core.assemble(input, input.obstacles.iter().enumerate(), work) {
+            Ok(()) => core.solve_assembled(memory, input, work, backend),
+            Err(e) => hold(memory, input, e),
+        }
+    }
+
+    /// [`Controller::step`] considering only the obstacles
+    /// `input.obstacles[i]` for `i` in `candidates`, in the candidates' order;
+    /// entries out of range are skipped. The output is bit for bit that of
+    /// `step` on the whole slice when `candidates` is in increasing order and
+    /// holds every obstacle within
+    /// [`ObstacleQuery::radius`](super::ObstacleQuery::radius) of
+    /// [`ObstacleQuery::center`](super::ObstacleQuery::center)
+    /// ([`Controller::obstacle_query`]; a superset is fine): `step` skips
+    /// every other obstacle without side effect, keeps the rest in slice
+    /// order (nearer first, ties in slice order), and identifies them (in
+    /// [`ActiveObstacle::index`](super::ActiveObstacle::index), the row ids
+    /// and so the warm start) by their index in `input.obstacles`, which is
+    /// unchanged. The cost is that of the candidates only, whatever the
+    /// length of `input.obstacles`.
+    pub fn step_among<const V: usize>(
+        &mut self,
+        input: &CycleInput<'_, V>,
+        candidates: &[u32],
+    ) -> CycleOutput<N> {
+        self.step_among_with(input, candidates, &mut OwnSolver)
+    }
+
+    /// [`Controller::step_among`] with another QP solver.
+    pub fn step_among_with<const V: usize, B: QpBackend<NV, NC>>(
+        &mut self,
+        input: &CycleInput<'_, V>,
+        candidates: &[u32],
+        backend: &mut B,
+    ) -> CycleOutput<N> {
+        let Controller { core, memory, work } = self;
+        match core.assemble(input, among(input.obstacles, candidates), work) {
+            Ok(()) => core.solve_assembled(memory, input, work, backend),
+            Err(e) => hold(memory, input, e),
+        }
+    }
+
+    /// [`Controller::assemble`] considering only the `candidates`, as
+    /// [`Controller::step_among`] does.
+    pub fn assemble_among<const V: usize>(
+        &self,
+        input: &CycleInput<'_, V>,
+        candidates: &[u32],
+        out: &mut Assembly<N, NV, NC, NOBS>,
+    ) -> Result<(), InputError> {
+        self.core
+            .assemble(input, among(input.obstacles, candidates), out)
+    }
+}
+
+impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
+    /// Validates the measured input and predicts `(p_0, v_0, tau)`: the CoM
+    /// state at the end of the current step (step 1 of SPEC section 2) and the
+    /// time left until then, s. Sets `time_clamped` once the time in step is
+    /// known to be finite.
+    pub(super) fn end_of_step<const V: usize>(
+        &self,
+        input: &CycleInput<'_, V>,
+        time_clamped: &mut bool,
+    ) -> Result<(Vector2<f64>, Vector2<f64>, f64), InputError> {
+        if !self.configured {
+            return Err(InputError::NotConfigured);
+        }
+        let cfg = &self.config;
+        let finite2 = |v: &Vector2<f64>| v.x.is_finite() && v.y.is_finite();
+        // `!(x <= bound)` is also true for NaN.
+        let within = |v: f64, bound: f64| v.abs() <= bound;
+        let pos_ok = |v: &Vector2<f64>| within(v.x, MAX_COORDINATE) && within(v.y, MAX_COORDINATE);
+        if !(pos_ok(&input.com_position)
+            && within(
+                crate::float::sqrt(input.com_velocity.norm_squared()),
+                MAX_RATE,
+            )
+            && within(input.heading, MAX_COORDINATE)
+            && within(input.turning_rate, MAX_RATE))
+        {
+            return Err(InputError::State);
+        }
+        if !pos_ok(&input.stance_foot) {
+            return Err(InputError::StanceFoot);
+        }
+        if !input.time_in_step.is_finite() {
+            return Err(InputError::TimeInStep);
+        }
+        if !pos_ok(&input.goal) {
+            return Err(InputError::Goal);
+        }
+        let t_step = cfg.step_duration;
+        let t_in = crate::clamp(input.time_in_step, 0.0, t_step);
+        *time_clamped = t_in != input.time_in_step;
+        let tau = t_step - t_in;
+
+        // 1. Predict x_0 at the end of the current step.
+        let (p0, v0) = self.lip.propagate(
+            &input.com_position,
+            &input.com_velocity,
+            &input.stance_foot,
+            tau,
+        );
+        if !(finite2(&p0) && finite2(&v0)) {
+            return Err(InputError::State);
+        }
+        Ok((p0, v0, tau))
+    }
+
+    /// Steps 1-5 of SPEC section 2 into `out`, the obstacles being `obstacles`:
+    /// `(index in input.obstacles, polygon)` in the order the selection sees
+    /// them (all of `input.obstacles`, or a caller's candidates).
+    fn assemble<'o, const V: usize, const NOBS: usize>(
+        &self,
+        input: &CycleInput<'_, V>,
+        obstacles: impl Iterator<Item = (usize, &'o ConvexPolygon<V>)>,
+        out: &mut Assembly<N, NV, NC, NOBS>,
+    ) -> Result<(), InputError> {
+        let (p0, v0, tau) = self.end_of_step(input, &mut out.time_clamped)?;
+        let cfg = &self.config;
+        let t_step = cfg.step_duration;
+        let theta0 = wrap_angle(input.heading + input.turning_rate * tau);
+        if !theta0.is_finite() {
+            return Err(InputError::State);
+        }
+        // 2. Headings.
+        let heading = plan_heading::<N>(
+            theta0,
+            [p0.x, p0.y],
+            [input.goal.x, input.goal.y],
+            t_step,
+            cfg.omega_max,
+            cfg.heading_freeze_radius,
+        );
+        let first_side = input.stance_side.opposite();
+        out.prediction = Prediction {
+            p0,
+            v0,
+            heading,
+            first_side,
+            goal: input.goal,
+        };
+
+        // 3. Active obstacles: within r_active of p_0, nearest first, at most NOBS.
+        out.select_obstacles(&p0, cfg, obstacles);
+
+        // 4-5. Cost and rows.
+        out.qp.clear();
+        let (q, c) = self.model.gradient::<NV>(&input.goal);
+        out.qp.q = q;
+        out.cost_constant = c;
+        let bounds = GaitBounds {
+            vx_min: cfg.vx_min,
+            vx_max: cfg.vx_max,
+            vy_min: cfg.vy_min,
+            vy_max: cfg.vy_max,
+            l_max: cfg.l_max,
+            alpha: cfg.alpha,
+        };
+        // Capacity is guaranteed by the compile-time check NC >= 8N + N NOBS and by
+        // `new` for the foot rows; a failed push would only drop rows, so it is
+        // checked anyway and reported as a numerical failure by the caller.
+        let mut ok = true;
+        let mut side = first_side;
+        for k in 0..N {
+            let m_before = out.qp.m;
+            ok &= push_gait_rows(
+                &mut out.qp,
+                &self.model,
+                &bounds,
+                k,
+                heading.theta[k],
+                side.sign(),
+                heading.omega_bar,
+                &p0,
+                &v0,
+            )
+            .is_ok();
+            for (r, kind) in RowKind::GAIT.iter().enumerate() {
+                if let Some(slot) = out.rows.get_mut(m_before + r) {
+                    *slot = RowId {
+                        kind: *kind,
+                        k: k as u8,
+                    };
+                }
+            }
+            side = side.opposite();
+        }
+        for ob in &out.obstacles[..out.n_obstacles.min(NOBS)] {
+            for k in 0..N {
+                let i = out.qp.m;
+                ok &= push_ldcbf_row(
+                    &mut out.qp,
+                    &self.model,
+                    &ob.half_plane,
+                    cfg.gamma,
+                    self.barrier_margin,
+                    k,
+                    &p0,
+                    &v0,
+                )
+                .is_ok();
+                if let Some(slot) = out.rows.get_mut(i) {
+                    *slot = RowId {
+                        kind: RowKind::Ldcbf(ob.index),
+                        k: k as u8,
+                    };
+                }
+            }
+        }
+        if cfg.foot_clearance.is_some() {
+            for ob in &out.obstacles[..out.n_obstacles.min(NOBS)] {
+                for k in 0..N {
+                    let i = out.qp.m;
+                    let df = cfg.foot_margin(&ob.half_plane.eta, heading.theta[k]);
+                    ok &= push_foot_row(&mut out.qp, &self.model, &ob.half_plane, df, k, &p0, &v0)
+                        .is_ok();
+                    if let Some(slot) = out.rows.get_mut(i) {
+                        *slot = RowId {
+                            kind: RowKind::FootClearance(ob.index),
+                            k: k as u8,
+                        };
+                    }
+                }
+            }
+        }
+        debug_assert!(ok, "row capacity exceeded despite compile-time check");
+        Ok(())
+    }
+
+    fn solve_assembled<const V: usize, const NOBS: usize, B: QpBackend<NV, NC>>(
+        &self,
+        memory: &mut Memory<NV>,
+        input: &CycleInput<'_, V>,
+        work: &Assembly<N, NV, NC, NOBS>,
+        backend: &mut B,
+    ) -> CycleOutput<N> {
+        let pred = &work.prediction;
+        // Shift of the horizon since the last plan: a new step began when the
+        // stance side changed.
+        let shift = usize::from(memory.has_plan && memory.stance != input.stance_side);
+        let mut prefer = [false; NC];
+        let mut warm = false;
+        if self.config.warm_start {
+            for id in &memory.active[..memory.n_active.min(NV)] {
+                let k = id.k as usize;
+                if k < shift {
+                    continue;
+                }
+                let target = RowId {
+                    kind: id.kind,
+                    k: (k - shift) as u8,
+                };
+                let used = work.qp.m.min(NC);
+                for (p, r) in prefer.iter_mut().zip(&work.rows[..used]) {
+                    if *r == target {
+                        *p = true;
+                        warm = true;
+                        break;
+                    }
+                }
+            }
+        }
+        let sol = backend.solve_qp(&self.solver, &work.qp, &prefer, self.config.max_iter);
+        let min_h0 = work
+            .active_obstacles()
+            .iter()
+            .map(|o| o.half_plane.h(&pred.p0, self.barrier_margin))
+            .fold(f64::INFINITY, f64::min);
+        let inside = work
+            .active_obstacles()
+            .first()
+            .is_some_and(|o| o.distance <= 0.0);
+        let mut info = CycleInfo {
+            qp_status: Some(sol.status),
+            iterations: sol.iterations,
+            active_set_size: sol.n_active as u8,
+            active_obstacles: work.n_obstacles as u8,
+            obstacles_truncated: work.obstacles_truncated,
+            inside_obstacle: inside,
+            time_clamped: work.time_clamped,
+            warm_started: warm,
+            source: CommandSource::Optimal,
+            cost: f64::NAN,
+            max_violation: f64::NAN,
+            min_h0,
+            relax_gait: 0.0,
+            relax_safety: 0.0,
+            relax_capture: 0.0,
+        };
+        // `z`: this cycle's decision vector (positions); `feet`: set for the
+        // fallbacks, which are defined by their footsteps.
+        let (z, fallback_feet, status) = match sol.status {
+            QpStatus::Solved => {
+                remember_active(memory, &sol, work);
+                (sol.x, None, CycleStatus::Optimal)
+            }
+            other => {
+                let status = match other {
+                    QpStatus::Infeasible => CycleStatus::Infeasible,
+                    QpStatus::IterationLimit => CycleStatus::BudgetExhausted,
+                    _ => CycleStatus::NumericalFailure,
+                };
+                memory.n_active = 0;
+                let relaxed = if other == QpStatus::Infeasible {
+                    relax::relax(
+                        &self.solver,
+                        backend,
+                        &work.qp,
+                        &work.rows,
+                        self.config.max_iter,
+                        self.config.max_iter_cycle.saturating_sub(sol.iterations),
+                        self.config.relax_bisections,
+                        self.config.max_gait_relaxation,
+                        relax::CaptureBounds::new(
+                            &self.config,
+                            self.model.kappa,
+                            pred.heading.omega_bar,
+                        ),
+                        Some(&sol.lambda),
+                    )
+                } else {
+                    Err(relax::RelaxError {
+                        kind: relax::RelaxFailure::Budget,
+                        iterations: 0,
+                    })
+                };
+                if let Ok(r) = &relaxed {
+                    info.iterations = info.iterations.saturating_add(r.iterations);
+                    info.relax_gait = r.eps_gait;
+                    info.relax_safety = r.eps_safety;
+                    info.relax_capture = r.eps_capture;
+                    info.source = match r.level {
+                        relax::RelaxLevel::Gait => CommandSource::RelaxedGait,
+                        relax::RelaxLevel::Safety => CommandSource::RelaxedSafety,
+                    };
+                    (r.u, None, status)
+                } else {
+                    // The iterations spent before the relaxation gave up count too.
+                    if let Err(e) = &relaxed {
+                        info.iterations = info.iterations.saturating_add(e.iterations);
+                    }
+                    let (feet, z, source) = self.fallback(memory, shift, work);
+                    info.source = source;
+                    (z, Some(feet), status)
+                }
+            }
+        };
+        // Plans computed with this cycle's headings turn at omega_bar; the
+        // fallbacks stop turning.
+        let omega = match info.source {
+            CommandSource::Optimal | CommandSource::RelaxedGait | CommandSource::RelaxedSafety => {
+                pred.heading.omega_bar
+            }
+            _ => 0.0,
+        };
+        info.max_violation = relax::class_violation(&work.qp, &work.rows, &z).max();
+        info.cost = self.solver.objective(&work.qp.q, &z) + work.cost_constant;
+        let plan = match &fallback_feet {
+            Some(feet) => self.rollout(pred, feet, omega),
+            None => self.plan_from_variables(pred, &z, omega),
+        };
+        let foot = plan.feet[0];
+        for (k, f) in plan.feet.iter().enumerate() {
+            memory.plan[2 * k] = f.x;
+            memory.plan[2 * k + 1] = f.y;
+        }
+        memory.has_plan = true;
+        memory.stance = input.stance_side;
+        memory.last_target = Some(foot);
+        let out = CycleOutput {
+            foot_target: foot,
+            turning_rate: omega,
+            plan,
+            status,
+            info,
+        };
+        if output_is_finite(&out) {
+            out
+        } else {
+            // Unreachable for finite inputs; kept so no NaN can ever leave.
+            hold(memory, input, InputError::State)
+        }
+    }
+
+    /// The plan of a QP solution `z` (positions): positions are `z` itself,
+    /// velocities and feet come from the inverse map of [`crate::constraints`]
+    /// (exact for the QP, no forward propagation of rounding errors).
+    fn plan_from_variables(
+        &self,
+        pred: &Prediction<N>,
+        z: &SVector<f64, NV>,
+        omega: f64,
+    ) -> Plan<N> {
+        let (feet, vel) = self.model.feet_from_variables(&pred.p0, &pred.v0, z);
+        let mut states = [LipState::default(); N];
+        let mut th = pred.heading.theta[0];
+        for (k, st) in states.iter_mut().enumerate() {
+            th += omega * self.config.step_duration;
+            *st = LipState {
+                position: Vector2::new(z[2 * k], z[2 * k + 1]),
+                velocity: vel[k],
+                heading: th,
+            };
+        }
+        pred.plan(states, feet)
+    }
+}
+
+fn remember_active<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>(
+    memory: &mut Memory<NV>,
+    sol: &QpSolution<NV, NC>,
+    work: &Assembly<N, NV, NC, NOBS>,
+) {
+    let n = sol.n_active.min(NV);
+    for (dst, &row) in memory.active.iter_mut().zip(&sol.active[..n]) {
+        *dst = work.rows.get(row as usize).copied().unwrap_or_default();
+    }
+    memory.n_active = n;
+}
+
+pub(super) fn output_is_finite<const N: usize>(o: &CycleOutput<N>) -> bool {
+    let f2 = |v: &Vector2<f64>| v.x.is_finite() && v.y.is_finite();
+    let fs = |s: &LipState| f2(&s.position) && f2(&s.velocity) && s.heading.is_finite();
+    f2(&o.foot_target)
+        && o.turning_rate.is_finite()
+        && fs(&o.plan.x0)
+        && o.plan.states.iter().all(fs)
+        && o.plan.feet.iter().all(f2)
+}

@@ -1,0 +1,390 @@
+//! The priority scheme for infeasible cycles: which rows give way, and by how
+//! little.
+//!
+//! Rows fall in three classes ([`RowClass`]): leg **reachability** (physical: never
+//! relaxed), **safety** (LDCBF and foot clearance), and **gait** (walking velocity
+//! and maneuverability). A fourth bound, **capturability** (optional,
+//! [`crate::Config::capture_fraction`], on by default; below), shares the gait
+//! rows' left-hand sides.
+//!
+//! # Units
+//!
+//! Every relaxation is in the physical units of the relaxed rows' right-hand
+//! sides, as [`crate::constraints`] builds them: a gait row `a'v_{k+1} <= b`
+//! (`a` a body-frame axis of step `k`) relaxed by `eps_gait` is
+//! `a'v_{k+1} <= b + eps_gait`, m/s of that velocity component, on every step of the horizon
+//! alike; an LDCBF row `h(p_{k+1}) - (1 - gamma) h(p_k) >= 0` relaxed by
+//! `eps_safety` is `>= -eps_safety`, m of `h` (a foot-clearance row likewise,
+//! m); the capturability bound relaxed by `eps_capture` is `|a'v_{k+1}| <=
+//! speed + eps_capture`, m/s. (In the decision variables the rows have norms
+//! from 1 to about 13, so a relaxation per unit row norm, as before, was not in
+//! these units: the 0.1 cap let a first-step velocity row give way by about
+//! 0.56 m/s and a second-step one by about 1.26 m/s.) [`class_violation`]
+//! measures violations in the same units.
+//!
+//! # Stages
+//!
+//! When the nominal QP is infeasible the controller solves, lexicographically:
+//!
+//! 1. **Gait relaxed.** Keep reachability, safety and capturability; relax
+//!    every gait row by the same amount `eps_gait` (m/s), the smallest that
+//!    makes the problem feasible, but at most
+//!    [`crate::Config::max_gait_relaxation`]; then minimise the nominal cost
+//!    under that relaxation.
+//! 2. **Safety relaxed** (when stage 1 needs more than the cap): keep
+//!    reachability, capturability and the gait rows relaxed by the cap; find
+//!    the smallest uniform relaxation `eps_safety` (m) of the safety rows,
+//!    then, with safety relaxed by exactly that, the smallest `eps_gait` (<=
+//!    cap), then minimise the cost. This is the least-violating reachable step
+//!    in the sense of the largest LDCBF violation.
+//! 3. **Gait unbounded** (only when reachability, capturability and the capped
+//!    gait rows alone conflict, i.e. the robot already moves faster than the
+//!    capped limits): as stage 2 with no cap on the gait rows, which then give
+//!    way up to the capturability bound.
+//! 4. **Capturability relaxed** (bound on, and reachability alone cannot meet
+//!    it: the robot already moves too fast to keep within it): the smallest
+//!    uniform relaxation `eps_capture` (m/s) of the bound with reachability
+//!    alone, then as stage 3 under the bound relaxed by that. Reported in
+//!    [`Relaxed::eps_capture`] and `CycleInfo::relax_capture`: never silent.
+//!
+//! So the priority order, most important first: reachability, capturability,
+//! gait up to the cap, safety, gait beyond the cap.
+//!
+//! Why the cap: the gait rows bound the CoM velocity at the end of each step,
+//! which is what keeps the pendulum capturable with steps inside the
+//! reachability box. Relaxing them without bound let cycles that keep meeting
+//! an infeasible LDCBF (an obstacle appearing from behind another under LiDAR)
+//! speed the robot up, cycle after cycle, past about 0.96 m/s, where no
+//! reachable step can stop it, and it fell. With the cap (0.1 m/s by default,
+//! so at most 0.9 m/s forward) the safety rows give way first, by the least
+//! amount.
+//!
+//! # Capturability
+//!
+//! Per body axis, with the heading fixed, the step map of
+//! [`crate::constraints`] gives `v_{k+1} = cosh(beta T) v_k - beta sinh(beta
+//! T) d_k` for the foot offset `d_k = f_k - p_k`, `|d_k| <= l_max` (leg
+//! reachability). The best step against `v_k > 0` (`d_k = l_max`) slows the
+//! robot iff `v_k < |kappa| l_max` with `|kappa| = beta sinh(beta T) /
+//! (cosh(beta T) - 1) = beta coth(beta T / 2)`; from any `|v_k| < |kappa|
+//! l_max` the robot can stop in finitely many steps within reach (N-step
+//! capturability of the LIP with reach `l_max` and step time `T`, as in
+//! Koolen et al., IJRR 2012), from any faster state it cannot and falls.
+//! For Table I (`beta = 3.13 /s`, `T = 0.4 s`, `l_max = 0.173 m`) the limit
+//! is `|kappa| l_max = 5.64 x 0.173 = 0.976 m/s`. The bound keeps every
+//! body-frame component of every predicted `v_{k+1}` within `speed =
+//! capture_fraction |kappa| l_max` (default 0.92: 0.898 m/s, just below the
+//! capped forward gait `vx_max + 0.1 = 0.9 m/s`, leaving 8 % for turns, which
+//! rotate the body frame by up to `omega_max T = 0.2 rad` per step, and for
+//! model error). The nominal gait rows of Table I imply it (0.8 and 0.4 m/s),
+//! so it changes nothing on cycles that meet them; it binds only when the gait
+//! rows give way. Each of its rows has the left-hand side of one gait velocity
+//! row, so it is applied as a per-row ceiling on that row's relaxation
+//! (`h + min(eps_gait, headroom + eps_capture)`, headroom = `speed` minus the
+//! row's nominal bound, at least 0) rather than as extra rows: the QP keeps
+//! its size.
+//!
+//! Reachability alone is always feasible (each `f_k` may sit at `p_k`), so
+//! stage 4 (and, without the bound, stage 3) always has an answer up to
+//! numerical failure or budget exhaustion.
+//!
+//! # Finding the smallest relaxation
+//!
+//! Each smallest uniform relaxation is the optimal value of a linear program
+//! (minimise `t` subject to the soft rows at `h + t` and the others as
+//! fixed), whose dual is: maximise `-y'h` over Farkas certificates `y >= 0`,
+//! `G'y = 0`, normalised by `y'|g|_soft = 1`. The dual active-set solver
+//! returns such a certificate with every infeasible solve, and one certificate
+//! holds for every relaxation of the same rows: with the gait rows at `e_g`
+//! and the safety rows at `e_s`, `y'h + e_g sum_gait y + e_s sum_safety y < 0`
+//! proves the relaxed problem empty (a gait row at its capturability ceiling
+//! counts with its headroom in `y'h` and towards `e_c`; the linear form is
+//! never below the true `y'h(e)`, so the proof stays valid). So each search
+//! runs from below:
+//!
+//! * the last certificate gives a lower bound `b` on `t` (in the first search
+//!   the nominal solve's, which the controller hands over; without one its
+//!   first solve is the unrelaxed problem restricted to the
+//!   rows of the first step, `k = 0`, which is usually already infeasible and
+//!   about a third of the rows; a certificate of a subset of the rows is one
+//!   of all of them; only if it is feasible is the whole unrelaxed problem
+//!   solved);
+//! * the next solve goes just above the bound, at `b (1 + 1e-9) + 1e-9`, with
+//!   the certificate's rows marked as the warm start (they are the tight rows
+//!   at the minimum); the first feasible solve ends the search with the
+//!   optimal plan under that relaxation; an infeasible one brings a new
+//!   certificate and a higher bound;
+//! * a bound that proves every `t` (up to the cap) infeasible ends the stage
+//!   without a solve: stage 2 starts from the certificate stage 1 ended with,
+//!   and its gait search from the one its safety search ended with, which
+//!   usually proves at once that less than the cap is infeasible.
+//!
+//! On the firmware's recorded infeasible cycles (all stage 1) this is two
+//! solves per cycle, the nominal one included: the nominal certificate proves
+//! the bound, and the solve just above it is feasible (three when the first
+//! certificate came from the first-step solve, 4 or 15 with the bisection this
+//! replaces); see `docs/fallback.md`.
+//!
+//! Tolerance: a reported `eps` is at most `b (1 + 1e-9) + 1e-9`, `b` the lower
+//! bound its certificate proves (up to rounding in `y'h`). At a degenerate
+//! minimum, where the relaxed feasible set is a single point that rounding can
+//! declare empty, a probe at the padded bound can come back infeasible with no
+//! higher bound: the padding then grows a hundredfold per probe. A search
+//! makes at most [`crate::Config::relax_bisections`] probes (the name is
+//! historical: it now counts probes, not halvings) and the whole scheme at
+//! most twice that many; a search that runs out solves the most relaxed
+//! problem once more and reports that plan with its own violation (feasible,
+//! not minimal). Stage 3 with the capturability bound on starts with one
+//! solve of reachability and the bound alone (counted as a probe): infeasible,
+//! it goes to stage 4 with that certificate; feasible, its plan bounds stage
+//! 3's safety search from above. So one infeasible cycle makes at most `2
+//! relax_bisections + 6` solves after the nominal one (six searches at most:
+//! stage 1, the safety searches of stages 2, 3 and 4, the capturability
+//! search of stage 4, one gait search), each drawing on the cycle's
+//! iteration budget ([`crate::Config::max_iter_cycle`]); if that runs out the
+//! controller falls back to the previous plan or the capture step.
+//!
+//! # Files
+//!
+//! * `rows`: the row classes, their violation, the capturability bound and
+//!   the rows a relaxed problem keeps;
+//! * `search`: the certificate-driven search for one smallest relaxation;
+//! * this file: the stages, in priority order, and their results.
+
+mod rows;
+mod search;
+#[cfg(test)]
+mod tests;
+
+pub use rows::{CaptureBounds, ClassViolation, RowClass, class_violation};
+
+use nalgebra::SVector;
+
+use crate::constraints::RowId;
+use crate::qp::{DenseQp, DualActiveSet, QpBackend};
+use rows::{Keep, Soft};
+use search::{Ctx, Probe};
+
+/// Which stage produced the relaxed plan.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RelaxLevel {
+    /// Stage 1: gait rows relaxed, safety and reachability kept.
+    Gait,
+    /// Stage 2: safety (and gait) rows relaxed, reachability kept.
+    Safety,
+}
+
+/// A relaxed plan.
+#[derive(Clone, Copy, Debug)]
+pub struct Relaxed<const NV: usize> {
+    /// Footsteps.
+    pub u: SVector<f64, NV>,
+    /// Stage that produced it.
+    pub level: RelaxLevel,
+    /// Uniform relaxation of the gait rows, m/s (0 if none was needed).
+    pub eps_gait: f64,
+    /// Uniform relaxation of the safety rows, m of `h` (0 at stage 1).
+    pub eps_safety: f64,
+    /// Uniform relaxation of the capturability bound, m/s (0 unless stage 4).
+    pub eps_capture: f64,
+    /// Solver iterations spent.
+    pub iterations: u32,
+}
+
+/// A failed relaxation: why, and the solver iterations it spent.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RelaxError {
+    /// Why it gave up.
+    pub kind: RelaxFailure,
+    /// Solver iterations spent before giving up.
+    pub iterations: u32,
+}
+
+/// Why the relaxation gave up.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RelaxFailure {
+    /// The per-cycle iteration budget ran out.
+    Budget,
+    /// A solve reported a numerical error.
+    Numerical,
+}
+
+/// Runs the priority scheme on the nominal QP `qp` (rows identified by `rows`;
+/// each probe solves a selection of its rows in place, with no copy).
+/// `budget` is the number of solver iterations left in this cycle; `probes`
+/// the largest number of solves of one search for a smallest relaxation (the scheme makes at most `2 probes + 4` solves in all,
+/// see the module docs); `gait_cap` the largest relaxation of the gait rows
+/// (m/s) allowed before the safety rows give way; `capture` the
+/// capturability bound (`None`: off). `certificate`: a Farkas certificate of
+/// the nominal QP (one weight per row of `qp`, as
+/// [`crate::qp::QpSolution::lambda`] of its infeasible solve), used as the
+/// first search's starting certificate when it proves the nominal QP empty
+/// (`y'h < 0`); it replaces the first-step solve.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
+    solver: &DualActiveSet<NV, NC>,
+    backend: &mut B,
+    qp: &DenseQp<NV, NC>,
+    rows: &[RowId; NC],
+    max_iter: u32,
+    budget: u32,
+    probes: u32,
+    gait_cap: f64,
+    capture: Option<CaptureBounds>,
+    certificate: Option<&SVector<f64, NC>>,
+) -> Result<Relaxed<NV>, RelaxError> {
+    let mut norms = [0.0f64; NC];
+    for (n, g) in norms.iter_mut().zip(qp.gt.column_iter().take(qp.m)) {
+        *n = crate::float::sqrt(g.norm_squared());
+    }
+    let mut ctx = Ctx {
+        norms,
+        solver,
+        backend,
+        qp,
+        rows,
+        max_iter,
+        budget,
+        used: 0,
+        probes,
+        probes_left: probes.saturating_mul(2),
+        cert: None,
+        marks: [false; NC],
+        capture,
+    };
+    if let Some(y) = certificate {
+        // The nominal QP is the first probe's problem (stage 1 at no
+        // relaxation) without the first-step restriction.
+        let nominal = Keep {
+            safety: Some(0.0),
+            gait: Some(0.0),
+            capture: capture.map(|_| 0.0),
+            first_step: false,
+        };
+        ctx.take_certificate(y, nominal);
+        if !ctx.cert.is_some_and(|c| c.yh < 0.0) {
+            ctx.cert = None;
+            ctx.marks = [false; NC];
+        }
+    }
+    let out = run_stages(&mut ctx, gait_cap);
+    out.map_err(|kind| RelaxError {
+        kind,
+        iterations: ctx.used,
+    })
+}
+
+/// The stages of the scheme (see the module docs).
+fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
+    ctx: &mut Ctx<'_, NV, NC, B>,
+    gait_cap: f64,
+) -> Result<Relaxed<NV>, RelaxFailure> {
+    // The capturability bound, when on, is kept through stages 1-3.
+    let capture0 = ctx.capture.map(|_| 0.0);
+    // Stage 1: reachability, safety and capturability hard, gait soft up to the cap.
+    let safe = Keep {
+        safety: Some(0.0),
+        gait: None,
+        capture: capture0,
+        first_step: false,
+    };
+    if let Some((u, eps)) = ctx.minimal(safe, Soft::Gait, gait_cap, None)? {
+        return Ok(Relaxed {
+            u,
+            level: RelaxLevel::Gait,
+            eps_gait: eps,
+            eps_safety: 0.0,
+            eps_capture: 0.0,
+            iterations: ctx.used,
+        });
+    }
+    // Stage 2: reachability and the capped gait rows hard, safety soft; then, with
+    // safety relaxed by exactly that much, the least gait relaxation (<= cap).
+    // Stage 3, when even reachability and the capped gait rows conflict (the
+    // robot already moves faster than the capped limits allow): the same with
+    // the gait rows unbounded (but under the capturability bound, when on).
+    // Stage 4 (capturability on, and reachability and the bound conflict: the
+    // robot is already too fast to stay within it): first the least uniform
+    // relaxation of the capturability bound, then as stage 3 under it.
+    for stage in 2..=4u8 {
+        let cap = if stage == 2 { gait_cap } else { f64::INFINITY };
+        let mut capture = capture0;
+        let mut known_s = None;
+        if stage == 3 && ctx.capture.is_some() && ctx.probes_left > 0 {
+            // One solve tells whether reachability and the capturability bound
+            // alone are feasible: if not, stage 4 (with this certificate); if
+            // so, the plan bounds stage 3's safety search from above.
+            let free = Keep {
+                safety: None,
+                gait: None,
+                capture: Some(0.0),
+                first_step: false,
+            };
+            ctx.probes_left -= 1;
+            match ctx.solve(free)? {
+                Probe::Feasible(u) => {
+                    known_s = Some((ctx.violation(Soft::Safety, &u).max(0.0), u));
+                }
+                Probe::Infeasible => continue,
+            }
+        }
+        if stage == 4 {
+            if ctx.capture.is_none() {
+                break;
+            }
+            let free = Keep {
+                safety: None,
+                gait: None,
+                capture: None,
+                first_step: false,
+            };
+            let Some((u_c, eps_c)) = ctx.minimal(free, Soft::Capture, f64::INFINITY, None)? else {
+                break;
+            };
+            capture = Some(eps_c);
+            known_s = Some((ctx.violation(Soft::Safety, &u_c).max(0.0), u_c));
+        }
+        let reach = Keep {
+            safety: None,
+            gait: if cap.is_finite() { Some(cap) } else { None },
+            capture,
+            first_step: false,
+        };
+        let Some((u_s, eps_s)) = ctx.minimal(reach, Soft::Safety, f64::INFINITY, known_s)? else {
+            continue;
+        };
+        let fixed = Keep {
+            safety: Some(eps_s),
+            gait: None,
+            capture,
+            first_step: false,
+        };
+        // The plan just found is feasible with the gait rows at the cap (or
+        // without them: then at its own gait violation).
+        let known = if cap.is_finite() {
+            cap
+        } else {
+            ctx.violation(Soft::Gait, &u_s).max(0.0)
+        };
+        let (u, eps_g) = ctx
+            .minimal(fixed, Soft::Gait, cap, Some((known, u_s)))?
+            .ok_or(RelaxFailure::Numerical)?;
+        // Without any safety relaxation this is still a gait relaxation (beyond
+        // the cap: the robot moves too fast already).
+        let level = if eps_s > 0.0 {
+            RelaxLevel::Safety
+        } else {
+            RelaxLevel::Gait
+        };
+        return Ok(Relaxed {
+            u,
+            level,
+            eps_gait: eps_g,
+            eps_safety: eps_s,
+            eps_capture: capture.unwrap_or(0.0),
+            iterations: ctx.used,
+        });
+    }
+    // Reachability alone is always feasible: only numerics get here.
+    Err(RelaxFailure::Numerical)
+}

@@ -1,0 +1,387 @@
+extern crate std;
+
+use super::*;
+use crate::qp::QpStatus;
+use crate::{Assembly, Config, ConvexPolygon, CycleInput, PaperController, Side};
+use nalgebra::Vector2;
+
+const NC: usize = crate::constraint_capacity(3, 8, false);
+/// Random cycles (about 4 in 5 are infeasible).
+const CASES: usize = 1000;
+
+/// Counts the solves of the priority scheme.
+struct Counting(usize);
+impl QpBackend<6, NC> for Counting {
+    fn solve_qp(
+        &mut self,
+        solver: &DualActiveSet<6, NC>,
+        qp: &DenseQp<6, NC>,
+        prefer: &[bool; NC],
+        max_iter: u32,
+    ) -> crate::qp::QpSolution<6, NC> {
+        self.0 += 1;
+        solver.solve(qp, prefer, max_iter)
+    }
+}
+
+/// Deterministic uniform numbers in [0, 1) (64-bit LCG, top bits).
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn range(&mut self, a: f64, b: f64) -> f64 {
+        a + (b - a) * self.next()
+    }
+}
+
+/// The nominal QP with the gait and safety rows relaxed by `gait` and
+/// `safety` (`None`: left out) is empty, as proven by a Farkas
+/// certificate checked here independently of the solver (`y >= 0`,
+/// `G'y = 0` to 1e-9, `h'y < 0`).
+fn certified_empty(
+    solver: &DualActiveSet<6, NC>,
+    asm: &Assembly<3, 6, NC, 8>,
+    gait: Option<f64>,
+    safety: Option<f64>,
+    capture: Option<(CaptureBounds, f64)>,
+) -> bool {
+    let keep = Keep {
+        safety,
+        gait,
+        capture: capture.map(|c| c.1),
+        first_step: false,
+    };
+    let bounds = capture.map(|c| c.0);
+    let mut qp = DenseQp::<6, NC>::with_q(asm.qp.q);
+    for ((g, h), id) in asm.qp.rows().zip(&asm.rows) {
+        if let Some((rhs, _)) = keep.rhs(id.kind, h, bounds.as_ref()) {
+            qp.push_row(&g, rhs).unwrap();
+        }
+    }
+    let sol = solver.solve(&qp, &[false; NC], 500);
+    if sol.status != QpStatus::Infeasible {
+        return false;
+    }
+    let y = &sol.lambda;
+    let mut gty = SVector::<f64, 6>::zeros();
+    let mut hty = 0.0;
+    for (i, (g, h)) in qp.rows().enumerate() {
+        assert!(y[i] >= 0.0);
+        gty += g * y[i];
+        hty += h * y[i];
+    }
+    gty.amax() <= 1e-9 * (1.0 + y.amax()) && hty < 0.0
+}
+
+/// On random cycles of a robot walking into nearby boxes, every infeasible
+/// nominal QP gets a relaxed plan that keeps reachability and each class
+/// within its reported relaxation, and each reported relaxation is
+/// minimal in the priority order: 1e-6 (relative, plus 1e-6 absolute) less
+/// is certified infeasible, a safety relaxation comes only when the gait
+/// rows at the cap cannot make the problem feasible, and (half of the
+/// cases run with the capturability bound on) the bound is relaxed only
+/// when reachability alone cannot meet it.
+#[test]
+fn relaxations_are_minimal_in_priority_order() {
+    let mut rng = Lcg(0x005e_ed0f_5afe);
+    let mut ctl = PaperController::new(Config::default()).unwrap();
+    let cap = ctl.config().max_gait_relaxation;
+    let mut asm = Assembly::default();
+    let (mut infeasible, mut stage1, mut stage2, mut stage3, mut stage4) = (0, 0, 0, 0, 0);
+    let less = |e: f64| e - 1e-6 * (1.0 + e);
+    let mut solves = [0usize; 32];
+    let kappa =
+        crate::constraints::Condensed::<3>::new(&crate::lip::Lip::new(9.81, 1.0, 0.4)).kappa;
+    for case in 0..CASES {
+        let delta = if rng.next() < 0.5 { 0.0 } else { 0.2 };
+        let capture_fraction = if case % 2 == 0 { Some(0.92) } else { None };
+        ctl = PaperController::new(Config {
+            delta,
+            capture_fraction,
+            ..Config::default()
+        })
+        .unwrap();
+        let th = rng.range(-3.0, 3.0);
+        let dir = Vector2::new(libm::cos(th), libm::sin(th));
+        let side = Vector2::new(-dir.y, dir.x);
+        let speed = rng.range(0.2, 1.2);
+        let v = dir * speed + side * rng.range(-0.3, 0.3);
+        let mut obstacles =
+            [ConvexPolygon::<8>::new(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]).unwrap(); 3];
+        let n_obs = 1 + (rng.next() * 3.0) as usize;
+        for o in obstacles.iter_mut().take(n_obs) {
+            let c = dir * rng.range(0.3, 1.6) + side * rng.range(-0.8, 0.8);
+            let (a, b) = (rng.range(0.1, 0.8), rng.range(0.1, 0.8));
+            *o = ConvexPolygon::hull(&[
+                [c.x - a, c.y - b],
+                [c.x + a, c.y - b],
+                [c.x + a, c.y + b],
+                [c.x - a, c.y + b],
+            ])
+            .unwrap();
+        }
+        let input = CycleInput {
+            com_position: Vector2::zeros(),
+            com_velocity: v,
+            heading: th + rng.range(-0.3, 0.3),
+            turning_rate: rng.range(-0.3, 0.3),
+            stance_foot: dir * rng.range(-0.2, 0.2) + side * rng.range(-0.15, 0.15),
+            stance_side: if rng.next() < 0.5 {
+                Side::Left
+            } else {
+                Side::Right
+            },
+            time_in_step: rng.range(0.0, 0.4),
+            goal: dir * 10.0,
+            obstacles: &obstacles[..n_obs],
+        };
+        ctl.assemble(&input, &mut asm).unwrap();
+        let solver = ctl.solver();
+        let nominal = solver.solve(&asm.qp, &[false; NC], 64);
+        if !nominal.status.is_infeasible() {
+            continue;
+        }
+        infeasible += 1;
+        // The nominal solve's certificate is one of the nominal QP
+        // (`y >= 0` on the used rows, 0 beyond, `G'y = 0`, `h'y < 0`), so
+        // of every relaxation the scheme bounds with it. Every other case
+        // hands it over (as the controller does), the rest run without.
+        let y = &nominal.lambda;
+        let m = asm.qp.m;
+        assert!(y.iter().take(m).all(|&v| v >= 0.0), "case {case}");
+        assert!(y.iter().skip(m).all(|&v| v == 0.0), "case {case}");
+        let scale: f64 = (0..m).map(|i| y[i] * asm.qp.row(i).norm()).sum();
+        let gty = (0..m).fold(nalgebra::SVector::<f64, 6>::zeros(), |acc, i| {
+            acc + asm.qp.row(i) * y[i]
+        });
+        assert!(gty.amax() <= 1e-9 * scale, "case {case}: G'y = {gty:?}");
+        let yh: f64 = (0..m).map(|i| y[i] * asm.qp.h[i]).sum();
+        assert!(yh < 0.0, "case {case}: y'h = {yh}");
+        let certificate = (case % 2 == 0).then_some(y);
+        let cb = CaptureBounds::new(ctl.config(), kappa, asm.prediction.heading.omega_bar);
+        assert_eq!(cb.is_some(), capture_fraction.is_some());
+        let mut count = Counting(0);
+        let r = relax(
+            solver,
+            &mut count,
+            &asm.qp,
+            &asm.rows,
+            64,
+            2048,
+            12,
+            cap,
+            cb,
+            certificate,
+        )
+        .unwrap_or_else(|e| panic!("case {case}: {e:?}"));
+        solves[count.0.min(31)] += 1;
+        let v = class_violation(&asm.qp, &asm.rows, &r.u);
+        let (eg, es, ec) = (r.eps_gait, r.eps_safety, r.eps_capture);
+        // The capturability bound, relaxed by `ec`, holds.
+        let with_capture = |e: f64| cb.map(|c| (c, e));
+        if let Some(c) = cb {
+            for ((g, h), id) in asm.qp.rows().zip(&asm.rows) {
+                if let Some(room) = c.of(id.kind) {
+                    let e = g.dot(&r.u) - h - room;
+                    assert!(e <= ec * (1.0 + 1e-9) + 1e-9, "case {case}: {e} {r:?}");
+                }
+            }
+        } else {
+            assert_eq!(ec, 0.0);
+        }
+        assert!(v.reach <= 1e-9, "case {case}: {v:?}");
+        assert!(
+            v.gait <= eg * (1.0 + 1e-9) + 1e-9,
+            "case {case}: {v:?} {r:?}"
+        );
+        assert!(
+            v.safety <= es * (1.0 + 1e-9) + 1e-9,
+            "case {case}: {v:?} {r:?}"
+        );
+        if ec > 0.0 {
+            // Stage 4: the least relaxation of the capturability bound
+            // with reachability alone, then the least safety and gait
+            // relaxations under it.
+            assert!(
+                certified_empty(solver, &asm, None, None, with_capture(less(ec))),
+                "case {case}: {r:?}: capture not minimal"
+            );
+            if es > 1e-6 {
+                assert!(
+                    certified_empty(solver, &asm, None, Some(less(es)), with_capture(ec)),
+                    "case {case}: {r:?}: safety not minimal"
+                );
+            }
+            if eg > 1e-6 {
+                assert!(
+                    certified_empty(solver, &asm, Some(less(eg)), Some(es), with_capture(ec)),
+                    "case {case}: {r:?}: gait not minimal"
+                );
+            }
+            stage4 += 1;
+            continue;
+        }
+        if es == 0.0 {
+            // Stage 1 (or stage 3 without a safety relaxation): the least
+            // gait relaxation with safety kept.
+            assert_eq!(r.level, RelaxLevel::Gait);
+            assert!(eg > 0.0, "case {case}: the nominal QP is infeasible");
+            assert!(
+                certified_empty(solver, &asm, Some(less(eg)), Some(0.0), with_capture(0.0)),
+                "case {case}: {r:?} not minimal"
+            );
+            stage1 += 1;
+            continue;
+        }
+        assert_eq!(r.level, RelaxLevel::Safety);
+        // Safety gives way only when the capped gait rows cannot help.
+        assert!(
+            certified_empty(solver, &asm, Some(cap), Some(0.0), with_capture(0.0)),
+            "case {case}"
+        );
+        // The least safety relaxation with the gait rows at the cap
+        // (stage 2) or left out (stage 3; under the capturability bound
+        // when on).
+        let gait_bound = (eg <= cap * (1.0 + 1e-9)).then_some(cap);
+        assert!(
+            certified_empty(solver, &asm, gait_bound, Some(less(es)), with_capture(0.0)),
+            "case {case}: {r:?}: safety not minimal"
+        );
+        // Then the least gait relaxation under that safety relaxation.
+        if eg > 1e-6 {
+            assert!(
+                certified_empty(solver, &asm, Some(less(eg)), Some(es), with_capture(0.0)),
+                "case {case}: {r:?}: gait not minimal"
+            );
+        }
+        if gait_bound.is_some() {
+            stage2 += 1;
+        } else {
+            stage3 += 1;
+        }
+    }
+    std::println!(
+        "{infeasible} infeasible: {stage1} stage 1, {stage2} stage 2, {stage3} stage 3, \
+         {stage4} stage 4; solves of the priority scheme (count: cycles): {:?}",
+        solves
+            .iter()
+            .enumerate()
+            .filter(|(_, n)| **n > 0)
+            .collect::<std::vec::Vec<_>>()
+    );
+    assert!(
+        stage1 >= 20 && stage2 >= 50 && stage3 >= 20 && stage4 >= 10,
+        "{stage1} {stage2} {stage3} {stage4}"
+    );
+}
+
+/// The largest body-frame velocity component of a plan's `v_1 .. v_N`
+/// (each in its step's heading frame), m/s.
+fn fastest_component(out: &crate::CycleOutput<3>) -> f64 {
+    out.plan
+        .states
+        .iter()
+        .map(|s| {
+            let (c, sn) = (libm::cos(s.heading), libm::sin(s.heading));
+            let lon = c * s.velocity.x + sn * s.velocity.y;
+            let lat = -sn * s.velocity.x + c * s.velocity.y;
+            lon.abs().max(lat.abs())
+        })
+        .fold(0.0, f64::max)
+}
+
+/// A robot at the end of a step, walking at `vx_max` along x, pushed
+/// sideways to `lateral` m/s, no obstacles, goal far ahead.
+fn pushed(capture_fraction: Option<f64>, forward: f64, lateral: f64) -> crate::CycleOutput<3> {
+    let mut ctl = PaperController::new(Config {
+        capture_fraction,
+        ..Config::default()
+    })
+    .unwrap();
+    let input = CycleInput::<8> {
+        com_position: Vector2::zeros(),
+        com_velocity: Vector2::new(forward, lateral),
+        heading: 0.0,
+        turning_rate: 0.0,
+        stance_foot: Vector2::new(-0.1, -0.1),
+        stance_side: Side::Right,
+        time_in_step: 0.4,
+        goal: Vector2::new(20.0, 0.0),
+        obstacles: &[],
+    };
+    ctl.step(&input)
+}
+
+/// Pushed to 0.75 m/s sideways (beyond `vy_max` = 0.4 m/s, but below the
+/// capturable 0.92 |kappa| l_max = 0.898 m/s): the gait rows give way
+/// beyond their cap (stage 3). Without the capturability bound the uniform
+/// relaxation also lets the forward velocity exceed what any step within
+/// reach can stop; with it every planned component stays capturable and
+/// the bound itself is not relaxed.
+#[test]
+fn capturable_push_keeps_the_plan_capturable() {
+    let kappa =
+        crate::constraints::Condensed::<3>::new(&crate::lip::Lip::new(9.81, 1.0, 0.4)).kappa;
+    let limit = kappa.abs() * Config::default().l_max;
+    let speed = 0.92 * limit;
+    let on = pushed(Some(0.92), 0.8, 0.75);
+    let off = pushed(None, 0.8, 0.75);
+    std::println!(
+        "on: {:?} fastest {:.3}; off: {:?} fastest {:.3}; limit {limit:.3}",
+        on.info,
+        fastest_component(&on),
+        off.info,
+        fastest_component(&off)
+    );
+    assert!(on.info.relax_gait > 0.1, "{:?}", on.info);
+    assert_eq!(on.info.relax_capture, 0.0);
+    assert!(fastest_component(&on) <= speed + 1e-9);
+    assert!(fastest_component(&off) > limit, "{:?}", off.plan);
+}
+
+/// Pushed forward beyond the bound. At 0.95 m/s (above the bound's
+/// 0.898 m/s, below `|kappa| l_max` = 0.976 m/s) no step within reach
+/// meets the bound at once (`v_1 >= cosh(beta T) v_0 - beta sinh(beta T)
+/// l_max` = 0.927 m/s): the bound is relaxed (stage 4, reported in
+/// `relax_capture`) by just that excess, no planned velocity exceeds the
+/// relaxed bound, and from the planned `v_1` the bound holds again. At
+/// 1.1 m/s the LIP cannot be stopped: the relaxation is reported,
+/// large, and the plan (the slowest possible) still speeds up.
+#[test]
+fn push_beyond_the_bound_is_detected() {
+    let lip = crate::lip::Lip::new(9.81, 1.0, 0.4);
+    let l_max = Config::default().l_max;
+    let kappa = crate::constraints::Condensed::<3>::new(&lip).kappa;
+    let speed = 0.92 * kappa.abs() * l_max;
+    let bs = lip.beta * lip.sinh_bt;
+    // The slowest reachable velocities from v_0.
+    let slowest = |v0: f64| {
+        let v1 = lip.cosh_bt * v0 - bs * l_max;
+        [v1, lip.cosh_bt * v1 - bs * l_max]
+    };
+    let out = pushed(Some(0.92), 0.95, 0.0);
+    let v: std::vec::Vec<f64> = out.plan.states.iter().map(|s| s.velocity.x).collect();
+    std::println!("0.95 m/s: {:?} {v:?}", out.info);
+    assert!(
+        (out.info.relax_capture - (slowest(0.95)[0] - speed)).abs() < 1e-6,
+        "{:?}",
+        out.info
+    );
+    let relaxed = speed + out.info.relax_capture + 1e-9;
+    assert!(v[0] < 0.95 && v.iter().all(|&x| x <= relaxed), "{v:?}");
+    let next = pushed(Some(0.92), v[0], 0.0);
+    assert_eq!(next.info.relax_capture, 0.0, "{:?}", next.info);
+    let out = pushed(Some(0.92), 1.1, 0.0);
+    let v: std::vec::Vec<f64> = out.plan.states.iter().map(|s| s.velocity.x).collect();
+    std::println!("1.1 m/s: {:?} {v:?}", out.info);
+    assert!(out.info.relax_capture > slowest(1.1)[1] - speed - 1e-6);
+    assert!(v[0] > 1.1 && v[1] > v[0], "{v:?}");
+    // Not reported when the robot is within the bound.
+    let within = pushed(Some(0.92), 0.85, 0.0);
+    assert_eq!(within.info.relax_capture, 0.0, "{:?}", within.info);
+}
