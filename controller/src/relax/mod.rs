@@ -212,7 +212,8 @@ pub enum RelaxFailure {
 /// Runs the priority scheme on the nominal QP `qp` (rows identified by `rows`;
 /// each probe solves a selection of its rows in place, with no copy).
 /// `budget` is the number of solver iterations left in this cycle; `probes`
-/// the largest number of solves of one search for a smallest relaxation (the scheme makes at most `2 probes + 4` solves in all,
+/// the largest number of solves of one search for a smallest relaxation
+/// (the scheme makes at most `2 probes + 6` solves after the nominal one,
 /// see the module docs); `gait_cap` the largest relaxation of the gait rows
 /// (m/s) allowed before the safety rows give way; `capture` the
 /// capturability bound (`None`: off). `certificate`: a Farkas certificate of
