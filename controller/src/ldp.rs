@@ -519,8 +519,14 @@ fn chol_drop<const NV: usize>(
         return;
     }
     let last = nact - 1;
+    // Checked access (the optimiser does not prove `i + 1 < NV` on every
+    // target, see nopanic/); always in bounds.
     for i in l..last {
-        C[i] = C[i + 1];
+        if let Some(&next) = C.get(i + 1)
+            && let Some(row) = C.get_mut(i)
+        {
+            *row = next;
+        }
     }
     C[last] = [0.0; NV];
     Ci[last] = [0.0; NV];

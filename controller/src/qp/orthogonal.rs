@@ -173,12 +173,21 @@ fn back_substitute<const NV: usize>(
             }
         }
     } else {
+        // Checked access: the optimiser does not see `nact <= NV` here on
+        // every target (nopanic/); every access is in bounds.
         for i in (0..nact).rev() {
-            let mut acc = d[i];
+            let (Some(&di), Some(&rii)) = (d.get(i), R.get((i, i))) else {
+                continue;
+            };
+            let mut acc = di;
             for k in (i + 1)..nact {
-                acc -= R[(i, k)] * r[k];
+                if let (Some(&rik), Some(&rk)) = (R.get((i, k)), r.get(k)) {
+                    acc -= rik * rk;
+                }
             }
-            r[i] = acc / R[(i, i)];
+            if let Some(ri) = r.get_mut(i) {
+                *ri = acc / rii;
+            }
         }
     }
 }
