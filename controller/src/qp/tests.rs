@@ -18,6 +18,39 @@ fn unconstrained_minimiser() {
     assert!((sol.objective - (-5.0)).abs() < 1e-14);
 }
 
+/// When the unconstrained minimiser satisfies every row, `solve` returns it
+/// after the one pass over the rows, without an iteration (so even with a
+/// budget of 0), bit for bit the minimiser of the QP without rows, whatever
+/// the warm-start marks.
+#[test]
+fn feasible_unconstrained_minimiser_is_returned_after_one_pass() {
+    let dense =
+        DualActiveSet::<2, 4>::new(&Matrix2::new(3.0, 1.0, 1.0, 2.0), QpSettings::default())
+            .unwrap();
+    for s in [solver2(), dense] {
+        let free = s.solve(
+            &DenseQp::<2, 4>::with_q(Vector2::new(-2.0, -4.0)),
+            &[false; 4],
+            0,
+        );
+        let mut qp = DenseQp::<2, 4>::with_q(Vector2::new(-2.0, -4.0));
+        qp.push_row(&Vector2::new(1.0, 0.0), 5.0).unwrap();
+        qp.push_row(&Vector2::new(0.0, 1.0), 3.0).unwrap();
+        qp.push_row(&Vector2::new(1.0, 1.0), 4.0).unwrap();
+        qp.push_row(&Vector2::new(-1.0, 0.0), 0.0).unwrap();
+        assert!(qp.max_violation(&free.x) == 0.0);
+        for prefer in [[false; 4], [true; 4]] {
+            let sol = s.solve(&qp, &prefer, 0);
+            assert_eq!(
+                (sol.status, sol.iterations, sol.n_active),
+                (QpStatus::Solved, 0, 0)
+            );
+            assert_eq!(sol.x.map(f64::to_bits), free.x.map(f64::to_bits));
+            assert_eq!(sol.lambda, SVector::<f64, 4>::zeros());
+        }
+    }
+}
+
 #[test]
 fn one_active_bound_and_multiplier() {
     // min (x-1)^2 + (y-2)^2, s.t. x + y <= 1  -> x = 0, y = 1, lambda = 2.
