@@ -43,7 +43,9 @@
 //! row is linearly dependent on the active ones when the component of `m_p`
 //! outside their span is below `tol_dependence |m_p|`), the same statuses,
 //! multipliers and Farkas certificate, and `iterations` counts adds plus drops.
-//! Rounding differs, so results agree to rounding, not bit for bit.
+//! Rounding differs, so results agree to rounding, not bit for bit. The
+//! iteration is the same code as [`DualActiveSet::solve`]'s (`active_set.rs`),
+//! over this representation of the active set.
 //!
 //! Accuracy: the normal equations lose accuracy with `cond(M_A)^2`. A short
 //! component `z` of a new row outside the active span is projected twice, and

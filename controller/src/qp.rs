@@ -17,7 +17,9 @@
 //! programs"). The factorisation of the active set is kept as `J = L^-T Q` and the
 //! upper-triangular `R` of `L^-1 N_A = Q [R; 0]`, updated by one Householder
 //! reflection on every add and by Givens rotations on every drop (no
-//! re-factorisation, no normal equations).
+//! re-factorisation, no normal equations; `qp/orthogonal.rs`). The iteration
+//! itself is written once for this solver and the least-distance path of
+//! [`crate::ldp`] (`active_set.rs`).
 //!
 //! Cost per solve: `m` row norms, one `H^-1` row norm (`|L^-1 g_i|`) per row the
 //! first time it is found violated, and per add or drop `O(m NV + NV^2)`. When `G`
