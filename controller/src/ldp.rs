@@ -43,7 +43,9 @@
 //! row is linearly dependent on the active ones when the component of `m_p`
 //! outside their span is below `tol_dependence |m_p|`), the same statuses,
 //! multipliers and Farkas certificate, and `iterations` counts adds plus drops.
-//! Rounding differs, so results agree to rounding, not bit for bit.
+//! Rounding differs, so results agree to rounding, not bit for bit. The
+//! iteration is the same code as [`DualActiveSet::solve`]'s (`active_set.rs`),
+//! over this representation of the active set.
 //!
 //! Accuracy: the normal equations lose accuracy with `cond(M_A)^2`. A short
 //! component `z` of a new row outside the active span is projected twice, and
@@ -58,7 +60,8 @@
 
 use nalgebra::SVector;
 
-use crate::qp::{DenseQp, DualActiveSet, QpSolution, QpStatus, RowNorms, ZERO_ROW2, dot, givens};
+use crate::active_set::{self, ActiveSetFactor, AddError, dot, givens};
+use crate::qp::{DenseQp, DualActiveSet, QpSolution, QpStatus, RowNorms, ZERO_ROW2};
 
 /// The least-distance form of one constraint matrix `G` for one Hessian: build
 /// once with [`LdpSolver::prepare`], then [`LdpSolver::load`] and
@@ -234,228 +237,40 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
         prefer: &[bool; NC],
         max_iter: u32,
     ) -> QpSolution<NV, NC> {
-        let m = self.m.min(NC);
-        let mut sol = QpSolution {
-            x: SVector::zeros(),
-            lambda: SVector::zeros(),
-            objective: 0.0,
-            status: QpStatus::NumericalError,
-            iterations: 0,
-            active: [0; NV],
-            n_active: 0,
-        };
         if !self.finite || !loaded.finite || loaded.m != self.m {
-            return sol;
+            return active_set::stopped(QpStatus::NumericalError, None);
         }
-        if let Some(i) = loaded.zero_infeasible {
+        if loaded.zero_infeasible.is_some() {
             // 0'x <= h with h < 0: y = e_i certifies it.
-            sol.status = QpStatus::Infeasible;
-            if let Some(y) = sol.lambda.get_mut(i) {
-                *y = 1.0;
-            }
-            return sol;
+            return active_set::stopped(QpStatus::Infeasible, loaded.zero_infeasible);
         }
         let tol_dep = self.solver.settings().tol_dependence;
-        let tol_dep2 = tol_dep * tol_dep;
-        let mut s = loaded.s0; // scaled slacks of all rows
-        let mut blocked = self.zero; // active or zero rows: not scanned
-        let mut lam = [0.0f64; NV]; // scaled multipliers of the active rows
-        let mut act = [0u16; NV];
-        let mut nact: usize = 0;
-        // Cholesky factor of M_A M_A' (scaled rows), row-major, zeros above
-        // the diagonal kept exactly zero (the solves use full-length dots).
-        let mut C = [[0.0f64; NV]; NV];
-        let mut Ci = [[0.0f64; NV]; NV]; // C^-1, lower triangular
-        let mut iters: u32 = 0;
-        // The row being added and its multiplier (part of the iterate).
-        let mut pending: Option<(usize, f64)> = None;
-        let mut farkas: Option<(usize, [f64; NV])> = None;
-
-        let status = 'outer: loop {
-            // Step 1: the most violated row in the H^-1 metric (marked first).
-            let mut best: Option<usize> = None;
-            let mut best_v = 0.0;
-            let mut best_pref: Option<usize> = None;
-            let mut best_pref_v = 0.0;
-            for i in 0..m {
-                let si = s[i];
-                if blocked[i] || si >= 0.0 || si * si <= self.thr[i] {
-                    continue;
-                }
-                if !si.is_finite() {
-                    break 'outer QpStatus::NumericalError;
-                }
-                if si < best_v {
-                    best_v = si;
-                    best = Some(i);
-                }
-                if prefer[i] && si < best_pref_v {
-                    best_pref_v = si;
-                    best_pref = Some(i);
-                }
-            }
-            let p = match best_pref.or(best) {
-                None => break QpStatus::Solved,
-                Some(p) => p,
-            };
-            let (Some(mp), Some(kp)) = (self.mhat.get(p), self.K.get(p)) else {
-                break QpStatus::NumericalError;
-            };
-            pending = Some((p, 0.0));
-            let mut u_new = 0.0;
-
-            // Step 2: move until p holds (full step) or a row must be dropped.
-            loop {
-                if iters >= max_iter {
-                    break 'outer QpStatus::IterationLimit;
-                }
-                let nact_c = nact.min(NV);
-                // w = C^-1 M_A m_p, r = C^-T w = (M_A M_A')^-1 M_A m_p.
-                let mut b = [0.0f64; NV];
-                for (bi, &a) in b.iter_mut().zip(&act).take(nact_c) {
-                    *bi = kp.get(usize::from(a)).copied().unwrap_or(0.0);
-                }
-                let (mut w, mut r) = chol_solve(&Ci, &b, nact_c);
-                // z = m_p - M_A' r: the component of m_p outside the active span.
-                let mut z = *mp;
-                self.sub_active(&mut z, &act, &r, nact_c);
-                let mut z2 = dot(&z, &z);
-                if z2 < REFINE2 {
-                    // Cancellation: z carries rounding of order eps cond(M_A)^2.
-                    // Project it once more (Gram-Schmidt "twice is enough"),
-                    // r2 = (M_A M_A')^-1 M_A z, z -= M_A' r2, r += r2.
-                    let mut b = [0.0f64; NV];
-                    for (bi, &a) in b.iter_mut().zip(&act).take(nact_c) {
-                        if let Some(ma) = self.mhat.get(usize::from(a)) {
-                            *bi = dot(ma, &z);
-                        }
-                    }
-                    let (w2, r2) = chol_solve(&Ci, &b, nact_c);
-                    self.sub_active(&mut z, &act, &r2, nact_c);
-                    for (ri, r2i) in r.iter_mut().zip(&r2) {
-                        *ri += r2i;
-                    }
-                    for (wi, w2i) in w.iter_mut().zip(&w2) {
-                        *wi += w2i;
-                    }
-                    z2 = dot(&z, &z);
-                }
-                // Partial (dual) step length t1 and the row to drop.
-                let mut t1 = f64::INFINITY;
-                let mut drop: Option<usize> = None;
-                let rmax = r[..nact_c].iter().fold(0.0f64, |a, b| a.max(b.abs()));
-                for i in 0..nact_c {
-                    if r[i] > 1e-14 * rmax.max(1.0) {
-                        let t = lam[i] / r[i];
-                        if t < t1 {
-                            t1 = t;
-                            drop = Some(i);
-                        }
-                    }
-                }
-                // Full (primal) step length t2 (|mhat_p| = 1).
-                // With NV rows active (independent) the span is everything.
-                let dependent = z2 <= tol_dep2 || nact_c >= NV;
-                let t2 = if dependent { f64::INFINITY } else { -s[p] / z2 };
-                if !(t1.is_finite() || t2.is_finite()) {
-                    if t1.is_nan() || t2.is_nan() {
-                        break 'outer QpStatus::NumericalError;
-                    }
-                    // m_p = M_A' r with every r_j <= 0: y_p = 1, y_A = -r.
-                    let mut neg_r = r;
-                    for y in neg_r.iter_mut() {
-                        *y = -*y;
-                    }
-                    farkas = Some((p, neg_r));
-                    break 'outer QpStatus::Infeasible;
-                }
-                let t = t1.min(t2);
-                iters += 1;
-                for i in 0..nact_c {
-                    lam[i] -= t * r[i];
-                }
-                u_new += t;
-                pending = Some((p, u_new));
-                if !dependent {
-                    // u moves by -t z: slack_i grows by t mhat_i . z
-                    // = t (K_ip - sum_j r_j K_i,A_j).
-                    for (si, &k) in s[..m].iter_mut().zip(&kp[..m]) {
-                        *si += t * k;
-                    }
-                    for (&a, &rj) in act.iter().zip(&r).take(nact_c) {
-                        if let Some(ka) = self.K.get(usize::from(a)) {
-                            let f = t * rj;
-                            for (si, &k) in s[..m].iter_mut().zip(&ka[..m]) {
-                                *si -= f * k;
-                            }
-                        }
-                    }
-                }
-                if t2 <= t1 {
-                    // Full step: p becomes active; C gains the row [w', |z|].
-                    let diag = libm::sqrt(z2);
-                    let (Some(row), Some(a), Some(l), Some(flag)) = (
-                        C.get_mut(nact_c),
-                        act.get_mut(nact_c),
-                        lam.get_mut(nact_c),
-                        blocked.get_mut(p),
-                    ) else {
-                        break 'outer QpStatus::NumericalError;
-                    };
-                    if !(diag > 0.0 && diag.is_finite()) {
-                        break 'outer QpStatus::NumericalError;
-                    }
-                    if diag < PIVOT_FALLBACK {
-                        // The normal equations would lose too much accuracy.
-                        return self.fallback(loaded, prefer, max_iter);
-                    }
-                    *row = w;
-                    row[nact_c] = diag;
-                    // C^-1 gains the row [-(C^-T w)' / |z|, 1 / |z|] = [-r', 1] / |z|.
-                    if let Some(ci) = Ci.get_mut(nact_c) {
-                        let inv = 1.0 / diag;
-                        for (c, rk) in ci.iter_mut().zip(&r) {
-                            *c = -rk * inv;
-                        }
-                        ci[nact_c] = inv;
-                    }
-                    *a = p as u16;
-                    *l = u_new;
-                    *flag = true;
-                    s[p] = 0.0;
-                    nact = nact_c + 1;
-                    pending = None;
-                    continue 'outer;
-                }
-                // Partial step: drop active row `l`, then retry the same p.
-                let Some((l, &row_l)) = drop.and_then(|l| Some((l, act.get(l)?))) else {
-                    break 'outer QpStatus::NumericalError;
-                };
-                if let Some(flag) = blocked.get_mut(usize::from(row_l)) {
-                    *flag = false;
-                }
-                chol_drop(&mut C, &mut Ci, nact_c, l);
-                let last = nact_c.saturating_sub(1);
-                for i in l..last {
-                    act[i] = act[i + 1];
-                    lam[i] = lam[i + 1];
-                }
-                lam[last] = 0.0;
-                nact = last;
-            }
+        let (mut C, mut Ci) = ([[0.0; NV]; NV], [[0.0; NV]; NV]);
+        let mut factor = Gram {
+            ldp: self,
+            s: loaded.s0,
+            C: &mut C,
+            Ci: &mut Ci,
+            tol_dep2: tol_dep * tol_dep,
+            w: [0.0; NV],
+            z2: 0.0,
+            dependent: false,
         };
-
-        let nact = nact.min(NV);
+        // Zero rows are never added: they start (and stay) blocked.
+        let Some(it) = active_set::iterate(&mut factor, self.m, self.zero, prefer, max_iter) else {
+            // The normal equations would lose too much accuracy.
+            return self.fallback(loaded, prefer, max_iter);
+        };
         // u = -M_A' lambda_A - u_new m_p (scaled rows, scaled multipliers).
         let mut u = [0.0f64; NV];
-        for (&a, &la) in act.iter().zip(&lam).take(nact) {
+        for (&a, &la) in it.act.iter().zip(&it.mult).take(it.nact) {
             if let Some(ma) = self.mhat.get(usize::from(a)) {
                 for (uk, mk) in u.iter_mut().zip(ma) {
                     *uk -= la * mk;
                 }
             }
         }
-        if let Some((p, un)) = pending
+        if let Some((p, un)) = it.adding
             && let Some(mp) = self.mhat.get(p)
         {
             for (uk, mk) in u.iter_mut().zip(mp) {
@@ -466,40 +281,12 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
         for (a, b) in uv.iter_mut().zip(&loaded.v) {
             *a -= b;
         }
-        sol.x = SVector::from(self.solver.linvt_mul(&uv));
-        sol.objective = 0.5 * (dot(&u, &u) - loaded.vv);
+        let x = self.solver.linvt_mul(&uv);
+        let objective = 0.5 * (dot(&u, &u) - loaded.vv);
         // Multipliers in the units of G: lambda_i = lambda_hat_i / |m_i|.
-        match farkas {
-            Some((p, neg_r)) => {
-                let scale = self.inv_mnorm.get(p).copied().unwrap_or(1.0);
-                if let Some(y) = sol.lambda.get_mut(p) {
-                    *y = 1.0;
-                }
-                for (&a, &y) in act.iter().zip(&neg_r).take(nact) {
-                    let a = usize::from(a);
-                    if let (Some(l), Some(&inv)) = (sol.lambda.get_mut(a), self.inv_mnorm.get(a)) {
-                        *l = (y * inv / scale).max(0.0);
-                    }
-                }
-            }
-            None => {
-                for (&a, &la) in act.iter().zip(&lam).take(nact) {
-                    let a = usize::from(a);
-                    if let (Some(l), Some(&inv)) = (sol.lambda.get_mut(a), self.inv_mnorm.get(a)) {
-                        *l = (la * inv).max(0.0);
-                    }
-                }
-            }
-        }
-        sol.active = act;
-        sol.n_active = nact;
-        sol.iterations = iters;
-        sol.status = if sol.x.iter().all(|v| v.is_finite()) && sol.objective.is_finite() {
-            status
-        } else {
-            QpStatus::NumericalError
-        };
-        sol
+        it.solution(x, objective, |i| {
+            self.inv_mnorm.get(i).copied().unwrap_or(1.0)
+        })
     }
 
     /// [`DualActiveSet::solve_prepared`] on the loaded QP: the answer for an
@@ -531,6 +318,156 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
     }
 }
 
+/// The active set of [`LdpSolver::solve`]: the Cholesky factor `C` of
+/// `M_A M_A'` (scaled rows) and its inverse, with the scaled slacks of all
+/// rows standing for the primal iterate `u`. The iteration itself is
+/// [`crate::active_set::iterate`].
+struct Gram<'a, const NV: usize, const NC: usize> {
+    /// The prepared rows, their Gram matrix and thresholds.
+    ldp: &'a LdpSolver<NV, NC>,
+    /// Scaled slacks `(d_i - m_i u) / |m_i|` of all rows.
+    s: [f64; NC],
+    /// Cholesky factor of `M_A M_A'`, row-major, zeros above the diagonal kept
+    /// exactly zero (the solves use full-length dots). The factors are the
+    /// caller's locals: their addresses go to [`chol_drop`], and an escaping
+    /// field would keep every other field of this struct in memory.
+    C: &'a mut [[f64; NV]; NV],
+    /// `C^-1`, lower triangular.
+    Ci: &'a mut [[f64; NV]; NV],
+    /// `tol_dependence^2`.
+    tol_dep2: f64,
+    /// `w = C^-1 M_A m_p` of the last direction: the new row of `C`.
+    w: [f64; NV],
+    /// `|z|^2`, `z = m_p - M_A' r` the component of the last row outside the
+    /// active span.
+    z2: f64,
+    /// The last row was linearly dependent on the active rows.
+    dependent: bool,
+}
+
+impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Gram<'_, NV, NC> {
+    #[inline(always)]
+    fn violation(&mut self, i: usize, blocked: bool) -> Option<f64> {
+        let (Some(&si), Some(&thr)) = (self.s.get(i), self.ldp.thr.get(i)) else {
+            return None;
+        };
+        if si >= 0.0 || blocked || si * si <= thr {
+            return None;
+        }
+        Some(if si.is_finite() { si } else { f64::NAN })
+    }
+
+    #[inline(always)]
+    fn direction(
+        &mut self,
+        p: usize,
+        act: &[u16; NV],
+        nact: usize,
+        r: &mut [f64; NV],
+    ) -> Option<f64> {
+        let ldp = self.ldp;
+        let (Some(mp), Some(kp), Some(&sp)) = (ldp.mhat.get(p), ldp.K.get(p), self.s.get(p)) else {
+            return None;
+        };
+        // w = C^-1 M_A m_p, r = C^-T w = (M_A M_A')^-1 M_A m_p.
+        let mut b = [0.0f64; NV];
+        for (bi, &a) in b.iter_mut().zip(act).take(nact) {
+            *bi = kp.get(usize::from(a)).copied().unwrap_or(0.0);
+        }
+        // Zero beyond `nact`: `w` becomes a row of the triangle `C`.
+        self.w = [0.0; NV];
+        chol_solve(self.Ci, &b, nact, &mut self.w, r);
+        // z = m_p - M_A' r: the component of m_p outside the active span.
+        let mut z = *mp;
+        ldp.sub_active(&mut z, act, r, nact);
+        let mut z2 = dot(&z, &z);
+        if z2 < REFINE2 {
+            // Cancellation: z carries rounding of order eps cond(M_A)^2.
+            // Project it once more (Gram-Schmidt "twice is enough"),
+            // r2 = (M_A M_A')^-1 M_A z, z -= M_A' r2, r += r2.
+            let mut b = [0.0f64; NV];
+            for (bi, &a) in b.iter_mut().zip(act).take(nact) {
+                if let Some(ma) = ldp.mhat.get(usize::from(a)) {
+                    *bi = dot(ma, &z);
+                }
+            }
+            let (mut w2, mut r2) = ([0.0f64; NV], [0.0f64; NV]);
+            chol_solve(self.Ci, &b, nact, &mut w2, &mut r2);
+            ldp.sub_active(&mut z, act, &r2, nact);
+            for (ri, r2i) in r.iter_mut().zip(&r2) {
+                *ri += r2i;
+            }
+            for (wi, w2i) in self.w.iter_mut().zip(&w2) {
+                *wi += w2i;
+            }
+            z2 = dot(&z, &z);
+        }
+        // Full (primal) step length t2 (|mhat_p| = 1).
+        // With NV rows active (independent) the span is everything.
+        let dependent = z2 <= self.tol_dep2 || nact >= NV;
+        let t2 = if dependent { f64::INFINITY } else { -sp / z2 };
+        self.z2 = z2;
+        self.dependent = dependent;
+        Some(t2)
+    }
+
+    #[inline(always)]
+    fn advance(&mut self, p: usize, t: f64, r: &[f64; NV], act: &[u16; NV], nact: usize) {
+        let m = self.ldp.m.min(NC);
+        let (false, Some(kp)) = (self.dependent, self.ldp.K.get(p)) else {
+            return;
+        };
+        // u moves by -t z: slack_i grows by t mhat_i . z
+        // = t (K_ip - sum_j r_j K_i,A_j).
+        for (si, &k) in self.s[..m].iter_mut().zip(&kp[..m]) {
+            *si += t * k;
+        }
+        for (&a, &rj) in act.iter().zip(r).take(nact) {
+            if let Some(ka) = self.ldp.K.get(usize::from(a)) {
+                let f = t * rj;
+                for (si, &k) in self.s[..m].iter_mut().zip(&ka[..m]) {
+                    *si -= f * k;
+                }
+            }
+        }
+    }
+
+    /// Appends the row `[w', |z|]` to `C` and `[-r', 1] / |z|` to `C^-1`;
+    /// asks for a restart when `|z| <` [`PIVOT_FALLBACK`].
+    #[inline(always)]
+    fn add(&mut self, p: usize, r: &[f64; NV], nact: usize) -> Result<(), AddError> {
+        let diag = libm::sqrt(self.z2);
+        let Some(row) = self.C.get_mut(nact) else {
+            return Err(AddError::Numerical);
+        };
+        if !(diag > 0.0 && diag.is_finite()) {
+            return Err(AddError::Numerical);
+        }
+        if diag < PIVOT_FALLBACK {
+            return Err(AddError::Restart);
+        }
+        *row = self.w;
+        row[nact] = diag;
+        // C^-1 gains the row [-(C^-T w)' / |z|, 1 / |z|] = [-r', 1] / |z|.
+        if let Some(ci) = self.Ci.get_mut(nact) {
+            let inv = 1.0 / diag;
+            for (c, rk) in ci.iter_mut().zip(r) {
+                *c = -rk * inv;
+            }
+            ci[nact] = inv;
+        }
+        if let Some(sp) = self.s.get_mut(p) {
+            *sp = 0.0;
+        }
+        Ok(())
+    }
+
+    #[inline(always)]
+    fn drop(&mut self, l: usize, nact: usize) {
+        chol_drop(self.C, self.Ci, nact, l);
+    }
+}
+
 /// A row whose component outside the span of the active rows is shorter than
 /// this (relative; the rows have unit norm), i.e. a row at an angle below
 /// about 1e-6 rad from that span yet not linearly dependent to
@@ -546,27 +483,27 @@ pub const PIVOT_FALLBACK: f64 = 1e-6;
 /// time.
 const REFINE2: f64 = 1e-2;
 
-/// `(w, r)` with `w = C^-1 b`, `r = C^-T w = (C C')^-1 b` on the leading
-/// `nact x nact` block, from the inverse factor `Ci = C^-1` (lower triangular,
-/// zeros above the diagonal): two matrix-vector products, no chain of
-/// dependent divisions or dot products as in substitution.
+/// `w = C^-1 b` and `r = C^-T w = (C C')^-1 b` on the leading `nact x nact`
+/// block, from the inverse factor `Ci = C^-1` (lower triangular, zeros above
+/// the diagonal): two matrix-vector products, no chain of dependent
+/// divisions or dot products as in substitution. `r` must come zeroed;
+/// entries `nact..` of `w` are left as they are.
 #[inline(always)]
 fn chol_solve<const NV: usize>(
     Ci: &[[f64; NV]; NV],
     b: &[f64; NV],
     nact: usize,
-) -> ([f64; NV], [f64; NV]) {
-    let mut w = [0.0f64; NV];
+    w: &mut [f64; NV],
+    r: &mut [f64; NV],
+) {
     for (wi, row) in w.iter_mut().zip(Ci).take(nact) {
         *wi = dot(row, b);
     }
-    let mut r = [0.0f64; NV];
     for (&wi, row) in w.iter().zip(Ci).take(nact) {
         for (rk, c) in r.iter_mut().zip(row) {
             *rk += wi * c;
         }
     }
-    (w, r)
 }
 
 /// Removes row `l` (of `nact`) from the Cholesky factor `C` of `M_A M_A'`:
@@ -584,8 +521,14 @@ fn chol_drop<const NV: usize>(
         return;
     }
     let last = nact - 1;
+    // Checked access (the optimiser does not prove `i + 1 < NV` on every
+    // target, see nopanic/); always in bounds.
     for i in l..last {
-        C[i] = C[i + 1];
+        if let Some(&next) = C.get(i + 1)
+            && let Some(row) = C.get_mut(i)
+        {
+            *row = next;
+        }
     }
     C[last] = [0.0; NV];
     Ci[last] = [0.0; NV];
@@ -623,446 +566,4 @@ fn chol_drop<const NV: usize>(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::qp::QpSettings;
-    use nalgebra::{Matrix2, SMatrix, Vector2};
-
-    /// Deterministic uniform numbers in [-1, 1) (64-bit LCG).
-    struct Rnd(u64);
-    impl Rnd {
-        fn next(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        }
-    }
-
-    /// Checks a Farkas certificate: y >= 0, |G'y| small, h'y < 0.
-    fn assert_certificate<const NV: usize, const NC: usize>(
-        qp: &DenseQp<NV, NC>,
-        y: &SVector<f64, NC>,
-    ) {
-        let mut gty = SVector::<f64, NV>::zeros();
-        let (mut hty, mut scale) = (0.0, 0.0f64);
-        for (i, (g, h)) in qp.rows().enumerate() {
-            assert!(y[i] >= 0.0);
-            gty += g * y[i];
-            hty += h * y[i];
-            scale = scale.max(y[i] * g.amax());
-        }
-        assert!(gty.amax() <= 1e-10 * (1.0 + scale), "G'y = {gty:?}");
-        assert!(hty < 0.0, "h'y = {hty}");
-    }
-
-    /// `(|G'y| / sum_i y_i |g_i|, h'y)` of a certificate `y >= 0`.
-    fn certificate_residual<const NV: usize, const NC: usize>(
-        qp: &DenseQp<NV, NC>,
-        y: &SVector<f64, NC>,
-    ) -> (f64, f64) {
-        let mut gty = SVector::<f64, NV>::zeros();
-        let (mut hty, mut scale) = (0.0, 0.0);
-        for (i, (g, h)) in qp.rows().enumerate() {
-            assert!(y[i] >= 0.0);
-            gty += g * y[i];
-            hty += h * y[i];
-            scale += y[i] * g.norm();
-        }
-        (if scale > 0.0 { gty.norm() / scale } else { 0.0 }, hty)
-    }
-
-    /// KKT conditions of a solution (stationarity, feasibility,
-    /// complementarity, signs), independent of either solver.
-    fn assert_kkt<const NV: usize, const NC: usize>(
-        s: &DualActiveSet<NV, NC>,
-        qp: &DenseQp<NV, NC>,
-        sol: &QpSolution<NV, NC>,
-    ) {
-        let mut stat = s.hessian() * sol.x + qp.q;
-        let scale = 1.0 + sol.lambda.amax() + qp.q.amax();
-        for (i, (g, h)) in qp.rows().enumerate() {
-            let slack = h - g.dot(&sol.x);
-            assert!(sol.lambda[i] >= 0.0);
-            assert!(
-                slack >= -1e-9 * g.norm().max(1.0),
-                "row {i} violated by {slack}"
-            );
-            assert!(
-                (sol.lambda[i] * slack).abs() < 1e-9 * scale,
-                "complementarity"
-            );
-            stat += g * sol.lambda[i];
-        }
-        assert!(stat.amax() < 1e-9 * scale, "stationarity {stat:?}");
-    }
-
-    /// The LDP path and `solve` on one QP: same status and iterations;
-    /// solved: x, objective and multipliers agree and satisfy KKT;
-    /// infeasible: both certificates are valid.
-    fn assert_same<const NV: usize, const NC: usize>(
-        s: &DualActiveSet<NV, NC>,
-        qp: &DenseQp<NV, NC>,
-        prefer: &[bool; NC],
-    ) -> QpStatus {
-        let a = s.solve(qp, prefer, 500);
-        let ldp = LdpSolver::prepare(s, qp);
-        let b = ldp.solve_qp(qp, prefer, 500);
-        assert_eq!(a.status, b.status, "{qp:?}");
-        assert_eq!(a.iterations, b.iterations);
-        match b.status {
-            QpStatus::Solved => {
-                assert_kkt(s, qp, &b);
-                let xs = a.x.amax().max(1.0);
-                assert!((a.x - b.x).amax() <= 1e-9 * xs, "{} vs {}", a.x, b.x);
-                let os = a.objective.abs().max(1.0);
-                assert!((a.objective - b.objective).abs() <= 1e-9 * os);
-                let ls = a.lambda.amax().max(1.0);
-                assert!((a.lambda - b.lambda).amax() <= 1e-8 * ls);
-                assert_eq!(a.active_set(), b.active_set());
-            }
-            QpStatus::Infeasible => {
-                assert_certificate(qp, &a.lambda);
-                assert_certificate(qp, &b.lambda);
-            }
-            other => panic!("unexpected status {other:?}"),
-        }
-        b.status
-    }
-
-    fn random_hessian<const NV: usize>(rnd: &mut Rnd, diagonal: bool) -> SMatrix<f64, NV, NV> {
-        if diagonal {
-            SMatrix::from_diagonal(&SVector::from_fn(|_, _| 0.1 + 10.0 * rnd.next().abs()))
-        } else {
-            let A = SMatrix::<f64, NV, NV>::from_fn(|_, _| rnd.next());
-            A.transpose() * A + SMatrix::identity() * 0.1
-        }
-    }
-
-    fn random_family<const NV: usize, const NC: usize>(seed: u64, count: usize) {
-        let mut rnd = Rnd(seed);
-        let (mut solved, mut infeasible) = (0, 0);
-        for k in 0..count {
-            let H = random_hessian::<NV>(&mut rnd, k % 2 == 0);
-            let s = DualActiveSet::<NV, NC>::new(&H, QpSettings::default()).unwrap();
-            let mut qp = DenseQp::<NV, NC>::with_q(SVector::from_fn(|_, _| 5.0 * rnd.next()));
-            for _ in 0..(4 + k % (NC - 3)) {
-                let g = SVector::<f64, NV>::from_fn(|_, _| rnd.next());
-                qp.push_row(&g, rnd.next() + 0.3).unwrap();
-            }
-            let mut prefer = [false; NC];
-            if k % 3 == 0 {
-                for p in prefer.iter_mut().take(qp.m) {
-                    *p = rnd.next() > 0.5;
-                }
-            }
-            match assert_same(&s, &qp, &prefer) {
-                QpStatus::Solved => solved += 1,
-                _ => infeasible += 1,
-            }
-        }
-        assert!(
-            solved > count / 4 && infeasible > count / 40,
-            "{solved} solved, {infeasible} infeasible"
-        );
-    }
-
-    #[test]
-    fn agrees_with_solve_on_random_qps_n6() {
-        random_family::<6, 24>(0x2545_f491_4f6c_dd1d, 600);
-    }
-
-    #[test]
-    fn agrees_with_solve_on_random_qps_n16() {
-        random_family::<16, 40>(0x9e37_79b9_7f4a_7c15, 300);
-    }
-
-    #[test]
-    fn one_fixed_g_many_q_h() {
-        // One preparation, many loads: every solve matches `solve`.
-        let mut rnd = Rnd(7);
-        let H = random_hessian::<6>(&mut rnd, false);
-        let s = DualActiveSet::<6, 16>::new(&H, QpSettings::default()).unwrap();
-        let mut qp = DenseQp::<6, 16>::default();
-        for _ in 0..16 {
-            let g = SVector::<f64, 6>::from_fn(|_, _| rnd.next());
-            qp.push_row(&g, 0.0).unwrap();
-        }
-        let ldp = LdpSolver::prepare(&s, &qp);
-        for _ in 0..200 {
-            qp.q = SVector::from_fn(|_, _| 5.0 * rnd.next());
-            qp.h = SVector::from_fn(|_, _| rnd.next() + 0.4);
-            let a = s.solve(&qp, &[false; 16], 200);
-            let b = ldp.solve(&ldp.load(&qp.q, &qp.h), &[false; 16], 200);
-            assert_eq!(a.status, b.status);
-            assert_eq!(a.iterations, b.iterations);
-            assert!((a.x - b.x).amax() <= 1e-9 * a.x.amax().max(1.0));
-        }
-    }
-
-    /// Random QPs built to be degenerate: duplicated, scaled, negated and
-    /// nearly parallel rows, zero rows, rows through one point, scales from
-    /// 1e-6 to 1e6. Every LDP result must be a valid solution or certificate
-    /// (or IterationLimit/NumericalError only where `solve` says the same), and
-    /// the status must match `solve`'s.
-    fn degenerate_family<const NV: usize, const NC: usize>(seed: u64, count: usize) -> usize {
-        let mut rnd = Rnd(seed);
-        let mut same_iters = 0;
-        for k in 0..count {
-            let H = random_hessian::<NV>(&mut rnd, k % 3 == 0);
-            let s = DualActiveSet::<NV, NC>::new(&H, QpSettings::default()).unwrap();
-            let mut qp = DenseQp::<NV, NC>::with_q(SVector::from_fn(|_, _| 5.0 * rnd.next()));
-            let x0 = SVector::<f64, NV>::from_fn(|_, _| rnd.next()); // a common point
-            while qp.m < NC {
-                let kind = (rnd.next().abs() * 7.0) as u32;
-                let last = qp.m.checked_sub(1).map(|i| qp.get_row(i).unwrap());
-                let (g, h) = match (kind, last) {
-                    (0, Some((g, h))) => (g, h), // duplicate
-                    (1, Some((g, h))) => {
-                        let c = 10f64.powf(3.0 * rnd.next());
-                        (g * c, h * c) // scaled copy
-                    }
-                    (2, Some((g, h))) => (-g, -h + 0.5 * rnd.next()), // opposite
-                    (3, Some((g, h))) => {
-                        let e = [1e-6, 1e-10, 1e-14][k % 3];
-                        (g + SVector::from_fn(|_, _| e * rnd.next()), h) // nearly parallel
-                    }
-                    (4, _) => (SVector::zeros(), rnd.next() + 0.2), // zero row
-                    (5, _) => {
-                        let g = SVector::<f64, NV>::from_fn(|_, _| rnd.next());
-                        let h = g.dot(&x0);
-                        (g, h) // through x0
-                    }
-                    _ => {
-                        let c = 10f64.powf(6.0 * rnd.next());
-                        let g = SVector::<f64, NV>::from_fn(|_, _| c * rnd.next());
-                        (g, c * (rnd.next() + 0.3))
-                    }
-                };
-                qp.push_row(&g, h).unwrap();
-            }
-            let a = s.solve(&qp, &[false; NC], 500);
-            let b = LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; NC], 500);
-            assert_eq!(a.status, b.status, "case {k}");
-            match b.status {
-                QpStatus::Solved => {
-                    let xs = a.x.amax().max(1.0);
-                    assert!(
-                        (a.x - b.x).amax() <= 1e-7 * xs,
-                        "case {k}: {} vs {}",
-                        a.x,
-                        b.x
-                    );
-                }
-                QpStatus::Infeasible => {
-                    // With nearly parallel rows `solve`'s certificate can be
-                    // inexact too: ours must be as good (to a factor 100).
-                    let (ra, ha) = certificate_residual(&qp, &a.lambda);
-                    let (rb, hb) = certificate_residual(&qp, &b.lambda);
-                    assert!(rb <= (100.0 * ra).max(1e-10), "case {k}: {rb:e} vs {ra:e}");
-                    assert!(hb < 0.0 || ha >= 0.0, "case {k}: h'y = {hb}");
-                }
-                _ => {}
-            }
-            same_iters += usize::from(a.iterations == b.iterations);
-        }
-        same_iters
-    }
-
-    #[test]
-    fn degenerate_random_qps_match_solve() {
-        let n6 = degenerate_family::<6, 24>(11, 400);
-        let n16 = degenerate_family::<16, 40>(12, 200);
-        // Rounding may change a tie between degenerate rows, so the paths may
-        // differ now and then; nearly always they are the same.
-        assert!(
-            n6 >= 380 && n16 >= 190,
-            "same iteration counts: {n6}/400, {n16}/200"
-        );
-    }
-
-    fn solver2() -> DualActiveSet<2, 8> {
-        DualActiveSet::new(&Matrix2::new(2.0, 0.0, 0.0, 2.0), QpSettings::default()).unwrap()
-    }
-
-    fn qp2(rows: &[([f64; 2], f64)]) -> DenseQp<2, 8> {
-        let mut qp = DenseQp::<2, 8>::with_q(Vector2::new(-2.0, -4.0));
-        for &(g, h) in rows {
-            qp.push_row(&Vector2::from(g), h).unwrap();
-        }
-        qp
-    }
-
-    #[test]
-    fn degenerate_rows() {
-        let s = solver2();
-        let dense =
-            DualActiveSet::<2, 8>::new(&Matrix2::new(3.0, 1.0, 1.0, 2.0), QpSettings::default())
-                .unwrap();
-        let cases: [&[([f64; 2], f64)]; 8] = [
-            // zero rows: satisfied, and one with h slightly negative but within tol
-            &[([0.0, 0.0], 1.0), ([1.0, 1.0], 1.0), ([0.0, 0.0], -1e-12)],
-            // duplicate rows (the second is linearly dependent once the first is active)
-            &[([1.0, 1.0], 1.0), ([1.0, 1.0], 1.0), ([2.0, 2.0], 2.0)],
-            // nearly parallel rows
-            &[
-                ([1.0, 1.0], 1.0),
-                ([1.0, 1.0 + 1e-13], 1.0),
-                ([1.0, 1.0 - 1e-9], 1.0),
-            ],
-            // three rows through the optimal vertex (degenerate vertex)
-            &[
-                ([1.0, 0.0], 0.0),
-                ([0.0, 1.0], 0.0),
-                ([1.0, 1.0], 0.0),
-                ([1.0, 2.0], 0.0),
-            ],
-            // a drop is needed
-            &[([1.0, 1.0], -2.0), ([0.0, 1.0], 0.0), ([1.0, 0.0], -1.0)],
-            // infeasible: opposite half-planes, and parallel duplicates of them
-            &[([1.0, 0.0], -1.0), ([-1.0, 0.0], -1.0), ([1.0, 0.0], -1.0)],
-            // infeasible through a zero row with a negative right-hand side
-            &[([1.0, 1.0], 1.0), ([0.0, 0.0], -1.0)],
-            // infeasible triangle, one irrelevant row
-            &[
-                ([0.0, 1.0], 5.0),
-                ([1.0, 1.0], -1.0),
-                ([-1.0, 0.0], 0.0),
-                ([0.0, -1.0], 0.0),
-            ],
-        ];
-        for s in [&s, &dense] {
-            for rows in cases {
-                let qp = qp2(rows);
-                assert_same(s, &qp, &[false; 8]);
-                assert_same(s, &qp, &[true; 8]);
-            }
-        }
-        let st: [QpStatus; 3] =
-            [5, 6, 7].map(|k| assert_same(&solver2(), &qp2(cases[k]), &[false; 8]));
-        assert!(st.iter().all(|s| s.is_infeasible()));
-        // The zero-row certificate is e_1.
-        let qp = qp2(cases[6]);
-        let sol = LdpSolver::prepare(&solver2(), &qp).solve_qp(&qp, &[false; 8], 10);
-        assert_eq!(sol.lambda[1], 1.0);
-    }
-
-    #[test]
-    fn ill_conditioned_active_set_falls_back_to_solve() {
-        // min |x - c|^2 with c = (1e6, 0.05) inside the thin cone of the
-        // normals of x <= 0 and x + 1e-7 y <= 0: both are active at (0, 0).
-        // The row added second has a component of 1e-7 < PIVOT_FALLBACK
-        // outside the first, so the result is `solve_prepared`'s, bit for bit.
-        let s = solver2();
-        let mut qp = qp2(&[([1.0, 0.0], 0.0), ([1.0, 1e-7], 0.0)]);
-        qp.q = Vector2::new(-2e6, -0.1);
-        let a = s.solve(&qp, &[false; 8], 10);
-        let b = LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; 8], 10);
-        assert_eq!(a.status, QpStatus::Solved);
-        assert_eq!((a.status, a.iterations), (b.status, b.iterations));
-        assert_eq!(a.x, b.x);
-        assert_eq!(a.lambda, b.lambda);
-        assert_eq!(a.n_active, 2);
-    }
-
-    #[test]
-    fn unconstrained_and_budget() {
-        let s = solver2();
-        let qp = qp2(&[]);
-        let sol = LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; 8], 10);
-        assert_eq!(sol.status, QpStatus::Solved);
-        assert_eq!(sol.iterations, 0);
-        assert!((sol.x - Vector2::new(1.0, 2.0)).amax() < 1e-14);
-        assert!((sol.objective + 5.0).abs() < 1e-14);
-        let qp = qp2(&[([1.0, 1.0], -2.0), ([0.0, 1.0], -1.0)]);
-        let ldp = LdpSolver::prepare(&s, &qp);
-        let full = ldp.solve_qp(&qp, &[false; 8], 10);
-        assert_eq!((full.status, full.iterations), (QpStatus::Solved, 2));
-        for budget in [0, 1] {
-            let a = s.solve(&qp, &[false; 8], budget);
-            let b = ldp.solve_qp(&qp, &[false; 8], budget);
-            assert_eq!(b.status, QpStatus::IterationLimit);
-            assert_eq!(b.iterations, budget);
-            // The last iterate is the one of `solve`.
-            assert!((a.x - b.x).amax() < 1e-12, "{} vs {}", a.x, b.x);
-        }
-    }
-
-    #[test]
-    fn bad_input_is_numerical_error() {
-        let s = solver2();
-        let good = qp2(&[([1.0, 1.0], 1.0)]);
-        let ldp = LdpSolver::prepare(&s, &good);
-        let err = |sol: QpSolution<2, 8>| assert_eq!(sol.status, QpStatus::NumericalError);
-        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
-            // q, h
-            err(ldp.solve(&ldp.load(&Vector2::new(bad, 0.0), &good.h), &[false; 8], 10));
-            let mut h = good.h;
-            h[0] = bad;
-            err(ldp.solve(&ldp.load(&good.q, &h), &[false; 8], 10));
-            // G
-            let qp = qp2(&[([1.0, bad], 1.0)]);
-            err(LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; 8], 10));
-        }
-        // A row whose squared norm overflows.
-        let qp = qp2(&[([1e200, 0.0], 1.0)]);
-        err(LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; 8], 10));
-        // Loaded data of a solver with another row count.
-        let other = LdpSolver::prepare(&s, &qp2(&[([1.0, 0.0], 0.0), ([0.0, 1.0], 0.0)]));
-        err(ldp.solve(&other.load(&good.q, &good.h), &[false; 8], 10));
-        // The placeholder solver (H = 0): defined status, no panic.
-        let ph = DualActiveSet::<2, 8>::PLACEHOLDER;
-        let sol = LdpSolver::prepare(&ph, &good).solve_qp(&good, &[false; 8], 10);
-        assert!(!sol.status.is_solved() || sol.x.iter().all(|v| v.is_finite()));
-    }
-
-    #[test]
-    fn chol_drop_keeps_the_gram_matrix() {
-        // Rows of a random 5 x 5 lower-triangular factor; drop each row in turn.
-        let mut rnd = Rnd(3);
-        for l in 0..5 {
-            let mut C = [[0.0f64; 5]; 5];
-            for (i, row) in C.iter_mut().enumerate() {
-                for (j, c) in row.iter_mut().enumerate().take(i + 1) {
-                    *c = if i == j {
-                        1.0 + rnd.next().abs()
-                    } else {
-                        rnd.next()
-                    };
-                }
-            }
-            let gram = |C: &[[f64; 5]; 5], i: usize, j: usize| dot(&C[i], &C[j]);
-            let before: [[f64; 5]; 5] =
-                core::array::from_fn(|i| core::array::from_fn(|j| gram(&C, i, j)));
-            // Ci = C^-1 by forward substitution, column by column.
-            let mut Ci = [[0.0f64; 5]; 5];
-            for j in 0..5 {
-                for i in j..5 {
-                    let mut acc = if i == j { 1.0 } else { 0.0 };
-                    for k in j..i {
-                        acc -= C[i][k] * Ci[k][j];
-                    }
-                    Ci[i][j] = acc / C[i][i];
-                }
-            }
-            chol_drop(&mut C, &mut Ci, 5, l);
-            let keep: [usize; 4] = core::array::from_fn(|k| if k < l { k } else { k + 1 });
-            for (a, &i) in keep.iter().enumerate() {
-                assert!(C[a][a] > 0.0);
-                for (b, &j) in keep.iter().enumerate() {
-                    if b > a {
-                        assert_eq!(C[a][b], 0.0, "upper triangle");
-                        assert_eq!(Ci[a][b], 0.0, "upper triangle of the inverse");
-                    }
-                    assert!((gram(&C, a, b) - before[i][j]).abs() < 1e-12);
-                    // (C Ci)_ab = delta_ab
-                    let cci: f64 = (0..4).map(|k| C[a][k] * Ci[k][b]).sum();
-                    assert!((cci - f64::from(u8::from(a == b))).abs() < 1e-12);
-                }
-            }
-            assert_eq!(Ci[4], [0.0; 5]);
-            assert_eq!(C[4], [0.0; 5]);
-        }
-    }
-}
+mod tests;

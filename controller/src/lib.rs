@@ -44,6 +44,7 @@
 #![deny(unsafe_code)]
 #![warn(clippy::std_instead_of_core, clippy::alloc_instead_of_core)]
 
+mod active_set;
 pub mod constraints;
 mod float;
 pub mod geometry;

@@ -17,7 +17,9 @@
 //! programs"). The factorisation of the active set is kept as `J = L^-T Q` and the
 //! upper-triangular `R` of `L^-1 N_A = Q [R; 0]`, updated by one Householder
 //! reflection on every add and by Givens rotations on every drop (no
-//! re-factorisation, no normal equations).
+//! re-factorisation, no normal equations; `qp/orthogonal.rs`). The iteration
+//! itself is written once for this solver and the least-distance path of
+//! [`crate::ldp`] (`active_set.rs`).
 //!
 //! Cost per solve: `m` row norms, one `H^-1` row norm (`|L^-1 g_i|`) per row the
 //! first time it is found violated, and per add or drop `O(m NV + NV^2)`. When `G`
@@ -43,6 +45,11 @@
 #![allow(non_snake_case)]
 
 use nalgebra::{ArrayStorage, SMatrix, SVector};
+
+use crate::active_set::{self, dot};
+
+mod orthogonal;
+use orthogonal::Orthogonal;
 
 /// Rows whose squared Euclidean norm is not above this (it is 0 for an exactly
 /// zero row or one whose squares underflow, `|g| < ~1e-162`) are treated as zero
@@ -450,7 +457,7 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         let mut rows = RowNorms::euclidean(qp);
         self.solve_with(
             qp,
-            qp.h.as_slice(),
+            &qp.h.data.0[0],
             &[false; NC],
             &mut rows,
             prefer,
@@ -481,7 +488,7 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
             *x = !on;
         }
         let mut rows = RowNorms::euclidean(qp);
-        self.solve_with(qp, h.as_slice(), &excluded, &mut rows, prefer, max_iter)
+        self.solve_with(qp, &h.data.0[0], &excluded, &mut rows, prefer, max_iter)
     }
 
     /// The per-row data of `qp`'s constraint matrix that [`DualActiveSet::solve`]
@@ -524,7 +531,7 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         }
         self.solve_with(
             qp,
-            qp.h.as_slice(),
+            &qp.h.data.0[0],
             &[false; NC],
             &mut rows,
             prefer,
@@ -554,26 +561,15 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
     fn solve_with(
         &self,
         qp: &DenseQp<NV, NC>,
-        h: &[f64],
+        h: &[f64; NC],
         excluded: &[bool; NC],
         norms: &mut RowNorms<NC>,
         prefer: &[bool; NC],
         max_iter: u32,
     ) -> QpSolution<NV, NC> {
         let m = qp.m.min(NC);
-        let mut sol = QpSolution {
-            x: SVector::zeros(),
-            lambda: SVector::zeros(),
-            objective: 0.0,
-            status: QpStatus::NumericalError,
-            iterations: 0,
-            active: [0; NV],
-            n_active: 0,
-        };
-        let rows = &qp.gt.data.0; // `rows[i]` is row `i` of `G`
         let q = &qp.q.data.0[0];
         if !norms.finite
-            || h.len() < m
             || !q.iter().all(|v| v.is_finite())
             || !h
                 .iter()
@@ -581,17 +577,9 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
                 .take(m)
                 .all(|(v, &out)| out || v.is_finite())
         {
-            return sol;
+            return active_set::stopped(QpStatus::NumericalError, None);
         }
         let tol = self.settings.tol_primal;
-        // Row norms: Euclidean for the scale-free violation test, and in the
-        // metric of H^-1 (|J0' g_i| = |L^-1 g_i|) for choosing which row to add:
-        // `s_i / |L^-1 g_i|` is the square root of the cost increase of enforcing
-        // row i alone, which picks rows that matter and roughly halves the
-        // add/drop count on the controller's QPs compared with the Euclidean rule.
-        // A row is violated when `slack / |g| < -tol`, tested without the square
-        // root as `slack < 0` and `slack^2 > tol^2 |g|^2`.
-        let tol2 = tol * tol;
         let RowNorms {
             norm2, inv_hnorm, ..
         } = norms;
@@ -601,307 +589,40 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
             .zip(excluded)
             .take(m)
             .position(|((&hi, &n2), &out)| !out && n2 <= ZERO_ROW2 && hi < -tol);
-        if let Some(i) = zero_infeasible {
+        if zero_infeasible.is_some() {
             // 0'x <= h with h < 0: nothing satisfies it; y = e_i certifies it.
-            sol.status = QpStatus::Infeasible;
-            if let Some(y) = sol.lambda.get_mut(i) {
-                *y = 1.0;
-            }
-            return sol;
+            return active_set::stopped(QpStatus::Infeasible, zero_infeasible);
         }
-
         // Unconstrained minimiser x = -J0 J0' q = -L^-T L^-1 q.
-        let mut J = self.Linv.transpose();
         let mut x = self.linvt_mul(&self.linv_mul(q));
         for v in x.iter_mut() {
             *v = -*v;
         }
+        let mut J = self.Linv.transpose();
         let mut R = SMatrix::<f64, NV, NV>::zeros();
-        let mut u = [0.0f64; NV]; // multipliers of the active rows
-        let mut act = [0u16; NV];
-        // Rows left out are never scanned: they start (and stay) marked as if
-        // active, but never enter `act`.
-        let mut is_active = *excluded;
-        let mut nact: usize = 0;
-        let mut iters: u32 = 0;
-        // On infeasibility: the row `p` and `-r` of the active rows (see below).
-        let mut farkas: Option<(usize, [f64; NV])> = None;
-
-        let status = 'outer: loop {
-            // Step 1: choose a violated row (marked rows first).
-            let mut best: Option<usize> = None;
-            let mut best_v = 0.0;
-            let mut best_pref: Option<usize> = None;
-            let mut best_pref_v = 0.0;
-            for i in 0..m {
-                // `i < m <= NC`: every index below is in bounds.
-                if is_active[i] || norm2[i] <= ZERO_ROW2 {
-                    continue;
-                }
-                let g = &rows[i];
-                let slack = h[i] - dot(g, &x);
-                if !slack.is_finite() {
-                    break 'outer QpStatus::NumericalError;
-                }
-                if slack >= 0.0 || slack * slack <= tol2 * norm2[i] {
-                    continue; // satisfied to tolerance
-                }
-                if inv_hnorm[i] == 0.0 {
-                    inv_hnorm[i] = self.inv_hnorm(g, norm2[i]);
-                }
-                let s = slack * inv_hnorm[i];
-                if s < best_v {
-                    best_v = s;
-                    best = Some(i);
-                }
-                if prefer[i] && s < best_pref_v {
-                    best_pref_v = s;
-                    best_pref = Some(i);
-                }
-            }
-            let p = match best_pref.or(best) {
-                None => break QpStatus::Solved,
-                Some(p) => p,
-            };
-            // `p < m <= NC`, so the row exists.
-            let (Some(gp), Some(&hp)) = (rows.get(p), h.get(p)) else {
-                break QpStatus::NumericalError;
-            };
-            let mut u_new: f64 = 0.0; // multiplier of p
-
-            // Step 2: move until p is satisfied (full step) or a row must be dropped.
-            loop {
-                if iters >= max_iter {
-                    break 'outer QpStatus::IterationLimit;
-                }
-                // Invariant: nact <= NV (a row is only added when `add_row` found
-                // room); the `min` states it for the compiler.
-                let nact_c = nact.min(NV);
-                // d = J' n_p with the GI normal n_p = -g_p (n_p'x >= -h_p).
-                let mut d = [0.0f64; NV];
-                for (dj, col) in d.iter_mut().zip(&J.data.0) {
-                    *dj = -dot(col, gp);
-                }
-                // z = J2 d2: component of the step outside the active span.
-                let mut z = [0.0f64; NV];
-                let mut d2sq = 0.0;
-                for (col, &dj) in J.data.0.iter().zip(d.iter()).skip(nact_c) {
-                    for (zk, c) in z.iter_mut().zip(col) {
-                        *zk += c * dj; // column j of J, j >= nact
-                    }
-                    d2sq += dj * dj;
-                }
-                // r = R^-1 d1 (back substitution on the active block). Counting
-                // down from the constant NV lets the compiler see every i < NV.
-                let mut r = [0.0f64; NV];
-                for i in (0..NV).rev().filter(|&i| i < nact_c) {
-                    let mut acc = d[i];
-                    for k in (i + 1)..nact_c {
-                        acc -= R[(i, k)] * r[k];
-                    }
-                    r[i] = acc / R[(i, i)];
-                }
-                // Partial (dual) step length t1 and the row to drop.
-                let mut t1 = f64::INFINITY;
-                let mut drop: Option<usize> = None;
-                let rmax = r[..nact_c].iter().fold(0.0f64, |a, b| a.max(b.abs()));
-                for i in 0..nact_c {
-                    if r[i] > 1e-14 * rmax.max(1.0) {
-                        let t = u[i] / r[i];
-                        if t < t1 {
-                            t1 = t;
-                            drop = Some(i);
-                        }
-                    }
-                }
-                // Full (primal) step length t2.
-                let dn = crate::float::sqrt(dot(&d, &d));
-                let dependent = crate::float::sqrt(d2sq) <= self.settings.tol_dependence * dn;
-                let slack_p = hp - dot(gp, &x); // < 0 while violated
-                let t2 = if dependent {
-                    f64::INFINITY
-                } else {
-                    -slack_p / d2sq
-                };
-                if !(t1.is_finite() || t2.is_finite()) {
-                    if t1.is_nan() || t2.is_nan() {
-                        break 'outer QpStatus::NumericalError;
-                    }
-                    // g_p = sum_j r_j g_act[j] with every r_j <= 0 (no row can be
-                    // dropped), and the active rows hold with equality while row
-                    // p is violated: y_p = 1, y_act[j] = -r_j is a Farkas
-                    // certificate (G'y = 0, h'y = h_p - g_p'x < 0).
-                    let mut neg_r = r;
-                    for y in neg_r.iter_mut() {
-                        *y = -*y;
-                    }
-                    farkas = Some((p, neg_r));
-                    break 'outer QpStatus::Infeasible;
-                }
-                let t = t1.min(t2);
-                iters += 1;
-                // Multipliers move along (-r, 1).
-                for i in 0..nact_c {
-                    u[i] -= t * r[i];
-                }
-                u_new += t;
-                if !dependent {
-                    for (xk, zk) in x.iter_mut().zip(&z) {
-                        *xk += t * zk;
-                    }
-                }
-                if t2 <= t1 {
-                    // Full step: p becomes active.
-                    // `add_row` fails when the active set is full (nact == NV).
-                    let (true, Some(a), Some(un), Some(flag)) = (
-                        self.add_row(&mut J, &mut R, nact_c, &d),
-                        act.get_mut(nact_c),
-                        u.get_mut(nact_c),
-                        is_active.get_mut(p),
-                    ) else {
-                        break 'outer QpStatus::NumericalError;
-                    };
-                    *a = p as u16;
-                    *un = u_new;
-                    *flag = true;
-                    nact = nact_c + 1;
-                    continue 'outer;
-                }
-                // Partial step: drop row `l` (< nact), then retry the same p.
-                let Some((l, &row_l)) = drop.and_then(|l| Some((l, act.get(l)?))) else {
-                    break 'outer QpStatus::NumericalError;
-                };
-                if let Some(flag) = is_active.get_mut(usize::from(row_l)) {
-                    *flag = false;
-                }
-                Self::drop_row(&mut J, &mut R, nact_c, l);
-                // Close the gap at `l` in the active list and its multipliers.
-                let last = nact_c.saturating_sub(1);
-                for i in l..last {
-                    act[i] = act[i + 1];
-                    u[i] = u[i + 1];
-                }
-                nact = last;
-            }
+        let (mut d, mut z) = ([0.0; NV], [0.0; NV]);
+        let mut factor = Orthogonal {
+            solver: self,
+            rows: &qp.gt.data.0,
+            h,
+            norm2,
+            inv_hnorm,
+            tol2: tol * tol,
+            x,
+            J: &mut J,
+            R: &mut R,
+            d: &mut d,
+            z: &mut z,
+            dependent: false,
         };
-
-        sol.x = SVector::from(x);
-        let nact = nact.min(NV);
-        // Multipliers of the active rows, or the Farkas certificate.
-        let weights = match farkas {
-            Some((p, neg_r)) => {
-                if let Some(y) = sol.lambda.get_mut(p) {
-                    *y = 1.0;
-                }
-                neg_r
-            }
-            None => u,
+        // Rows left out are never scanned: they start (and stay) blocked as if
+        // active, but never enter the active list.
+        let Some(it) = active_set::iterate(&mut factor, m, *excluded, prefer, max_iter) else {
+            // The orthogonal factor never asks for a restart.
+            return active_set::stopped(QpStatus::NumericalError, None);
         };
-        for (&row, &w) in act[..nact].iter().zip(&weights[..nact]) {
-            if let Some(lambda) = sol.lambda.get_mut(usize::from(row)) {
-                *lambda = w.max(0.0); // row < m <= NC: always there
-            }
-        }
-        sol.active = act;
-        sol.n_active = nact;
-        sol.iterations = iters;
-        sol.objective = self.objective(&qp.q, &sol.x);
-        sol.status = if x.iter().all(|v| v.is_finite()) && sol.objective.is_finite() {
-            status
-        } else {
-            QpStatus::NumericalError
-        };
-        sol
-    }
-
-    /// Adds a row whose `d = J' n` is given: one Householder reflection of
-    /// columns `nact..NV` of `J` maps `d[nact..]` to `alpha e_nact` (`|alpha| =
-    /// |d[nact..]|`), and `d[..nact], alpha` becomes column `nact` of `R`. Half
-    /// the flops of the equivalent Givens sweep, and all of them vectorise.
-    fn add_row(
-        &self,
-        J: &mut SMatrix<f64, NV, NV>,
-        R: &mut SMatrix<f64, NV, NV>,
-        nact: usize,
-        d: &[f64; NV],
-    ) -> bool {
-        if nact >= NV {
-            return false;
-        }
-        let mut d = *d;
-        let d0 = d[nact];
-        let mut tail = 0.0; // |d[nact+1..]|^2
-        for &dj in d.iter().skip(nact + 1) {
-            tail += dj * dj;
-        }
-        if tail > 0.0 {
-            // x = d[nact..], alpha = -sign(x_0) |x|, v = x - alpha e_0 (no
-            // cancellation), reflection I - beta v v' with beta = 2 / v'v and
-            // v'v = 2 |x| (|x| + |x_0|).
-            let norm = crate::float::sqrt(d0 * d0 + tail);
-            let alpha = if d0 >= 0.0 { -norm } else { norm };
-            let mut v = d;
-            v[nact] = d0 - alpha;
-            let beta = 1.0 / (norm * (norm + d0.abs()));
-            // J2 <- J2 (I - beta v v'): w = J2 v, then column j -= beta v_j w.
-            let mut w = [0.0f64; NV];
-            for (col, &vj) in J.data.0.iter().zip(&v).skip(nact) {
-                for (wk, c) in w.iter_mut().zip(col) {
-                    *wk += c * vj;
-                }
-            }
-            for (col, &vj) in J.data.0.iter_mut().zip(&v).skip(nact) {
-                let f = beta * vj;
-                for (c, wk) in col.iter_mut().zip(&w) {
-                    *c -= f * wk;
-                }
-            }
-            d[nact] = alpha;
-        }
-        // Column `nact` of R gets d[..=nact] (checked access, as in drop_row).
-        let Some(col) = R.data.0.get_mut(nact) else {
-            return false;
-        };
-        for (r, &di) in col.iter_mut().zip(&d).take(nact + 1) {
-            *r = di;
-        }
-        col.get(nact).is_some_and(|&r| r != 0.0 && r.is_finite())
-    }
-
-    /// Removes active row `l` (of `nact`): deletes column `l` of `R` and restores
-    /// the triangle with Givens rotations, applied to `J` as well.
-    fn drop_row(J: &mut SMatrix<f64, NV, NV>, R: &mut SMatrix<f64, NV, NV>, nact: usize, l: usize) {
-        let nact = nact.min(NV); // invariant of `solve`, stated for the compiler
-        for col in l..nact.saturating_sub(1) {
-            for i in 0..NV {
-                R[(i, col)] = R[(i, col + 1)];
-            }
-        }
-        if nact >= 1 {
-            for i in 0..NV {
-                R[(i, nact - 1)] = 0.0;
-            }
-        }
-        // Column `col` now has a sub-diagonal entry at row col+1 for col >= l.
-        for col in l..nact.saturating_sub(1) {
-            let (a, b) = (R[(col, col)], R[(col + 1, col)]);
-            if b == 0.0 {
-                continue;
-            }
-            let (c, s, rr) = givens(a, b);
-            R[(col, col)] = rr;
-            R[(col + 1, col)] = 0.0;
-            // Columns k in col+1..nact-1 (checked access: the optimiser cannot
-            // prove the bounds for every NV, see nopanic/).
-            for rk in R.data.0.iter_mut().take(nact - 1).skip(col + 1) {
-                if let [.., ra, rb] = rk.get_mut(..col + 2).unwrap_or(&mut []) {
-                    let (a, b) = (*ra, *rb);
-                    *ra = c * a + s * b;
-                    *rb = -s * a + c * b;
-                }
-            }
-            rotate_columns(J, col, c, s);
-        }
+        let x = factor.x;
+        it.solution(x, self.objective(&qp.q, &SVector::from(x)), |_| 1.0)
     }
 }
 
@@ -996,410 +717,5 @@ impl<const NV: usize, const NC: usize> QpBackend<NV, NC> for OwnSolver {
     }
 }
 
-/// `a . b` with four partial sums (independent add chains; `N` is a constant, so
-/// the loop unrolls and vectorises without bounds checks).
-#[inline(always)]
-pub(crate) fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
-    let mut acc = [0.0f64; 2];
-    for k in 0..N {
-        acc[k % 2] += a[k] * b[k];
-    }
-    acc[0] + acc[1]
-}
-
-/// Givens rotation `(c, s, r)` with `c a + s b = r`, `-s a + c b = 0`.
-pub(crate) fn givens(a: f64, b: f64) -> (f64, f64, f64) {
-    // sqrt(a^2 + b^2) is within an ulp or two of hypot; hypot (slower, no
-    // overflow or underflow) only when the squares leave the normal range.
-    let r2 = a * a + b * b;
-    let r = if (1e-280..=1e280).contains(&r2) {
-        crate::float::sqrt(r2)
-    } else {
-        libm::hypot(a, b)
-    };
-    if r == 0.0 {
-        return (1.0, 0.0, 0.0);
-    }
-    (a / r, b / r, r)
-}
-
-/// `[Ji, Jj] <- [c Ji + s Jj, -s Ji + c Jj]` for the adjacent columns `i` and
-/// `j = i + 1` (the callers' only use); with `j >= NV` nothing happens.
-fn rotate_columns<const NV: usize>(J: &mut SMatrix<f64, NV, NV>, i: usize, c: f64, s: f64) {
-    // Column-major storage: `J.data.0[k]` is column `k`.
-    if let Some([ji, jj]) = J.data.0.get_mut(i..i.saturating_add(2)) {
-        for k in 0..NV {
-            let (a, b) = (ji[k], jj[k]);
-            ji[k] = c * a + s * b;
-            jj[k] = -s * a + c * b;
-        }
-    }
-}
-
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use nalgebra::{Matrix2, Vector2};
-
-    fn solver2() -> DualActiveSet<2, 4> {
-        DualActiveSet::new(&Matrix2::new(2.0, 0.0, 0.0, 2.0), QpSettings::default()).unwrap()
-    }
-
-    #[test]
-    fn unconstrained_minimiser() {
-        let s = solver2();
-        let qp = DenseQp::<2, 4>::with_q(Vector2::new(-2.0, -4.0));
-        let sol = s.solve(&qp, &[false; 4], 10);
-        assert_eq!(sol.status, QpStatus::Solved);
-        assert!((sol.x - Vector2::new(1.0, 2.0)).amax() < 1e-14);
-        assert_eq!(sol.iterations, 0);
-        assert!((sol.objective - (-5.0)).abs() < 1e-14);
-    }
-
-    #[test]
-    fn one_active_bound_and_multiplier() {
-        // min (x-1)^2 + (y-2)^2, s.t. x + y <= 1  -> x = 0, y = 1, lambda = 2.
-        let s = solver2();
-        let mut qp = DenseQp::<2, 4>::with_q(Vector2::new(-2.0, -4.0));
-        qp.push_row(&Vector2::new(1.0, 1.0), 1.0).unwrap();
-        let sol = s.solve(&qp, &[false; 4], 10);
-        assert_eq!(sol.status, QpStatus::Solved);
-        assert!((sol.x - Vector2::new(0.0, 1.0)).amax() < 1e-14);
-        assert!((sol.lambda[0] - 2.0).abs() < 1e-14);
-        assert_eq!(sol.active_set(), &[0]);
-    }
-
-    #[test]
-    fn drop_happens_and_result_is_optimal() {
-        // min (x-1)^2 + (y-2)^2 with y <= 0 and x <= -1, x + y <= -2 (redundant-ish)
-        let s = solver2();
-        let mut qp = DenseQp::<2, 4>::with_q(Vector2::new(-2.0, -4.0));
-        qp.push_row(&Vector2::new(1.0, 1.0), -2.0).unwrap();
-        qp.push_row(&Vector2::new(0.0, 1.0), 0.0).unwrap();
-        qp.push_row(&Vector2::new(1.0, 0.0), -1.0).unwrap();
-        let sol = s.solve(&qp, &[false; 4], 20);
-        assert_eq!(sol.status, QpStatus::Solved);
-        // Projection of (1, 2) onto {x + y <= -2}: (-1.5, -0.5), which satisfies
-        // the other two rows.
-        assert!(
-            (sol.x - Vector2::new(-1.5, -0.5)).amax() < 1e-12,
-            "{:?}",
-            sol.x
-        );
-        assert!(qp.max_violation(&sol.x) < 1e-12);
-        let grad = s.hessian() * sol.x + qp.q;
-        let mut stat = grad;
-        for i in 0..qp.m {
-            stat += qp.row(i) * sol.lambda[i];
-            assert!(sol.lambda[i] >= 0.0);
-        }
-        assert!(stat.amax() < 1e-12);
-    }
-
-    /// Checks a Farkas certificate: y >= 0, |G'y| small, h'y < 0.
-    fn assert_certificate<const NV: usize, const NC: usize>(
-        qp: &DenseQp<NV, NC>,
-        y: &SVector<f64, NC>,
-    ) {
-        let mut gty = SVector::<f64, NV>::zeros();
-        let mut hty = 0.0;
-        for i in 0..qp.m {
-            assert!(y[i] >= 0.0);
-            gty += qp.row(i) * y[i];
-            hty += qp.h[i] * y[i];
-        }
-        assert!(gty.amax() <= 1e-12 * (1.0 + y.amax()), "G'y = {gty:?}");
-        assert!(hty < 0.0, "h'y = {hty}");
-    }
-
-    #[test]
-    fn infeasible_detected() {
-        let s = solver2();
-        let mut qp = DenseQp::<2, 4>::default();
-        qp.push_row(&Vector2::new(1.0, 0.0), -1.0).unwrap(); // x <= -1
-        qp.push_row(&Vector2::new(-1.0, 0.0), -1.0).unwrap(); // x >= 1
-        let sol = s.solve(&qp, &[false; 4], 20);
-        assert_eq!(sol.status, QpStatus::Infeasible);
-        assert_certificate(&qp, &sol.lambda);
-        // Three rows, one of them irrelevant: x + y <= -1, x >= 0, y >= 0.
-        let mut qp = DenseQp::<2, 4>::default();
-        qp.push_row(&Vector2::new(0.0, 1.0), 5.0).unwrap();
-        qp.push_row(&Vector2::new(1.0, 1.0), -1.0).unwrap();
-        qp.push_row(&Vector2::new(-1.0, 0.0), 0.0).unwrap();
-        qp.push_row(&Vector2::new(0.0, -1.0), 0.0).unwrap();
-        let sol = s.solve(&qp, &[false; 4], 20);
-        assert_eq!(sol.status, QpStatus::Infeasible);
-        assert_certificate(&qp, &sol.lambda);
-        assert_eq!(sol.lambda[0], 0.0);
-    }
-
-    #[test]
-    fn zero_row_negative_rhs_is_infeasible() {
-        let s = solver2();
-        let mut qp = DenseQp::<2, 4>::default();
-        qp.push_row(&Vector2::new(0.0, 0.0), -1.0).unwrap();
-        assert_eq!(s.solve(&qp, &[false; 4], 20).status, QpStatus::Infeasible);
-        let mut qp = DenseQp::<2, 4>::default();
-        qp.push_row(&Vector2::new(0.0, 0.0), 1.0).unwrap();
-        assert_eq!(s.solve(&qp, &[false; 4], 20).status, QpStatus::Solved);
-    }
-
-    #[test]
-    fn budget_is_respected() {
-        let s = solver2();
-        let mut qp = DenseQp::<2, 4>::with_q(Vector2::new(-2.0, -4.0));
-        qp.push_row(&Vector2::new(1.0, 1.0), -2.0).unwrap();
-        qp.push_row(&Vector2::new(0.0, 1.0), -1.0).unwrap();
-        let full = s.solve(&qp, &[false; 4], 10);
-        assert_eq!(full.status, QpStatus::Solved);
-        assert_eq!(full.iterations, 2);
-        let sol = s.solve(&qp, &[false; 4], 1);
-        assert_eq!(sol.status, QpStatus::IterationLimit);
-        assert_eq!(sol.iterations, 1);
-        let sol = s.solve(&qp, &[false; 4], 0);
-        assert_eq!(sol.status, QpStatus::IterationLimit);
-        assert_eq!(sol.iterations, 0);
-    }
-
-    #[test]
-    fn non_finite_data_is_numerical_error() {
-        let s = solver2();
-        let qp = DenseQp::<2, 4>::with_q(Vector2::new(f64::NAN, 0.0));
-        assert_eq!(
-            s.solve(&qp, &[false; 4], 10).status,
-            QpStatus::NumericalError
-        );
-    }
-
-    #[test]
-    fn bad_hessians_rejected() {
-        let e =
-            DualActiveSet::<2, 4>::new(&Matrix2::new(1.0, 0.0, 0.0, -1.0), QpSettings::default());
-        assert_eq!(e.unwrap_err(), HessianError::NotPositiveDefinite);
-        let e =
-            DualActiveSet::<2, 4>::new(&Matrix2::new(1.0, 0.5, 0.0, 1.0), QpSettings::default());
-        assert_eq!(e.unwrap_err(), HessianError::NotSymmetric);
-        // Every pair is compared: an asymmetry in any one off-diagonal pair of a
-        // 6 x 6 Hessian is found, on either side of the diagonal.
-        for (i, j) in [(4, 2), (2, 4), (5, 0), (0, 5), (1, 0)] {
-            let mut h = SMatrix::<f64, 6, 6>::identity() * 2.0;
-            h[(i, j)] = 1e-6;
-            let e = DualActiveSet::<6, 4>::new(&h, QpSettings::default());
-            assert_eq!(e.unwrap_err(), HessianError::NotSymmetric, "({i}, {j})");
-        }
-        let e = DualActiveSet::<2, 4>::new(
-            &Matrix2::new(f64::NAN, 0.0, 0.0, 1.0),
-            QpSettings::default(),
-        );
-        assert_eq!(e.unwrap_err(), HessianError::NotFinite);
-    }
-
-    #[test]
-    fn prepared_rows_give_the_same_solve() {
-        // A non-diagonal Hessian (dense path) and the diagonal one (fast path).
-        let dense =
-            DualActiveSet::<2, 4>::new(&Matrix2::new(3.0, 1.0, 1.0, 2.0), QpSettings::default())
-                .unwrap();
-        for s in [dense, solver2()] {
-            let mut qp = DenseQp::<2, 4>::with_q(Vector2::new(-2.0, -4.0));
-            qp.push_row(&Vector2::new(1.0, 1.0), -2.0).unwrap();
-            qp.push_row(&Vector2::new(0.0, 1.0), 0.0).unwrap();
-            qp.push_row(&Vector2::new(1.0, 0.0), -1.0).unwrap();
-            let rows = s.prepare_rows(&qp);
-            let cold = s.solve(&qp, &[false; 4], 20);
-            assert_eq!(cold.status, QpStatus::Solved);
-            // KKT: H x + q + G' lambda = 0, lambda >= 0, rows hold.
-            let mut stat = s.hessian() * cold.x + qp.q;
-            for i in 0..qp.m {
-                stat += qp.row(i) * cold.lambda[i];
-                assert!(cold.lambda[i] >= 0.0);
-            }
-            assert!(stat.amax() < 1e-12, "{stat:?}");
-            assert!(qp.max_violation(&cold.x) < 1e-12);
-            // Same G, other h and q: the prepared rows still apply.
-            qp.h[0] = -3.0;
-            qp.q = Vector2::new(1.0, -1.0);
-            let a = s.solve(&qp, &[false; 4], 20);
-            let b = s.solve_prepared(&qp, &rows, &[false; 4], 20);
-            assert_eq!(a.status, b.status);
-            assert_eq!(a.iterations, b.iterations);
-            assert_eq!(a.x, b.x);
-            // Rows prepared for another row count are refused.
-            qp.push_row(&Vector2::new(-1.0, 0.0), 5.0).unwrap();
-            let c = s.solve_prepared(&qp, &rows, &[false; 4], 20);
-            assert_eq!(c.status, QpStatus::NumericalError);
-        }
-    }
-
-    /// KKT conditions of a solution, or the certificate of an infeasible QP.
-    fn assert_kkt<const NV: usize, const NC: usize>(
-        s: &DualActiveSet<NV, NC>,
-        qp: &DenseQp<NV, NC>,
-        sol: &QpSolution<NV, NC>,
-    ) {
-        match sol.status {
-            QpStatus::Solved => {
-                let mut stat = s.hessian() * sol.x + qp.q;
-                for i in 0..qp.m {
-                    let (g, h) = qp.get_row(i).unwrap();
-                    let slack = h - g.dot(&sol.x);
-                    assert!(sol.lambda[i] >= 0.0);
-                    assert!(slack >= -1e-9, "row {i} violated by {slack}");
-                    assert!((sol.lambda[i] * slack).abs() < 1e-9, "complementarity");
-                    stat += g * sol.lambda[i];
-                }
-                assert!(stat.amax() < 1e-9, "stationarity {stat:?}");
-            }
-            QpStatus::Infeasible => assert_certificate(qp, &sol.lambda),
-            other => panic!("unexpected status {other:?}"),
-        }
-    }
-
-    /// Deterministic pseudo-random numbers in [-1, 1) (64-bit LCG, top bits).
-    fn uniform(seed: u64) -> impl FnMut() -> f64 {
-        let mut state = seed;
-        move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (state >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-        }
-    }
-
-    #[test]
-    fn diagonal_and_dense_hessians_satisfy_kkt_on_random_qps() {
-        // Deterministic pseudo-random QPs (64-bit LCG), both Hessian code paths.
-        let mut rnd = uniform(0x2545_f491_4f6c_dd1d);
-        let (mut solved, mut infeasible) = (0, 0);
-        for k in 0..400 {
-            let H = if k % 2 == 0 {
-                SMatrix::<f64, 6, 6>::from_diagonal(&SVector::from_fn(|_, _| {
-                    0.1 + 10.0 * rnd().abs()
-                }))
-            } else {
-                let A = SMatrix::<f64, 6, 6>::from_fn(|_, _| rnd());
-                A.transpose() * A + SMatrix::identity() * 0.1
-            };
-            let s = DualActiveSet::<6, 24>::new(&H, QpSettings::default()).unwrap();
-            assert_eq!(s.linv_diag, k % 2 == 0);
-            let mut qp = DenseQp::<6, 24>::with_q(SVector::from_fn(|_, _| 5.0 * rnd()));
-            for _ in 0..(4 + k % 20) {
-                let g = SVector::<f64, 6>::from_fn(|_, _| rnd());
-                qp.push_row(&g, rnd() + 0.3).unwrap();
-            }
-            let sol = s.solve(&qp, &[false; 24], 200);
-            assert_kkt(&s, &qp, &sol);
-            let rows = s.prepare_rows(&qp);
-            let prepared = s.solve_prepared(&qp, &rows, &[false; 24], 200);
-            assert_eq!(prepared.x, sol.x);
-            solved += usize::from(sol.status.is_solved());
-            infeasible += usize::from(sol.status.is_infeasible());
-        }
-        // Both outcomes are exercised.
-        assert!(
-            solved > 100 && infeasible > 10,
-            "{solved} solved, {infeasible} infeasible"
-        );
-    }
-
-    /// `solve_selected` (in place) is bit for bit `solve` on the compacted QP,
-    /// and so is the provided `QpBackend::solve_selected` (which compacts),
-    /// with multipliers, active set and warm-start marks mapped between the two
-    /// row numberings; a non-finite right-hand side of a left-out row is
-    /// ignored.
-    #[test]
-    fn solve_selected_is_solve_on_the_selected_rows() {
-        struct Compacting;
-        impl QpBackend<6, 24> for Compacting {
-            fn solve_qp(
-                &mut self,
-                solver: &DualActiveSet<6, 24>,
-                qp: &DenseQp<6, 24>,
-                prefer: &[bool; 24],
-                max_iter: u32,
-            ) -> QpSolution<6, 24> {
-                solver.solve(qp, prefer, max_iter)
-            }
-        }
-        let mut rnd = uniform(0x0bad_5eed_1234_5678);
-        let (mut solved, mut infeasible) = (0, 0);
-        for k in 0..400 {
-            let H = SMatrix::<f64, 6, 6>::identity() * 2.0;
-            let s = DualActiveSet::<6, 24>::new(&H, QpSettings::default()).unwrap();
-            let mut qp = DenseQp::<6, 24>::with_q(SVector::from_fn(|_, _| 5.0 * rnd()));
-            let mut h = SVector::<f64, 24>::zeros();
-            let mut enabled = [false; 24];
-            let mut prefer = [false; 24];
-            let mut sub = DenseQp::<6, 24>::with_q(qp.q);
-            let mut sub_prefer = [false; 24];
-            let mut orig = [0usize; 24];
-            for i in 0..(4 + k % 20) {
-                let g = SVector::<f64, 6>::from_fn(|_, _| rnd());
-                qp.push_row(&g, 7.0).unwrap();
-                enabled[i] = rnd() < 0.5;
-                prefer[i] = rnd() < -0.6;
-                h[i] = if enabled[i] { rnd() + 0.3 } else { f64::NAN };
-                if enabled[i] {
-                    orig[sub.m] = i;
-                    sub_prefer[sub.m] = prefer[i];
-                    sub.push_row(&g, h[i]).unwrap();
-                }
-            }
-            let want = s.solve(&sub, &sub_prefer, 200);
-            for got in [
-                s.solve_selected(&qp, &h, &enabled, &prefer, 200),
-                Compacting.solve_selected(&s, &qp, &h, &enabled, &prefer, 200),
-            ] {
-                assert_eq!(got.status, want.status);
-                assert_eq!(got.iterations, want.iterations);
-                assert_eq!(got.x.map(f64::to_bits), want.x.map(f64::to_bits));
-                assert_eq!(got.objective.to_bits(), want.objective.to_bits());
-                let mut lambda = SVector::<f64, 24>::zeros();
-                for j in 0..sub.m {
-                    lambda[orig[j]] = want.lambda[j];
-                }
-                assert_eq!(got.lambda.map(f64::to_bits), lambda.map(f64::to_bits));
-                assert_eq!(got.n_active, want.n_active);
-                for (&g, &w) in got.active_set().iter().zip(want.active_set()) {
-                    assert_eq!(usize::from(g), orig[usize::from(w)]);
-                }
-            }
-            solved += usize::from(want.status.is_solved());
-            infeasible += usize::from(want.status.is_infeasible());
-        }
-        assert!(
-            solved > 100 && infeasible > 10,
-            "{solved} solved, {infeasible} infeasible"
-        );
-    }
-
-    #[test]
-    fn overflowing_row_norm_is_numerical_error() {
-        let s = solver2();
-        let mut qp = DenseQp::<2, 4>::default();
-        qp.push_row(&Vector2::new(1e200, 0.0), 1.0).unwrap();
-        assert_eq!(
-            s.solve(&qp, &[false; 4], 10).status,
-            QpStatus::NumericalError
-        );
-    }
-
-    #[test]
-    fn warm_start_marks_do_not_change_solution() {
-        let s = solver2();
-        let mut qp = DenseQp::<2, 4>::with_q(Vector2::new(-2.0, -4.0));
-        qp.push_row(&Vector2::new(1.0, 1.0), -2.0).unwrap();
-        qp.push_row(&Vector2::new(0.0, 1.0), 0.0).unwrap();
-        qp.push_row(&Vector2::new(1.0, 0.0), -1.0).unwrap();
-        let cold = s.solve(&qp, &[false; 4], 20);
-        // Wrong guesses cost iterations but not accuracy.
-        let wrong = s.solve(&qp, &[false, true, true, false], 20);
-        assert_eq!(wrong.status, QpStatus::Solved);
-        assert!((cold.x - wrong.x).amax() < 1e-12);
-        assert!(wrong.iterations > cold.iterations);
-        // The right guess is never slower.
-        let right = s.solve(&qp, &[true, false, false, false], 20);
-        assert!((cold.x - right.x).amax() < 1e-12);
-        assert!(right.iterations <= cold.iterations);
-    }
-}
+mod tests;

@@ -1,0 +1,356 @@
+//! The Goldfarb–Idnani dual active-set iteration, written once for both
+//! representations of the active set: the orthogonal factor `J = L^-T Q`,
+//! `R` of [`DualActiveSet::solve`](crate::qp::DualActiveSet::solve)
+//! (`qp.rs`) and the Cholesky factor of `M_A M_A'` of
+//! [`LdpSolver::solve`](crate::ldp::LdpSolver::solve) (`ldp.rs`).
+//!
+//! [`iterate`] holds everything the two share: the choice of the row to add
+//! (most violated in the metric of `H^-1`, marked rows first), the budget, the
+//! partial (dual) step length with its ratio test and the row to drop, the
+//! choice between a partial and a full step, the multiplier update, the active
+//! list and its add/drop bookkeeping, the termination and status, and the
+//! Farkas certificate when no multiplier can decrease. What depends on the
+//! representation is behind [`ActiveSetFactor`]: how a row's violation is
+//! measured, how the step direction `r = (N_A' H^-1 N_A)^-1 N_A' H^-1 n_p`
+//! and the full step length are found, how the iterate moves, and how an add
+//! or a drop updates the factor. [`Iterate::solution`] turns the result into
+//! a [`QpSolution`] (multipliers and certificate in the units of `G`).
+//!
+//! Speed: [`iterate`] and the hot methods of both factors are
+//! `#[inline(always)]`, so each solver compiles to one function as when the
+//! loop was written out in each (see `docs/solvers.md`, "One iteration for
+//! both representations", for the measurements). The state shared by the loop
+//! is only the active list, its multipliers, the direction `r` (length `NV`)
+//! and the flags of blocked rows (length `NC`); a solver generic over nalgebra
+//! dimensions would make these its storage types and the trait generic over
+//! the same dimensions, the loop itself unchanged.
+
+use nalgebra::SVector;
+
+use crate::qp::{QpSolution, QpStatus};
+
+/// Why [`ActiveSetFactor::add`] did not add the row.
+pub(crate) enum AddError {
+    /// The factor could not take the row (full, zero or non-finite pivot).
+    Numerical,
+    /// The factor would lose too much accuracy: the caller restarts with
+    /// another representation ([`iterate`] returns `None`).
+    Restart,
+}
+
+/// One representation of the active set and of the primal iterate, as the
+/// dual iteration of [`iterate`] needs it. Active rows are numbered `0..nact`
+/// in the order of the active list `act`.
+pub(crate) trait ActiveSetFactor<const NV: usize> {
+    /// The violation of row `i` (`i < m`) at the current iterate: `None` when
+    /// the row is `blocked` (active, left out or a zero row; the
+    /// representation tests this where it is cheapest: before a dot product,
+    /// or after the sign of a stored slack) or holds to the primal tolerance,
+    /// else its (negative) slack in the metric of `H^-1`,
+    /// `slack_i / |L^-1 g_i|` (the most negative is added), or NaN when the
+    /// slack is not finite (the solve stops with
+    /// [`QpStatus::NumericalError`]). An `Option` with early returns keeps the
+    /// common case, a row that holds, one compare and branch (a three-way
+    /// enum was compiled branch-free and made the scan 4x longer).
+    fn violation(&mut self, i: usize, blocked: bool) -> Option<f64>;
+
+    /// The step for adding row `p` with `nact` active rows `act`: writes the
+    /// dual direction into `r` (entries `0..nact`, the change of the active
+    /// multipliers per unit multiplier of `p` is `-r`; `r` comes zeroed) and
+    /// returns the full (primal) step length `t2` (infinite when `p`'s normal
+    /// lies in the span of the active normals). `None` when row `p` does not
+    /// exist. The factor keeps what [`ActiveSetFactor::advance`] and
+    /// [`ActiveSetFactor::add`] need.
+    fn direction(
+        &mut self,
+        p: usize,
+        act: &[u16; NV],
+        nact: usize,
+        r: &mut [f64; NV],
+    ) -> Option<f64>;
+
+    /// Moves the primal iterate by a step of length `t` along the direction of
+    /// the last [`ActiveSetFactor::direction`] (nothing when `p` was
+    /// dependent).
+    fn advance(&mut self, p: usize, t: f64, r: &[f64; NV], act: &[u16; NV], nact: usize);
+
+    /// Appends row `p` as active row `nact` after a full step.
+    fn add(&mut self, p: usize, r: &[f64; NV], nact: usize) -> Result<(), AddError>;
+
+    /// Removes active row `l` of `nact`.
+    fn drop(&mut self, l: usize, nact: usize);
+}
+
+/// Where [`iterate`] stopped.
+pub(crate) struct Iterate<const NV: usize> {
+    /// Outcome of the iteration (before the finiteness check of the result).
+    pub status: QpStatus,
+    /// Active rows; the first `nact` are valid.
+    pub act: [u16; NV],
+    /// Multipliers of the active rows, in the representation's scaling.
+    pub mult: [f64; NV],
+    /// Number of active rows (`<= NV`).
+    pub nact: usize,
+    /// Adds plus drops.
+    pub iters: u32,
+    /// On [`QpStatus::Infeasible`]: the row that could not be added and `-r`,
+    /// the certificate's weights of the active rows.
+    pub farkas: Option<(usize, [f64; NV])>,
+    /// The row being added when the iteration stopped, with its multiplier so
+    /// far (part of the dual iterate; `None` after a completed add).
+    pub adding: Option<(usize, f64)>,
+}
+
+/// The dual active-set iteration (Goldfarb & Idnani 1983) on the `m` rows of
+/// `factor`, starting from the unconstrained minimiser with no active row:
+/// rows with `blocked[i]` are never added (left out, or zero rows),
+/// `prefer[i]` marks rows to add first among the violated ones, at most
+/// `max_iter` adds plus drops. `None` when [`ActiveSetFactor::add`] asked for
+/// a restart.
+#[inline(always)]
+pub(crate) fn iterate<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
+    factor: &mut F,
+    m: usize,
+    mut blocked: [bool; NC],
+    prefer: &[bool; NC],
+    max_iter: u32,
+) -> Option<Iterate<NV>> {
+    let m = m.min(NC);
+    let mut mult = [0.0f64; NV];
+    let mut act = [0u16; NV];
+    let mut nact: usize = 0;
+    let mut iters: u32 = 0;
+    let mut farkas: Option<(usize, [f64; NV])> = None;
+    let mut adding: Option<(usize, f64)> = None;
+
+    let status = 'outer: loop {
+        // Step 1: the most violated row in the H^-1 metric (marked rows first).
+        let mut best: Option<usize> = None;
+        let mut best_v = 0.0;
+        let mut best_pref: Option<usize> = None;
+        let mut best_pref_v = 0.0;
+        for i in 0..m {
+            // `i < m <= NC`: every index below is in bounds.
+            let Some(s) = factor.violation(i, blocked[i]) else {
+                continue;
+            };
+            if s.is_nan() {
+                break 'outer QpStatus::NumericalError;
+            }
+            if s < best_v {
+                best_v = s;
+                best = Some(i);
+            }
+            if prefer[i] && s < best_pref_v {
+                best_pref_v = s;
+                best_pref = Some(i);
+            }
+        }
+        let p = match best_pref.or(best) {
+            None => break QpStatus::Solved,
+            Some(p) => p,
+        };
+        adding = Some((p, 0.0));
+        let mut u_new: f64 = 0.0; // multiplier of p
+
+        // Step 2: move until p holds (full step) or a row must be dropped.
+        loop {
+            if iters >= max_iter {
+                break 'outer QpStatus::IterationLimit;
+            }
+            // Invariant: nact <= NV (a row is only added when there is room);
+            // the `min` states it for the compiler.
+            let nact_c = nact.min(NV);
+            let mut r = [0.0f64; NV];
+            let Some(t2) = factor.direction(p, &act, nact_c, &mut r) else {
+                break 'outer QpStatus::NumericalError;
+            };
+            // Partial (dual) step length t1 and the row to drop.
+            let mut t1 = f64::INFINITY;
+            let mut drop: Option<usize> = None;
+            let rmax = r[..nact_c].iter().fold(0.0f64, |a, b| a.max(b.abs()));
+            for i in 0..nact_c {
+                if r[i] > 1e-14 * rmax.max(1.0) {
+                    let t = mult[i] / r[i];
+                    if t < t1 {
+                        t1 = t;
+                        drop = Some(i);
+                    }
+                }
+            }
+            if !(t1.is_finite() || t2.is_finite()) {
+                if t1.is_nan() || t2.is_nan() {
+                    break 'outer QpStatus::NumericalError;
+                }
+                // n_p = sum_j r_j n_act[j] with every r_j <= 0 (no row can be
+                // dropped), and the active rows hold with equality while row
+                // p is violated: y_p = 1, y_act[j] = -r_j is a Farkas
+                // certificate (G'y = 0, h'y = h_p - g_p'x < 0).
+                let mut neg_r = r;
+                for y in neg_r.iter_mut() {
+                    *y = -*y;
+                }
+                farkas = Some((p, neg_r));
+                break 'outer QpStatus::Infeasible;
+            }
+            let t = t1.min(t2);
+            iters += 1;
+            // Multipliers move along (-r, 1).
+            for i in 0..nact_c {
+                mult[i] -= t * r[i];
+            }
+            u_new += t;
+            adding = Some((p, u_new));
+            factor.advance(p, t, &r, &act, nact_c);
+            if t2 <= t1 {
+                // Full step: p becomes active.
+                match factor.add(p, &r, nact_c) {
+                    Ok(()) => {}
+                    Err(AddError::Numerical) => break 'outer QpStatus::NumericalError,
+                    Err(AddError::Restart) => return None,
+                }
+                let (Some(a), Some(un), Some(flag)) = (
+                    act.get_mut(nact_c),
+                    mult.get_mut(nact_c),
+                    blocked.get_mut(p),
+                ) else {
+                    break 'outer QpStatus::NumericalError;
+                };
+                *a = p as u16;
+                *un = u_new;
+                *flag = true;
+                nact = nact_c + 1;
+                adding = None;
+                continue 'outer;
+            }
+            // Partial step: drop active row `l` (< nact), then retry the same p.
+            let Some((l, &row_l)) = drop.and_then(|l| Some((l, act.get(l)?))) else {
+                break 'outer QpStatus::NumericalError;
+            };
+            if let Some(flag) = blocked.get_mut(usize::from(row_l)) {
+                *flag = false;
+            }
+            factor.drop(l, nact_c);
+            // Close the gap at `l` in the active list and its multipliers.
+            let last = nact_c.saturating_sub(1);
+            for i in l..last {
+                act[i] = act[i + 1];
+                mult[i] = mult[i + 1];
+            }
+            nact = last;
+        }
+    };
+    Some(Iterate {
+        status,
+        act,
+        mult,
+        nact: nact.min(NV),
+        iters,
+        farkas,
+        adding,
+    })
+}
+
+impl<const NV: usize> Iterate<NV> {
+    /// The solution with primal `x` and its objective: the multipliers (or
+    /// the Farkas certificate, whose entry of the row that could not be added
+    /// is 1) in the units of `G`, row `i`'s multiplier being
+    /// `scale(i)` times the representation's; negative rounding clipped to 0.
+    /// The status becomes [`QpStatus::NumericalError`] when `x` or the
+    /// objective is not finite.
+    #[inline(always)]
+    pub(crate) fn solution<const NC: usize>(
+        &self,
+        x: [f64; NV],
+        objective: f64,
+        scale: impl Fn(usize) -> f64,
+    ) -> QpSolution<NV, NC> {
+        let mut lambda = SVector::<f64, NC>::zeros();
+        let nact = self.nact.min(NV);
+        match self.farkas {
+            Some((p, neg_r)) => {
+                let sp = scale(p);
+                if let Some(y) = lambda.get_mut(p) {
+                    *y = 1.0;
+                }
+                for (&a, &y) in self.act.iter().zip(&neg_r).take(nact) {
+                    let a = usize::from(a);
+                    if let Some(l) = lambda.get_mut(a) {
+                        *l = (y * scale(a) / sp).max(0.0);
+                    }
+                }
+            }
+            None => {
+                for (&a, &w) in self.act.iter().zip(&self.mult).take(nact) {
+                    let a = usize::from(a);
+                    if let Some(l) = lambda.get_mut(a) {
+                        *l = (w * scale(a)).max(0.0);
+                    }
+                }
+            }
+        }
+        let finite = x.iter().all(|v| v.is_finite()) && objective.is_finite();
+        QpSolution {
+            x: SVector::from(x),
+            lambda,
+            objective,
+            status: if finite {
+                self.status
+            } else {
+                QpStatus::NumericalError
+            },
+            iterations: self.iters,
+            active: self.act,
+            n_active: nact,
+        }
+    }
+}
+
+/// The result of a solve that stopped before iterating: `status`, `x = 0`, no
+/// active row; for [`QpStatus::Infeasible`] with `zero_row = Some(i)` (the
+/// zero row `0'x <= h_i` with `h_i < 0`) the certificate `y = e_i`.
+pub(crate) fn stopped<const NV: usize, const NC: usize>(
+    status: QpStatus,
+    zero_row: Option<usize>,
+) -> QpSolution<NV, NC> {
+    let mut sol = QpSolution::<NV, NC> {
+        x: SVector::zeros(),
+        lambda: SVector::zeros(),
+        objective: 0.0,
+        status,
+        iterations: 0,
+        active: [0; NV],
+        n_active: 0,
+    };
+    if let Some(y) = zero_row.and_then(|i| sol.lambda.get_mut(i)) {
+        *y = 1.0;
+    }
+    sol
+}
+
+/// `a . b` with four partial sums (independent add chains; `N` is a constant, so
+/// the loop unrolls and vectorises without bounds checks).
+#[inline(always)]
+pub(crate) fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
+    let mut acc = [0.0f64; 2];
+    for k in 0..N {
+        acc[k % 2] += a[k] * b[k];
+    }
+    acc[0] + acc[1]
+}
+
+/// Givens rotation `(c, s, r)` with `c a + s b = r`, `-s a + c b = 0`.
+pub(crate) fn givens(a: f64, b: f64) -> (f64, f64, f64) {
+    // sqrt(a^2 + b^2) is within an ulp or two of hypot; hypot (slower, no
+    // overflow or underflow) only when the squares leave the normal range.
+    let r2 = a * a + b * b;
+    let r = if (1e-280..=1e280).contains(&r2) {
+        crate::float::sqrt(r2)
+    } else {
+        libm::hypot(a, b)
+    };
+    if r == 0.0 {
+        return (1.0, 0.0, 0.0);
+    }
+    (a / r, b / r, r)
+}
