@@ -27,7 +27,7 @@ use ldcbf_controller::{
     Config, ConvexPolygon, CycleInput, CycleStatus, PaperController, Side, constraint_capacity,
 };
 use ldcbf_nav::fixtures::{PAPER_GOAL, PAPER_OBSTACLES, paper_obstacles, walk};
-use ldcbf_sim::deadline::INSTRUCTIONS_HEADER;
+use ldcbf_sim::studies::deadline::INSTRUCTIONS_HEADER;
 
 mod recorded {
     include!("../firmware/src/recorded.rs");

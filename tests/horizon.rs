@@ -20,8 +20,9 @@ use ldcbf_controller::{
     CommandSource, Config, Controller, CycleInput, Side, closest_point_point_polygon,
     constraint_capacity,
 };
-use ldcbf_sim::scenario::{LoadOptions, Polygon, Scenario, load};
+use ldcbf_sim::scenario::{LoadOptions, Scenario, load};
 use ldcbf_sim::sim::{SimOptions, run};
+use ldcbf_sim::world::Polygon;
 
 type V2 = Vector2<f64>;
 

@@ -29,9 +29,10 @@ use anyhow::{Context, Result, bail};
 use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_controller::{Config, CycleInput, CycleOutput, RobotController, Side};
 
-use crate::deadline::Case;
-use crate::scenario::{MAX_VERTICES, Perception, Polygon};
+use crate::sense::Perception;
 use crate::sim::{HORIZON, SimOptions, SimResult, Solver, run};
+use crate::studies::deadline::Case;
+use crate::world::{MAX_VERTICES, Polygon};
 
 /// The input of one recorded control cycle, owned; the obstacles are an index
 /// into [`Recording::obstacle_sets`]. World frame W.

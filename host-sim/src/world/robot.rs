@@ -25,7 +25,7 @@ use ldcbf_controller::geometry::closest_point_point_polygon;
 use ldcbf_controller::nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
-use crate::scenario::Polygon;
+use crate::world::Polygon;
 
 /// Contact tolerance, m: a clearance below `-CONTACT_TOLERANCE` is a collision.
 /// A barrier or foot row that is active holds to rounding (`1e-14` m), so a
