@@ -177,5 +177,11 @@ fn the_check_sees_upward_sideways_and_root_arrows() {
         [(2, "sim"), (4, "plan"), (4, "plant"), (5, "Scenario")],
         "{v:?}"
     );
-    assert!(violations("cli", "use crate::world::robot;\nuse crate::studies::batch;").is_empty());
+    assert!(
+        violations(
+            "cli",
+            "use crate::world::robot;\nuse crate::studies::batch;"
+        )
+        .is_empty()
+    );
 }

@@ -3,7 +3,7 @@
 //! the sensor, and the merge of neighbouring pieces (module docs of [`super`]);
 //! and the former one-hull-per-cluster inference ([`cluster_polygon`]).
 
-use ldcbf_controller::geometry::closest_point_point_polygon;
+use ldcbf_controller::geometry::{closest_point_point_polygon, convex_hull_into};
 use ldcbf_controller::nalgebra::Vector2;
 
 use super::{LidarParams, dbscan, ray_angle, ray_direction};
@@ -178,7 +178,7 @@ fn merge_pieces(
         .chain(b.poly.vertices())
         .copied()
         .collect();
-    let mut hull = convex_hull(&pts);
+    let mut hull = hull_of(&pts);
     for u in first..=last {
         let d = ray_direction(ctx.heading, u, n);
         let free = range(u) - ctx.tol;
@@ -245,7 +245,7 @@ fn clip_half_plane(h: &[Vector2<f64>], w: Vector2<f64>, c: f64) -> Vec<Vector2<f
             out.push(p + (q - p) * (fp / (fp - fq)));
         }
     }
-    convex_hull(&out)
+    hull_of(&out)
 }
 
 /// Where the segment from `o` along the unit direction `d` to length `len`
@@ -435,38 +435,20 @@ fn segment_piece(
     }
 }
 
+/// `(a - o) x (b - o)`, m^2.
 fn cross3(o: Vector2<f64>, a: Vector2<f64>, b: Vector2<f64>) -> f64 {
     (a.x - o.x) * (b.y - o.y) - (a.y - o.y) * (b.x - o.x)
 }
 
-/// Convex hull, counter-clockwise, without collinear or repeated points
-/// (Andrew's monotone chain). Returns fewer than 3 points for degenerate sets.
-pub fn convex_hull(points: &[Vector2<f64>]) -> Vec<Vector2<f64>> {
-    let mut p: Vec<Vector2<f64>> = points.to_vec();
-    p.sort_by(|a, b| a.x.total_cmp(&b.x).then(a.y.total_cmp(&b.y)));
-    p.dedup_by(|a, b| (*a - *b).norm() <= 1e-12);
-    if p.len() < 3 {
-        return p;
-    }
-    let mut hull: Vec<Vector2<f64>> = Vec::with_capacity(2 * p.len());
-    for pass in 0..2 {
-        let start = hull.len();
-        let iter: Box<dyn Iterator<Item = &Vector2<f64>>> = if pass == 0 {
-            Box::new(p.iter())
-        } else {
-            Box::new(p.iter().rev())
-        };
-        for &q in iter {
-            while hull.len() >= start + 2
-                && cross3(hull[hull.len() - 2], hull[hull.len() - 1], q) <= 0.0
-            {
-                hull.pop();
-            }
-            hull.push(q);
-        }
-        hull.pop(); // the last point starts the other chain
-    }
-    hull
+/// The convex hull of `points` ([`convex_hull_into`]: counter-clockwise from
+/// the lowest-x point, without collinear or repeated points; fewer than 3
+/// points for degenerate sets), as a new vector.
+pub(super) fn hull_of(points: &[Vector2<f64>]) -> Vec<Vector2<f64>> {
+    let mut scratch = points.to_vec();
+    let mut out = vec![Vector2::zeros(); 2 * points.len()];
+    let n = convex_hull_into(&mut scratch, &mut out).expect("2 n slots hold the chain");
+    out.truncate(n);
+    out
 }
 
 /// Width of a convex polygon (CCW, >= 3 vertices): the smallest extent across
@@ -569,7 +551,7 @@ pub fn cluster_polygon(
     max_vertices: usize,
 ) -> Polygon {
     let to_arr = |v: &[Vector2<f64>]| v.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>();
-    let hull = convex_hull(points);
+    let hull = hull_of(points);
     if hull.len() >= 3 && width(&hull) >= min_thickness {
         let h = simplify_outer(&hull, max_vertices.clamp(4, MAX_VERTICES));
         if let Ok(p) = Polygon::new(&to_arr(&h)) {

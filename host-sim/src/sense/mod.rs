@@ -77,7 +77,8 @@
 //! across the rays a piece is only as wide as the rays it covers (a single
 //! ray near the sensor gives a piece a few mm wide and `min_thickness` deep).
 //!
-//! [`cluster_polygon`] (one convex hull per cluster, Andrew's monotone chain,
+//! [`cluster_polygon`] (one convex hull per cluster, the controller's
+//! [`convex_hull_into`](ldcbf_controller::convex_hull_into),
 //! thin clusters as rectangles, conservative simplification to `max_vertices`)
 //! is the former inference: it is kept as a utility, but its hull of a cluster
 //! that spans a corner covers free space, sometimes the robot (issue 11).
@@ -100,7 +101,7 @@ mod tests;
 
 pub use dbscan::{clusters, dbscan};
 pub use infer::{
-    cluster_polygon, convex_hull, free_tolerance, infer_obstacles, simplify_outer, split_and_merge,
+    cluster_polygon, free_tolerance, infer_obstacles, simplify_outer, split_and_merge,
 };
 
 /// Obstacle perception (SPEC 6).

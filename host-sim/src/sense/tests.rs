@@ -7,25 +7,6 @@ fn v(x: f64, y: f64) -> Vector2<f64> {
 }
 
 #[test]
-fn hull_drops_interior_and_collinear_points() {
-    let pts = [
-        v(0.0, 0.0),
-        v(1.0, 0.0),
-        v(0.5, 0.0),
-        v(1.0, 1.0),
-        v(0.0, 1.0),
-        v(0.5, 0.5),
-    ];
-    let h = convex_hull(&pts);
-    assert_eq!(h.len(), 4);
-    assert_eq!(h[0], v(0.0, 0.0));
-    assert_eq!(
-        convex_hull(&[v(0.0, 0.0), v(1.0, 1.0), v(2.0, 2.0)]).len(),
-        2
-    );
-}
-
-#[test]
 fn simplification_contains_the_input() {
     let circle: Vec<_> = (0..100)
         .map(|i| {
@@ -33,7 +14,7 @@ fn simplification_contains_the_input() {
             v(a.cos(), a.sin())
         })
         .collect();
-    let s = simplify_outer(&convex_hull(&circle), 12);
+    let s = simplify_outer(&infer::hull_of(&circle), 12);
     assert_eq!(s.len(), 12);
     let poly = Polygon::new(&s.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>()).unwrap();
     for p in &circle {
