@@ -100,7 +100,7 @@ fn encode(c: &CycleInput<'_, 8>) -> Row {
 fn closed_loop(obstacles: &[Poly], goal: Vector2<f64>) -> Vec<(Row, u32)> {
     walk::<3, 6, { constraint_capacity(3, 8, false) }, 8, 8>(obstacles, goal, 150)
         .iter()
-        .map(|(c, out)| (encode(&c.input(goal, obstacles)), out.info.iterations))
+        .map(|(c, out)| (encode(&c.input(obstacles)), out.info.iterations))
         .collect()
 }
 

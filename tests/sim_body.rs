@@ -100,7 +100,7 @@ fn shipped_scenarios_keep_body_and_feet_out() {
     assert!(failures.is_empty(), "body or foot collisions: {failures:?}");
 }
 
-/// The scenario families (`host-sim/src/families.rs`), 20 seeds each, at
+/// The scenario families (`host-sim/src/world/families.rs`), 20 seeds each, at
 /// `delta = 0.05`: the MPC alone and with RRT* subgoals on the known map (the
 /// guarantee's domain), and the MPC alone with LiDAR perception: no body or
 /// foot overlaps a true obstacle in any run. (With perception the guarantee

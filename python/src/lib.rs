@@ -23,10 +23,10 @@ use ldcbf_controller::{
     CommandSource, Config, ConvexPolygon, CycleInput, CycleOutput, CycleStatus, DenseQp,
     DualActiveSet, InputError, PaperController, QpSettings, QpStatus, RobotController, Side,
 };
-use ldcbf_sim::world::robot::RobotParams;
 use ldcbf_sim::scenario::{LoadOptions, Scenario};
-use ldcbf_sim::world::{MAX_VERTICES, Polygon};
 use ldcbf_sim::sim::{MpcRate, SimOptions, SimResult, Solver};
+use ldcbf_sim::world::robot::RobotParams;
+use ldcbf_sim::world::{MAX_VERTICES, Polygon};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::create_exception;

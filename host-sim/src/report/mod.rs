@@ -41,5 +41,6 @@ mod tests;
 pub use logs::{OutputDir, write_logs};
 use summary::side_name;
 pub use summary::{
-    ComputeStats, Summary, compute_stats, human_summary, percentile, source_name, summarize,
+    ComputeStats, Summary, compute_stats, human_summary, nearest_rank, percentile, source_name,
+    summarize,
 };

@@ -151,11 +151,15 @@ pub struct Summary {
 
 /// Nearest-rank percentile `p` (0..=100) of `sorted` (ascending), 0 if empty.
 pub fn percentile(sorted: &[u64], p: f64) -> u64 {
-    if sorted.is_empty() {
-        return 0;
-    }
+    nearest_rank(sorted, p).unwrap_or(0)
+}
+
+/// Nearest-rank percentile `p` (0..=100) of `sorted` (ascending): the element
+/// of rank `ceil(p n / 100)`, at least the first; `None` if empty. Used for
+/// compute times here and for clearances in the robustness study.
+pub fn nearest_rank<T: Copy>(sorted: &[T], p: f64) -> Option<T> {
     let rank = ((p / 100.0) * sorted.len() as f64).ceil() as usize;
-    sorted[rank.clamp(1, sorted.len()) - 1]
+    sorted.get(rank.clamp(1, sorted.len().max(1)) - 1).copied()
 }
 
 /// Compute-time statistics of a list of durations (ns).

@@ -82,7 +82,7 @@
 //! `goal`) and the obstacle (`obstacles[i]`, or the generated one and the seed).
 //!
 //! Without `hull = true` a vertex list must already be a convex polygon
-//! ([`ConvexPolygon::new`]); a non-convex list is an error naming the obstacle.
+//! ([`ConvexPolygon::new`](ldcbf_controller::ConvexPolygon::new)); a non-convex list is an error naming the obstacle.
 //! Unknown keys are errors. Every error names the file, the field and, when it
 //! is known, the line ([`ScenarioError`]).
 //!

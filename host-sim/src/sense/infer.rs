@@ -11,7 +11,7 @@ use crate::world::{MAX_VERTICES, Polygon};
 
 /// Inferred obstacles of one scan taken from `origin` (m, world frame) with
 /// the sensor's zero angle along `heading` (rad): `rays[i]` is ray `i`'s hit
-/// point (m) or `None` (see [`Lidar::scan_rays`]). The convex pieces of every
+/// point (m) or `None` (see [`Lidar::scan_rays`](super::Lidar::scan_rays)). The convex pieces of every
 /// DBSCAN cluster, by breakpoints, split-and-merge and extrusion away from the
 /// sensor (module docs). Deterministic: the same scan gives the same pieces.
 pub fn infer_obstacles(

@@ -44,7 +44,7 @@
 //!    used to advance the subgoal) are the true ones plus a seeded Gaussian
 //!    draw; the LiDAR scans from the true pose.
 //! 3. **Record** the 1 kHz sample (and its clearance to every TRUE obstacle,
-//!    [`clearance`] found through the map's index, unless
+//!    [`clearance`](crate::world::clearance) found through the map's index, unless
 //!    [`SimOptions::record_clearance`] is off), then
 //!    check the end conditions: goal reached (`|p - goal| <= success_radius`),
 //!    time limit, or stuck: the remaining path length

@@ -51,7 +51,7 @@ mod tests;
 use files::write_dir;
 pub use files::{RUNS_HEADER, is_robustness_dir, merge, read_dir, runs_csv};
 
-use crate::report::OutputDir;
+use crate::report::{OutputDir, nearest_rank};
 use crate::scenario::Scenario;
 use crate::sim::{Outcome, SimOptions, SimResult, run};
 use crate::studies::batch::Shard;
@@ -314,14 +314,7 @@ pub fn cell_stats(runs: &[&RobustRun]) -> CellStats {
         .map(|r| r.min_clearance)
         .collect();
     c.sort_by(f64::total_cmp);
-    let rank = |p: f64| {
-        if c.is_empty() {
-            f64::NAN
-        } else {
-            let i = ((p / 100.0) * c.len() as f64).ceil() as usize;
-            c[i.clamp(1, c.len()) - 1]
-        }
-    };
+    let rank = |p: f64| nearest_rank(&c, p).unwrap_or(f64::NAN);
     let count = |f: &dyn Fn(&RobustRun) -> bool| runs.iter().filter(|r| f(r)).count();
     CellStats {
         runs: runs.len(),
