@@ -6,8 +6,6 @@
 //! vertices, positive area, is strictly convex and is stored counter-clockwise
 //! with duplicate and collinear vertices removed. Input may come in either order.
 
-use core::cmp::Ordering;
-
 use nalgebra::Vector2;
 
 mod hull;
@@ -233,8 +231,8 @@ impl<const V: usize> ConvexPolygon<V> {
         let mut buf = [[Vector2::zeros(); V]; 2];
         let chain = buf.as_flattened_mut();
         let len = monotone_chain(
-            Selection::new(points, Ordering::Less),
-            Selection::new(points, Ordering::Greater),
+            Selection::new(points, true),
+            Selection::new(points, false),
             chain,
         )?;
         let found = chain.get(..len).unwrap_or_default();
@@ -252,9 +250,10 @@ impl<const V: usize> ConvexPolygon<V> {
             .reduce(|best, (i, a)| if lower(a, best.1) { (i, a) } else { best })
             .map_or(0, |(i, _)| i);
         let mut corners = [[0.0f64; 2]; V];
-        let from_start = found.iter().skip(start).chain(found.iter().take(start));
-        for (slot, v) in corners.iter_mut().zip(from_start) {
-            *slot = [v.x, v.y];
+        for (k, slot) in corners.iter_mut().take(found.len()).enumerate() {
+            if let Some(v) = found.get((start + k) % found.len()) {
+                *slot = [v.x, v.y];
+            }
         }
         match Self::new(&corners[..found.len().min(V)]) {
             // Judged on all the points, not only the corners found.

@@ -23,40 +23,31 @@ fn xy_order(a: &Vector2<f64>, b: &Vector2<f64>) -> Ordering {
 }
 
 /// Andrew's monotone chain over distinct points given in ascending (x, y)
-/// order by `ascending` and in descending order by `descending`: the lower
-/// chain, then the upper one, each dropping the points that do not turn left
-/// (collinear ones too), into `chain`. Returns the number of hull vertices,
-/// counter-clockwise from the first point; fewer than 3 distinct points are
-/// returned as they are. [`GeometryError::TooManyVertices`] when `chain` is full.
+/// order by `ascending` and in descending order by `descending` (at least 3 of
+/// them for a hull; fewer give fewer than 3 points): the lower chain, then the
+/// upper one, each dropping the points that do not turn left (collinear ones
+/// too), into `chain`. Returns the number of hull vertices, counter-clockwise
+/// from the first point. [`GeometryError::TooManyVertices`] when `chain` is full.
 pub(super) fn monotone_chain(
-    ascending: impl Iterator<Item = Vector2<f64>> + Clone,
+    ascending: impl Iterator<Item = Vector2<f64>>,
     descending: impl Iterator<Item = Vector2<f64>>,
     chain: &mut [Vector2<f64>],
 ) -> Result<usize, GeometryError> {
     let mut len = 0usize;
-    if ascending.clone().nth(2).is_none() {
-        for p in ascending {
-            *chain.get_mut(len).ok_or(GeometryError::TooManyVertices)? = p;
-            len += 1;
-        }
-        return Ok(len);
-    }
     half_chain(ascending, chain, &mut len)?;
     half_chain(descending, chain, &mut len)?;
     Ok(len)
 }
 
 /// One pass of [`monotone_chain`], appended to `chain[..len]`. The pass's last
-/// point starts the other chain: it is not kept (it still drops the points
-/// before it that it does not turn left from).
+/// point starts the other chain: it is dropped at the end.
 fn half_chain(
     points: impl Iterator<Item = Vector2<f64>>,
     chain: &mut [Vector2<f64>],
     len: &mut usize,
 ) -> Result<(), GeometryError> {
     let start = *len;
-    let mut points = points.peekable();
-    while let Some(q) = points.next() {
+    for q in points {
         while *len >= start + 2 {
             let (Some(a), Some(b)) = (chain.get(*len - 2), chain.get(*len - 1)) else {
                 break;
@@ -66,35 +57,42 @@ fn half_chain(
             }
             *len -= 1;
         }
-        if points.peek().is_none() {
-            break;
-        }
         *chain.get_mut(*len).ok_or(GeometryError::TooManyVertices)? = q;
         *len += 1;
     }
+    *len = len.saturating_sub(1).max(start);
     Ok(())
 }
 
-/// The distinct points of a list in ascending ([`Ordering::Less`]) or
-/// descending ([`Ordering::Greater`]) (x, y) order, each found by a pass over
-/// the list (no buffer to sort in). A point within [`HULL_MERGE_TOL`] of the
-/// last one given is skipped.
+/// The position of a point in the (x, y) order of [`xy_order`] (`total_cmp`'s
+/// order, as integers).
+#[inline(never)]
+fn order_key(v: &Vector2<f64>) -> (i64, i64) {
+    let key = |f: f64| {
+        let bits = f.to_bits() as i64;
+        bits ^ (((bits >> 63) as u64) >> 1) as i64
+    };
+    (key(v.x), key(v.y))
+}
+
+/// The distinct points of a list in ascending or descending (x, y) order, each
+/// found by a pass over the list (no buffer to sort in). A point within
+/// [`HULL_MERGE_TOL`] of the last one given is skipped.
 #[derive(Clone)]
 pub(super) struct Selection<'a> {
     points: &'a [[f64; 2]],
-    /// `Less`: ascending; `Greater`: descending.
-    direction: Ordering,
-    /// The last point passed (given or skipped).
-    last: Option<Vector2<f64>>,
+    ascending: bool,
+    /// The order key of the last point passed (given or skipped).
+    last: Option<(i64, i64)>,
     /// The last point given.
     kept: Option<Vector2<f64>>,
 }
 
 impl<'a> Selection<'a> {
-    pub(super) fn new(points: &'a [[f64; 2]], direction: Ordering) -> Self {
+    pub(super) fn new(points: &'a [[f64; 2]], ascending: bool) -> Self {
         Selection {
             points,
-            direction,
+            ascending,
             last: None,
             kept: None,
         }
@@ -105,18 +103,21 @@ impl Iterator for Selection<'_> {
     type Item = Vector2<f64>;
 
     fn next(&mut self) -> Option<Vector2<f64>> {
+        // `a` strictly before `b` in the direction of travel.
+        let before = |a: (i64, i64), b: (i64, i64)| a != b && (a < b) == self.ascending;
         loop {
-            let before = |a: &Vector2<f64>, b: &Vector2<f64>| xy_order(a, b) == self.direction;
-            let mut next: Option<Vector2<f64>> = None;
+            let mut next: Option<((i64, i64), Vector2<f64>)> = None;
             for p in self.points {
                 let v = Vector2::new(p[0], p[1]);
-                if self.last.is_none_or(|l| before(&l, &v)) && next.is_none_or(|n| before(&v, &n)) {
-                    next = Some(v);
+                let k = order_key(&v);
+                if self.last.is_none_or(|l| before(l, k)) && next.is_none_or(|(n, _)| before(k, n))
+                {
+                    next = Some((k, v));
                 }
             }
-            let v = next?;
-            self.last = Some(v);
-            if self.kept.is_some_and(|k| norm(&(v - k)) <= HULL_MERGE_TOL) {
+            let (k, v) = next?;
+            self.last = Some(k);
+            if self.kept.is_some_and(|q| norm(&(v - q)) <= HULL_MERGE_TOL) {
                 continue;
             }
             self.kept = Some(v);
@@ -159,6 +160,12 @@ pub fn convex_hull_into(
         kept += 1;
     }
     let sorted = points.get(..kept).unwrap_or_default();
+    if sorted.len() < 3 {
+        for (i, p) in sorted.iter().enumerate() {
+            *out.get_mut(i).ok_or(GeometryError::TooManyVertices)? = *p;
+        }
+        return Ok(sorted.len());
+    }
     monotone_chain(sorted.iter().copied(), sorted.iter().rev().copied(), out)
 }
 
@@ -258,5 +265,106 @@ mod tests {
             }
         }
         assert_eq!(Poly::hull(&many), Ok(Poly::new(&SQUARE).unwrap()));
+    }
+
+    #[test]
+    fn polygon_hull_holds_every_point_of_a_decimal_grid() {
+        // Points on a 0.1 m grid (decimal steps: near-collinear in binary).
+        // The former gift wrapping returned `NotConvex` for the first set and
+        // left (1.9, 0.6) 0.23 m and (1.7, 0.5) 0.17 m outside the hull of the
+        // second.
+        let t = |v: f64| v * 0.1;
+        let sets: [&[[f64; 2]]; 2] = [
+            &[
+                [18.0, 1.0],
+                [5.0, 13.0],
+                [18.0, 18.0],
+                [6.0, 15.0],
+                [10.0, 1.0],
+                [9.0, 1.0],
+                [2.0, 10.0],
+                [7.0, 1.0],
+                [8.0, 0.0],
+                [10.0, 18.0],
+                [15.0, 2.0],
+                [17.0, 17.0],
+                [10.0, 14.0],
+                [8.0, 14.0],
+                [4.0, 15.0],
+                [3.0, 18.0],
+                [14.0, 5.0],
+                [1.0, 15.0],
+                [2.0, 16.0],
+                [12.0, 12.0],
+                [5.0, 9.0],
+                [11.0, 0.0],
+                [2.0, 6.0],
+                [0.0, 11.0],
+                [7.0, 3.0],
+                [12.0, 19.0],
+                [14.0, 8.0],
+                [18.0, 3.0],
+                [8.0, 5.0],
+            ],
+            &[
+                [10.0, 16.0],
+                [14.0, 7.0],
+                [9.0, 18.0],
+                [8.0, 13.0],
+                [11.0, 13.0],
+                [9.0, 5.0],
+                [2.0, 7.0],
+                [19.0, 6.0],
+                [12.0, 14.0],
+                [12.0, 19.0],
+                [8.0, 13.0],
+                [17.0, 5.0],
+                [18.0, 15.0],
+                [8.0, 9.0],
+                [6.0, 19.0],
+                [11.0, 14.0],
+                [6.0, 9.0],
+                [5.0, 5.0],
+                [2.0, 19.0],
+                [7.0, 1.0],
+                [4.0, 7.0],
+                [3.0, 6.0],
+                [4.0, 8.0],
+                [6.0, 16.0],
+                [2.0, 1.0],
+                [11.0, 9.0],
+                [18.0, 13.0],
+                [4.0, 1.0],
+                [7.0, 12.0],
+                [3.0, 17.0],
+                [15.0, 6.0],
+                [4.0, 4.0],
+                [19.0, 9.0],
+                [15.0, 12.0],
+                [12.0, 3.0],
+                [13.0, 12.0],
+                [9.0, 7.0],
+                [4.0, 2.0],
+                [4.0, 2.0],
+                [4.0, 15.0],
+            ],
+        ];
+        for set in sets {
+            // As the scenario files write them: 0.1 * k, rounded once.
+            let mut buf = [[0.0; 2]; 40];
+            for (b, p) in buf.iter_mut().zip(set) {
+                *b = [t(p[0]), t(p[1])];
+            }
+            let pts = &buf[..set.len()];
+            let poly = ConvexPolygon::<32>::hull(pts).unwrap();
+            for p in pts {
+                let d = crate::closest_point_point_polygon(&v(p[0], p[1]), &poly);
+                assert!(
+                    d.signed_distance <= 1e-9,
+                    "{p:?} is {} m out",
+                    d.signed_distance
+                );
+            }
+        }
     }
 }
