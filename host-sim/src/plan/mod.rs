@@ -1,7 +1,10 @@
 //! Global planner (SPEC 5, report 5.1): RRT* on an occupancy grid of the known
 //! map, whose path becomes a sequence of subgoals for the footstep MPC.
 //!
-//! All positions are in the world frame W, metres.
+//! All positions are in the world frame W, metres. A room of the simulator that
+//! uses only [`crate::world`] (the occupancy grid is
+//! [`crate::world::grid`]); its settings are the scenario's `[rrt_star]` table
+//! ([`RrtParams`]).
 //!
 //! # Pipeline ([`plan`])
 //!

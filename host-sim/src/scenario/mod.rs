@@ -1,5 +1,7 @@
 //! Scenario files: TOML under `scenarios/`, their validation, `--set`
-//! overrides, and the seeded `random` family.
+//! overrides, and the seeded `random` family. The room above `world`, `sense`,
+//! `plan` and `plant`, whose settings (`[robot]`, `[lidar]`, `[rrt_star]`,
+//! `[disturbance]`) it reads; below the closed loop.
 //!
 //! # File format
 //!

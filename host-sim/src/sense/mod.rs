@@ -1,6 +1,8 @@
 //! Perception for unknown maps (SPEC 6, report 5.2): a simulated 2D LiDAR, DBSCAN
 //! clustering of its hit points, and convex pieces that hug the points of each
 //! cluster without ever covering space the sensor has seen to be free.
+//! A room of the simulator that uses only [`crate::world`]; its settings are
+//! the scenario's `[lidar]` table ([`LidarParams`]).
 //!
 //! World frame W, metres, radians. The sensor sits at the CoM.
 //!

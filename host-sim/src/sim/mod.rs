@@ -1,5 +1,7 @@
 //! The closed loop: the 1 kHz [`Plant`] and the controller, called as an onboard
-//! loop would call it.
+//! loop would call it. A room of the simulator above the scenario, the plant,
+//! perception and the planner; the report and the studies read what it
+//! records ([`SimResult`]).
 //!
 //! Before the first tick, with `planner = "rrt_star"`, [`crate::plan::plan`]
 //! turns the known map into subgoals (the goal last; without a planner the goal
