@@ -590,17 +590,8 @@ fn plan_once(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::world::square;
     use ldcbf_controller::closest_point_point_polygon;
-
-    fn square(c: [f64; 2], h: f64) -> Polygon {
-        Polygon::new(&[
-            [c[0] - h, c[1] - h],
-            [c[0] + h, c[1] - h],
-            [c[0] + h, c[1] + h],
-            [c[0] - h, c[1] + h],
-        ])
-        .unwrap()
-    }
 
     #[test]
     fn plan_goes_around_and_is_deterministic() {

@@ -348,16 +348,7 @@ pub fn grid_search(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn square(c: [f64; 2], h: f64) -> Polygon {
-        Polygon::new(&[
-            [c[0] - h, c[1] - h],
-            [c[0] + h, c[1] - h],
-            [c[0] + h, c[1] + h],
-            [c[0] - h, c[1] + h],
-        ])
-        .unwrap()
-    }
+    use crate::world::square;
 
     #[test]
     fn distance_transform_is_exact_on_a_small_grid() {

@@ -37,3 +37,15 @@ pub fn clearance(p: &Vector2<f64>, obstacles: &[Polygon]) -> f64 {
         .map(|o| closest_point_point_polygon(p, o).signed_distance)
         .fold(f64::INFINITY, f64::min)
 }
+
+/// The square of half side `h` (m) around `c`, for tests.
+#[cfg(test)]
+pub(crate) fn square(c: [f64; 2], h: f64) -> Polygon {
+    Polygon::new(&[
+        [c[0] - h, c[1] - h],
+        [c[0] + h, c[1] - h],
+        [c[0] + h, c[1] + h],
+        [c[0] - h, c[1] + h],
+    ])
+    .unwrap()
+}

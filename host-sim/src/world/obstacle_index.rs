@@ -278,13 +278,7 @@ mod tests {
     use super::*;
 
     fn square(cx: f64, cy: f64, h: f64) -> Polygon {
-        Polygon::new(&[
-            [cx - h, cy - h],
-            [cx + h, cy - h],
-            [cx + h, cy + h],
-            [cx - h, cy + h],
-        ])
-        .unwrap()
+        crate::world::square([cx, cy], h)
     }
 
     #[test]
