@@ -22,7 +22,7 @@ use std::hint::black_box;
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
 use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_controller::{Assembly, Config, Controller, ConvexPolygon, constraint_capacity};
-use ldcbf_nav::fixtures::{PAPER_GOAL, Recorded, paper_obstacles, walk};
+use ldcbf_nav::fixtures::{PAPER_GOAL, RecordedInput, paper_obstacles, walk};
 
 type Poly = ConvexPolygon<8>;
 
@@ -52,7 +52,7 @@ fn post_field() -> Vec<Poly> {
 fn record<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>(
     obs: &[Poly],
     goal: Vector2<f64>,
-) -> Vec<Recorded> {
+) -> Vec<RecordedInput> {
     walk::<N, NV, NC, NOBS, 8>(obs, goal, 150)
         .into_iter()
         .map(|(c, _)| c)
@@ -74,7 +74,7 @@ fn bench_step<const N: usize, const NV: usize, const NC: usize, const NOBS: usiz
         b.iter(|| {
             let c = &cycles[i % cycles.len()];
             i += 1;
-            black_box(ctl.step(black_box(&c.input(goal, obs))))
+            black_box(ctl.step(black_box(&c.input(obs))))
         })
     });
 }
@@ -93,7 +93,7 @@ fn paper(cr: &mut Criterion) {
         b.iter(|| {
             let c = &cycles[i % cycles.len()];
             i += 1;
-            black_box(ctl.step(black_box(&c.input(goal, &obs))))
+            black_box(ctl.step(black_box(&c.input(&obs))))
         })
     });
     group.bench_function("step/cold", |b| {
@@ -103,7 +103,7 @@ fn paper(cr: &mut Criterion) {
             let c = &cycles[i % cycles.len()];
             i += 1;
             ctl.reset();
-            black_box(ctl.step(black_box(&c.input(goal, &obs))))
+            black_box(ctl.step(black_box(&c.input(&obs))))
         })
     });
     let ctl = Paper::new(Config::default()).unwrap();
@@ -111,7 +111,7 @@ fn paper(cr: &mut Criterion) {
         .iter()
         .map(|c| {
             let mut a = Assembly::default();
-            ctl.assemble(&c.input(goal, &obs), &mut a).unwrap();
+            ctl.assemble(&c.input(&obs), &mut a).unwrap();
             a
         })
         .collect();

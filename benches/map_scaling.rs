@@ -6,7 +6,7 @@
 //!
 //! The cycles are the closed loop `random@0` (the paper's random test, seed 0:
 //! 8 polygons, (0, 0) to (10, 10)), run in-process as `ldcbf-sim deadline`
-//! runs it and rebuilt from its logs (`ldcbf_sim::replay`). The map of size
+//! runs it and rebuilt from its logs (`ldcbf_sim::studies::replay`). The map of size
 //! `n` is those 8 polygons followed by `n - 8` small filler polygons (0.1-0.4
 //! m across, 3-6 vertices, seeded) at the density, 10,000 per 110 m x
 //! 110 m, in a square around the walk but outside the box [-6, 16]² m: farther
@@ -18,7 +18,7 @@
 //! Two ways to run a cycle:
 //!
 //! * `indexed`: `Controller::obstacle_query`, the candidates
-//!   (`ldcbf_sim::obstacle_index::Candidates`: the R-tree queried 0.5 m
+//!   (`ldcbf_sim::world::obstacle_index::Candidates`: the R-tree queried 0.5 m
 //!   beyond `r_active` around `p_0`, the list reused while it covers later
 //!   cycles) and `Controller::step_among`: what the simulator does with a
 //!   known map;
@@ -53,11 +53,11 @@ use std::time::Instant;
 
 use criterion::{BenchmarkId, Criterion};
 use ldcbf_controller::{CycleOutput, RobotController};
-use ldcbf_sim::deadline::Case;
-use ldcbf_sim::obstacle_index::{Candidates, ObstacleIndex};
-use ldcbf_sim::replay::{Recording, record_case};
-use ldcbf_sim::scenario::Polygon;
 use ldcbf_sim::sim::HORIZON;
+use ldcbf_sim::studies::deadline::Case;
+use ldcbf_sim::studies::replay::{Recording, record_case};
+use ldcbf_sim::world::Polygon;
+use ldcbf_sim::world::obstacle_index::{Candidates, ObstacleIndex};
 
 /// Map sizes of the table (the first is the recorded map itself).
 const SIZES: [usize; 5] = [8, 10, 1_000, 10_000, 100_000];

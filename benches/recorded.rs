@@ -7,7 +7,7 @@
 //! Each set is closed loops of `ldcbf-sim` run in-process exactly as
 //! `ldcbf-sim deadline` runs them (own solver, 20 Hz, the scenario's own
 //! configuration, e.g. `maze`'s `delta = 0.2`), before any timing; their
-//! cycle inputs are rebuilt from the logs by `ldcbf_sim::replay` and checked
+//! cycle inputs are rebuilt from the logs by `ldcbf_sim::studies::replay` and checked
 //! to reproduce every logged output bit for bit (`Recording::verify`), so the
 //! benchmarks replay exactly the simulator's cycles:
 //!
@@ -63,11 +63,11 @@ use ldcbf_controller::{
     CycleInput, CycleOutput, CycleStatus, DenseQp, DualActiveSet, QpBackend, QpSolution,
     RobotController,
 };
-use ldcbf_sim::deadline::{Case, random_cases};
-use ldcbf_sim::replay::{Recording, record_case};
 use ldcbf_sim::report::compute_stats;
-use ldcbf_sim::scenario::MAX_VERTICES;
 use ldcbf_sim::sim::{HORIZON, NC, NV};
+use ldcbf_sim::studies::deadline::{Case, random_cases};
+use ldcbf_sim::studies::replay::{Recording, record_case};
+use ldcbf_sim::world::MAX_VERTICES;
 
 /// Seeds of the `random` set.
 const RANDOM_SEEDS: u64 = 10;

@@ -3,16 +3,20 @@
 
 pub mod fixtures {
     //! Shared test and benchmark fixtures: the SPEC's `paper` obstacles and a
-    //! miniature closed loop that records controller cycles.
+    //! miniature closed loop that records controller cycles (as the
+    //! simulator's [`RecordedInput`]).
     //!
-    //! The loop is the simulator's in miniature (`host-sim/src/sim.rs` is the full
-    //! one): the controller runs at 20 Hz (8 cycles per 0.4 s step) on the exact
+    //! The loop is the simulator's in miniature (`host-sim/src/sim/mod.rs` is the
+    //! full one): the controller runs at 20 Hz (8 cycles per 0.4 s step) on the exact
     //! state, the LIP is integrated in closed form over each 50 ms, and at each
     //! step end the swing foot lands on the last `foot_target`, the stance side
     //! flips and the last `turning_rate` takes effect for the new step.
 
     use ldcbf_controller::nalgebra::Vector2;
-    use ldcbf_controller::{Config, Controller, ConvexPolygon, CycleInput, CycleOutput, Side};
+    use ldcbf_controller::{Config, Controller, ConvexPolygon, CycleOutput};
+    /// A recorded cycle's input: the simulator's type (its replay's), with the
+    /// goal in it and obstacle list 0 (goal and obstacles are fixed per walk).
+    pub use ldcbf_sim::studies::replay::RecordedInput;
 
     /// Goal of the SPEC's `paper` scenario, m (world).
     pub const PAPER_GOAL: [f64; 2] = [10.0, 10.0];
@@ -36,59 +40,7 @@ pub mod fixtures {
             .collect()
     }
 
-    /// The measured part of one cycle's input (goal and obstacles are fixed per
-    /// walk). World frame; m, m/s, rad, rad/s, s.
-    #[derive(Clone, Copy, Debug, PartialEq)]
-    pub struct Recorded {
-        /// CoM position.
-        pub com_position: Vector2<f64>,
-        /// CoM velocity.
-        pub com_velocity: Vector2<f64>,
-        /// Heading.
-        pub heading: f64,
-        /// Turning rate in force.
-        pub turning_rate: f64,
-        /// Stance foot position.
-        pub stance_foot: Vector2<f64>,
-        /// Stance side.
-        pub stance_side: Side,
-        /// Time spent in the current step.
-        pub time_in_step: f64,
-    }
-
-    impl Recorded {
-        /// At rest at the origin, heading 0, left stance foot under the CoM.
-        pub const START: Recorded = Recorded {
-            com_position: Vector2::new(0.0, 0.0),
-            com_velocity: Vector2::new(0.0, 0.0),
-            heading: 0.0,
-            turning_rate: 0.0,
-            stance_foot: Vector2::new(0.0, 0.0),
-            stance_side: Side::Left,
-            time_in_step: 0.0,
-        };
-
-        /// The full controller input.
-        pub fn input<'a, const V: usize>(
-            &self,
-            goal: Vector2<f64>,
-            obstacles: &'a [ConvexPolygon<V>],
-        ) -> CycleInput<'a, V> {
-            CycleInput {
-                com_position: self.com_position,
-                com_velocity: self.com_velocity,
-                heading: self.heading,
-                turning_rate: self.turning_rate,
-                stance_foot: self.stance_foot,
-                stance_side: self.stance_side,
-                time_in_step: self.time_in_step,
-                goal,
-                obstacles,
-            }
-        }
-    }
-
-    /// Walks from [`Recorded::START`] toward `goal` with a fresh controller of
+    /// Walks from [`RecordedInput::at_rest`] toward `goal` with a fresh controller of
     /// the given sizes (default configuration, iteration budgets scaled by
     /// `Config::with_budgets_for_horizon`), for at most `max_steps` steps or
     /// until the CoM is within 0.15 m of the goal; returns every cycle's input and
@@ -103,17 +55,17 @@ pub mod fixtures {
         obstacles: &[ConvexPolygon<V>],
         goal: Vector2<f64>,
         max_steps: usize,
-    ) -> Vec<(Recorded, CycleOutput<N>)> {
+    ) -> Vec<(RecordedInput, CycleOutput<N>)> {
         // Budgets scaled for the horizon (unchanged at N = 3).
         let config = Config::default().with_budgets_for_horizon(N);
         let mut ctl = Controller::<N, NV, NC, NOBS>::new(config).expect("valid config");
         let lip = *ctl.lip();
         let t_step = ctl.config().step_duration;
         let dt = t_step / 8.0;
-        let mut c = Recorded::START;
+        let mut c = RecordedInput::at_rest(goal);
         let mut out = Vec::new();
         for _ in 0..8 * max_steps {
-            let cmd = ctl.step(&c.input(goal, obstacles));
+            let cmd = ctl.step(&c.input(obstacles));
             out.push((c, cmd));
             let (p, v) = lip.propagate(&c.com_position, &c.com_velocity, &c.stance_foot, dt);
             c.com_position = p;

@@ -7,7 +7,7 @@
 //! other deterministic measure, instructions per cycle on the Cortex-M7 in
 //! QEMU, is `tests/firmware_qemu.rs`.)
 //!
-//! Closed loops: every shipped scenario (`ldcbf_sim::deadline::SHIPPED_CASES`:
+//! Closed loops: every shipped scenario (`ldcbf_sim::studies::deadline::SHIPPED_CASES`:
 //! `simple`, `circles`, `paper`, `maze` and `trap` with and without RRT*
 //! subgoals, `crowded` seed 0 with LiDAR) and the 200 random environments
 //! (seeds 0..199 of `scenarios/random.toml`, known map, the paper's defaults),
@@ -70,7 +70,7 @@
 //! (`tests/firmware_qemu.rs`).
 
 use ldcbf_controller::{Config, CycleStatus};
-use ldcbf_sim::deadline::{
+use ldcbf_sim::studies::deadline::{
     CaseRun, SHIPPED_CASES, cost_stats, random_cases, run_cases, shipped_cases,
 };
 
@@ -199,7 +199,7 @@ fn worst_case_iterations_stay_within_the_configured_budget() {
 
 /// The default set covers every shipped scenario but the `random` family
 /// (which the 200 seeds cover) and the layout families of
-/// `ldcbf_sim::families` (run by `batch` and `tests/sim_body.rs`), and the
+/// `ldcbf_sim::world::families` (run by `batch` and `tests/sim_body.rs`), and the
 /// large maps (`LARGE_MAP_CASES`, run by `tests/obstacle_index.rs`): a new
 /// scenario file must be added to `SHIPPED_CASES`.
 #[test]
@@ -213,16 +213,16 @@ fn shipped_cases_cover_every_shipped_scenario() {
     let is_family = |n: &str| {
         let sc = ldcbf_sim::scenario::load(n, &Default::default()).unwrap();
         sc.generator
-            .is_some_and(|g| ldcbf_sim::families::FAMILIES.contains(&g.kind.as_str()))
+            .is_some_and(|g| ldcbf_sim::world::families::FAMILIES.contains(&g.kind.as_str()))
     };
     for n in names.iter().filter(|n| {
         n.as_str() != "random"
-            && !ldcbf_sim::deadline::LARGE_MAP_CASES.contains(&n.as_str())
+            && !ldcbf_sim::studies::deadline::LARGE_MAP_CASES.contains(&n.as_str())
             && !is_family(n)
     }) {
         assert!(
             cases.iter().any(|c| &c.scenario == n),
-            "scenario {n} is not in ldcbf_sim::deadline::SHIPPED_CASES"
+            "scenario {n} is not in ldcbf_sim::studies::deadline::SHIPPED_CASES"
         );
     }
 }

@@ -27,7 +27,7 @@ use ldcbf_controller::{
     Config, ConvexPolygon, CycleInput, CycleStatus, PaperController, Side, constraint_capacity,
 };
 use ldcbf_nav::fixtures::{PAPER_GOAL, PAPER_OBSTACLES, paper_obstacles, walk};
-use ldcbf_sim::deadline::INSTRUCTIONS_HEADER;
+use ldcbf_sim::studies::deadline::INSTRUCTIONS_HEADER;
 
 mod recorded {
     include!("../firmware/src/recorded.rs");
@@ -100,7 +100,7 @@ fn encode(c: &CycleInput<'_, 8>) -> Row {
 fn closed_loop(obstacles: &[Poly], goal: Vector2<f64>) -> Vec<(Row, u32)> {
     walk::<3, 6, { constraint_capacity(3, 8, false) }, 8, 8>(obstacles, goal, 150)
         .iter()
-        .map(|(c, out)| (encode(&c.input(goal, obstacles)), out.info.iterations))
+        .map(|(c, out)| (encode(&c.input(obstacles)), out.info.iterations))
         .collect()
 }
 

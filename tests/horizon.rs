@@ -16,12 +16,10 @@
 use std::time::Instant;
 
 use ldcbf_controller::nalgebra::Vector2;
-use ldcbf_controller::{
-    CommandSource, Config, Controller, CycleInput, Side, closest_point_point_polygon,
-    constraint_capacity,
-};
-use ldcbf_sim::scenario::{LoadOptions, Polygon, Scenario, load};
+use ldcbf_controller::{CommandSource, Config, Controller, CycleInput, Side, constraint_capacity};
+use ldcbf_sim::scenario::{LoadOptions, Scenario, load};
 use ldcbf_sim::sim::{SimOptions, run};
+use ldcbf_sim::world::clearance;
 
 type V2 = Vector2<f64>;
 
@@ -48,13 +46,6 @@ struct LoopResult {
 
 fn percentile<T: Copy>(v: &[T], p: f64) -> T {
     v[((v.len() - 1) as f64 * p).round() as usize]
-}
-
-fn clearance(p: &V2, obstacles: &[Polygon]) -> f64 {
-    obstacles
-        .iter()
-        .map(|o| closest_point_point_polygon(p, o).signed_distance)
-        .fold(f64::INFINITY, f64::min)
 }
 
 /// Closed loop from the scenario's start through `subgoals` (the last is the

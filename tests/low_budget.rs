@@ -4,7 +4,7 @@
 //! that fallback never violates an LDCBF row more than a fallback candidate the
 //! controller had.
 //!
-//! Closed loops: every shipped scenario (`ldcbf_sim::deadline::SHIPPED_CASES`)
+//! Closed loops: every shipped scenario (`ldcbf_sim::studies::deadline::SHIPPED_CASES`)
 //! and a few random environments, run in-process through `ldcbf_sim` with
 //! `max_iter = max_iter_cycle = B` for `B` in [`BUDGETS`], the simulated time cut
 //! to 5-20 s so that the test stays small in a debug build (CI runs it in
@@ -47,9 +47,10 @@ use ldcbf_controller::mpc::Assembly;
 use ldcbf_controller::nalgebra::{SVector, Vector2};
 use ldcbf_controller::relax::class_violation;
 use ldcbf_controller::{CommandSource, Config, CycleInput, CycleOutput, CycleStatus, Lip, Side};
-use ldcbf_sim::deadline::{Case, random_cases, shipped_cases};
-use ldcbf_sim::scenario::Perception;
-use ldcbf_sim::sim::{HORIZON, NC, NV, SimOptions, SimResult, clearance, run};
+use ldcbf_sim::sense::Perception;
+use ldcbf_sim::sim::{HORIZON, NC, NV, SimOptions, SimResult, run};
+use ldcbf_sim::studies::deadline::{Case, random_cases, shipped_cases};
+use ldcbf_sim::world::clearance;
 
 type Controller = ldcbf_controller::RobotController;
 type Asm = Assembly<HORIZON, NV, NC, 8>;

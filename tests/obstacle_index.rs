@@ -1,4 +1,4 @@
-//! The known map's spatial index (`ldcbf_sim::obstacle_index`, issue 14
+//! The known map's spatial index (`ldcbf_sim::world::obstacle_index`, issue 14
 //! part 2): its query returns exactly what a linear scan of the bounding boxes
 //! returns, the candidates it gives hold every obstacle the controller can
 //! select, and `Controller::step_among` on them is `Controller::step` on the
@@ -10,11 +10,12 @@ use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_controller::{
     Assembly, CycleInput, ObstacleQuery, RobotController, Side, closest_point_point_polygon,
 };
-use ldcbf_sim::obstacle_index::{Candidates, ObstacleIndex, scan_within};
-use ldcbf_sim::replay::Recording;
-use ldcbf_sim::robot::RobotParams;
-use ldcbf_sim::scenario::{LoadOptions, Polygon, load};
+use ldcbf_sim::scenario::{LoadOptions, load};
 use ldcbf_sim::sim::{Outcome, SimOptions, run};
+use ldcbf_sim::studies::replay::Recording;
+use ldcbf_sim::world::Polygon;
+use ldcbf_sim::world::obstacle_index::{Candidates, ObstacleIndex, scan_within};
+use ldcbf_sim::world::robot::RobotParams;
 use proptest::prelude::*;
 
 /// A polygon: centre, circumradius, point angles (the hull of the points).
@@ -176,7 +177,7 @@ proptest! {
         }
         prop_assert_eq!(
             index.clearance(&c, &map).to_bits(),
-            ldcbf_sim::sim::clearance(&c, &map).to_bits()
+            ldcbf_sim::world::clearance(&c, &map).to_bits()
         );
         let robot = RobotParams::default();
         prop_assert_eq!(

@@ -1,9 +1,9 @@
 //! The recorded cycles of `benches/recorded.rs` are the simulator's: the inputs
-//! rebuilt from a run's logs (`ldcbf_sim::replay`), replayed in order through a
+//! rebuilt from a run's logs (`ldcbf_sim::studies::replay`), replayed in order through a
 //! fresh controller, give back every logged output bit for bit.
 
-use ldcbf_sim::deadline::Case;
-use ldcbf_sim::replay::{Recording, record_case};
+use ldcbf_sim::studies::deadline::Case;
+use ldcbf_sim::studies::replay::{Recording, record_case};
 
 fn recorded(case: &str) -> Recording {
     let case: Case = case.parse().expect("case");

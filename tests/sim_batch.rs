@@ -4,9 +4,12 @@
 
 use std::path::PathBuf;
 
-use ldcbf_sim::batch::{BatchRequest, RunRow, SeedRange, Shard, merge, read_dir, run_batch};
-use ldcbf_sim::scenario::{LoadOptions, Planner, load};
+use ldcbf_sim::plan::Planner;
+use ldcbf_sim::scenario::{LoadOptions, load};
 use ldcbf_sim::sim::{SimOptions, run};
+use ldcbf_sim::studies::batch::{
+    BatchRequest, RunRow, SeedRange, Shard, merge, read_dir, run_batch,
+};
 use ldcbf_sim::summarize;
 
 const SEEDS: SeedRange = SeedRange { start: 3, end: 7 };

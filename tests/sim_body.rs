@@ -11,11 +11,12 @@
 
 use std::path::PathBuf;
 
-use ldcbf_sim::batch::{BatchRequest, SeedRange, run_batch};
-use ldcbf_sim::robot::CONTACT_TOLERANCE;
-use ldcbf_sim::scenario::{LoadOptions, Perception, load, scenario_dir};
+use ldcbf_sim::scenario::{LoadOptions, load, scenario_dir};
+use ldcbf_sim::sense::Perception;
 use ldcbf_sim::sim::{SimOptions, run};
+use ldcbf_sim::studies::batch::{BatchRequest, SeedRange, run_batch};
 use ldcbf_sim::summarize;
+use ldcbf_sim::world::robot::CONTACT_TOLERANCE;
 
 /// Random layouts at delta = 0 (the tightest margin): no run's body or foot
 /// overlaps an obstacle at any 1 kHz sample. At delta = 0 and a point CoM
@@ -99,7 +100,7 @@ fn shipped_scenarios_keep_body_and_feet_out() {
     assert!(failures.is_empty(), "body or foot collisions: {failures:?}");
 }
 
-/// The scenario families (`host-sim/src/families.rs`), 20 seeds each, at
+/// The scenario families (`host-sim/src/world/families.rs`), 20 seeds each, at
 /// `delta = 0.05`: the MPC alone and with RRT* subgoals on the known map (the
 /// guarantee's domain), and the MPC alone with LiDAR perception: no body or
 /// foot overlaps a true obstacle in any run. (With perception the guarantee
@@ -113,7 +114,7 @@ fn shipped_scenarios_keep_body_and_feet_out() {
     ignore = "360 closed loops: run with --release (.ci/run does)"
 )]
 fn families_keep_body_and_feet_out() {
-    use ldcbf_sim::scenario::Planner;
+    use ldcbf_sim::plan::Planner;
     let tmp = tempfile::tempdir().unwrap();
     let mut failures = Vec::new();
     for family in [

@@ -2,8 +2,8 @@
 //! push on `simple` is recovered from, the run's files record the push and the
 //! true clearance, and a bad disturbance field is refused with a clear error.
 
-use ldcbf_sim::batch::Shard;
-use ldcbf_sim::robustness::{
+use ldcbf_sim::studies::batch::Shard;
+use ldcbf_sim::studies::robustness::{
     Condition, RobustnessRequest, cell_stats, default_conditions, is_robustness_dir, merge,
     run_robustness,
 };
@@ -119,7 +119,7 @@ fn robustness_study_counts_a_small_grid() {
             2
         );
     }
-    let md = ldcbf_sim::robustness::markdown(&rep);
+    let md = ldcbf_sim::studies::robustness::markdown(&rep);
     assert!(md.contains("| foot | sigma 5 mm | 0.1 | "), "{md}");
 }
 

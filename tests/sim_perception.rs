@@ -4,13 +4,15 @@
 //! inferred obstacles and the CoM must stay out of the TRUE ones.
 
 use ldcbf_controller::nalgebra::Vector2;
-use ldcbf_sim::perception::{
+use ldcbf_sim::scenario::{LoadOptions, load};
+use ldcbf_sim::sense::Perception;
+use ldcbf_sim::sense::{
     Lidar, LidarParams, cast_ray, cluster_polygon, clusters, dbscan, free_tolerance,
     infer_obstacles, ray_direction, split_and_merge,
 };
-use ldcbf_sim::scenario::{LoadOptions, Perception, Polygon, load};
 use ldcbf_sim::sim::{Outcome, SimOptions, run};
 use ldcbf_sim::summarize;
+use ldcbf_sim::world::Polygon;
 use proptest::prelude::*;
 
 fn v(x: f64, y: f64) -> Vector2<f64> {

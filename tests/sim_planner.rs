@@ -6,8 +6,9 @@
 //! Runs in-process with the own QP solver at 20 Hz, no figures.
 
 use ldcbf_controller::closest_point_point_polygon;
-use ldcbf_sim::planner::{RrtParams, plan};
-use ldcbf_sim::scenario::{LoadOptions, Planner, load};
+use ldcbf_sim::plan::Planner;
+use ldcbf_sim::plan::{RrtParams, plan};
+use ldcbf_sim::scenario::{LoadOptions, load};
 use ldcbf_sim::sim::{Outcome, SimOptions, SimResult, run};
 use ldcbf_sim::{Summary, summarize};
 

@@ -8,6 +8,11 @@
 
 use nalgebra::Vector2;
 
+mod hull;
+
+pub use hull::{HULL_MERGE_TOL, convex_hull_into};
+use hull::{Selection, monotone_chain};
+
 /// Two vertices closer than this (m) are the same vertex.
 pub const DUPLICATE_TOL: f64 = 1e-9;
 /// A point closer than this (m) to the boundary is on the boundary.
@@ -208,65 +213,52 @@ impl<const V: usize> ConvexPolygon<V> {
         Ok(ConvexPolygon { vertices: out, len })
     }
 
-    /// The convex hull of a point set (gift wrapping, at most `V` hull vertices,
-    /// `O(n V)`). Fails like [`ConvexPolygon::new`] when the hull has fewer than 3
+    /// The convex hull of a point set ([`convex_hull_into`]'s monotone chain,
+    /// at most `V` hull vertices), stored from its lowest (then leftmost)
+    /// corner. Fails like [`ConvexPolygon::new`] when the hull has fewer than 3
     /// corners: [`GeometryError::TooFewVertices`] for one or two distinct points,
-    /// [`GeometryError::ZeroArea`] for three or more collinear ones.
+    /// [`GeometryError::ZeroArea`] for three or more collinear ones; with
+    /// [`GeometryError::TooManyVertices`] when the hull has more than `V`
+    /// corners (or, for a few point sets with many points, when the chain
+    /// holds more than `2 V` points while it runs).
+    ///
+    /// Without a buffer to sort them in, the points are visited in order by
+    /// selection: `O(n^2)` for `n` points, no allocation.
     pub fn hull(points: &[[f64; 2]]) -> Result<Self, GeometryError> {
         check_points(points)?;
-        let pts = || points.iter().map(|p| Vector2::new(p[0], p[1])).enumerate();
-        // Start at the lowest (then leftmost) point: it is a hull corner.
+        let points_v = || points.iter().map(|p| Vector2::new(p[0], p[1]));
+        // The chain holds a little more than the hull while it runs.
+        let mut buf = [[Vector2::zeros(); V]; 2];
+        let chain = buf.as_flattened_mut();
+        let len = monotone_chain(
+            Selection::new(points, true),
+            Selection::new(points, false),
+            chain,
+        )?;
+        let found = chain.get(..len).unwrap_or_default();
+        if found.len() < 3 {
+            return Err(degenerate(points_v()));
+        }
+        if found.len() > V {
+            return Err(GeometryError::TooManyVertices);
+        }
+        // Start at the lowest (then leftmost) corner.
         let lower = |a: &Vector2<f64>, b: &Vector2<f64>| a.y < b.y || (a.y == b.y && a.x < b.x);
-        let Some((start, start_pt)) =
-            pts().reduce(|best, (i, a)| if lower(&a, &best.1) { (i, a) } else { best })
-        else {
-            return Err(GeometryError::TooFewVertices);
-        };
-        let mut hull = [[0.0f64; 2]; V];
-        let mut len = 0usize;
-        let (mut cur, mut c) = (start, start_pt);
-        // Each pass adds one corner; a closed hull has at most `points.len()`.
-        for _ in 0..=points.len() {
-            let Some(slot) = hull.get_mut(len) else {
-                return Err(GeometryError::TooManyVertices);
-            };
-            *slot = [c.x, c.y];
-            len += 1;
-            // The most clockwise point seen from `c` (collinear: the farthest),
-            // starting from the first point other than `c`.
-            let mut cand: Option<(usize, Vector2<f64>)> = None;
-            for (i, b_pt) in pts() {
-                if i == cur {
-                    continue;
-                }
-                let Some((_, a_pt)) = cand else {
-                    cand = Some((i, b_pt));
-                    continue;
-                };
-                let (a, b) = (a_pt - c, b_pt - c);
-                let x = cross(&a, &b);
-                // Take i if it is clockwise of cand, or collinear and farther.
-                if x < 0.0 || (x == 0.0 && b.norm_squared() > a.norm_squared()) {
-                    cand = Some((i, b_pt));
-                }
+        let start = found
+            .iter()
+            .enumerate()
+            .reduce(|best, (i, a)| if lower(a, best.1) { (i, a) } else { best })
+            .map_or(0, |(i, _)| i);
+        let mut corners = [[0.0f64; 2]; V];
+        for (k, slot) in corners.iter_mut().take(found.len()).enumerate() {
+            if let Some(v) = found.get((start + k) % found.len()) {
+                *slot = [v.x, v.y];
             }
-            // A single point has no candidate: the outline is closed.
-            let Some((next, next_pt)) = cand else {
-                break;
-            };
-            if next == start || norm(&(next_pt - start_pt)) <= DUPLICATE_TOL {
-                break;
-            }
-            (cur, c) = (next, next_pt);
         }
-        let points = || points.iter().map(|p| Vector2::new(p[0], p[1]));
-        if len == 2 {
-            return Err(degenerate(points()));
-        }
-        match Self::new(&hull[..len.min(V)]) {
+        match Self::new(&corners[..found.len().min(V)]) {
             // Judged on all the points, not only the corners found.
             Err(GeometryError::ZeroArea | GeometryError::TooFewVertices) => {
-                Err(degenerate(points()))
+                Err(degenerate(points_v()))
             }
             other => other,
         }

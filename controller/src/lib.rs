@@ -77,6 +77,7 @@ pub(crate) fn clamp(x: f64, lo: f64, hi: f64) -> f64 {
 pub use constraints::{Condensed, HalfPlane, RowId, RowKind};
 pub use geometry::{
     ClosestPoint, ConvexPolygon, GeometryError, PointLocation, closest_point_point_polygon,
+    convex_hull_into,
 };
 pub use heading::{HeadingPlan, plan_heading, wrap_angle};
 pub use ldp::{LdpLoaded, LdpSolver};

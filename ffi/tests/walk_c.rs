@@ -16,7 +16,7 @@ use std::process::Command;
 
 use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_controller::{CommandSource, CycleOutput, QpStatus, Side, constraint_capacity};
-use ldcbf_nav::fixtures::{PAPER_GOAL, Recorded, paper_obstacles, walk};
+use ldcbf_nav::fixtures::{PAPER_GOAL, RecordedInput, paper_obstacles, walk};
 
 /// Steps the C example walks at most (`MAX_STEPS` in walk.c).
 const MAX_STEPS: usize = 150;
@@ -96,7 +96,7 @@ fn qp_code(s: Option<QpStatus>) -> u32 {
 }
 
 /// One cycle as `walk --hex` prints it.
-fn line(i: usize, c: &Recorded, o: &CycleOutput<3>) -> String {
+fn line(i: usize, c: &RecordedInput, o: &CycleOutput<3>) -> String {
     let mut s = format!("cycle {i}");
     for x in [
         c.com_position.x,

@@ -23,9 +23,10 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
-use ldcbf_sim::batch::{BatchRequest, SeedRange, Shard};
-use ldcbf_sim::scenario::{Perception, Planner};
+use ldcbf_sim::plan::Planner;
+use ldcbf_sim::sense::Perception;
 use ldcbf_sim::sim::{MpcRate, Solver};
+use ldcbf_sim::studies::batch::{BatchRequest, SeedRange, Shard};
 use ldcbf_sim::{RunRequest, execute_run};
 
 #[derive(Parser)]
@@ -136,18 +137,18 @@ enum Command {
     Deadline {
         /// Cases `NAME[+rrt_star|+none][@SEED]` (a shipped scenario or a path),
         /// e.g. `maze+none`, `crowded@0` [default: the shipped cases,
-        /// `ldcbf_sim::deadline::SHIPPED_CASES`, and `large-map`].
+        /// `ldcbf_sim::studies::deadline::SHIPPED_CASES`, and `large-map`].
         #[arg(value_name = "CASES")]
-        cases: Vec<ldcbf_sim::deadline::Case>,
+        cases: Vec<ldcbf_sim::studies::deadline::Case>,
         /// Also run seeds 0..N of the `random` family (pooled into one row).
         #[arg(long, default_value_t = 0, value_name = "N")]
         random: u64,
         /// Deadline per control cycle, µs (250 = the 100,000
         /// instructions at 400 MHz).
-        #[arg(long, default_value_t = ldcbf_sim::deadline::DEFAULT_DEADLINE_US, value_name = "D")]
+        #[arg(long, default_value_t = ldcbf_sim::studies::deadline::DEFAULT_DEADLINE_US, value_name = "D")]
         deadline_us: f64,
         /// Target clock, MHz, to turn instruction counts into time.
-        #[arg(long, default_value_t = ldcbf_sim::deadline::DEFAULT_CLOCK_MHZ, value_name = "F")]
+        #[arg(long, default_value_t = ldcbf_sim::studies::deadline::DEFAULT_CLOCK_MHZ, value_name = "F")]
         clock_mhz: f64,
         /// Override a scenario field for every case (as for `run`).
         #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_set)]
@@ -185,12 +186,12 @@ enum Command {
         /// Cases `NAME[+rrt_star|+none][@SEED]` [default: the deadline study's
         /// shipped cases].
         #[arg(value_name = "CASES")]
-        cases: Vec<ldcbf_sim::deadline::Case>,
+        cases: Vec<ldcbf_sim::studies::deadline::Case>,
         /// Also run seeds 0..N of the `random` family.
         #[arg(long, default_value_t = 200, value_name = "N")]
         random: u64,
         /// Safety margins delta, m, comma separated (each replaces the files' own).
-        #[arg(long = "delta", value_delimiter = ',', default_values_t = ldcbf_sim::robustness::DEFAULT_DELTAS)]
+        #[arg(long = "delta", value_delimiter = ',', default_values_t = ldcbf_sim::studies::robustness::DEFAULT_DELTAS)]
         deltas: Vec<f64>,
         /// Override a scenario field for every run (as for `run`), e.g. `l_max=0.3`.
         #[arg(long = "set", value_name = "KEY=VALUE", value_parser = parse_set)]
@@ -308,7 +309,7 @@ fn fail(err: anyhow::Error) -> ExitCode {
     ExitCode::FAILURE
 }
 
-fn print_batch(rep: &ldcbf_sim::batch::BatchReport) {
+fn print_batch(rep: &ldcbf_sim::studies::batch::BatchReport) {
     let a = &rep.aggregate;
     outln!(
         "{} seeds {} shard {}: {} runs, {} successful, {} collisions, {} stuck, {} time limit, {} diverged; wall time {:.1} s",
@@ -360,7 +361,7 @@ fn main() -> ExitCode {
             req.solver = solver;
             req.mpc_rate = mpc_rate;
             req.progress = !quiet;
-            match ldcbf_sim::batch::run_batch(&req) {
+            match ldcbf_sim::studies::batch::run_batch(&req) {
                 Ok(rep) => {
                     print_batch(&rep);
                     ExitCode::SUCCESS
@@ -372,10 +373,10 @@ fn main() -> ExitCode {
             dirs,
             out,
             allow_partial,
-        } if ldcbf_sim::robustness::is_robustness_dir(&dirs[0]) => {
-            match ldcbf_sim::robustness::merge(&dirs, &out, allow_partial) {
+        } if ldcbf_sim::studies::robustness::is_robustness_dir(&dirs[0]) => {
+            match ldcbf_sim::studies::robustness::merge(&dirs, &out, allow_partial) {
                 Ok(rep) => {
-                    out!("{}", ldcbf_sim::robustness::markdown(&rep));
+                    out!("{}", ldcbf_sim::studies::robustness::markdown(&rep));
                     outln!("wrote {}/: runs.csv summary.json table.md", out.display());
                     ExitCode::SUCCESS
                 }
@@ -386,7 +387,7 @@ fn main() -> ExitCode {
             dirs,
             out,
             allow_partial,
-        } => match ldcbf_sim::batch::merge(&dirs, &out, allow_partial) {
+        } => match ldcbf_sim::studies::batch::merge(&dirs, &out, allow_partial) {
             Ok(rep) => {
                 print_batch(&rep);
                 ExitCode::SUCCESS
@@ -396,12 +397,12 @@ fn main() -> ExitCode {
         Command::Table { dirs } => {
             let mut cols = Vec::new();
             for d in &dirs {
-                match ldcbf_sim::batch::read_dir(d) {
-                    Ok((meta, agg, _)) => cols.push((ldcbf_sim::batch::label(&meta), agg)),
+                match ldcbf_sim::studies::batch::read_dir(d) {
+                    Ok((meta, agg, _)) => cols.push((ldcbf_sim::studies::batch::label(&meta), agg)),
                     Err(e) => return fail(e),
                 }
             }
-            out!("{}", ldcbf_sim::batch::markdown_table(&cols));
+            out!("{}", ldcbf_sim::studies::batch::markdown_table(&cols));
             ExitCode::SUCCESS
         }
         Command::Deadline {
@@ -414,7 +415,7 @@ fn main() -> ExitCode {
             repeat,
             instructions,
         } => {
-            let mut req = ldcbf_sim::deadline::DeadlineRequest::new();
+            let mut req = ldcbf_sim::studies::deadline::DeadlineRequest::new();
             if !cases.is_empty() {
                 req.cases = cases;
             }
@@ -425,9 +426,9 @@ fn main() -> ExitCode {
             req.jobs = jobs;
             req.repeat = repeat;
             req.instructions = instructions;
-            match ldcbf_sim::deadline::run_deadline(&req) {
+            match ldcbf_sim::studies::deadline::run_deadline(&req) {
                 Ok(rep) => {
-                    out!("{}", ldcbf_sim::deadline::markdown(&rep));
+                    out!("{}", ldcbf_sim::studies::deadline::markdown(&rep));
                     ExitCode::SUCCESS
                 }
                 Err(e) => fail(e),
@@ -443,7 +444,7 @@ fn main() -> ExitCode {
             shard,
             quiet,
         } => {
-            let mut req = ldcbf_sim::robustness::RobustnessRequest::new();
+            let mut req = ldcbf_sim::studies::robustness::RobustnessRequest::new();
             req.shard = shard;
             if !cases.is_empty() {
                 req.cases = cases;
@@ -456,9 +457,9 @@ fn main() -> ExitCode {
             }
             req.out = out;
             req.progress = !quiet;
-            match ldcbf_sim::robustness::run_robustness(&req) {
+            match ldcbf_sim::studies::robustness::run_robustness(&req) {
                 Ok(rep) => {
-                    out!("{}", ldcbf_sim::robustness::markdown(&rep));
+                    out!("{}", ldcbf_sim::studies::robustness::markdown(&rep));
                     ExitCode::SUCCESS
                 }
                 Err(e) => fail(e),
@@ -483,12 +484,12 @@ fn main() -> ExitCode {
             // Solve everything first: on any error nothing is printed but the error.
             let mut rows = Vec::with_capacity(files.len());
             for f in &files {
-                match ldcbf_sim::qpbench::solve_file(f, repeat, max_iter) {
+                match ldcbf_sim::studies::qpbench::solve_file(f, repeat, max_iter) {
                     Ok(r) => rows.push(r),
                     Err(e) => return fail(e),
                 }
             }
-            outln!("{}", ldcbf_sim::qpbench::CSV_HEADER);
+            outln!("{}", ldcbf_sim::studies::qpbench::CSV_HEADER);
             for r in &rows {
                 outln!("{}", r.csv());
             }

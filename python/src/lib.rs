@@ -23,9 +23,10 @@ use ldcbf_controller::{
     CommandSource, Config, ConvexPolygon, CycleInput, CycleOutput, CycleStatus, DenseQp,
     DualActiveSet, InputError, PaperController, QpSettings, QpStatus, RobotController, Side,
 };
-use ldcbf_sim::robot::RobotParams;
-use ldcbf_sim::scenario::{LoadOptions, MAX_VERTICES, Polygon, Scenario};
+use ldcbf_sim::scenario::{LoadOptions, Scenario};
 use ldcbf_sim::sim::{MpcRate, SimOptions, SimResult, Solver};
+use ldcbf_sim::world::robot::RobotParams;
+use ldcbf_sim::world::{MAX_VERTICES, Polygon};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::create_exception;
@@ -395,7 +396,7 @@ fn default_config(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
 
 /// The simulator's default humanoid: the controller's defaults with the body
 /// disk (0.25 m) and the feet (0.22 x 0.10 m) of `[robot]`'s defaults and the
-/// foot rows on (`ldcbf_sim::robot::RobotParams::default().apply(..)`).
+/// foot rows on (`ldcbf_sim::world::robot::RobotParams::default().apply(..)`).
 #[pyfunction]
 fn humanoid_config(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
     config_dict(py, &RobotParams::default().apply(Config::default()))
@@ -978,7 +979,7 @@ fn result_dict<'py>(
 // ------------------------------------------------------------------ QP
 
 /// The compiled solver sizes `(NV, max NC)`: the list of `ldcbf-sim qp solve`.
-const QP_SIZES: [(usize, usize); 7] = ldcbf_sim::qpbench::SIZES;
+const QP_SIZES: [(usize, usize); 7] = ldcbf_sim::studies::qpbench::SIZES;
 
 /// `min 1/2 x'Px + q'x  s.t.  Gx <= h` with the controller's dual active-set
 /// solver (`ldcbf_controller::DualActiveSet`), cold start, at the smallest

@@ -2,7 +2,7 @@
 
 The cycles are recorded by the CLI (`ldcbf-sim run NAME --trajectory-every 1`,
 a separate Rust build): every control cycle's input is in its logs (as
-`ldcbf_sim::replay` rebuilds it: the 1 kHz sample of the call's tick for the
+`ldcbf_sim::studies::replay` rebuilds it: the 1 kHz sample of the call's tick for the
 CoM state, heading, turning rate and stance side; the last footstep landed for
 the stance foot; the tick in the step for the time in step; the scenario's
 goal and map), and its output is in `cycles.csv`. The same inputs through a

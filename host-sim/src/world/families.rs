@@ -7,12 +7,12 @@
 //! the start (position and heading), the goal and the obstacles (convex
 //! polygons; a wall is a rectangle, a cup three). World frame W, metres,
 //! radians. Every layout is valid for a body of radius `r`
-//! ([`crate::robot::RobotParams::body_radius`]):
+//! ([`crate::world::robot::RobotParams::body_radius`]):
 //!
 //! * the start and the goal are at least `r + 0.05` m from every obstacle;
 //! * the goal is reachable by the body: on an occupancy grid of the obstacles
 //!   inflated by `r + 0.05` m (0.05 m cells), the start's and the goal's cells
-//!   are connected ([`crate::planner::connected`]), so a path of free cell
+//!   are connected ([`crate::world::grid::connected`]), so a path of free cell
 //!   centres keeps more than `r` from every obstacle; the drawn passage widths
 //!   below are at least 0.7 m;
 //!
@@ -32,7 +32,7 @@ use ldcbf_controller::nalgebra::Vector2;
 use rand_chacha::ChaCha8Rng;
 use rand_chacha::rand_core::{Rng, SeedableRng};
 
-use crate::scenario::Polygon;
+use crate::world::Polygon;
 
 /// The family names (`[generator] kind`).
 pub const FAMILIES: &[&str] = &[
@@ -296,7 +296,13 @@ pub fn is_valid(layout: &Layout, r: f64) -> bool {
     };
     clear(&layout.start)
         && clear(&layout.goal)
-        && crate::planner::connected(layout.start, layout.goal, &layout.obstacles, r + 0.05, 0.05)
+        && crate::world::grid::connected(
+            layout.start,
+            layout.goal,
+            &layout.obstacles,
+            r + 0.05,
+            0.05,
+        )
 }
 
 /// The layout of family `kind` for `seed` and a body of radius

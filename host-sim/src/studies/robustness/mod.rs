@@ -1,8 +1,8 @@
 //! `ldcbf-sim robustness`: the closed loop under disturbances
-//! ([`crate::disturbance`]), with and without the LDCBF safety margin `delta`.
+//! ([`crate::plant::disturbance`]), with and without the LDCBF safety margin `delta`.
 //!
 //! A study runs every case (by default the deadline study's shipped cases,
-//! [`crate::deadline::SHIPPED_CASES`], and seeds `0..200` of the `random`
+//! [`crate::studies::deadline::SHIPPED_CASES`], and seeds `0..200` of the `random`
 //! family) under every [`Condition`] (the undisturbed baseline, then each
 //! disturbance at a moderate and a severe magnitude, [`default_conditions`]) and
 //! every `delta` (m; `--set delta=...` for every case, replacing the files' own
@@ -44,11 +44,18 @@ use anyhow::{Context, Result, anyhow, bail};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::batch::Shard;
-use crate::deadline::{Case, random_cases, shipped_cases};
-use crate::report::OutputDir;
+mod files;
+#[cfg(test)]
+mod tests;
+
+use files::write_dir;
+pub use files::{RUNS_HEADER, is_robustness_dir, merge, read_dir, runs_csv};
+
+use crate::report::{OutputDir, nearest_rank};
 use crate::scenario::Scenario;
 use crate::sim::{Outcome, SimOptions, SimResult, run};
+use crate::studies::batch::Shard;
+use crate::studies::deadline::{Case, random_cases, shipped_cases};
 
 /// Fall threshold: horizontal CoM offset from the stance foot over the plant's
 /// CoM height (0.5: 27 degrees of lean; the undisturbed walks of the shipped
@@ -245,7 +252,8 @@ fn one_run(
     let r = run(sc, opts).with_context(|| label.clone())?;
     let (fall_time, min_com) = fall_and_clearance(&r, r.disturbance.plant_com_height);
     let min_clearance = sc.robot.body_clearance(min_com);
-    let collision = !sc.obstacles.is_empty() && min_clearance < -crate::robot::CONTACT_TOLERANCE;
+    let collision =
+        !sc.obstacles.is_empty() && min_clearance < -crate::world::robot::CONTACT_TOLERANCE;
     let reached = r.outcome == Outcome::GoalReached;
     Ok(RobustRun {
         condition,
@@ -306,14 +314,7 @@ pub fn cell_stats(runs: &[&RobustRun]) -> CellStats {
         .map(|r| r.min_clearance)
         .collect();
     c.sort_by(f64::total_cmp);
-    let rank = |p: f64| {
-        if c.is_empty() {
-            f64::NAN
-        } else {
-            let i = ((p / 100.0) * c.len() as f64).ceil() as usize;
-            c[i.clamp(1, c.len()) - 1]
-        }
-    };
+    let rank = |p: f64| nearest_rank(&c, p).unwrap_or(f64::NAN);
     let count = |f: &dyn Fn(&RobustRun) -> bool| runs.iter().filter(|r| f(r)).count();
     CellStats {
         runs: runs.len(),
@@ -549,318 +550,6 @@ pub fn run_robustness(req: &RobustnessRequest) -> Result<RobustnessReport> {
     Ok(rep)
 }
 
-/// Writes `runs.csv`, `table.md` and `summary.json` into `out` (atomically).
-fn write_dir(out: &Path, rep: &RobustnessReport) -> Result<PathBuf> {
-    let dir = OutputDir::create(out)
-        .with_context(|| format!("cannot create output directory {}", out.display()))?;
-    std::fs::write(dir.path().join("runs.csv"), runs_csv(rep))?;
-    std::fs::write(dir.path().join("table.md"), markdown(rep))?;
-    let json = serde_json::to_string_pretty(&RobustnessMeta::of(rep))?;
-    std::fs::write(dir.path().join("summary.json"), json + "\n")?;
-    dir.commit()
-        .with_context(|| format!("cannot move the results into {}", out.display()))
-}
-
-/// Whether `dir` holds a `summary.json` written by `robustness --out` (so
-/// `merge` knows which kind of study it merges).
-pub fn is_robustness_dir(dir: &Path) -> bool {
-    #[derive(Deserialize)]
-    struct Kind {
-        kind: String,
-    }
-    std::fs::read_to_string(dir.join("summary.json"))
-        .ok()
-        .and_then(|t| serde_json::from_str::<Kind>(&t).ok())
-        .is_some_and(|k| k.kind == KIND)
-}
-
-/// Reads a directory written by `robustness --out` or by [`merge`]: its
-/// summary and its runs (each checked against the run the study has at that
-/// place), with their 0-based indices in the whole study.
-pub fn read_dir(dir: &Path) -> Result<(RobustnessMeta, Vec<(usize, RobustRun)>)> {
-    if !dir.is_dir() {
-        bail!(
-            "{}: no such robustness directory (give the directory written by `robustness --out` or `merge`)",
-            dir.display()
-        );
-    }
-    let sj = dir.join("summary.json");
-    let text = std::fs::read_to_string(&sj).map_err(|e| anyhow!("{}: {e}", sj.display()))?;
-    let meta: RobustnessMeta = serde_json::from_str(&text)
-        .map_err(|e| anyhow!("{}: not a robustness summary: {e}", sj.display()))?;
-    if meta.kind != KIND {
-        bail!(
-            "{}: field `meta.kind` is {:?}, not {KIND:?}",
-            sj.display(),
-            meta.kind
-        );
-    }
-    if meta.shard_count == 0
-        || meta.shard.count
-            != if meta.merged_shards.is_empty() {
-                meta.shard_count
-            } else {
-                1
-            }
-        || meta
-            .merged_shards
-            .iter()
-            .any(|&i| i == 0 || i > meta.shard_count)
-    {
-        bail!(
-            "{}: inconsistent shard fields (shard {}, shard_count {}, merged_shards {:?})",
-            sj.display(),
-            meta.shard,
-            meta.shard_count,
-            meta.merged_shards
-        );
-    }
-    let cases = meta.all_cases();
-    let per_cell = cases.len();
-    if meta.study_runs != meta.conditions.len() * meta.deltas.len() * per_cell {
-        bail!(
-            "{}: study_runs {} does not match the study it describes",
-            sj.display(),
-            meta.study_runs
-        );
-    }
-    // Indices in the study of this directory's runs, in order.
-    let indices: Vec<usize> = if meta.merged_shards.is_empty() {
-        (0..meta.study_runs)
-            .filter(|&k| meta.shard.holds(k as u64))
-            .collect()
-    } else {
-        (0..meta.study_runs)
-            .filter(|&k| {
-                meta.merged_shards.iter().any(|&i| {
-                    Shard {
-                        index: i,
-                        count: meta.shard_count,
-                    }
-                    .holds(k as u64)
-                })
-            })
-            .collect()
-    };
-    let csv = dir.join("runs.csv");
-    let text = std::fs::read_to_string(&csv).map_err(|e| anyhow!("{}: {e}", csv.display()))?;
-    let mut lines = text.lines();
-    if lines.next() != Some(RUNS_HEADER) {
-        bail!(
-            "{}:1: unexpected header (not a runs.csv written by ldcbf-sim robustness)",
-            csv.display()
-        );
-    }
-    let rows: Vec<&str> = lines.filter(|l| !l.trim().is_empty()).collect();
-    if rows.len() != meta.runs || rows.len() != indices.len() {
-        bail!(
-            "{}: {} rows but summary.json says {} runs of shard {} (truncated file?)",
-            csv.display(),
-            rows.len(),
-            meta.runs,
-            meta.shard
-        );
-    }
-    let mut out = Vec::with_capacity(rows.len());
-    for (i, (line, &k)) in rows.iter().zip(&indices).enumerate() {
-        let ci = k / (meta.deltas.len() * per_cell);
-        let di = (k / per_cell) % meta.deltas.len();
-        let (group, label) = &cases[k % per_cell];
-        let run = parse_run(
-            line,
-            &meta.conditions[ci],
-            ci,
-            meta.deltas[di],
-            group,
-            label,
-        )
-        .map_err(|e| anyhow!("{}:{}: {e}", csv.display(), i + 2))?;
-        out.push((k, run));
-    }
-    Ok((meta, out))
-}
-
-/// Parses a line of `runs.csv`, which must be the run of `condition`, `delta`
-/// and case `label`.
-fn parse_run(
-    line: &str,
-    cond: &Condition,
-    condition: usize,
-    delta: f64,
-    group: &'static str,
-    label: &str,
-) -> Result<RobustRun> {
-    let f: Vec<&str> = line.split(',').collect();
-    if f.len() != 13 {
-        bail!("{} fields, expected 13", f.len());
-    }
-    let expect = [
-        cond.disturbance.clone(),
-        cond.magnitude.replace(',', ";"),
-        format!("{delta}"),
-        group.to_string(),
-        label.to_string(),
-    ];
-    if f[..5] != expect {
-        bail!(
-            "run {:?} where the study has {:?} (not the same study, or rows out of order)",
-            f[..5].join(","),
-            expect.join(",")
-        );
-    }
-    let outcome = [
-        Outcome::GoalReached,
-        Outcome::TimeLimit,
-        Outcome::Stuck,
-        Outcome::Diverged,
-    ]
-    .into_iter()
-    .find(|o| o.name() == f[5])
-    .ok_or_else(|| anyhow!("unknown outcome {:?}", f[5]))?;
-    let flag = |s: &str, name: &str| match s {
-        "0" => Ok(false),
-        "1" => Ok(true),
-        _ => Err(anyhow!("{name}: expected 0 or 1, got {s:?}")),
-    };
-    let num = |s: &str, name: &str| {
-        s.parse::<f64>()
-            .map_err(|_| anyhow!("{name}: not a number: {s:?}"))
-    };
-    let count = |s: &str, name: &str| {
-        s.parse::<usize>()
-            .map_err(|_| anyhow!("{name}: not a count: {s:?}"))
-    };
-    let fell = flag(f[6], "fell")?;
-    let fall_time = if f[7].is_empty() {
-        None
-    } else {
-        Some(num(f[7], "fall_time")?)
-    };
-    if fell != fall_time.is_some() {
-        bail!("fell and fall_time disagree");
-    }
-    Ok(RobustRun {
-        condition,
-        delta,
-        group,
-        label: label.to_string(),
-        outcome,
-        fall_time,
-        success: flag(f[8], "success")?,
-        collision: flag(f[9], "collision")?,
-        min_clearance: num(f[10], "min_clearance")?,
-        steps: count(f[11], "steps")?,
-        non_optimal_cycles: count(f[12], "non_optimal_cycles")?,
-    })
-}
-
-/// Merges shard directories of one robustness study into `out`: checks that
-/// they come from the same study (cases, random seeds, conditions, margins,
-/// overrides, shard count) and that no shard appears twice and, unless
-/// `allow_partial`, that every shard is there; writes the three files of the
-/// whole study (nothing on error).
-pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<RobustnessReport> {
-    if inputs.is_empty() {
-        bail!("merge needs at least one robustness directory");
-    }
-    let mut parts = Vec::new();
-    for d in inputs {
-        parts.push(read_dir(d)?);
-    }
-    let m0 = parts[0].0.clone();
-    let key = m0.study_key();
-    let mut shards: Vec<u32> = Vec::new();
-    let mut runs: Vec<(usize, RobustRun)> = Vec::new();
-    let mut wall = 0.0;
-    for ((meta, r), dir) in parts.into_iter().zip(inputs) {
-        if meta.study_key() != key {
-            bail!(
-                "{}: not the same study as {} (cases, random seeds, conditions, deltas, overrides and shard count must agree)",
-                dir.display(),
-                inputs[0].display()
-            );
-        }
-        let mine = if meta.merged_shards.is_empty() {
-            vec![meta.shard.index]
-        } else {
-            meta.merged_shards.clone()
-        };
-        for s in mine {
-            if shards.contains(&s) {
-                bail!(
-                    "{}: shard {s}/{} given twice",
-                    dir.display(),
-                    meta.shard_count
-                );
-            }
-            shards.push(s);
-        }
-        wall += meta.wall_time_s;
-        runs.extend(r);
-    }
-    shards.sort_unstable();
-    runs.sort_by_key(|(k, _)| *k);
-    if !allow_partial && runs.len() < m0.study_runs {
-        let missing: Vec<String> = (1..=m0.shard_count)
-            .filter(|s| !shards.contains(s))
-            .map(|s| format!("{s}/{}", m0.shard_count))
-            .collect();
-        bail!(
-            "incomplete study: {} of {} runs (missing shards: {}); pass --allow-partial to merge anyway",
-            runs.len(),
-            m0.study_runs,
-            missing.join(", ")
-        );
-    }
-    let rep = RobustnessReport {
-        cases: m0.cases,
-        random: m0.random,
-        conditions: m0.conditions,
-        deltas: m0.deltas,
-        runs: runs.into_iter().map(|(_, r)| r).collect(),
-        study_runs: m0.study_runs,
-        wall_time_s: wall,
-        jobs: 0,
-        sets: m0.sets,
-        shard: Shard::ALL,
-        shard_count: m0.shard_count,
-        merged_shards: shards,
-    };
-    write_dir(out, &rep)?;
-    Ok(rep)
-}
-
-/// Header of `runs.csv`.
-pub const RUNS_HEADER: &str = "disturbance,magnitude,delta,group,case,outcome,fell,fall_time,\
-success,collision,min_clearance,steps,non_optimal_cycles";
-
-/// Every run as CSV (with [`RUNS_HEADER`]).
-pub fn runs_csv(rep: &RobustnessReport) -> String {
-    let mut s = String::from(RUNS_HEADER);
-    s.push('\n');
-    for r in &rep.runs {
-        let c = &rep.conditions[r.condition];
-        let _ = writeln!(
-            s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            c.disturbance,
-            c.magnitude.replace(',', ";"),
-            r.delta,
-            r.group,
-            r.label,
-            r.outcome.name(),
-            u8::from(r.fall_time.is_some()),
-            r.fall_time.map_or(String::new(), |t| format!("{t:.3}")),
-            u8::from(r.success),
-            u8::from(r.collision),
-            r.min_clearance,
-            r.steps,
-            r.non_optimal_cycles
-        );
-    }
-    s
-}
-
 /// The study as Markdown: one table per group, a row per condition and delta.
 pub fn markdown(rep: &RobustnessReport) -> String {
     let mut s = String::new();
@@ -964,60 +653,4 @@ pub fn markdown(rep: &RobustnessReport) -> String {
         }
     );
     s
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    fn run_of(c: f64, success: bool, fell: bool) -> RobustRun {
-        RobustRun {
-            condition: 0,
-            delta: 0.0,
-            group: "random",
-            label: "x".into(),
-            outcome: if fell {
-                Outcome::Diverged
-            } else {
-                Outcome::GoalReached
-            },
-            fall_time: fell.then_some(1.0),
-            success,
-            collision: c < 0.0,
-            min_clearance: c,
-            steps: 1,
-            non_optimal_cycles: 0,
-        }
-    }
-
-    #[test]
-    fn cell_statistics() {
-        let runs: Vec<RobustRun> = (0..20)
-            .map(|i| run_of(f64::from(i) * 0.01 - 0.015, i >= 2, i == 0))
-            .collect();
-        let refs: Vec<&RobustRun> = runs.iter().collect();
-        let st = cell_stats(&refs);
-        assert_eq!(st.runs, 20);
-        assert_eq!(st.success, 18);
-        assert_eq!(st.collisions, 2);
-        assert_eq!(st.collisions_upright, 1);
-        assert_eq!(st.falls, 1);
-        assert!((st.min_clearance + 0.015).abs() < 1e-12);
-        // Upright: the 19 runs from -0.005 m; nearest rank 1 of 19 is the p5.
-        assert!((st.min_clearance_upright + 0.005).abs() < 1e-12);
-        assert_eq!(st.p5_clearance_upright, st.min_clearance_upright);
-        assert!((st.median_clearance_upright - 0.085).abs() < 1e-12);
-    }
-
-    #[test]
-    fn default_conditions_parse_as_scenario_overrides() {
-        for c in default_conditions() {
-            let sc = Case::new("simple").load(&c.sets).unwrap();
-            assert_eq!(
-                sc.disturbance.is_active(sc.config.com_height),
-                c.disturbance != "none",
-                "{c:?}"
-            );
-        }
-    }
 }

@@ -25,7 +25,7 @@ use ldcbf_controller::geometry::closest_point_point_polygon;
 use ldcbf_controller::nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
-use crate::scenario::Polygon;
+use crate::world::Polygon;
 
 /// Contact tolerance, m: a clearance below `-CONTACT_TOLERANCE` is a collision.
 /// A barrier or foot row that is active holds to rounding (`1e-14` m), so a
@@ -206,16 +206,7 @@ fn distance_point_segment(p: &Vector2<f64>, a: &Vector2<f64>, b: &Vector2<f64>) 
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn square(c: [f64; 2], h: f64) -> Polygon {
-        Polygon::new(&[
-            [c[0] - h, c[1] - h],
-            [c[0] + h, c[1] - h],
-            [c[0] + h, c[1] + h],
-            [c[0] - h, c[1] + h],
-        ])
-        .unwrap()
-    }
+    use crate::world::square;
 
     #[test]
     fn foot_clearance_is_the_gap_or_minus_the_depth() {

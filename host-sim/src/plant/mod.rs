@@ -19,9 +19,16 @@
 //! flips, the tick counter of the step restarts at 0 and the turning rate of the
 //! new step takes effect. The heading integrates the turning rate in force at
 //! every tick (`theta += omega dt`).
+//!
+//! The room also holds what is done to the plant and to the controller's
+//! measurement that the controller's model does not predict ([`disturbance`]).
+//! It depends on no other room; the scenario reads its `[disturbance]`
+//! settings, the closed loop ([`crate::sim`]) drives it.
 
 use ldcbf_controller::Side;
 use ldcbf_controller::nalgebra::Vector2;
+
+pub mod disturbance;
 
 /// Physical parameters of the plant.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -167,7 +174,7 @@ impl Plant {
     }
 
     /// A push: adds `delta_v` (m/s, world) to the CoM velocity at once (the
-    /// position is continuous). Used by [`crate::disturbance`].
+    /// position is continuous). Used by [`crate::plant::disturbance`].
     pub fn push(&mut self, delta_v: Vector2<f64>) {
         self.velocity += delta_v;
     }

@@ -1,7 +1,9 @@
 //! The closed loop: the 1 kHz [`Plant`] and the controller, called as an onboard
-//! loop would call it.
+//! loop would call it. A room of the simulator above the scenario, the plant,
+//! perception and the planner; the report and the studies read what it
+//! records ([`SimResult`]).
 //!
-//! Before the first tick, with `planner = "rrt_star"`, [`crate::planner::plan`]
+//! Before the first tick, with `planner = "rrt_star"`, [`crate::plan::plan`]
 //! turns the known map into subgoals (the goal last; without a planner the goal
 //! is the only subgoal). If planning fails the run goes on towards the goal
 //! directly and the error is kept in [`Navigation::error`].
@@ -9,7 +11,7 @@
 //! Each tick, in this order:
 //!
 //! 0. **Push.** A push of the scenario's `[disturbance]` due at this tick is
-//!    added to the plant's CoM velocity ([`crate::disturbance`]), so everything
+//!    added to the plant's CoM velocity ([`crate::plant::disturbance`]), so everything
 //!    below sees the pushed state.
 //! 1. **Step end.** When the current step has lasted `T`, the swing foot lands at
 //!    the `foot_target` of the most recent controller cycle, the stance side
@@ -23,9 +25,9 @@
 //!    true state (CoM position, velocity, heading, the turning rate in force, stance
 //!    foot and side, time in step), the goal and the obstacle list, and
 //!    `Controller::step_with` is called. With the known map, the candidates
-//!    come from the map's R-tree ([`crate::obstacle_index`], built once before
+//!    come from the map's R-tree ([`crate::world::obstacle_index`], built once before
 //!    the first tick) around `Controller::obstacle_query` (reused while they
-//!    cover the cycle, [`crate::obstacle_index::Candidates`]), and
+//!    cover the cycle, [`crate::world::obstacle_index::Candidates`]), and
 //!    `Controller::step_among_with` is called on them: bit for bit the
 //!    result of `step_with` on the whole map, at a cost that does not grow with
 //!    it. The wall-clock time is measured with [`Instant`] around that query
@@ -38,17 +40,17 @@
 //!    is advanced while the CoM is within `switch_radius` of it (never past the
 //!    goal), and the controller's goal is the current subgoal. With
 //!    `perception = "lidar"` the obstacle list is the one inferred from a LiDAR
-//!    scan taken at that moment from the CoM ([`crate::perception`]); otherwise
+//!    scan taken at that moment from the CoM ([`crate::sense`]); otherwise
 //!    it is the true map. With state estimation noise (`disturbance.noise_*`)
 //!    the CoM position, velocity and heading in the input (and the position
 //!    used to advance the subgoal) are the true ones plus a seeded Gaussian
 //!    draw; the LiDAR scans from the true pose.
 //! 3. **Record** the 1 kHz sample (and its clearance to every TRUE obstacle,
-//!    [`clearance`] found through the map's index, unless
+//!    [`clearance`](crate::world::clearance) found through the map's index, unless
 //!    [`SimOptions::record_clearance`] is off), then
 //!    check the end conditions: goal reached (`|p - goal| <= success_radius`),
 //!    time limit, or stuck: the remaining path length
-//!    ([`crate::planner::remaining_length`]: distance to the current subgoal plus
+//!    ([`crate::plan::remaining_length`]: distance to the current subgoal plus
 //!    the rest of the subgoal polyline; the distance to the goal without a
 //!    planner) has not improved by 5 cm for `stuck_window` seconds. Walking
 //!    around an obstacle towards a subgoal is progress; circling is not. A
@@ -67,16 +69,18 @@ use std::time::Instant;
 use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_controller::{
     CycleInput, CycleOutput, HalfPlane, OwnSolver, QpBackend, RobotController, Side,
-    closest_point_point_polygon,
 };
 use ldcbf_reference::ClarabelBackend;
 
-use crate::disturbance::{DisturbanceLog, Disturber};
-use crate::obstacle_index::{Candidates, ObstacleIndex};
-use crate::perception::Lidar;
-use crate::planner::{Plan, remaining_length};
+use crate::plan::Planner;
+use crate::plan::{Plan, remaining_length};
+use crate::plant::disturbance::{DisturbanceLog, Disturber};
 use crate::plant::{Plant, PlantParams};
-use crate::scenario::{Perception, Planner, Polygon, Scenario};
+use crate::scenario::Scenario;
+use crate::sense::Lidar;
+use crate::sense::Perception;
+use crate::world::Polygon;
+use crate::world::obstacle_index::{Candidates, ObstacleIndex};
 
 /// Horizon of [`RobotController`].
 pub const HORIZON: usize = 3;
@@ -291,7 +295,7 @@ pub struct Footstep {
     pub time: f64,
     /// Heading of the foot's long axis (the robot's heading when it landed), rad.
     pub heading: f64,
-    /// Signed clearance of the foot's footprint ([`crate::robot::RobotParams::footprint`])
+    /// Signed clearance of the foot's footprint ([`crate::world::robot::RobotParams::footprint`])
     /// to the nearest obstacle, m (negative = the foot overlaps an obstacle; a
     /// point foot's signed distance when the footprint is 0 x 0).
     pub clearance: f64,
@@ -377,14 +381,6 @@ impl core::fmt::Display for SimError {
 
 impl std::error::Error for SimError {}
 
-/// Signed distance from `p` to the nearest polygon, m (`+inf` if none).
-pub fn clearance(p: &Vector2<f64>, obstacles: &[Polygon]) -> f64 {
-    obstacles
-        .iter()
-        .map(|o| closest_point_point_polygon(p, o).signed_distance)
-        .fold(f64::INFINITY, f64::min)
-}
-
 /// Runs the scenario to its end (see the module docs). Fails before the first
 /// tick on an invalid controller configuration or LiDAR, or
 /// [`SimOptions::timing_repeats`] = 0.
@@ -402,7 +398,7 @@ pub fn run(scenario: &Scenario, options: SimOptions) -> Result<SimResult, SimErr
 /// index of that list, `step_among_with` on the candidates around
 /// `obstacle_query` (`candidates`: the index queried again only when the last
 /// list does not cover this cycle; bit for bit the same output, see
-/// [`crate::obstacle_index`]).
+/// [`crate::world::obstacle_index`]).
 fn control<const V: usize, B: QpBackend<NV, NC>>(
     controller: &mut RobotController,
     backend: &mut B,
@@ -488,7 +484,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
     let mut navigation = Navigation::default();
     if scenario.planner == Planner::RrtStar {
         let t0 = Instant::now();
-        let res = crate::planner::plan(
+        let res = crate::plan::plan(
             scenario.start,
             scenario.goal,
             obstacles,
@@ -709,176 +705,4 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::scenario::{LoadOptions, load};
-
-    /// `simple`, cut to `time_limit` s, with `--set` overrides.
-    fn simple(time_limit: f64, sets: &[(&str, &str)]) -> Scenario {
-        let mut all = vec![("time_limit".to_string(), time_limit.to_string())];
-        all.extend(sets.iter().map(|(k, v)| (k.to_string(), v.to_string())));
-        load(
-            "simple",
-            &LoadOptions {
-                seed: None,
-                sets: all,
-            },
-        )
-        .unwrap()
-    }
-
-    fn go(sc: &Scenario) -> SimResult {
-        let opts = SimOptions {
-            record_scans: false,
-            ..SimOptions::default()
-        };
-        run(sc, opts).unwrap()
-    }
-
-    fn same_walk(a: &SimResult, b: &SimResult) -> bool {
-        a.samples == b.samples
-            && a.footsteps == b.footsteps
-            && a.cycles.len() == b.cycles.len()
-            && a.cycles
-                .iter()
-                .zip(&b.cycles)
-                .all(|(x, y)| x.output.foot_target == y.output.foot_target)
-    }
-
-    #[test]
-    fn timing_repeats_leave_the_run_unchanged() {
-        let sc = simple(3.0, &[]);
-        let once = go(&sc);
-        for solver in [Solver::Own, Solver::Clarabel] {
-            let opts = |k| SimOptions {
-                record_scans: false,
-                solver,
-                timing_repeats: k,
-                ..SimOptions::default()
-            };
-            let a = run(&sc, opts(1)).unwrap();
-            let b = run(&sc, opts(3)).unwrap();
-            assert!(same_walk(&a, &b), "{solver:?}");
-            assert!(
-                a.cycles
-                    .iter()
-                    .zip(&b.cycles)
-                    .all(|(x, y)| x.output == y.output),
-                "{solver:?}"
-            );
-            assert!(b.cycles.iter().all(|c| c.compute_ns > 0));
-            assert!(matches!(&run(&sc, opts(0)), Err(SimError(e)) if e.contains(">= 1")));
-        }
-        assert!(same_walk(
-            &once,
-            &run(
-                &sc,
-                SimOptions {
-                    timing_repeats: 5,
-                    ..SimOptions::default()
-                }
-            )
-            .unwrap()
-        ));
-    }
-
-    #[test]
-    fn zero_disturbance_is_the_undisturbed_run_bit_for_bit() {
-        let base = go(&simple(3.0, &[]));
-        let zero = go(&simple(
-            3.0,
-            &[
-                ("disturbance.seed", "9"),
-                ("disturbance.push_time", "1.0"),
-                ("disturbance.push_period", "0.5"),
-                ("disturbance.plant_com_height", "1.0"),
-                ("disturbance.foot_sigma", "0.0"),
-                ("disturbance.noise_position", "0.0"),
-            ],
-        ));
-        assert!(same_walk(&base, &zero));
-        assert!(zero.disturbance.pushes.is_empty());
-        assert_eq!(zero.disturbance.foot_errors, 0);
-        assert!(crate::report::summarize(&zero).disturbance.is_none());
-    }
-
-    #[test]
-    fn a_push_changes_the_velocity_by_the_impulse_at_its_tick() {
-        let base = go(&simple(2.0, &[]));
-        let pushed = go(&simple(
-            2.0,
-            &[
-                ("disturbance.push_time", "1.234"),
-                ("disturbance.push_forward", "0.1"),
-                ("disturbance.push_lateral", "0.3"),
-            ],
-        ));
-        let log = &pushed.disturbance;
-        assert_eq!(log.pushes.len(), 1);
-        assert_eq!(log.pushes[0].tick, 1234);
-        let n = 1234;
-        assert_eq!(base.samples[..n], pushed.samples[..n]);
-        let dv = Vector2::new(log.pushes[0].delta_v[0], log.pushes[0].delta_v[1]);
-        // The impulse in the body frame, rotated by the heading at the push.
-        let (s, c) = base.samples[n].heading.sin_cos();
-        let expected = Vector2::new(c * 0.1 - s * 0.3, s * 0.1 + c * 0.3);
-        assert!((dv - expected).amax() < 1e-15);
-        assert_eq!(pushed.samples[n].position, base.samples[n].position);
-        assert_eq!(pushed.samples[n].velocity, base.samples[n].velocity + dv);
-        assert_ne!(pushed.samples[n + 1], base.samples[n + 1]);
-        let summary = crate::report::summarize(&pushed);
-        assert_eq!(summary.disturbance.unwrap().pushes.len(), 1);
-    }
-
-    #[test]
-    fn height_mismatch_changes_the_plant_only() {
-        let base = go(&simple(2.0, &[]));
-        let low = go(&simple(2.0, &[("disturbance.plant_com_height", "0.9")]));
-        assert_eq!(low.disturbance.plant_com_height, 0.9);
-        assert_eq!(low.disturbance.model_com_height, 1.0);
-        assert_eq!(low.scenario.config.com_height, 1.0);
-        // The first cycle sees the same (rest) state, so plans the same step.
-        assert_eq!(
-            low.cycles[0].output.foot_target,
-            base.cycles[0].output.foot_target
-        );
-        assert_ne!(low.samples[1500], base.samples[1500]);
-    }
-
-    #[test]
-    fn foot_errors_and_noise_are_seeded() {
-        let sets = |seed: &'static str| {
-            vec![
-                ("disturbance.seed", seed),
-                ("disturbance.foot_sigma", "0.02"),
-                ("disturbance.noise_position", "0.01"),
-                ("disturbance.noise_velocity", "0.02"),
-                ("disturbance.noise_heading", "0.01"),
-            ]
-        };
-        let a = go(&simple(2.0, &sets("1")));
-        let b = go(&simple(2.0, &sets("1")));
-        let c = go(&simple(2.0, &sets("2")));
-        assert!(same_walk(&a, &b));
-        assert!(!same_walk(&a, &c));
-        let log = &a.disturbance;
-        assert_eq!(log.foot_errors, a.steps());
-        assert!(log.max_foot_error > 0.0 && log.noisy_cycles == a.cycles.len());
-        // Every landed foot is its target plus an error no larger than the largest.
-        let targets: Vec<Vector2<f64>> = a
-            .cycles
-            .iter()
-            .filter(|c| c.landed)
-            .map(|c| c.output.foot_target)
-            .collect();
-        assert_eq!(targets.len(), a.steps());
-        for (f, t) in a.footsteps[1..].iter().zip(&targets) {
-            let e = (f.position - t).norm();
-            assert!(e > 0.0 && e <= log.max_foot_error + 1e-15);
-        }
-        // The controller saw a noisy state: its x0 is not the true sample.
-        let c0 = &a.cycles[1];
-        let tick = (c0.time / PLANT_DT).round() as usize;
-        assert_ne!(c0.output.plan.x0.position, a.samples[tick].position);
-    }
-}
+mod tests;

@@ -52,8 +52,8 @@ use ldcbf_controller::{ObstacleQuery, closest_point_point_polygon};
 use rstar::primitives::{GeomWithData, Rectangle};
 use rstar::{AABB, RTree};
 
-use crate::robot::{RobotParams, signed_distance_convex};
-use crate::scenario::Polygon;
+use crate::world::Polygon;
+use crate::world::robot::{RobotParams, signed_distance_convex};
 
 /// One indexed obstacle: its bounding box (m, world frame) and its index in
 /// the map.
@@ -162,7 +162,7 @@ impl ObstacleIndex {
 
     /// Signed distance from `p` (m, world) to the nearest of `obstacles` (the
     /// list this index was built from), m (negative inside, `+inf` without
-    /// obstacles): [`crate::sim::clearance`]'s value through
+    /// obstacles): [`crate::world::clearance`]'s value through
     /// [`ObstacleIndex::min_near`].
     pub fn clearance(&self, p: &Vector2<f64>, obstacles: &[Polygon]) -> f64 {
         self.min_near(p, 0.0, |j| {
@@ -278,13 +278,7 @@ mod tests {
     use super::*;
 
     fn square(cx: f64, cy: f64, h: f64) -> Polygon {
-        Polygon::new(&[
-            [cx - h, cy - h],
-            [cx + h, cy - h],
-            [cx + h, cy + h],
-            [cx - h, cy + h],
-        ])
-        .unwrap()
+        crate::world::square([cx, cy], h)
     }
 
     #[test]
@@ -306,7 +300,7 @@ mod tests {
         for p in [c, Vector2::new(5.05, 5.0), Vector2::new(-3.0, 12.5)] {
             assert_eq!(
                 index.clearance(&p, &map).to_bits(),
-                crate::sim::clearance(&p, &map).to_bits()
+                crate::world::clearance(&p, &map).to_bits()
             );
         }
         assert!((index.clearance(&Vector2::new(5.05, 5.0), &map) + 0.05).abs() < 1e-12);

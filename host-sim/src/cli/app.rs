@@ -6,7 +6,7 @@ use std::path::{Component, Path, PathBuf};
 
 use anyhow::{Context, Result, bail};
 
-use crate::plot::PlotOptions;
+use crate::report::plot::PlotOptions;
 use crate::report::{OutputDir, Summary, summarize, write_logs};
 use crate::scenario::{LoadOptions, load};
 use crate::sim::{MpcRate, SimOptions, SimResult, Solver, run};
@@ -170,7 +170,7 @@ pub fn execute_run(req: &RunRequest) -> Result<RunReport> {
             gif: req.gif,
             ..PlotOptions::default()
         };
-        files.extend(crate::plot::render_all(&result, dir.path(), &opts)?);
+        files.extend(crate::report::plot::render_all(&result, dir.path(), &opts)?);
     }
     // Everything is written: move the QPs, then the results, into place.
     if let (Some(qd), Some(qdir)) = (qd, &req.export_qps) {

@@ -1,0 +1,330 @@
+//! The map-like scene every map figure is made of: obstacles, path, footsteps,
+//! the robot, start and goal, and for one control cycle its LDCBF half-planes,
+//! scan and subgoals.
+
+use super::*;
+
+/// Draws a map-like scene into `area`: title, axes, (half-planes of `cycle`),
+/// obstacles, path and footsteps up to `until` (s), robot, start and goal.
+pub(super) fn draw_scene<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    scene: &Scene<'_>,
+    layout: MapLayout,
+    moment: Moment<'_>,
+    title: &str,
+    legend: bool,
+) -> Result<()> {
+    let Moment { until, cycle, scan } = moment;
+    let r = scene.r;
+    let lidar = sc_perception(r) == Perception::Lidar;
+    let sc = &r.scenario;
+    let (x0, x1, y0, y1) = scene.bounds;
+    let (title_area, chart_area) = area.split_vertically(layout.title_h);
+    let mut chart = map_chart(
+        &title_area,
+        &chart_area,
+        &layout,
+        (title, 1.2),
+        (x0, x1, y0, y1),
+        RGBColor(210, 210, 210),
+    )?;
+
+    // LDCBF half-planes of the cycle: each safe side light, intersection dark.
+    if let Some(c) = cycle {
+        let delta = sc.config.delta;
+        let rect = vec![(x0, y0), (x1, y0), (x1, y1), (x0, y1)];
+        let mut inter = rect.clone();
+        for hp in &c.half_planes {
+            let p = clip(&rect, &hp.half_plane, delta);
+            if p.len() >= 3 {
+                chart
+                    .draw_series(std::iter::once(Polygon::new(p, SAFE.mix(0.10).filled())))
+                    .map_err(e)?;
+            }
+            inter = clip(&inter, &hp.half_plane, delta);
+        }
+        if !c.half_planes.is_empty() && inter.len() >= 3 {
+            let mut closed = inter.clone();
+            closed.push(inter[0]);
+            chart
+                .draw_series(std::iter::once(Polygon::new(
+                    inter,
+                    SAFE.mix(0.30).filled(),
+                )))
+                .map_err(e)?;
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    closed,
+                    SAFE.stroke_width(1),
+                )))
+                .map_err(e)?;
+        }
+    }
+
+    // Obstacles (the true map; faded when the controller only perceives it).
+    let fill = if lidar { 0.30 } else { 0.85 };
+    for (i, o) in sc.obstacles.iter().enumerate() {
+        let v: Vec<(f64, f64)> = o.vertices().iter().map(|p| (p.x, p.y)).collect();
+        let mut closed = v.clone();
+        closed.push(v[0]);
+        let s = chart
+            .draw_series(std::iter::once(Polygon::new(
+                v,
+                OBSTACLE.mix(fill).filled(),
+            )))
+            .map_err(e)?;
+        if legend && i == 0 {
+            let label = if lidar {
+                "true obstacle (unknown)"
+            } else {
+                "obstacle"
+            };
+            s.label(label).legend(move |(x, y)| {
+                Rectangle::new(
+                    [(x - 6, y - 6), (x + 6, y + 6)],
+                    OBSTACLE.mix(fill).filled(),
+                )
+            });
+        }
+        chart
+            .draw_series(std::iter::once(PathElement::new(closed, OBSTACLE_EDGE)))
+            .map_err(e)?;
+    }
+
+    // LiDAR scan: range, inferred polygons, hit points.
+    if let Some(sc_rec) = scan {
+        let rng = sc.lidar.range;
+        let ring: Vec<(f64, f64)> = (0..=96)
+            .map(|i| {
+                let a = core::f64::consts::TAU * f64::from(i) / 96.0;
+                (
+                    sc_rec.origin.x + rng * a.cos(),
+                    sc_rec.origin.y + rng * a.sin(),
+                )
+            })
+            .collect();
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                ring,
+                GOAL.stroke_width(1),
+            )))
+            .map_err(e)?;
+        for o in &sc_rec.obstacles {
+            let v: Vec<(f64, f64)> = o.vertices().iter().map(|p| (p.x, p.y)).collect();
+            let mut closed = v.clone();
+            closed.push(v[0]);
+            chart
+                .draw_series(std::iter::once(Polygon::new(
+                    v,
+                    INFERRED.mix(0.45).filled(),
+                )))
+                .map_err(e)?;
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    closed,
+                    INFERRED.stroke_width(2),
+                )))
+                .map_err(e)?;
+        }
+        chart
+            .draw_series(
+                sc_rec
+                    .points
+                    .iter()
+                    .map(|p| Circle::new((p.x, p.y), 1, SCAN.filled())),
+            )
+            .map_err(e)?;
+    }
+
+    // Subgoals: the polyline from the start and the points.
+    if r.navigation.plan.is_some() {
+        let mut line = vec![(sc.start.x, sc.start.y)];
+        line.extend(r.navigation.subgoals.iter().map(|p| (p.x, p.y)));
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                line,
+                SUBGOAL.mix(0.8).stroke_width(2),
+            )))
+            .map_err(e)?;
+        let s = chart
+            .draw_series(
+                r.navigation
+                    .subgoals
+                    .iter()
+                    .map(|p| Circle::new((p.x, p.y), 5, SUBGOAL.filled())),
+            )
+            .map_err(e)?;
+        if legend {
+            s.label("subgoals (RRT*)")
+                .legend(|(x, y)| Circle::new((x, y), 5, SUBGOAL.filled()));
+        }
+        if let Some(c) = cycle
+            && let Some(p) = r.navigation.subgoals.get(c.subgoal)
+        {
+            chart
+                .draw_series(std::iter::once(Circle::new(
+                    (p.x, p.y),
+                    9,
+                    SUBGOAL.stroke_width(2),
+                )))
+                .map_err(e)?;
+        }
+    }
+
+    // c_j and eta_j on top of the obstacles.
+    if let Some(c) = cycle {
+        let len = 0.08 * (x1 - x0);
+        for hp in &c.half_planes {
+            let (cp, eta) = (hp.half_plane.c, hp.half_plane.eta);
+            let tip = cp + eta * len;
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    vec![(cp.x, cp.y), (tip.x, tip.y)],
+                    GOAL.stroke_width(2),
+                )))
+                .map_err(e)?;
+            let head = |ang: f64| {
+                let d = Vector2::new(
+                    -eta.x * ang.cos() + eta.y * ang.sin(),
+                    -eta.x * ang.sin() - eta.y * ang.cos(),
+                ) * (0.3 * len);
+                (tip.x + d.x, tip.y + d.y)
+            };
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    vec![head(0.4), (tip.x, tip.y), head(-0.4)],
+                    GOAL.stroke_width(2),
+                )))
+                .map_err(e)?;
+            chart
+                .draw_series(std::iter::once(Circle::new((cp.x, cp.y), 3, GOAL.filled())))
+                .map_err(e)?;
+        }
+    }
+
+    // Path so far.
+    let path: Vec<(f64, f64)> = scene
+        .path
+        .iter()
+        .take_while(|p| p.0 <= until + 1e-9)
+        .map(|p| (p.1, p.2))
+        .collect();
+    let s = chart
+        .draw_series(LineSeries::new(path, PATH.stroke_width(1)))
+        .map_err(e)?;
+    if legend {
+        s.label("CoM path")
+            .legend(|(x, y)| PathElement::new(vec![(x - 8, y), (x + 8, y)], PATH.stroke_width(2)));
+    }
+
+    // Footsteps: oriented rectangles 0.16 m x 0.08 m along the heading at landing.
+    let foot = |p: Vector2<f64>, th: f64| {
+        let (c, s) = (th.cos(), th.sin());
+        [(0.08, 0.04), (-0.08, 0.04), (-0.08, -0.04), (0.08, -0.04)]
+            .iter()
+            .map(|(a, b)| (p.x + c * a - s * b, p.y + s * a + c * b))
+            .collect::<Vec<_>>()
+    };
+    for (side, color, label) in [
+        (Side::Left, LEFT, "left foot"),
+        (Side::Right, RIGHT, "right foot"),
+    ] {
+        let feet: Vec<_> = r
+            .footsteps
+            .iter()
+            .filter(|f| f.side == side && f.time <= until + 1e-9)
+            .map(|f| Polygon::new(foot(f.position, scene.heading_at(f.time)), color.filled()))
+            .collect();
+        let s = chart.draw_series(feet).map_err(e)?;
+        if legend {
+            s.label(label).legend(move |(x, y)| {
+                Rectangle::new([(x - 7, y - 4), (x + 7, y + 4)], color.filled())
+            });
+        }
+    }
+
+    // Start, goal (with the success radius).
+    let s = chart
+        .draw_series(std::iter::once(Circle::new(
+            (sc.start.x, sc.start.y),
+            5,
+            BLACK.filled(),
+        )))
+        .map_err(e)?;
+    if legend {
+        s.label("start")
+            .legend(|(x, y)| Circle::new((x, y), 5, BLACK.filled()));
+    }
+    let ring: Vec<(f64, f64)> = (0..=48)
+        .map(|i| {
+            let a = core::f64::consts::TAU * f64::from(i) / 48.0;
+            (
+                sc.goal.x + sc.success_radius * a.cos(),
+                sc.goal.y + sc.success_radius * a.sin(),
+            )
+        })
+        .collect();
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            ring,
+            GOAL.stroke_width(2),
+        )))
+        .map_err(e)?;
+    let s = chart
+        .draw_series(std::iter::once(Cross::new(
+            (sc.goal.x, sc.goal.y),
+            7,
+            GOAL.stroke_width(3),
+        )))
+        .map_err(e)?;
+    if legend {
+        s.label("goal")
+            .legend(|(x, y)| Cross::new((x, y), 6, GOAL.stroke_width(3)));
+    }
+
+    // Robot: isosceles triangle along the heading.
+    if cycle.is_some() || !legend {
+        let (p, th) = scene.pose_at(until);
+        let d = Vector2::new(th.cos(), th.sin());
+        let n = Vector2::new(-d.y, d.x);
+        let sz = 0.025 * (x1 - x0);
+        let tip = p + d * (1.6 * sz);
+        let b1 = p - d * sz + n * sz;
+        let b2 = p - d * sz - n * sz;
+        chart
+            .draw_series(std::iter::once(Polygon::new(
+                vec![(tip.x, tip.y), (b1.x, b1.y), (b2.x, b2.y)],
+                RGBColor(120, 40, 160).filled(),
+            )))
+            .map_err(e)?;
+    }
+
+    if legend {
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .label_font((FONT, layout.font))
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()
+            .map_err(e)?;
+    }
+    Ok(())
+}
+
+fn sc_perception(r: &SimResult) -> Perception {
+    r.scenario.perception
+}
+
+pub(super) fn outcome_text(r: &SimResult) -> String {
+    let s = crate::report::summarize(r);
+    format!(
+        "{}: {} after {:.1} s, {} steps, min CoM clearance {}",
+        r.scenario.name,
+        s.outcome.replace('_', " "),
+        s.sim_time,
+        s.steps,
+        s.min_com_clearance
+            .map_or("n/a".into(), |c| format!("{c:.3} m"))
+    )
+}

@@ -1,0 +1,54 @@
+//! Tests of seed ranges, shards, rows and the aggregate.
+
+use super::*;
+
+#[test]
+fn seed_ranges_and_shards_parse() {
+    assert_eq!("0..200".parse::<SeedRange>().unwrap().len(), 200);
+    assert_eq!(
+        "3..=5".parse::<SeedRange>().unwrap(),
+        SeedRange { start: 3, end: 6 }
+    );
+    assert_eq!("7".parse::<SeedRange>().unwrap().len(), 1);
+    assert!("5..2".parse::<SeedRange>().is_err());
+    assert!("a..b".parse::<SeedRange>().is_err());
+    assert!("3/2".parse::<Shard>().is_err());
+    assert!("0/2".parse::<Shard>().is_err());
+    let r = SeedRange { start: 10, end: 17 };
+    let a: Vec<u64> = (1..=3)
+        .flat_map(|i| Shard { index: i, count: 3 }.seeds(r))
+        .collect();
+    let mut s = a.clone();
+    s.sort_unstable();
+    assert_eq!(s, (10..17).collect::<Vec<_>>());
+    assert_eq!(Shard { index: 2, count: 3 }.seeds(r), vec![11, 14]);
+}
+
+#[test]
+fn rows_round_trip_through_csv() {
+    let r = RunRow {
+        seed: 3,
+        outcome: "goal_reached".into(),
+        success: true,
+        collision: false,
+        steps: 52,
+        sim_time: 20.99,
+        final_distance: 0.1499,
+        min_com_clearance: 0.34,
+        min_footstep_clearance: f64::INFINITY,
+        max_violation: 2.3e-13,
+        cycles: 420,
+        non_optimal_cycles: 0,
+        compute_p50_ns: 1500,
+        compute_p99_ns: 4000,
+        compute_max_ns: 97000,
+        planner_failed: false,
+        subgoals: 1,
+        plan_time_ms: 0.0,
+        obstacles_seen_mean: 8.0,
+        wall_ms: 12.5,
+        foot_collision: true,
+        min_body_clearance: 0.09,
+    };
+    assert_eq!(RunRow::parse(&r.csv()).unwrap(), r);
+}
