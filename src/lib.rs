@@ -12,11 +12,11 @@ pub mod fixtures {
     //! step end the swing foot lands on the last `foot_target`, the stance side
     //! flips and the last `turning_rate` takes effect for the new step.
 
-    use ldcbf_controller::nalgebra::Vector2;
-    use ldcbf_controller::{Config, Controller, ConvexPolygon, CycleOutput};
     /// A recorded cycle's input: the simulator's type (its replay's), with the
     /// goal in it and obstacle list 0 (goal and obstacles are fixed per walk).
-    pub use ldcbf_sim::studies::replay::RecordedInput;
+    pub use ldcbf_controller::RecordedInput;
+    use ldcbf_controller::nalgebra::Vector2;
+    use ldcbf_controller::{Config, Controller, ConvexPolygon, CycleOutput};
 
     /// Goal of the SPEC's `paper` scenario, m (world).
     pub const PAPER_GOAL: [f64; 2] = [10.0, 10.0];

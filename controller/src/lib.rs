@@ -85,7 +85,7 @@ pub use lip::Lip;
 pub use mpc::{
     ActiveObstacle, Assembly, CommandSource, Config, ConfigError, Controller, CycleInfo,
     CycleInput, CycleOutput, CycleStatus, InputError, LipState, ObstacleQuery, PaperController,
-    Plan, Prediction, RobotController, Side, constraint_capacity,
+    Plan, Prediction, RecordedInput, RobotController, Side, constraint_capacity,
 };
 pub use qp::{
     DenseQp, DualActiveSet, HessianError, OwnSolver, QpBackend, QpSettings, QpSolution, QpStatus,

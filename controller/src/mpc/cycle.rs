@@ -22,6 +22,70 @@ use crate::heading::{plan_heading, wrap_angle};
 use crate::qp::{OwnSolver, QpBackend, QpSolution, QpStatus};
 use crate::relax;
 
+/// The input of one recorded control cycle, owned: a [`CycleInput`] whose
+/// obstacles are named by an index into the caller's obstacle lists. World
+/// frame W. The one recorded-input type of the workspace: the simulator's
+/// replays (`ldcbf_sim::studies::replay`, lists in `Recording::obstacle_sets`)
+/// and the shared test fixtures (`ldcbf_nav::fixtures::walk`) use it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RecordedInput {
+    /// CoM position, m.
+    pub com_position: Vector2<f64>,
+    /// CoM velocity, m/s.
+    pub com_velocity: Vector2<f64>,
+    /// Heading, rad (accumulated).
+    pub heading: f64,
+    /// Turning rate in force, rad/s.
+    pub turning_rate: f64,
+    /// Stance foot position, m.
+    pub stance_foot: Vector2<f64>,
+    /// Stance side.
+    pub stance_side: Side,
+    /// Time already spent in the current step, s.
+    pub time_in_step: f64,
+    /// Goal given to the controller (the current subgoal), m.
+    pub goal: Vector2<f64>,
+    /// Index of the cycle's obstacle list among the caller's lists.
+    pub obstacles: usize,
+}
+
+impl RecordedInput {
+    /// At rest at the origin, heading 0, left stance foot under the CoM, at the
+    /// start of a step, walking to `goal` among obstacle list 0.
+    pub fn at_rest(goal: Vector2<f64>) -> RecordedInput {
+        RecordedInput {
+            com_position: Vector2::zeros(),
+            com_velocity: Vector2::zeros(),
+            heading: 0.0,
+            turning_rate: 0.0,
+            stance_foot: Vector2::zeros(),
+            stance_side: Side::Left,
+            time_in_step: 0.0,
+            goal,
+            obstacles: 0,
+        }
+    }
+
+    /// The controller input of this cycle among `obstacles` (the list that
+    /// [`RecordedInput::obstacles`] names).
+    pub fn input<'a, const V: usize>(
+        &self,
+        obstacles: &'a [ConvexPolygon<V>],
+    ) -> CycleInput<'a, V> {
+        CycleInput {
+            com_position: self.com_position,
+            com_velocity: self.com_velocity,
+            heading: self.heading,
+            turning_rate: self.turning_rate,
+            stance_foot: self.stance_foot,
+            stance_side: self.stance_side,
+            time_in_step: self.time_in_step,
+            goal: self.goal,
+            obstacles,
+        }
+    }
+}
+
 /// The measured state and context of one control cycle. World frame W.
 #[derive(Clone, Copy, Debug)]
 pub struct CycleInput<'a, const V: usize> {
