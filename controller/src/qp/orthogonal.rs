@@ -143,6 +143,74 @@ impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Orthogonal<'_, NV
     fn drop(&mut self, l: usize, nact: usize) {
         givens_drop(self.J, self.R, nact, l);
     }
+
+    const HOT_START: bool = NV >= super::HOT_START_MIN_NV;
+
+    /// `d = J' n_p`, then the add of [`householder_add`] unless the part of
+    /// `d` outside the active span is below `tol_dependence |d|`.
+    fn hot_add(&mut self, p: usize, nact: usize) -> Result<bool, AddError> {
+        let Some(gp) = self.rows.get(p) else {
+            return Err(AddError::Numerical);
+        };
+        let d = &mut *self.d;
+        for (dj, col) in d.iter_mut().zip(&self.J.data.0) {
+            *dj = -dot(col, gp);
+        }
+        let mut d2sq = 0.0;
+        for &dj in d.iter().skip(nact) {
+            d2sq += dj * dj;
+        }
+        let outside = crate::float::sqrt(d2sq);
+        let dn = crate::float::sqrt(dot(d, d));
+        if outside.is_nan() || outside <= self.solver.settings.tol_dependence * dn {
+            return Ok(false);
+        }
+        if householder_add(self.J, self.R, nact, self.d) {
+            Ok(true)
+        } else {
+            Err(AddError::Numerical)
+        }
+    }
+
+    /// With the active normals `N = [-g_a]` (`J' N = [R; 0]`) and `x` the
+    /// unconstrained minimiser: `R' w = c`, `c_j = g_j'x - h_j` (forward
+    /// substitution; `w` kept in `d`), and `mult = R^-1 w`; the minimiser on
+    /// the active rows is `x + J1 w` ([`ActiveSetFactor::hot_move`]).
+    fn hot_multipliers(&mut self, act: &[u16; NV], nact: usize, mult: &mut [f64; NV]) -> bool {
+        let n = nact.min(NV);
+        let w = &mut *self.d;
+        *w = [0.0; NV];
+        for j in 0..n {
+            let a = usize::from(act[j]);
+            let (Some(g), Some(&ha)) = (self.rows.get(a), self.h.get(a)) else {
+                return false;
+            };
+            let mut acc = dot(g, &self.x) - ha;
+            for k in 0..j {
+                if let Some(&rkj) = self.R.get((k, j)) {
+                    acc -= rkj * w[k];
+                }
+            }
+            let Some(&rjj) = self.R.get((j, j)) else {
+                return false;
+            };
+            w[j] = acc / rjj;
+        }
+        *mult = [0.0; NV];
+        back_substitute(self.R, w, n, mult);
+        mult.iter()
+            .chain(w.iter())
+            .take(2 * NV)
+            .all(|v| v.is_finite())
+    }
+
+    fn hot_move(&mut self, nact: usize) {
+        for (col, &wj) in self.J.data.0.iter().zip(self.d.iter()).take(nact) {
+            for (xk, c) in self.x.iter_mut().zip(col) {
+                *xk += c * wj;
+            }
+        }
+    }
 }
 
 /// `r[..nact] = R^-1 d[..nact]` by back substitution on the leading
