@@ -84,6 +84,21 @@ pub(crate) trait ActiveSetFactor<const NV: usize> {
     /// methods below); when false they are never called.
     const HOT_START: bool = false;
 
+    /// Hot start, a guess first: whether the minimiser on the `k` rows `act`
+    /// held as equalities is the solution (its multipliers `>= 0`, written to
+    /// `mult[..k]`, and every row not `blocked` holds to the tolerance); then
+    /// it is the iterate, and the factor need not be built. False leaves the
+    /// iterate as it was.
+    fn hot_guess(
+        &mut self,
+        _act: &[u16; NV],
+        _k: usize,
+        _mult: &mut [f64; NV],
+        _blocked: &[bool],
+    ) -> bool {
+        false
+    }
+
     /// Hot start, first phase: appends row `p` as active row `nact` without a
     /// step (the iterate stays). `Ok(false)` when `p`'s normal depends on the
     /// active ones (not added).
@@ -311,7 +326,11 @@ struct Start<'a, const NV: usize, const NC: usize> {
     iters: &'a mut u32,
 }
 
-/// Hot start (the warm start by active set of DAQP and qpOASES): the marked
+/// Hot start (the warm start by active set of DAQP and qpOASES). First a
+/// guess ([`ActiveSetFactor::hot_guess`]): if the minimiser on the marked rows
+/// held as equalities has multipliers `>= 0` and violates no row, it is the
+/// solution (one iteration per marked row is counted, as if each had been
+/// added). Otherwise the marked
 /// rows, in row order, enter the active set without scans or steps
 /// ([`ActiveSetFactor::hot_add`]; rows dependent on those before are left to
 /// the iteration); then, while a multiplier of the minimiser on the active
@@ -333,6 +352,36 @@ fn hot_start<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
 ) -> Option<QpStatus> {
     let mut nact = (*st.nact).min(NV);
     let mut iters = *st.iters;
+    // The guess: the marked rows are the optimal active set.
+    let mut k = 0usize;
+    for (i, (&mark, &flag)) in prefer.iter().zip(st.blocked.iter()).enumerate().take(m) {
+        if mark && !flag {
+            let Some(a) = st.act.get_mut(k) else {
+                k = usize::MAX; // more marks than variables: no guess
+                break;
+            };
+            *a = i as u16;
+            k += 1;
+        }
+    }
+    let fits = nact == 0 && k > 0 && k <= NV;
+    if fits
+        && k as u64 + u64::from(iters) <= u64::from(max_iter)
+        && factor.hot_guess(st.act, k, st.mult, st.blocked.get(..m).unwrap_or(&[]))
+    {
+        {
+            for &a in st.act.iter().take(k) {
+                if let Some(flag) = st.blocked.get_mut(usize::from(a)) {
+                    *flag = true;
+                }
+            }
+            *st.nact = k;
+            *st.iters = iters + k as u32;
+            return Some(QpStatus::Solved);
+        }
+    }
+    *st.act = [0; NV];
+    *st.mult = [0.0; NV];
     for (i, (&mark, flag)) in prefer.iter().zip(st.blocked.iter_mut()).enumerate().take(m) {
         if nact >= NV || iters >= max_iter {
             break;
