@@ -79,6 +79,44 @@ pub(crate) trait ActiveSetFactor<const NV: usize> {
 
     /// Removes active row `l` of `nact`.
     fn drop(&mut self, l: usize, nact: usize);
+
+    /// Whether [`iterate`] may hot-start this representation (the three
+    /// methods below); when false they are never called.
+    const HOT_START: bool = false;
+
+    /// Hot start, a guess first: whether the minimiser on the `k` rows `act`
+    /// held as equalities is the solution (its multipliers `>= 0`, written to
+    /// `mult[..k]`, and every row not `blocked` holds to the tolerance); then
+    /// it is the iterate, and the factor need not be built. False leaves the
+    /// iterate as it was.
+    fn hot_guess(
+        &mut self,
+        _act: &[u16; NV],
+        _k: usize,
+        _mult: &mut [f64; NV],
+        _blocked: &[bool],
+    ) -> bool {
+        false
+    }
+
+    /// Hot start, first phase: appends row `p` as active row `nact` without a
+    /// step (the iterate stays). `Ok(false)` when `p`'s normal depends on the
+    /// active ones (not added).
+    fn hot_add(&mut self, _p: usize, _nact: usize) -> Result<bool, AddError> {
+        Err(AddError::Numerical)
+    }
+
+    /// Hot start, second phase: the multipliers `mult[..nact]` of the
+    /// minimiser on the `nact` active rows `act` held as equalities, from the
+    /// current iterate (the unconstrained minimiser); what
+    /// [`ActiveSetFactor::hot_move`] needs is kept. False when not finite.
+    fn hot_multipliers(&mut self, _act: &[u16; NV], _nact: usize, _mult: &mut [f64; NV]) -> bool {
+        false
+    }
+
+    /// Hot start, last step: moves the iterate to the minimiser of the last
+    /// [`ActiveSetFactor::hot_multipliers`].
+    fn hot_move(&mut self, _nact: usize) {}
 }
 
 /// Where [`iterate`] stopped.
@@ -104,9 +142,10 @@ pub(crate) struct Iterate<const NV: usize> {
 /// The dual active-set iteration (Goldfarb & Idnani 1983) on the `m` rows of
 /// `factor`, starting from the unconstrained minimiser with no active row:
 /// rows with `blocked[i]` are never added (left out, or zero rows),
-/// `prefer[i]` marks rows to add first among the violated ones, at most
-/// `max_iter` adds plus drops. `None` when [`ActiveSetFactor::add`] asked for
-/// a restart.
+/// `prefer[i]` marks rows to add first among the violated ones (and, with
+/// `hot` and [`ActiveSetFactor::HOT_START`], rows that enter the active set
+/// together before the first scan, see [`hot_start`]), at most `max_iter`
+/// adds plus drops. `None` when [`ActiveSetFactor::add`] asked for a restart.
 #[inline(always)]
 pub(crate) fn iterate<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
     factor: &mut F,
@@ -114,6 +153,7 @@ pub(crate) fn iterate<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
     mut blocked: [bool; NC],
     prefer: &[bool; NC],
     max_iter: u32,
+    hot: bool,
 ) -> Option<Iterate<NV>> {
     let m = m.min(NC);
     let mut mult = [0.0f64; NV];
@@ -122,33 +162,59 @@ pub(crate) fn iterate<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
     let mut iters: u32 = 0;
     let mut farkas: Option<(usize, [f64; NV])> = None;
     let mut adding: Option<(usize, f64)> = None;
+    // Marked rows are preferred, so while one of them is violated the scan of
+    // all rows would choose among them alone: each choice scans the marked
+    // rows first, and all rows only when none of those is violated (the same
+    // choice, without the other rows' slacks).
+    let any_marked = prefer.iter().zip(&blocked).take(m).any(|(&p, &b)| p && !b);
+    let mut stop = None;
+    if F::HOT_START && hot {
+        let mut start = Start {
+            blocked: &mut blocked,
+            act: &mut act,
+            mult: &mut mult,
+            nact: &mut nact,
+            iters: &mut iters,
+        };
+        stop = hot_start(factor, m, prefer, max_iter, &mut start);
+    }
 
     let status = 'outer: loop {
-        // Step 1: the most violated row in the H^-1 metric (marked rows first).
-        let mut best: Option<usize> = None;
-        let mut best_v = 0.0;
-        let mut best_pref: Option<usize> = None;
-        let mut best_pref_v = 0.0;
-        for i in 0..m {
-            // `i < m <= NC`: every index below is in bounds.
-            let Some(s) = factor.violation(i, blocked[i]) else {
-                continue;
-            };
-            if s.is_nan() {
-                break 'outer QpStatus::NumericalError;
-            }
-            if s < best_v {
-                best_v = s;
-                best = Some(i);
-            }
-            if prefer[i] && s < best_pref_v {
-                best_pref_v = s;
-                best_pref = Some(i);
-            }
+        if let Some(status) = stop {
+            break status;
         }
-        let p = match best_pref.or(best) {
-            None => break QpStatus::Solved,
-            Some(p) => p,
+        // Step 1: the most violated row in the H^-1 metric (marked rows first).
+        let mut marked_only = any_marked;
+        let p = loop {
+            let mut best: Option<usize> = None;
+            let mut best_v = 0.0;
+            let mut best_pref: Option<usize> = None;
+            let mut best_pref_v = 0.0;
+            for i in 0..m {
+                if marked_only && !prefer[i] {
+                    continue;
+                }
+                // `i < m <= NC`: every index below is in bounds.
+                let Some(s) = factor.violation(i, blocked[i]) else {
+                    continue;
+                };
+                if s.is_nan() {
+                    break 'outer QpStatus::NumericalError;
+                }
+                if s < best_v {
+                    best_v = s;
+                    best = Some(i);
+                }
+                if prefer[i] && s < best_pref_v {
+                    best_pref_v = s;
+                    best_pref = Some(i);
+                }
+            }
+            match best_pref.or(best) {
+                Some(p) => break p,
+                None if marked_only => marked_only = false,
+                None => break 'outer QpStatus::Solved,
+            }
         };
         adding = Some((p, 0.0));
         let mut u_new: f64 = 0.0; // multiplier of p
@@ -249,6 +315,134 @@ pub(crate) fn iterate<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
         farkas,
         adding,
     })
+}
+
+/// The iteration's state that [`hot_start`] sets up.
+struct Start<'a, const NV: usize, const NC: usize> {
+    blocked: &'a mut [bool; NC],
+    act: &'a mut [u16; NV],
+    mult: &'a mut [f64; NV],
+    nact: &'a mut usize,
+    iters: &'a mut u32,
+}
+
+/// Hot start (the warm start by active set of DAQP and qpOASES). First a
+/// guess ([`ActiveSetFactor::hot_guess`]): if the minimiser on the marked rows
+/// held as equalities has multipliers `>= 0` and violates no row, it is the
+/// solution (one iteration per marked row is counted, as if each had been
+/// added). Otherwise the marked
+/// rows, in row order, enter the active set without scans or steps
+/// ([`ActiveSetFactor::hot_add`]; rows dependent on those before are left to
+/// the iteration); then, while a multiplier of the minimiser on the active
+/// rows held as equalities is negative, the row with the most negative one is
+/// dropped; the iterate moves to that minimiser. The result is the pair the
+/// dual method starts from and keeps (Goldfarb & Idnani's S-pair: `x` optimal
+/// on the active rows, multipliers `>= 0`). Each add and each drop counts as
+/// an iteration. `Some(status)` stops the solve: [`QpStatus::NumericalError`]
+/// on a failed add or non-finite multipliers, [`QpStatus::IterationLimit`]
+/// when the budget runs out with a negative multiplier left (the iterate is
+/// then the minimiser on the active rows).
+#[inline(always)]
+fn hot_start<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
+    factor: &mut F,
+    m: usize,
+    prefer: &[bool; NC],
+    max_iter: u32,
+    st: &mut Start<'_, NV, NC>,
+) -> Option<QpStatus> {
+    let mut nact = (*st.nact).min(NV);
+    let mut iters = *st.iters;
+    // The guess: the marked rows are the optimal active set.
+    let mut k = 0usize;
+    for (i, (&mark, &flag)) in prefer.iter().zip(st.blocked.iter()).enumerate().take(m) {
+        if mark && !flag {
+            let Some(a) = st.act.get_mut(k) else {
+                k = usize::MAX; // more marks than variables: no guess
+                break;
+            };
+            *a = i as u16;
+            k += 1;
+        }
+    }
+    let fits = nact == 0 && k > 0 && k <= NV;
+    if fits
+        && k as u64 + u64::from(iters) <= u64::from(max_iter)
+        && factor.hot_guess(st.act, k, st.mult, st.blocked.get(..m).unwrap_or(&[]))
+    {
+        {
+            for &a in st.act.iter().take(k) {
+                if let Some(flag) = st.blocked.get_mut(usize::from(a)) {
+                    *flag = true;
+                }
+            }
+            *st.nact = k;
+            *st.iters = iters + k as u32;
+            return Some(QpStatus::Solved);
+        }
+    }
+    *st.act = [0; NV];
+    *st.mult = [0.0; NV];
+    for (i, (&mark, flag)) in prefer.iter().zip(st.blocked.iter_mut()).enumerate().take(m) {
+        if nact >= NV || iters >= max_iter {
+            break;
+        }
+        if !mark || *flag {
+            continue;
+        }
+        match factor.hot_add(i, nact) {
+            Ok(false) => continue,
+            Ok(true) => {}
+            Err(_) => return Some(QpStatus::NumericalError),
+        }
+        let Some(a) = st.act.get_mut(nact) else {
+            return Some(QpStatus::NumericalError);
+        };
+        *a = i as u16;
+        *flag = true;
+        nact += 1;
+        iters += 1;
+    }
+    let stop = loop {
+        let n = nact.min(NV);
+        if n == 0 {
+            break None;
+        }
+        if !factor.hot_multipliers(st.act, n, st.mult) {
+            break Some(QpStatus::NumericalError);
+        }
+        let mut worst: Option<usize> = None;
+        let mut worst_u = 0.0;
+        for (i, &u) in st.mult.iter().enumerate().take(n) {
+            if u < worst_u {
+                worst_u = u;
+                worst = Some(i);
+            }
+        }
+        let Some(l) = worst else {
+            factor.hot_move(n);
+            break None;
+        };
+        if iters >= max_iter {
+            factor.hot_move(n);
+            break Some(QpStatus::IterationLimit);
+        }
+        if let Some(flag) = st
+            .act
+            .get(l)
+            .and_then(|&a| st.blocked.get_mut(usize::from(a)))
+        {
+            *flag = false;
+        }
+        factor.drop(l, n);
+        for i in l..n - 1 {
+            st.act[i] = st.act[i + 1];
+        }
+        nact = n - 1;
+        iters += 1;
+    };
+    *st.nact = nact;
+    *st.iters = iters;
+    stop
 }
 
 impl<const NV: usize> Iterate<NV> {

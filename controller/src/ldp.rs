@@ -38,7 +38,7 @@
 //! keeps an `L D L'` factor of `M_A M_A'` and recomputes slacks by products
 //! with `M`. The iterations are the ones of [`DualActiveSet::solve`]: the same
 //! choice of row to add (most negative slack in the metric of `H^-1`, marked
-//! rows first), the same partial and full steps, the same tolerances with the
+//! rows first; no hot start, as with [`QpSettings::hot_start`] off), the same partial and full steps, the same tolerances with the
 //! same meaning (a row is violated when `slack / |g_i| < -tol_primal`; a new
 //! row is linearly dependent on the active ones when the component of `m_p`
 //! outside their span is below `tol_dependence |m_p|`), the same statuses,
@@ -61,6 +61,8 @@
 use nalgebra::SVector;
 
 use crate::active_set::{self, ActiveSetFactor, AddError, dot, givens};
+#[cfg(doc)]
+use crate::qp::QpSettings;
 use crate::qp::{DenseQp, DualActiveSet, QpSolution, QpStatus, RowNorms, ZERO_ROW2};
 
 /// The least-distance form of one constraint matrix `G` for one Hessian: build
@@ -128,7 +130,9 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
             ..DenseQp::default()
         };
         let mut p = LdpSolver {
-            solver: solver.clone(),
+            // The LDP iterations have no hot start (module docs): its
+            // fallback solves cold too, so both take the same path.
+            solver: solver.without_hot_start(),
             norms: solver.prepare_rows(&rows),
             qp: rows,
             mhat: [[0.0; NV]; NC],
@@ -257,7 +261,9 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
             dependent: false,
         };
         // Zero rows are never added: they start (and stay) blocked.
-        let Some(it) = active_set::iterate(&mut factor, self.m, self.zero, prefer, max_iter) else {
+        // No hot start (module docs): `hot` is false.
+        let Some(it) = active_set::iterate(&mut factor, self.m, self.zero, prefer, max_iter, false)
+        else {
             // The normal equations would lose too much accuracy.
             return self.fallback(loaded, prefer, max_iter);
         };

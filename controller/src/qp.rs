@@ -34,9 +34,22 @@
 //! to `solve`. Every loop is bounded by `NV`, `NC` or the budget.
 //!
 //! Warm start: the caller may mark rows it expects to be active (for example the
-//! previous cycle's active set). Among the violated rows the solver adds a marked
-//! one first. Any violated row is a valid choice in the dual method, so the marks
-//! change the path (usually shortening it), never the solution.
+//! previous cycle's active set, shifted). Among the violated rows the solver adds
+//! a marked one first; each choice scans the marked rows alone first and all
+//! rows only when none of them is violated (the same choice without the dot
+//! products of the other rows, so the same path and results bit for bit). From
+//! [`HOT_START_MIN_NV`] variables on, with [`QpSettings::hot_start`] (the
+//! default), the marked rows also enter the active set together before the
+//! first scan, as in DAQP's and qpOASES' warm start by active set: each is added
+//! to the factorisation (no scan, no step), the minimiser on them held as
+//! equalities and its multipliers are formed, and the row with the most negative
+//! multiplier is dropped until none is left. That is the pair the dual method
+//! starts from and keeps (`x` optimal on the active rows, multipliers `>= 0`),
+//! so when the marks are right one scan finds nothing violated; on the
+//! controller's long horizons it removes most row scans (`docs/horizon.md`).
+//! Any valid starting pair and any violated row are valid choices in the dual
+//! method, so the marks change the path (usually shortening it), and with the
+//! hot start the rounding, never the solution.
 //!
 //! Infeasibility: a violated row whose normal lies in the span of the active
 //! normals and for which no active multiplier can decrease proves the constraint
@@ -55,6 +68,13 @@ use orthogonal::Orthogonal;
 /// zero row or one whose squares underflow, `|g| < ~1e-162`) are treated as zero
 /// rows: satisfied when `h_i >= -tol`, infeasible otherwise.
 pub(crate) const ZERO_ROW2: f64 = 0.0;
+
+/// Smallest number of variables for which [`QpSettings::hot_start`] is
+/// compiled in (the controller's horizons `N >= 8`). Below it, scanning the
+/// marked rows first gets most of the gain, and the hot start's code (3.8 KiB
+/// of Thumb at `NV = 6`) would not fit the firmware's 64 KiB of flash
+/// (`docs/horizon.md`).
+pub const HOT_START_MIN_NV: usize = 16;
 
 /// What one solve did. `Copy`, so it can travel in every cycle's diagnostics.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -106,7 +126,8 @@ impl core::fmt::Display for HessianError {
 
 impl core::error::Error for HessianError {}
 
-/// Tolerances of the solver. All are absolute, applied to rows scaled to unit norm.
+/// Tolerances and options of the solver. The tolerances are absolute, applied to
+/// rows scaled to unit norm.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct QpSettings {
     /// A row counts as violated when `(h_i - g_i x) / |g_i| < -tol_primal`.
@@ -114,6 +135,11 @@ pub struct QpSettings {
     /// Relative size below which the component of a new normal outside the span of
     /// the active normals is taken as zero (linear dependence).
     pub tol_dependence: f64,
+    /// Hot start: the rows marked in `prefer` enter the active set together
+    /// before the first row scan (module docs; compiled in from
+    /// [`HOT_START_MIN_NV`] variables on). Off, the marks only decide which
+    /// violated row is added first.
+    pub hot_start: bool,
 }
 
 impl Default for QpSettings {
@@ -121,6 +147,7 @@ impl Default for QpSettings {
         QpSettings {
             tol_primal: 1e-10,
             tol_dependence: 1e-12,
+            hot_start: true,
         }
     }
 }
@@ -337,6 +364,7 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         settings: QpSettings {
             tol_primal: 0.0,
             tol_dependence: 0.0,
+            hot_start: false,
         },
     };
 
@@ -387,6 +415,14 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
             linv_diag,
             settings,
         })
+    }
+
+    /// The same solver with [`QpSettings::hot_start`] off (the marks then only
+    /// decide which violated row is added first).
+    pub fn without_hot_start(&self) -> Self {
+        let mut s = self.clone();
+        s.settings.hot_start = false;
+        s
     }
 
     /// The Hessian this solver was built for.
@@ -617,7 +653,8 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         };
         // Rows left out are never scanned: they start (and stay) blocked as if
         // active, but never enter the active list.
-        let Some(it) = active_set::iterate(&mut factor, m, *excluded, prefer, max_iter) else {
+        let hot = self.settings.hot_start;
+        let Some(it) = active_set::iterate(&mut factor, m, *excluded, prefer, max_iter, hot) else {
             // The orthogonal factor never asks for a restart.
             return active_set::stopped(QpStatus::NumericalError, None);
         };

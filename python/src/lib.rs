@@ -1059,6 +1059,7 @@ fn solve_qp<'py>(
     let settings = QpSettings {
         tol_primal,
         tol_dependence,
+        ..QpSettings::default()
     };
     let data = QpData {
         n,

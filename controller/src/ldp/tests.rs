@@ -82,7 +82,7 @@ fn assert_same<const NV: usize, const NC: usize>(
     qp: &DenseQp<NV, NC>,
     prefer: &[bool; NC],
 ) -> QpStatus {
-    let a = s.solve(qp, prefer, 500);
+    let a = s.without_hot_start().solve(qp, prefer, 500);
     let ldp = LdpSolver::prepare(s, qp);
     let b = ldp.solve_qp(qp, prefer, 500);
     assert_eq!(a.status, b.status, "{qp:?}");

@@ -143,6 +143,179 @@ impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Orthogonal<'_, NV
     fn drop(&mut self, l: usize, nact: usize) {
         givens_drop(self.J, self.R, nact, l);
     }
+
+    const HOT_START: bool = NV >= super::HOT_START_MIN_NV;
+
+    /// On the normal equations of the marked rows: `M = G_A L^-T` (rows
+    /// `m_j = L^-1 g_j`), `K = M M'` by Cholesky (a pivot below `1e-10` of its
+    /// diagonal entry, i.e. nearly dependent rows, gives up),
+    /// `K lambda = G_A x0 - h_A`, `x = x0 - L^-T M' lambda`; then one pass
+    /// over all rows. Cheaper than the adds of `J` and `R` (`O(k^2 NV)`
+    /// against `O(k NV^2)`), which are only needed if an iteration follows.
+    fn hot_guess(
+        &mut self,
+        act: &[u16; NV],
+        k: usize,
+        mult: &mut [f64; NV],
+        blocked: &[bool],
+    ) -> bool {
+        let k = k.min(NV);
+        let mut M = [[0.0f64; NV]; NV]; // rows 0..k: m_j
+        let mut c = [0.0f64; NV];
+        for j in 0..k {
+            let a = usize::from(act[j]);
+            let (Some(g), Some(&ha)) = (self.rows.get(a), self.h.get(a)) else {
+                return false;
+            };
+            M[j] = self.solver.linv_mul(g);
+            c[j] = dot(g, &self.x) - ha;
+        }
+        // K = C C' (lower C, row-major in `C[i][j]`, j <= i). Checked access
+        // throughout (nopanic/: the optimiser does not see every bound).
+        let at = |C: &[[f64; NV]; NV], i: usize, j: usize| {
+            C.get(i).and_then(|r| r.get(j)).copied().unwrap_or(0.0)
+        };
+        let mut C = [[0.0f64; NV]; NV];
+        for i in 0..k {
+            for j in 0..=i {
+                let (Some(mi), Some(mj)) = (M.get(i), M.get(j)) else {
+                    return false;
+                };
+                let mut s = dot(mi, mj);
+                for l in 0..j {
+                    s -= at(&C, i, l) * at(&C, j, l);
+                }
+                let v = if i == j {
+                    if s.is_nan() || s <= 1e-10 * dot(mi, mi) {
+                        return false;
+                    }
+                    crate::float::sqrt(s)
+                } else {
+                    s / at(&C, j, j)
+                };
+                if let Some(cij) = C.get_mut(i).and_then(|r| r.get_mut(j)) {
+                    *cij = v;
+                }
+            }
+        }
+        // C y = c, C' lambda = y.
+        let mut y = [0.0f64; NV];
+        for i in 0..k {
+            let mut s = c.get(i).copied().unwrap_or(0.0);
+            for l in 0..i {
+                s -= at(&C, i, l) * y.get(l).copied().unwrap_or(0.0);
+            }
+            if let Some(yi) = y.get_mut(i) {
+                *yi = s / at(&C, i, i);
+            }
+        }
+        let mut lambda = [0.0f64; NV];
+        for i in (0..k).rev() {
+            let mut s = y.get(i).copied().unwrap_or(0.0);
+            for l in (i + 1)..k {
+                s -= at(&C, l, i) * lambda.get(l).copied().unwrap_or(0.0);
+            }
+            if let Some(li) = lambda.get_mut(i) {
+                *li = s / at(&C, i, i);
+            }
+        }
+        if !lambda.iter().all(|&l| l >= 0.0 && l.is_finite()) {
+            return false;
+        }
+        // x = x0 - L^-T M' lambda.
+        let mut w = [0.0f64; NV];
+        for (row, &l) in M.iter().zip(&lambda).take(k) {
+            for (wk, &mk) in w.iter_mut().zip(row) {
+                *wk += l * mk;
+            }
+        }
+        let step = self.solver.linvt_mul(&w);
+        let x0 = self.x;
+        for (xk, sk) in self.x.iter_mut().zip(&step) {
+            *xk -= sk;
+        }
+        // Every row must hold (the marked ones do, to rounding; if rounding
+        // says otherwise the guess is dropped).
+        let mut holds = true;
+        for (i, &b) in blocked.iter().enumerate().take(NC) {
+            if self.violation(i, b).is_some() {
+                holds = false;
+                break;
+            }
+        }
+        if !holds || !self.x.iter().all(|v| v.is_finite()) {
+            self.x = x0;
+            return false;
+        }
+        *mult = lambda;
+        true
+    }
+
+    /// `d = J' n_p`, then the add of [`householder_add`] unless the part of
+    /// `d` outside the active span is below `tol_dependence |d|`.
+    fn hot_add(&mut self, p: usize, nact: usize) -> Result<bool, AddError> {
+        let Some(gp) = self.rows.get(p) else {
+            return Err(AddError::Numerical);
+        };
+        let d = &mut *self.d;
+        for (dj, col) in d.iter_mut().zip(&self.J.data.0) {
+            *dj = -dot(col, gp);
+        }
+        let mut d2sq = 0.0;
+        for &dj in d.iter().skip(nact) {
+            d2sq += dj * dj;
+        }
+        let outside = crate::float::sqrt(d2sq);
+        let dn = crate::float::sqrt(dot(d, d));
+        if outside.is_nan() || outside <= self.solver.settings.tol_dependence * dn {
+            return Ok(false);
+        }
+        if householder_add(self.J, self.R, nact, self.d) {
+            Ok(true)
+        } else {
+            Err(AddError::Numerical)
+        }
+    }
+
+    /// With the active normals `N = [-g_a]` (`J' N = [R; 0]`) and `x` the
+    /// unconstrained minimiser: `R' w = c`, `c_j = g_j'x - h_j` (forward
+    /// substitution; `w` kept in `d`), and `mult = R^-1 w`; the minimiser on
+    /// the active rows is `x + J1 w` ([`ActiveSetFactor::hot_move`]).
+    fn hot_multipliers(&mut self, act: &[u16; NV], nact: usize, mult: &mut [f64; NV]) -> bool {
+        let n = nact.min(NV);
+        let w = &mut *self.d;
+        *w = [0.0; NV];
+        for j in 0..n {
+            let a = usize::from(act[j]);
+            let (Some(g), Some(&ha)) = (self.rows.get(a), self.h.get(a)) else {
+                return false;
+            };
+            let mut acc = dot(g, &self.x) - ha;
+            for k in 0..j {
+                if let Some(&rkj) = self.R.get((k, j)) {
+                    acc -= rkj * w[k];
+                }
+            }
+            let Some(&rjj) = self.R.get((j, j)) else {
+                return false;
+            };
+            w[j] = acc / rjj;
+        }
+        *mult = [0.0; NV];
+        back_substitute(self.R, w, n, mult);
+        mult.iter()
+            .chain(w.iter())
+            .take(2 * NV)
+            .all(|v| v.is_finite())
+    }
+
+    fn hot_move(&mut self, nact: usize) {
+        for (col, &wj) in self.J.data.0.iter().zip(self.d.iter()).take(nact) {
+            for (xk, c) in self.x.iter_mut().zip(col) {
+                *xk += c * wj;
+            }
+        }
+    }
 }
 
 /// `r[..nact] = R^-1 d[..nact]` by back substitution on the leading
