@@ -3,6 +3,8 @@
 use super::*;
 use nalgebra::{Matrix2, Vector2};
 
+mod hot_start;
+
 fn solver2() -> DualActiveSet<2, 4> {
     DualActiveSet::new(&Matrix2::new(2.0, 0.0, 0.0, 2.0), QpSettings::default()).unwrap()
 }

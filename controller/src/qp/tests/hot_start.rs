@@ -7,65 +7,17 @@
 //! (and no degenerate multiplier) the hot start solves with one add per active
 //! row and no other iteration. Budgets are kept.
 
-use ldcbf_controller::nalgebra::{SMatrix, SVector};
-use ldcbf_controller::qp::{
-    DenseQp, DualActiveSet, HOT_START_MIN_NV, QpSettings, QpSolution, QpStatus,
-};
+use super::{assert_certificate, assert_kkt, uniform};
+use crate::qp::{DenseQp, DualActiveSet, HOT_START_MIN_NV, QpSettings, QpStatus};
+use nalgebra::{SMatrix, SVector};
 
-struct Rnd(u64);
-impl Rnd {
-    /// Uniform in [-1, 1).
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64 * 2.0 - 1.0
-    }
-}
-
-fn hessian<const NV: usize>(rnd: &mut Rnd, diagonal: bool) -> SMatrix<f64, NV, NV> {
+fn hessian<const NV: usize>(rnd: &mut impl FnMut() -> f64, diagonal: bool) -> SMatrix<f64, NV, NV> {
     if diagonal {
-        SMatrix::from_diagonal(&SVector::from_fn(|_, _| 0.1 + 10.0 * rnd.next().abs()))
+        SMatrix::from_diagonal(&SVector::from_fn(|_, _| 0.1 + 10.0 * rnd().abs()))
     } else {
-        let a = SMatrix::<f64, NV, NV>::from_fn(|_, _| rnd.next());
+        let a = SMatrix::<f64, NV, NV>::from_fn(|_, _| rnd());
         a.transpose() * a + SMatrix::identity() * 0.1
     }
-}
-
-fn assert_kkt<const NV: usize, const NC: usize>(
-    h: &SMatrix<f64, NV, NV>,
-    qp: &DenseQp<NV, NC>,
-    sol: &QpSolution<NV, NC>,
-) {
-    let scale = 1.0 + qp.q.amax() + sol.lambda.amax();
-    let mut stat = h * sol.x + qp.q;
-    for i in 0..qp.m {
-        let slack = qp.h[i] - qp.row(i).dot(&sol.x);
-        assert!(slack >= -1e-9 * scale, "row {i} violated by {slack}");
-        assert!(sol.lambda[i] >= 0.0);
-        assert!(
-            sol.lambda[i] * slack.abs() <= 1e-8 * scale,
-            "complementarity {i}"
-        );
-        stat += qp.row(i) * sol.lambda[i];
-    }
-    assert!(stat.amax() <= 1e-8 * scale, "stationarity {stat:?}");
-}
-
-fn assert_certificate<const NV: usize, const NC: usize>(
-    qp: &DenseQp<NV, NC>,
-    y: &SVector<f64, NC>,
-) {
-    let mut gty = SVector::<f64, NV>::zeros();
-    let mut hty = 0.0;
-    for i in 0..qp.m {
-        assert!(y[i] >= 0.0);
-        gty += qp.row(i) * y[i];
-        hty += qp.h[i] * y[i];
-    }
-    assert!(gty.amax() <= 1e-10 * (1.0 + y.amax()), "G'y = {gty:?}");
-    assert!(hty < 0.0, "h'y = {hty}");
 }
 
 /// Counts of what the family exercised, so the test fails if it stops covering
@@ -81,21 +33,21 @@ struct Seen {
 }
 
 fn family<const NV: usize, const NC: usize>(seed: u64, count: usize) -> Seen {
-    let mut rnd = Rnd(seed);
+    let mut rnd = uniform(seed);
     let mut seen = Seen::default();
     for k in 0..count {
         let h = hessian::<NV>(&mut rnd, k % 2 == 0);
         let hot = DualActiveSet::<NV, NC>::new(&h, QpSettings::default()).unwrap();
         let cold = hot.without_hot_start();
-        let mut qp = DenseQp::<NV, NC>::with_q(SVector::from_fn(|_, _| 5.0 * rnd.next()));
+        let mut qp = DenseQp::<NV, NC>::with_q(SVector::from_fn(|_, _| 5.0 * rnd()));
         for _ in 0..(NV / 2 + k % (NC - NV / 2)) {
-            let g = SVector::<f64, NV>::from_fn(|_, _| rnd.next());
+            let g = SVector::<f64, NV>::from_fn(|_, _| rnd());
             // A few duplicated and opposite rows: dependent marks.
-            if k % 5 == 0 && qp.m > 2 && rnd.next() > 0.6 {
+            if k % 5 == 0 && qp.m > 2 && rnd() > 0.6 {
                 let r = qp.row(qp.m - 1);
-                let _ = qp.push_row(&(-r), rnd.next() + 0.3);
+                let _ = qp.push_row(&(-r), rnd() + 0.3);
             }
-            let _ = qp.push_row(&g, rnd.next() + 0.3);
+            let _ = qp.push_row(&g, rnd() + 0.3);
         }
         let unmarked = [false; NC];
         let a = cold.solve(&qp, &unmarked, 1000);
@@ -110,8 +62,8 @@ fn family<const NV: usize, const NC: usize>(seed: u64, count: usize) -> Seen {
         // rows, every row.
         let mut marks = [optimal, [false; NC], optimal, [false; NC]];
         for i in 0..qp.m {
-            marks[1][i] = rnd.next() > 0.3;
-            marks[2][i] |= rnd.next() > 0.7;
+            marks[1][i] = rnd() > 0.3;
+            marks[2][i] |= rnd() > 0.7;
             marks[3][i] = true;
         }
         for (which, prefer) in marks.iter().enumerate() {
@@ -124,7 +76,7 @@ fn family<const NV: usize, const NC: usize>(seed: u64, count: usize) -> Seen {
             }
             match b.status {
                 QpStatus::Solved => {
-                    assert_kkt(&h, &qp, &b);
+                    assert_kkt(&hot, &qp, &b);
                     let xs = a.x.amax().max(1.0);
                     assert!((a.x - b.x).amax() <= 1e-9 * xs, "qp {k} marks {which}");
                     let os = a.objective.abs().max(1.0);
@@ -159,7 +111,6 @@ fn hot_start_changes_the_path_not_the_answer() {
     const { assert!(HOT_START_MIN_NV <= 16) };
     let small = family::<16, 48>(0x2545_f491_4f6c_dd1d, 300);
     let large = family::<24, 96>(0x9e37_79b9_7f4a_7c15, 150);
-    println!("n = 16: {small:?}\nn = 24: {large:?}");
     for s in [&small, &large] {
         assert!(s.solved > 20 && s.infeasible > 5, "{s:?}");
         assert!(s.exact_marks > 20 && s.other_path > 20, "{s:?}");
@@ -168,15 +119,15 @@ fn hot_start_changes_the_path_not_the_answer() {
 
 #[test]
 fn hot_start_keeps_the_budget() {
-    let mut rnd = Rnd(11);
+    let mut rnd = uniform(11);
     let h = hessian::<16>(&mut rnd, false);
     let s = DualActiveSet::<16, 48>::new(&h, QpSettings::default()).unwrap();
     let mut limited = 0;
     for _ in 0..50 {
-        let mut qp = DenseQp::<16, 48>::with_q(SVector::from_fn(|_, _| 5.0 * rnd.next()));
+        let mut qp = DenseQp::<16, 48>::with_q(SVector::from_fn(|_, _| 5.0 * rnd()));
         for _ in 0..40 {
-            let g = SVector::<f64, 16>::from_fn(|_, _| rnd.next());
-            qp.push_row(&g, rnd.next() + 0.3).unwrap();
+            let g = SVector::<f64, 16>::from_fn(|_, _| rnd());
+            qp.push_row(&g, rnd() + 0.3).unwrap();
         }
         let all = [true; 48];
         for budget in 0..24 {
