@@ -9,6 +9,9 @@ use ldcbf_controller::{ConfigError, ConvexPolygon, GeometryError};
 
 use super::types::LdcbfResult;
 use super::{LDCBF_MAX_OBSTACLES, LDCBF_MAX_POINTS, LDCBF_MAX_VERTICES, LdcbfController, MAGIC};
+// Named in the doc comments only (intra-doc links).
+#[cfg(doc)]
+use super::{ldcbf_init, ldcbf_last_error, ldcbf_step};
 
 /// The last error recorded in a controller, for [`ldcbf_last_error`].
 #[derive(Clone, Copy, Debug)]
