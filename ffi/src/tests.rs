@@ -20,6 +20,10 @@ use std::vec::Vec;
 
 use core::ptr::{null, null_mut};
 
+use ldcbf_controller::nalgebra::Vector2;
+use ldcbf_controller::{CommandSource, CycleOutput, CycleStatus, InputError, LipState, Side};
+
+use super::types::side_code;
 use super::*;
 
 /// Caller storage for one controller, as C would declare it.

@@ -1,5 +1,6 @@
 //! The committed C header `include/ldcbf.h` is what cbindgen generates from
-//! `src/lib.rs` now. `LDCBF_BLESS=1 cargo test -p ldcbf-ffi --test header`
+//! `src/lib.rs` (and the modules it declares: `src/types.rs`, `src/checks.rs`)
+//! now. `LDCBF_BLESS=1 cargo test -p ldcbf-ffi --test header`
 //! rewrites it.
 
 use std::path::Path;
@@ -11,7 +12,8 @@ fn committed_header_is_up_to_date() {
         .expect("ffi/cbindgen.toml parses");
     let mut generated = Vec::new();
     cbindgen::Builder::new()
-        // The one source file, parsed directly: no nested `cargo metadata`.
+        // The crate's root file, parsed directly (cbindgen follows its `mod`
+        // items to `types.rs` and `checks.rs`): no nested `cargo metadata`.
         .with_src(crate_dir.join("src/lib.rs"))
         .with_config(config)
         .generate()

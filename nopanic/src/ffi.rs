@@ -1,7 +1,7 @@
 //! Link-time proof that the C API (`ffi/`) cannot panic.
 //!
-//! The C API's source (`ffi/src/lib.rs`) is compiled into this binary as a
-//! module (its crate builds a `staticlib`, which would need its own panic
+//! The C API's source (`ffi/src/lib.rs`, with its modules `types.rs` and
+//! `checks.rs`) is compiled into this binary as a module (its crate builds a `staticlib`, which would need its own panic
 //! handler as a dependency) and every exported function is called with
 //! arguments read with `read_volatile` from statics the optimiser knows
 //! nothing about: every pointer (NULL, misaligned, anywhere), every size and
