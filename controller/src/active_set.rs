@@ -326,12 +326,12 @@ struct Start<'a, const NV: usize, const NC: usize> {
     iters: &'a mut u32,
 }
 
-/// Hot start (the warm start by active set of DAQP and qpOASES). First a
-/// guess ([`ActiveSetFactor::hot_guess`]): if the minimiser on the marked rows
-/// held as equalities has multipliers `>= 0` and violates no row, it is the
-/// solution (one iteration per marked row is counted, as if each had been
-/// added). Otherwise the marked
-/// rows, in row order, enter the active set without scans or steps
+/// Hot start (the warm start by active set of DAQP and qpOASES), at the start
+/// of a solve, on the first `NV` marked rows in row order. First a guess
+/// ([`ActiveSetFactor::hot_guess`]): if the minimiser on them held as
+/// equalities has multipliers `>= 0` and violates no row, it is the solution
+/// (one iteration per row is counted, as if each had been added). Otherwise
+/// they enter the active set in turn without scans or steps
 /// ([`ActiveSetFactor::hot_add`]; rows dependent on those before are left to
 /// the iteration); then, while a multiplier of the minimiser on the active
 /// rows held as equalities is negative, the row with the most negative one is
@@ -350,57 +350,59 @@ fn hot_start<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
     max_iter: u32,
     st: &mut Start<'_, NV, NC>,
 ) -> Option<QpStatus> {
-    let mut nact = (*st.nact).min(NV);
-    let mut iters = *st.iters;
-    // The guess: the marked rows are the optimal active set.
+    // The marked rows, in row order; at most `NV` (no more can be active at
+    // once; marks beyond them are still preferred by the scans).
     let mut k = 0usize;
     for (i, (&mark, &flag)) in prefer.iter().zip(st.blocked.iter()).enumerate().take(m) {
         if mark && !flag {
             let Some(a) = st.act.get_mut(k) else {
-                k = usize::MAX; // more marks than variables: no guess
                 break;
             };
             *a = i as u16;
             k += 1;
         }
     }
-    let fits = nact == 0 && k > 0 && k <= NV;
-    if fits
-        && k as u64 + u64::from(iters) <= u64::from(max_iter)
+    // The guess: they are the optimal active set.
+    if k > 0
+        && k as u64 <= u64::from(max_iter)
         && factor.hot_guess(st.act, k, st.mult, st.blocked.get(..m).unwrap_or(&[]))
     {
-        {
-            for &a in st.act.iter().take(k) {
-                if let Some(flag) = st.blocked.get_mut(usize::from(a)) {
-                    *flag = true;
-                }
+        for &a in st.act.iter().take(k) {
+            if let Some(flag) = st.blocked.get_mut(usize::from(a)) {
+                *flag = true;
             }
-            *st.nact = k;
-            *st.iters = iters + k as u32;
-            return Some(QpStatus::Solved);
         }
+        *st.nact = k;
+        *st.iters = k as u32;
+        return Some(QpStatus::Solved);
     }
-    *st.act = [0; NV];
-    *st.mult = [0.0; NV];
-    for (i, (&mark, flag)) in prefer.iter().zip(st.blocked.iter_mut()).enumerate().take(m) {
-        if nact >= NV || iters >= max_iter {
+    // Otherwise each enters the factor in turn (the list is compacted in
+    // place over the rows left to the iteration as dependent).
+    let mut nact = 0usize;
+    let mut iters = 0u32;
+    for j in 0..k {
+        let Some(&a) = st.act.get(j) else {
+            break;
+        };
+        if iters >= max_iter {
             break;
         }
-        if !mark || *flag {
-            continue;
-        }
-        match factor.hot_add(i, nact) {
+        match factor.hot_add(usize::from(a), nact) {
             Ok(false) => continue,
             Ok(true) => {}
             Err(_) => return Some(QpStatus::NumericalError),
         }
-        let Some(a) = st.act.get_mut(nact) else {
+        let (Some(slot), Some(flag)) = (st.act.get_mut(nact), st.blocked.get_mut(usize::from(a)))
+        else {
             return Some(QpStatus::NumericalError);
         };
-        *a = i as u16;
+        *slot = a;
         *flag = true;
         nact += 1;
         iters += 1;
+    }
+    for a in st.act.iter_mut().skip(nact) {
+        *a = 0;
     }
     let stop = loop {
         let n = nact.min(NV);

@@ -303,10 +303,7 @@ impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Orthogonal<'_, NV
         }
         *mult = [0.0; NV];
         back_substitute(self.R, w, n, mult);
-        mult.iter()
-            .chain(w.iter())
-            .take(2 * NV)
-            .all(|v| v.is_finite())
+        mult.iter().chain(w.iter()).all(|v| v.is_finite())
     }
 
     fn hot_move(&mut self, nact: usize) {
