@@ -21,13 +21,16 @@
 //! loop was written out in each (see `docs/solvers.md`, "One iteration for
 //! both representations", for the measurements). The state shared by the loop
 //! is only the active list, its multipliers, the direction `r` (length `NV`)
-//! and the flags of blocked rows (length `NC`); a solver generic over nalgebra
-//! dimensions would make these its storage types and the trait generic over
-//! the same dimensions, the loop itself unchanged.
+//! and the flags of blocked rows (length `NC`): nalgebra vectors over the
+//! dimension types `NV`, `NC` (`Const` arrays on the stack, or `Dyn` on the
+//! heap with the feature `alloc`), read through slices whose lengths are the
+//! constants for `Const`, so the static instances compile as loops over
+//! fixed-size arrays.
 
-use nalgebra::SVector;
+use nalgebra::allocator::Allocator;
+use nalgebra::{DefaultAllocator, Dim, OVector, U1};
 
-use crate::qp::{QpSolution, QpStatus};
+use crate::qp::{QpAllocator, QpSolutionOf, QpStatus};
 
 /// Why [`ActiveSetFactor::add`] did not add the row.
 pub(crate) enum AddError {
@@ -40,8 +43,9 @@ pub(crate) enum AddError {
 
 /// One representation of the active set and of the primal iterate, as the
 /// dual iteration of [`iterate`] needs it. Active rows are numbered `0..nact`
-/// in the order of the active list `act`.
-pub(crate) trait ActiveSetFactor<const NV: usize> {
+/// in the order of the active list `act`. The slices `act`, `r` and `mult`
+/// have length `NV` (the number of variables).
+pub(crate) trait ActiveSetFactor {
     /// The violation of row `i` (`i < m`) at the current iterate: `None` when
     /// the row is `blocked` (active, left out or a zero row; the
     /// representation tests this where it is cheapest: before a dot product,
@@ -61,41 +65,40 @@ pub(crate) trait ActiveSetFactor<const NV: usize> {
     /// lies in the span of the active normals). `None` when row `p` does not
     /// exist. The factor keeps what [`ActiveSetFactor::advance`] and
     /// [`ActiveSetFactor::add`] need.
-    fn direction(
-        &mut self,
-        p: usize,
-        act: &[u16; NV],
-        nact: usize,
-        r: &mut [f64; NV],
-    ) -> Option<f64>;
+    fn direction(&mut self, p: usize, act: &[u16], nact: usize, r: &mut [f64]) -> Option<f64>;
 
     /// Moves the primal iterate by a step of length `t` along the direction of
     /// the last [`ActiveSetFactor::direction`] (nothing when `p` was
     /// dependent).
-    fn advance(&mut self, p: usize, t: f64, r: &[f64; NV], act: &[u16; NV], nact: usize);
+    fn advance(&mut self, p: usize, t: f64, r: &[f64], act: &[u16], nact: usize);
 
     /// Appends row `p` as active row `nact` after a full step.
-    fn add(&mut self, p: usize, r: &[f64; NV], nact: usize) -> Result<(), AddError>;
+    fn add(&mut self, p: usize, r: &[f64], nact: usize) -> Result<(), AddError>;
 
     /// Removes active row `l` of `nact`.
     fn drop(&mut self, l: usize, nact: usize);
 
-    /// Whether [`iterate`] may hot-start this representation (the three
-    /// methods below); when false they are never called.
-    const HOT_START: bool = false;
+    /// Whether [`iterate`] may hot-start this representation and hold
+    /// equality rows (the four methods below); when false they are never
+    /// called. Constant for the static sizes, so the code behind it is left
+    /// out of their builds when false.
+    fn hot_start_capable(&self) -> bool {
+        false
+    }
+
+    /// The slack `h_i - g_i x` of row `i` at the current iterate and the
+    /// squared tolerance it is held to, `tol_primal^2 |g_i|^2` (for the
+    /// equality rows).
+    fn slack(&self, _i: usize) -> (f64, f64) {
+        (f64::NAN, 0.0)
+    }
 
     /// Hot start, a guess first: whether the minimiser on the `k` rows `act`
     /// held as equalities is the solution (its multipliers `>= 0`, written to
     /// `mult[..k]`, and every row not `blocked` holds to the tolerance); then
     /// it is the iterate, and the factor need not be built. False leaves the
     /// iterate as it was.
-    fn hot_guess(
-        &mut self,
-        _act: &[u16; NV],
-        _k: usize,
-        _mult: &mut [f64; NV],
-        _blocked: &[bool],
-    ) -> bool {
+    fn hot_guess(&mut self, _act: &[u16], _k: usize, _mult: &mut [f64], _blocked: &[bool]) -> bool {
         false
     }
 
@@ -108,9 +111,9 @@ pub(crate) trait ActiveSetFactor<const NV: usize> {
 
     /// Hot start, second phase: the multipliers `mult[..nact]` of the
     /// minimiser on the `nact` active rows `act` held as equalities, from the
-    /// current iterate (the unconstrained minimiser); what
-    /// [`ActiveSetFactor::hot_move`] needs is kept. False when not finite.
-    fn hot_multipliers(&mut self, _act: &[u16; NV], _nact: usize, _mult: &mut [f64; NV]) -> bool {
+    /// current iterate; what [`ActiveSetFactor::hot_move`] needs is kept.
+    /// False when not finite.
+    fn hot_multipliers(&mut self, _act: &[u16], _nact: usize, _mult: &mut [f64]) -> bool {
         false
     }
 
@@ -120,20 +123,28 @@ pub(crate) trait ActiveSetFactor<const NV: usize> {
 }
 
 /// Where [`iterate`] stopped.
-pub(crate) struct Iterate<const NV: usize> {
+pub(crate) struct Iterate<NV: Dim>
+where
+    DefaultAllocator: Allocator<NV>,
+{
     /// Outcome of the iteration (before the finiteness check of the result).
     pub status: QpStatus,
-    /// Active rows; the first `nact` are valid.
-    pub act: [u16; NV],
+    /// Active rows; the first `nact` are valid, of which the first `neq` are
+    /// equality rows.
+    pub act: OVector<u16, NV>,
     /// Multipliers of the active rows, in the representation's scaling.
-    pub mult: [f64; NV],
+    pub mult: OVector<f64, NV>,
     /// Number of active rows (`<= NV`).
     pub nact: usize,
+    /// Number of equality rows at the head of the active list (never dropped,
+    /// multipliers of either sign).
+    pub neq: usize,
     /// Adds plus drops.
     pub iters: u32,
-    /// On [`QpStatus::Infeasible`]: the row that could not be added and `-r`,
-    /// the certificate's weights of the active rows.
-    pub farkas: Option<(usize, [f64; NV])>,
+    /// On [`QpStatus::Infeasible`]: the row that could not be added, the sign
+    /// of its certificate entry (+1, or -1 for an equality row violated from
+    /// below) and `-r`, the certificate's weights of the active rows.
+    pub farkas: Option<(usize, f64, OVector<f64, NV>)>,
     /// The row being added when the iteration stopped, with its multiplier so
     /// far (part of the dual iterate; `None` after a completed add).
     pub adding: Option<(usize, f64)>,
@@ -141,42 +152,93 @@ pub(crate) struct Iterate<const NV: usize> {
 
 /// The dual active-set iteration (Goldfarb & Idnani 1983) on the `m` rows of
 /// `factor`, starting from the unconstrained minimiser with no active row:
-/// rows with `blocked[i]` are never added (left out, or zero rows),
-/// `prefer[i]` marks rows to add first among the violated ones (and, with
-/// `hot` and [`ActiveSetFactor::HOT_START`], rows that enter the active set
-/// together before the first scan, see [`hot_start`]), at most `max_iter`
-/// adds plus drops. `None` when [`ActiveSetFactor::add`] asked for a restart.
+/// the first `neq` rows are equalities (held active from the start, see
+/// [`equalities`]), rows with `blocked[i]` are never added (left out, or
+/// zero rows), `prefer[i]` marks rows to add first among the violated ones
+/// (and, with `hot` and [`ActiveSetFactor::hot_start_capable`], rows that
+/// enter the active set together before the first scan, see [`hot_start`]),
+/// at most `max_iter` adds plus drops. `None` when [`ActiveSetFactor::add`]
+/// asked for a restart. `nv` is the number of variables, `blocked` and
+/// `prefer` have the row capacity as length.
 #[inline(always)]
-pub(crate) fn iterate<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn iterate<F: ActiveSetFactor, NV: Dim, NC: Dim>(
     factor: &mut F,
+    nv: NV,
     m: usize,
-    mut blocked: [bool; NC],
-    prefer: &[bool; NC],
+    neq: usize,
+    mut blocked: OVector<bool, NC>,
+    prefer: &OVector<bool, NC>,
     max_iter: u32,
     hot: bool,
-) -> Option<Iterate<NV>> {
-    let m = m.min(NC);
-    let mut mult = [0.0f64; NV];
-    let mut act = [0u16; NV];
+) -> Option<Iterate<NV>>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
+    let nvv = nv.value();
+    let m = m.min(blocked.len()).min(prefer.len());
+    let mut mult = OVector::<f64, NV>::zeros_generic(nv, U1);
+    let mut act = OVector::<u16, NV>::zeros_generic(nv, U1);
+    let mut r = OVector::<f64, NV>::zeros_generic(nv, U1);
     let mut nact: usize = 0;
+    let mut neq_act: usize = 0;
     let mut iters: u32 = 0;
-    let mut farkas: Option<(usize, [f64; NV])> = None;
+    let mut farkas: Option<(usize, f64, OVector<f64, NV>)> = None;
     let mut adding: Option<(usize, f64)> = None;
+    let mut stop = None;
+    let capable = factor.hot_start_capable();
+    if neq > 0 {
+        if !capable {
+            stop = Some(QpStatus::NumericalError);
+        } else {
+            let mut start = Start {
+                blocked: blocked.as_mut_slice(),
+                act: act.as_mut_slice(),
+                mult: mult.as_mut_slice(),
+                r: r.as_mut_slice(),
+                nact: &mut nact,
+                iters: &mut iters,
+            };
+            match equalities(factor, m, neq, max_iter, &mut start) {
+                Ok(n) => neq_act = n,
+                Err(e) => {
+                    if let EqStop::Infeasible(p, sign) = e {
+                        let mut neg_r = r.clone();
+                        for v in neg_r.as_mut_slice() {
+                            *v = -*v;
+                        }
+                        farkas = Some((p, sign, neg_r));
+                    }
+                    stop = Some(e.status());
+                }
+            }
+        }
+    }
+    let blocked_s = blocked.as_mut_slice();
+    let prefer = prefer.as_slice();
+    let m = m.min(blocked_s.len()).min(prefer.len());
+    let act_s = act.as_mut_slice();
+    let mult_s = mult.as_mut_slice();
+    let r_s = r.as_mut_slice();
     // Marked rows are preferred, so while one of them is violated the scan of
     // all rows would choose among them alone: each choice scans the marked
     // rows first, and all rows only when none of those is violated (the same
     // choice, without the other rows' slacks).
-    let any_marked = prefer.iter().zip(&blocked).take(m).any(|(&p, &b)| p && !b);
-    let mut stop = None;
-    if F::HOT_START && hot {
+    let any_marked = prefer
+        .iter()
+        .zip(blocked_s.iter())
+        .take(m)
+        .any(|(&p, &b)| p && !b);
+    if stop.is_none() && capable && hot {
         let mut start = Start {
-            blocked: &mut blocked,
-            act: &mut act,
-            mult: &mut mult,
+            blocked: &mut *blocked_s,
+            act: &mut *act_s,
+            mult: &mut *mult_s,
+            r: &mut *r_s,
             nact: &mut nact,
             iters: &mut iters,
         };
-        stop = hot_start(factor, m, prefer, max_iter, &mut start);
+        stop = hot_start(factor, m, neq_act, prefer, max_iter, &mut start);
     }
 
     let status = 'outer: loop {
@@ -191,11 +253,12 @@ pub(crate) fn iterate<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
             let mut best_pref: Option<usize> = None;
             let mut best_pref_v = 0.0;
             for i in 0..m {
-                if marked_only && !prefer[i] {
+                // `m <= len` of both: no bounds checks.
+                let pref = prefer[i];
+                if marked_only && !pref {
                     continue;
                 }
-                // `i < m <= NC`: every index below is in bounds.
-                let Some(s) = factor.violation(i, blocked[i]) else {
+                let Some(s) = factor.violation(i, blocked_s[i]) else {
                     continue;
                 };
                 if s.is_nan() {
@@ -205,7 +268,7 @@ pub(crate) fn iterate<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
                     best_v = s;
                     best = Some(i);
                 }
-                if prefer[i] && s < best_pref_v {
+                if pref && s < best_pref_v {
                     best_pref_v = s;
                     best_pref = Some(i);
                 }
@@ -226,18 +289,22 @@ pub(crate) fn iterate<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
             }
             // Invariant: nact <= NV (a row is only added when there is room);
             // the `min` states it for the compiler.
-            let nact_c = nact.min(NV);
-            let mut r = [0.0f64; NV];
-            let Some(t2) = factor.direction(p, &act, nact_c, &mut r) else {
+            let nact_c = nact.min(nvv).min(r_s.len()).min(mult_s.len());
+            r_s.fill(0.0);
+            let Some(t2) = factor.direction(p, act_s, nact_c, r_s) else {
                 break 'outer QpStatus::NumericalError;
             };
-            // Partial (dual) step length t1 and the row to drop.
+            // Partial (dual) step length t1 and the row to drop (equality
+            // rows are never dropped).
             let mut t1 = f64::INFINITY;
             let mut drop: Option<usize> = None;
-            let rmax = r[..nact_c].iter().fold(0.0f64, |a, b| a.max(b.abs()));
-            for i in 0..nact_c {
-                if r[i] > 1e-14 * rmax.max(1.0) {
-                    let t = mult[i] / r[i];
+            let rmax = r_s[..nact_c]
+                .iter()
+                .skip(neq_act)
+                .fold(0.0f64, |a, b| a.max(b.abs()));
+            for i in neq_act..nact_c {
+                if r_s[i] > 1e-14 * rmax.max(1.0) {
+                    let t = mult_s[i] / r_s[i];
                     if t < t1 {
                         t1 = t;
                         drop = Some(i);
@@ -248,37 +315,39 @@ pub(crate) fn iterate<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
                 if t1.is_nan() || t2.is_nan() {
                     break 'outer QpStatus::NumericalError;
                 }
-                // n_p = sum_j r_j n_act[j] with every r_j <= 0 (no row can be
-                // dropped), and the active rows hold with equality while row
-                // p is violated: y_p = 1, y_act[j] = -r_j is a Farkas
-                // certificate (G'y = 0, h'y = h_p - g_p'x < 0).
-                let mut neg_r = r;
-                for y in neg_r.iter_mut() {
-                    *y = -*y;
+                // n_p = sum_j r_j n_act[j] with every r_j <= 0 of an
+                // inequality row (no row can be dropped), and the active rows
+                // hold with equality while row p is violated: y_p = 1,
+                // y_act[j] = -r_j is a Farkas certificate (G'y = 0,
+                // h'y = h_p - g_p'x < 0; entries of equality rows may have
+                // either sign).
+                let mut neg_r = r.clone();
+                for v in neg_r.as_mut_slice() {
+                    *v = -*v;
                 }
-                farkas = Some((p, neg_r));
+                farkas = Some((p, 1.0, neg_r));
                 break 'outer QpStatus::Infeasible;
             }
             let t = t1.min(t2);
             iters += 1;
             // Multipliers move along (-r, 1).
             for i in 0..nact_c {
-                mult[i] -= t * r[i];
+                mult_s[i] -= t * r_s[i];
             }
             u_new += t;
             adding = Some((p, u_new));
-            factor.advance(p, t, &r, &act, nact_c);
+            factor.advance(p, t, r_s, act_s, nact_c);
             if t2 <= t1 {
                 // Full step: p becomes active.
-                match factor.add(p, &r, nact_c) {
+                match factor.add(p, r_s, nact_c) {
                     Ok(()) => {}
                     Err(AddError::Numerical) => break 'outer QpStatus::NumericalError,
                     Err(AddError::Restart) => return None,
                 }
                 let (Some(a), Some(un), Some(flag)) = (
-                    act.get_mut(nact_c),
-                    mult.get_mut(nact_c),
-                    blocked.get_mut(p),
+                    act_s.get_mut(nact_c),
+                    mult_s.get_mut(nact_c),
+                    blocked_s.get_mut(p),
                 ) else {
                     break 'outer QpStatus::NumericalError;
                 };
@@ -290,69 +359,180 @@ pub(crate) fn iterate<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
                 continue 'outer;
             }
             // Partial step: drop active row `l` (< nact), then retry the same p.
-            let Some((l, &row_l)) = drop.and_then(|l| Some((l, act.get(l)?))) else {
+            let Some((l, &row_l)) = drop.and_then(|l| Some((l, act_s.get(l)?))) else {
                 break 'outer QpStatus::NumericalError;
             };
-            if let Some(flag) = blocked.get_mut(usize::from(row_l)) {
+            if let Some(flag) = blocked_s.get_mut(usize::from(row_l)) {
                 *flag = false;
             }
             factor.drop(l, nact_c);
             // Close the gap at `l` in the active list and its multipliers.
-            let last = nact_c.saturating_sub(1);
-            for i in l..last {
-                act[i] = act[i + 1];
-                mult[i] = mult[i + 1];
-            }
-            nact = last;
+            remove_at(act_s, l, nact_c);
+            remove_at(mult_s, l, nact_c);
+            nact = nact_c.saturating_sub(1);
         }
     };
     Some(Iterate {
         status,
         act,
         mult,
-        nact: nact.min(NV),
+        nact: nact.min(nvv),
+        neq: neq_act,
         iters,
         farkas,
         adding,
     })
 }
 
-/// The iteration's state that [`hot_start`] sets up.
-struct Start<'a, const NV: usize, const NC: usize> {
-    blocked: &'a mut [bool; NC],
-    act: &'a mut [u16; NV],
-    mult: &'a mut [f64; NV],
+/// The iteration's state that [`equalities`] and [`hot_start`] set up (slices
+/// of the vectors of [`iterate`]).
+struct Start<'a> {
+    blocked: &'a mut [bool],
+    act: &'a mut [u16],
+    mult: &'a mut [f64],
+    r: &'a mut [f64],
     nact: &'a mut usize,
     iters: &'a mut u32,
 }
 
-/// Hot start (the warm start by active set of DAQP and qpOASES), at the start
-/// of a solve, on the first `NV` marked rows in row order. First a guess
-/// ([`ActiveSetFactor::hot_guess`]): if the minimiser on them held as
-/// equalities has multipliers `>= 0` and violates no row, it is the solution
-/// (one iteration per row is counted, as if each had been added). Otherwise
-/// they enter the active set in turn without scans or steps
-/// ([`ActiveSetFactor::hot_add`]; rows dependent on those before are left to
-/// the iteration); then, while a multiplier of the minimiser on the active
-/// rows held as equalities is negative, the row with the most negative one is
-/// dropped; the iterate moves to that minimiser. The result is the pair the
-/// dual method starts from and keeps (Goldfarb & Idnani's S-pair: `x` optimal
-/// on the active rows, multipliers `>= 0`). Each add and each drop counts as
-/// an iteration. `Some(status)` stops the solve: [`QpStatus::NumericalError`]
-/// on a failed add or non-finite multipliers, [`QpStatus::IterationLimit`]
-/// when the budget runs out with a negative multiplier left (the iterate is
-/// then the minimiser on the active rows).
+/// Why [`equalities`] stopped the solve.
+enum EqStop {
+    /// A non-finite number, or a factor that could not take a row.
+    Numerical,
+    /// The budget ran out.
+    Budget,
+    /// Equality row `p` depends on the others and contradicts them; the sign
+    /// of its certificate entry, `-r` in the iteration's `r`.
+    Infeasible(usize, f64),
+}
+
+impl EqStop {
+    fn status(&self) -> QpStatus {
+        match self {
+            EqStop::Numerical => QpStatus::NumericalError,
+            EqStop::Budget => QpStatus::IterationLimit,
+            EqStop::Infeasible(..) => QpStatus::Infeasible,
+        }
+    }
+}
+
+/// The equality rows `0..neq`, held active for the whole solve (as DAQP and
+/// qpOASES hold them): each enters the factor in turn without a step
+/// ([`ActiveSetFactor::hot_add`], one iteration each), the iterate moves to
+/// the minimiser on them with their multipliers (either sign), and they
+/// stay blocked, so no scan adds them again and, at the head of the active
+/// list, no ratio test drops them. A row whose normal depends on those
+/// before is redundant when it holds there to the tolerance (blocked, never
+/// active) and proves the equalities inconsistent otherwise (Farkas
+/// certificate from its dependence on the active rows). Returns the number
+/// of equality rows made active.
 #[inline(always)]
-fn hot_start<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
+fn equalities<F: ActiveSetFactor>(
     factor: &mut F,
     m: usize,
-    prefer: &[bool; NC],
+    neq: usize,
     max_iter: u32,
-    st: &mut Start<'_, NV, NC>,
+    st: &mut Start<'_>,
+) -> Result<usize, EqStop> {
+    let neq = neq.min(m);
+    let nv = st.act.len();
+    let mut nact = 0usize;
+    let mut dependent = false;
+    for p in 0..neq {
+        let Some(flag) = st.blocked.get_mut(p) else {
+            break;
+        };
+        if *flag {
+            continue; // left out
+        }
+        *flag = true;
+        if nact >= nv {
+            dependent = true;
+            continue;
+        }
+        if *st.iters >= max_iter {
+            return Err(EqStop::Budget);
+        }
+        match factor.hot_add(p, nact) {
+            Ok(false) => dependent = true,
+            Ok(true) => {
+                if let Some(a) = st.act.get_mut(nact) {
+                    *a = p as u16;
+                }
+                nact += 1;
+                *st.iters += 1;
+            }
+            Err(_) => return Err(EqStop::Numerical),
+        }
+    }
+    *st.nact = nact;
+    if nact > 0 {
+        if !factor.hot_multipliers(st.act, nact, st.mult) {
+            return Err(EqStop::Numerical);
+        }
+        factor.hot_move(nact);
+    }
+    if dependent {
+        // The rows left out of the factor must hold at the minimiser on the
+        // others; otherwise they contradict them.
+        let act_rows = st.act.get(..nact).unwrap_or(&[]);
+        for p in 0..neq {
+            if act_rows.iter().any(|&a| usize::from(a) == p) {
+                continue;
+            }
+            let (slack, tol2) = factor.slack(p);
+            if slack.is_nan() {
+                return Err(EqStop::Numerical);
+            }
+            if slack * slack <= tol2 {
+                continue;
+            }
+            // g_p = sum_j r_j g_act[j]: y = s (e_p - sum_j r_j e_act[j]),
+            // with s the sign that makes h'y = s (h_p - g_p x) negative.
+            st.r.fill(0.0);
+            if factor.direction(p, st.act, nact, st.r).is_none() {
+                return Err(EqStop::Numerical);
+            }
+            let sign = if slack < 0.0 { 1.0 } else { -1.0 };
+            for v in st.r.iter_mut() {
+                *v *= sign;
+            }
+            return Err(EqStop::Infeasible(p, sign));
+        }
+    }
+    Ok(nact)
+}
+
+/// Hot start (the warm start by active set of DAQP and qpOASES), at the start
+/// of a solve, on the first marked rows in row order (as many as fit beside
+/// the `neq` active equality rows). First a guess
+/// ([`ActiveSetFactor::hot_guess`], only without equality rows): if the
+/// minimiser on them held as equalities has multipliers `>= 0` and violates
+/// no row, it is the solution (one iteration per row is counted, as if each
+/// had been added). Otherwise they enter the active set in turn without
+/// scans or steps ([`ActiveSetFactor::hot_add`]; rows dependent on those
+/// before are left to the iteration); then, while a multiplier of an
+/// inequality row of the minimiser on the active rows held as equalities is
+/// negative, the row with the most negative one is dropped; the iterate moves
+/// to that minimiser. The result is the pair the dual method starts from and
+/// keeps (Goldfarb & Idnani's S-pair: `x` optimal on the active rows,
+/// multipliers `>= 0`). Each add and each drop counts as an iteration.
+/// `Some(status)` stops the solve: [`QpStatus::NumericalError`] on a failed
+/// add or non-finite multipliers, [`QpStatus::IterationLimit`] when the
+/// budget runs out with a negative multiplier left (the iterate is then the
+/// minimiser on the active rows).
+#[inline(always)]
+fn hot_start<F: ActiveSetFactor>(
+    factor: &mut F,
+    m: usize,
+    neq: usize,
+    prefer: &[bool],
+    max_iter: u32,
+    st: &mut Start<'_>,
 ) -> Option<QpStatus> {
-    // The marked rows, in row order; at most `NV` (no more can be active at
-    // once; marks beyond them are still preferred by the scans).
-    let mut k = 0usize;
+    let nv = st.act.len();
+    // The marked rows, in row order, after the equality rows.
+    let mut k = neq;
     for (i, (&mark, &flag)) in prefer.iter().zip(st.blocked.iter()).enumerate().take(m) {
         if mark && !flag {
             let Some(a) = st.act.get_mut(k) else {
@@ -362,8 +542,11 @@ fn hot_start<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
             k += 1;
         }
     }
+    if k == neq {
+        return None;
+    }
     // The guess: they are the optimal active set.
-    if k > 0
+    if neq == 0
         && k as u64 <= u64::from(max_iter)
         && factor.hot_guess(st.act, k, st.mult, st.blocked.get(..m).unwrap_or(&[]))
     {
@@ -378,9 +561,9 @@ fn hot_start<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
     }
     // Otherwise each enters the factor in turn (the list is compacted in
     // place over the rows left to the iteration as dependent).
-    let mut nact = 0usize;
-    let mut iters = 0u32;
-    for j in 0..k {
+    let mut nact = neq;
+    let mut iters = *st.iters;
+    for j in neq..k {
         let Some(&a) = st.act.get(j) else {
             break;
         };
@@ -405,7 +588,7 @@ fn hot_start<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
         *a = 0;
     }
     let stop = loop {
-        let n = nact.min(NV);
+        let n = nact.min(nv);
         if n == 0 {
             break None;
         }
@@ -414,7 +597,7 @@ fn hot_start<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
         }
         let mut worst: Option<usize> = None;
         let mut worst_u = 0.0;
-        for (i, &u) in st.mult.iter().enumerate().take(n) {
+        for (i, &u) in st.mult.iter().enumerate().take(n).skip(neq) {
             if u < worst_u {
                 worst_u = u;
                 worst = Some(i);
@@ -436,9 +619,7 @@ fn hot_start<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
             *flag = false;
         }
         factor.drop(l, n);
-        for i in l..n - 1 {
-            st.act[i] = st.act[i + 1];
-        }
+        remove_at(st.act, l, n);
         nact = n - 1;
         iters += 1;
     };
@@ -447,47 +628,71 @@ fn hot_start<F: ActiveSetFactor<NV>, const NV: usize, const NC: usize>(
     stop
 }
 
-impl<const NV: usize> Iterate<NV> {
+impl<NV: Dim> Iterate<NV>
+where
+    DefaultAllocator: Allocator<NV>,
+{
     /// The solution with primal `x` and its objective: the multipliers (or
     /// the Farkas certificate, whose entry of the row that could not be added
-    /// is 1) in the units of `G`, row `i`'s multiplier being
-    /// `scale(i)` times the representation's; negative rounding clipped to 0.
-    /// The status becomes [`QpStatus::NumericalError`] when `x` or the
-    /// objective is not finite.
+    /// is 1 or, for an equality row violated from below, -1) in the units of
+    /// `G`, row `i`'s multiplier being `scale(i)` times the representation's;
+    /// negative rounding clipped to 0 on inequality rows (equality rows keep
+    /// their sign). The status becomes [`QpStatus::NumericalError`] when `x`
+    /// or the objective is not finite. `nc` is the row capacity.
     #[inline(always)]
-    pub(crate) fn solution<const NC: usize>(
-        &self,
-        x: [f64; NV],
+    pub(crate) fn solution<NC: Dim>(
+        self,
+        nc: NC,
+        x: OVector<f64, NV>,
         objective: f64,
         scale: impl Fn(usize) -> f64,
-    ) -> QpSolution<NV, NC> {
-        let mut lambda = SVector::<f64, NC>::zeros();
-        let nact = self.nact.min(NV);
-        match self.farkas {
-            Some((p, neg_r)) => {
-                let sp = scale(p);
-                if let Some(y) = lambda.get_mut(p) {
-                    *y = 1.0;
+    ) -> QpSolutionOf<NV, NC>
+    where
+        DefaultAllocator: QpAllocator<NV, NC>,
+    {
+        let mut lambda = OVector::<f64, NC>::zeros_generic(nc, U1);
+        let nact = self.nact.min(self.act.len());
+        let neq = self.neq;
+        let clip = |j: usize, v: f64| if j < neq { v } else { v.max(0.0) };
+        match &self.farkas {
+            Some((p, sign, neg_r)) => {
+                let sp = scale(*p);
+                if let Some(y) = lambda.get_mut(*p) {
+                    *y = *sign;
                 }
-                for (&a, &y) in self.act.iter().zip(&neg_r).take(nact) {
+                for (j, (&a, &y)) in self
+                    .act
+                    .as_slice()
+                    .iter()
+                    .zip(neg_r.as_slice().iter())
+                    .take(nact)
+                    .enumerate()
+                {
                     let a = usize::from(a);
                     if let Some(l) = lambda.get_mut(a) {
-                        *l = (y * scale(a) / sp).max(0.0);
+                        *l = clip(j, y * scale(a) / sp);
                     }
                 }
             }
             None => {
-                for (&a, &w) in self.act.iter().zip(&self.mult).take(nact) {
+                for (j, (&a, &w)) in self
+                    .act
+                    .as_slice()
+                    .iter()
+                    .zip(self.mult.as_slice().iter())
+                    .take(nact)
+                    .enumerate()
+                {
                     let a = usize::from(a);
                     if let Some(l) = lambda.get_mut(a) {
-                        *l = (w * scale(a)).max(0.0);
+                        *l = clip(j, w * scale(a));
                     }
                 }
             }
         }
-        let finite = x.iter().all(|v| v.is_finite()) && objective.is_finite();
-        QpSolution {
-            x: SVector::from(x),
+        let finite = x.as_slice().iter().all(|v| v.is_finite()) && objective.is_finite();
+        QpSolutionOf {
+            x,
             lambda,
             objective,
             status: if finite {
@@ -502,20 +707,47 @@ impl<const NV: usize> Iterate<NV> {
     }
 }
 
+/// `dst[k] = src[k]` over the shorter length (`copy_from_slice` without its
+/// length assertion).
+#[inline(always)]
+pub(crate) fn copy(dst: &mut [f64], src: &[f64]) {
+    for (a, &b) in dst.iter_mut().zip(src) {
+        *a = b;
+    }
+}
+
+/// Removes entry `l` of the first `n` of `s` (the entries after it move up
+/// one place; entry `n - 1` is left as it was).
+#[inline(always)]
+fn remove_at<T: Copy>(s: &mut [T], l: usize, n: usize) {
+    for i in l..n.min(s.len()).saturating_sub(1) {
+        if let Some(&next) = s.get(i + 1)
+            && let Some(cur) = s.get_mut(i)
+        {
+            *cur = next;
+        }
+    }
+}
+
 /// The result of a solve that stopped before iterating: `status`, `x = 0`, no
 /// active row; for [`QpStatus::Infeasible`] with `zero_row = Some(i)` (the
 /// zero row `0'x <= h_i` with `h_i < 0`) the certificate `y = e_i`.
-pub(crate) fn stopped<const NV: usize, const NC: usize>(
+pub(crate) fn stopped<NV: Dim, NC: Dim>(
+    nv: NV,
+    nc: NC,
     status: QpStatus,
     zero_row: Option<usize>,
-) -> QpSolution<NV, NC> {
-    let mut sol = QpSolution::<NV, NC> {
-        x: SVector::zeros(),
-        lambda: SVector::zeros(),
+) -> QpSolutionOf<NV, NC>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
+    let mut sol = QpSolutionOf {
+        x: OVector::zeros_generic(nv, U1),
+        lambda: OVector::zeros_generic(nc, U1),
         objective: 0.0,
         status,
         iterations: 0,
-        active: [0; NV],
+        active: OVector::zeros_generic(nv, U1),
         n_active: 0,
     };
     if let Some(y) = zero_row.and_then(|i| sol.lambda.get_mut(i)) {
@@ -524,13 +756,14 @@ pub(crate) fn stopped<const NV: usize, const NC: usize>(
     sol
 }
 
-/// `a . b` with four partial sums (independent add chains; `N` is a constant, so
-/// the loop unrolls and vectorises without bounds checks).
+/// `a . b` over the shorter length, with two partial sums (independent add
+/// chains; for the static sizes the lengths are constants, so the loop
+/// unrolls and vectorises without bounds checks).
 #[inline(always)]
-pub(crate) fn dot<const N: usize>(a: &[f64; N], b: &[f64; N]) -> f64 {
+pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     let mut acc = [0.0f64; 2];
-    for k in 0..N {
-        acc[k % 2] += a[k] * b[k];
+    for (k, (x, y)) in a.iter().zip(b).enumerate() {
+        acc[k % 2] += x * y;
     }
     acc[0] + acc[1]
 }

@@ -58,57 +58,74 @@
 //! does not use it.
 #![allow(non_snake_case)]
 
-use nalgebra::SVector;
+use nalgebra::{Const, DefaultAllocator, Dim, OMatrix, OVector, U1};
 
 use crate::active_set::{self, ActiveSetFactor, AddError, dot, givens};
 #[cfg(doc)]
 use crate::qp::QpSettings;
-use crate::qp::{DenseQp, DualActiveSet, QpSolution, QpStatus, RowNorms, ZERO_ROW2};
+use crate::qp::{
+    DenseQpOf, DualActiveSetOf, QpAllocator, QpSolutionOf, QpStatus, RowNormsOf, ZERO_ROW2, column,
+    column_mut, columns,
+};
 
-/// The least-distance form of one constraint matrix `G` for one Hessian: build
-/// once with [`LdpSolver::prepare`], then [`LdpSolver::load`] and
-/// [`LdpSolver::solve`] per `(q, h)`.
+/// The least-distance form of one constraint matrix `G` for one Hessian, for
+/// any dimension types (see [`LdpSolver`] for the static sizes): build once
+/// with [`LdpSolverOf::prepare`], then [`LdpSolverOf::load`] and
+/// [`LdpSolverOf::solve`] per `(q, h)`.
 #[derive(Clone, Debug)]
-pub struct LdpSolver<const NV: usize, const NC: usize> {
+pub struct LdpSolverOf<NV: Dim, NC: Dim>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
     /// The solver whose Hessian factor defines the change of variables.
-    solver: DualActiveSet<NV, NC>,
+    solver: DualActiveSetOf<NV, NC>,
     /// The rows of `G` (with `q = 0`, `h = 0`) and their norms, for the
-    /// fallback to [`DualActiveSet::solve_prepared`] (see [`PIVOT_FALLBACK`]).
-    qp: DenseQp<NV, NC>,
+    /// fallback to [`DualActiveSetOf::solve_prepared`] (see [`PIVOT_FALLBACK`]).
+    qp: DenseQpOf<NV, NC>,
     /// Row norms of `qp` for the fallback.
-    norms: RowNorms<NC>,
-    /// `m_i / |m_i|` with `m_i = L^-1 g_i` (dimensionless; zero for zero rows).
-    mhat: [[f64; NV]; NC],
+    norms: RowNormsOf<NC>,
+    /// Column `i`: `m_i / |m_i|` with `m_i = L^-1 g_i` (dimensionless; zero
+    /// for zero rows).
+    mhat: OMatrix<f64, NV, NC>,
     /// Gram matrix of the scaled rows, `K_ij = mhat_i . mhat_j` (unit diagonal
-    /// for non-zero rows); rows `m..NC` are zero.
-    K: [[f64; NC]; NC],
+    /// for non-zero rows); rows and columns `m..NC` are zero.
+    K: OMatrix<f64, NC, NC>,
     /// `1 / |m_i|` (units of `1 / (G L^-T)`), 0 for zero rows.
-    inv_mnorm: [f64; NC],
+    inv_mnorm: OVector<f64, NC>,
     /// Violation threshold on the squared scaled slack:
     /// `tol_primal^2 |g_i|^2 / |m_i|^2`.
-    thr: [f64; NC],
+    thr: OVector<f64, NC>,
     /// Row `i` is a zero row (`|g_i|^2` or `|m_i|^2` is 0): never added.
-    zero: [bool; NC],
+    zero: OVector<bool, NC>,
     /// Rows covered.
     m: usize,
     /// Every entry of `M` and `K` is finite.
     finite: bool,
 }
 
-/// The per-`(q, h)` data of an LDP solve, from [`LdpSolver::load`].
+/// [`LdpSolverOf`] with the sizes as constants (stack only).
+pub type LdpSolver<const NV: usize, const NC: usize> = LdpSolverOf<Const<NV>, Const<NC>>;
+/// [`LdpSolverOf`] with run-time sizes (feature `alloc`).
+#[cfg(feature = "alloc")]
+pub type LdpSolverDyn = LdpSolverOf<nalgebra::Dyn, nalgebra::Dyn>;
+
+/// The per-`(q, h)` data of an LDP solve, from [`LdpSolverOf::load`].
 #[derive(Clone, Debug)]
-pub struct LdpLoaded<const NV: usize, const NC: usize> {
+pub struct LdpLoadedOf<NV: Dim, NC: Dim>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
     /// `q` and `h` as loaded, for the fallback.
-    q: SVector<f64, NV>,
+    q: OVector<f64, NV>,
     /// Right-hand side `h` as loaded.
-    h: SVector<f64, NC>,
+    h: OVector<f64, NC>,
     /// `v = L^-1 q`, so `x = L^-T (u - v)`.
-    v: [f64; NV],
+    v: OVector<f64, NV>,
     /// `|v|^2`: the objective is `1/2 |u|^2 - 1/2 |v|^2`.
     vv: f64,
     /// Scaled slacks at `u = 0`: `d_i / |m_i| = (h_i - g_i x_unc) / |m_i|`
     /// with `x_unc = -H^-1 q` (0 for zero rows).
-    s0: [f64; NC],
+    s0: OVector<f64, NC>,
     /// A zero row with `h_i < -tol_primal` (the problem is infeasible).
     zero_infeasible: Option<usize>,
     /// Rows covered (must match the solver's).
@@ -117,36 +134,51 @@ pub struct LdpLoaded<const NV: usize, const NC: usize> {
     finite: bool,
 }
 
-impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
+/// [`LdpLoadedOf`] with the sizes as constants.
+pub type LdpLoaded<const NV: usize, const NC: usize> = LdpLoadedOf<Const<NV>, Const<NC>>;
+/// [`LdpLoadedOf`] with run-time sizes (feature `alloc`).
+#[cfg(feature = "alloc")]
+pub type LdpLoadedDyn = LdpLoadedOf<nalgebra::Dyn, nalgebra::Dyn>;
+
+impl<NV: Dim, NC: Dim> LdpSolverOf<NV, NC>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
     /// The LDP form of the rows of `qp` (its `q` and `h` are not used) for the
     /// Hessian of `solver`. Non-finite rows, or rows whose squared norms
-    /// overflow, make every later solve a [`QpStatus::NumericalError`].
-    pub fn prepare(solver: &DualActiveSet<NV, NC>, qp: &DenseQp<NV, NC>) -> Self {
-        let m = qp.m.min(NC);
+    /// overflow, make every later solve a [`QpStatus::NumericalError`]. The
+    /// equality rows of `qp` (`qp.me > 0`) are solved by the fallback
+    /// ([`DualActiveSetOf::solve_prepared`]), which holds them.
+    pub fn prepare(solver: &DualActiveSetOf<NV, NC>, qp: &DenseQpOf<NV, NC>) -> Self {
+        let (nv, nc) = qp.gt.shape_generic();
+        let n = nv.value();
+        let m = qp.m.min(nc.value());
         let tol = solver.settings().tol_primal;
-        let rows = DenseQp::<NV, NC> {
-            gt: qp.gt,
+        let rows = DenseQpOf {
+            q: OVector::zeros_generic(nv, U1),
+            gt: qp.gt.clone(),
+            h: OVector::zeros_generic(nc, U1),
             m,
-            ..DenseQp::default()
+            me: qp.me.min(m),
         };
-        let mut p = LdpSolver {
+        let mut p = LdpSolverOf {
             // The LDP iterations have no hot start (module docs): its
             // fallback solves cold too, so both take the same path.
             solver: solver.without_hot_start(),
             norms: solver.prepare_rows(&rows),
             qp: rows,
-            mhat: [[0.0; NV]; NC],
-            K: [[0.0; NC]; NC],
-            inv_mnorm: [0.0; NC],
-            thr: [0.0; NC],
-            zero: [false; NC],
+            mhat: OMatrix::zeros_generic(nv, nc),
+            K: OMatrix::zeros_generic(nc, nc),
+            inv_mnorm: OVector::zeros_generic(nc, U1),
+            thr: OVector::zeros_generic(nc, U1),
+            zero: OVector::from_element_generic(nc, U1, false),
             m,
-            finite: true,
+            finite: solver.nv().value() == n,
         };
-        for (i, g) in qp.gt.data.0.iter().enumerate().take(m) {
+        for (i, g) in columns(qp.gt.as_slice(), n).enumerate().take(m) {
             let n2 = dot(g, g);
             let mi = solver.linv_mul(g);
-            let mn2 = dot(&mi, &mi);
+            let mn2 = dot(mi.as_slice(), mi.as_slice());
             if !(n2.is_finite() && mn2.is_finite()) {
                 p.finite = false;
                 continue;
@@ -156,24 +188,36 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
                 continue;
             }
             let inv = 1.0 / libm::sqrt(mn2);
-            for (a, b) in p.mhat[i].iter_mut().zip(&mi) {
-                *a = b * inv;
+            if let Some(col) = column_mut(p.mhat.as_mut_slice(), n, i) {
+                for (a, b) in col.iter_mut().zip(mi.as_slice().iter()) {
+                    *a = b * inv;
+                }
             }
             p.inv_mnorm[i] = inv;
             p.thr[i] = tol * tol * n2 * inv * inv;
         }
         for i in 0..m {
             for j in 0..=i {
-                let k = dot(&p.mhat[i], &p.mhat[j]);
-                p.K[i][j] = k;
-                p.K[j][i] = k;
+                let (Some(mi), Some(mj)) = (
+                    column(p.mhat.as_slice(), n, i),
+                    column(p.mhat.as_slice(), n, j),
+                ) else {
+                    continue;
+                };
+                let k = dot(mi, mj);
+                if let Some(e) = p.K.get_mut((i, j)) {
+                    *e = k;
+                }
+                if let Some(e) = p.K.get_mut((j, i)) {
+                    *e = k;
+                }
             }
         }
         p
     }
 
     /// The solver this LDP was prepared for.
-    pub fn solver(&self) -> &DualActiveSet<NV, NC> {
+    pub fn solver(&self) -> &DualActiveSetOf<NV, NC> {
         &self.solver
     }
 
@@ -186,164 +230,220 @@ impl<const NV: usize, const NC: usize> LdpSolver<NV, NC> {
     /// unconstrained minimiser. `h` entries beyond the prepared `m` are
     /// ignored. Non-finite `q` or `h` make the solve a
     /// [`QpStatus::NumericalError`].
-    pub fn load(&self, q: &SVector<f64, NV>, h: &SVector<f64, NC>) -> LdpLoaded<NV, NC> {
-        let (qv, hv) = (*q, *h);
-        let q = &q.data.0[0];
-        let h = h.as_slice();
+    pub fn load(&self, q: &OVector<f64, NV>, h: &OVector<f64, NC>) -> LdpLoadedOf<NV, NC> {
         let tol = self.solver.settings().tol_primal;
-        let v = self.solver.linv_mul(q);
-        let mut ld = LdpLoaded {
-            q: qv,
-            h: hv,
+        let n = self.solver.nv().value();
+        let v = self.solver.linv_mul(q.as_slice());
+        let nc = self.inv_mnorm.shape_generic().0;
+        let mut ld = LdpLoadedOf {
+            q: q.clone(),
+            h: h.clone(),
+            vv: dot(v.as_slice(), v.as_slice()),
             v,
-            vv: dot(&v, &v),
-            s0: [0.0; NC],
+            s0: OVector::zeros_generic(nc, U1),
             zero_infeasible: None,
             m: self.m,
-            finite: q.iter().all(|a| a.is_finite()),
+            finite: q.as_slice().iter().all(|a| a.is_finite()) && h.len() == nc.value(),
         };
-        for i in 0..self.m.min(NC) {
-            let hi = h[i];
+        let mhat = columns(self.mhat.as_slice(), n);
+        for (i, ((((&hi, &zero), &inv), mh), s0)) in h
+            .as_slice()
+            .iter()
+            .zip(self.zero.as_slice().iter())
+            .zip(self.inv_mnorm.as_slice().iter())
+            .zip(mhat)
+            .zip(ld.s0.as_mut_slice().iter_mut())
+            .enumerate()
+            .take(self.m)
+        {
             if !hi.is_finite() {
                 ld.finite = false;
             }
-            if self.zero[i] {
+            if zero {
                 if hi < -tol && ld.zero_infeasible.is_none() {
                     ld.zero_infeasible = Some(i);
                 }
                 continue;
             }
             // d_i / |m_i| = h_i / |m_i| + mhat_i . v
-            ld.s0[i] = hi * self.inv_mnorm[i] + dot(&self.mhat[i], &v);
+            *s0 = hi * inv + dot(mh, ld.v.as_slice());
         }
         ld
     }
 
-    /// [`LdpSolver::load`] and [`LdpSolver::solve`] with `qp.q` and `qp.h`
+    /// [`LdpSolverOf::load`] and [`LdpSolverOf::solve`] with `qp.q` and `qp.h`
     /// (`qp`'s rows must be the prepared ones; they are not read).
     pub fn solve_qp(
         &self,
-        qp: &DenseQp<NV, NC>,
-        prefer: &[bool; NC],
+        qp: &DenseQpOf<NV, NC>,
+        prefer: &[bool],
         max_iter: u32,
-    ) -> QpSolution<NV, NC> {
+    ) -> QpSolutionOf<NV, NC> {
         let ld = self.load(&qp.q, &qp.h);
         self.solve(&ld, prefer, max_iter)
     }
 
     /// Solves the loaded QP with at most `max_iter` adds plus drops; `prefer[i]`
     /// marks row `i` as expected active (warm start). Same contract as
-    /// [`DualActiveSet::solve`]. A `loaded` from a solver with another row count
+    /// [`DualActiveSetOf::solve`]. A `loaded` from a solver with another row count
     /// gives [`QpStatus::NumericalError`].
     pub fn solve(
         &self,
-        loaded: &LdpLoaded<NV, NC>,
-        prefer: &[bool; NC],
+        loaded: &LdpLoadedOf<NV, NC>,
+        prefer: &[bool],
         max_iter: u32,
-    ) -> QpSolution<NV, NC> {
+    ) -> QpSolutionOf<NV, NC> {
+        let nv = self.solver.nv();
+        let nc = self.inv_mnorm.shape_generic().0;
         if !self.finite || !loaded.finite || loaded.m != self.m {
-            return active_set::stopped(QpStatus::NumericalError, None);
+            return active_set::stopped(nv, nc, QpStatus::NumericalError, None);
         }
         if loaded.zero_infeasible.is_some() {
             // 0'x <= h with h < 0: y = e_i certifies it.
-            return active_set::stopped(QpStatus::Infeasible, loaded.zero_infeasible);
+            return active_set::stopped(nv, nc, QpStatus::Infeasible, loaded.zero_infeasible);
+        }
+        if self.qp.me > 0 {
+            // Equality rows: held by the orthogonal factor (module docs).
+            return self.fallback(loaded, prefer, max_iter);
         }
         let tol_dep = self.solver.settings().tol_dependence;
-        let (mut C, mut Ci) = ([[0.0; NV]; NV], [[0.0; NV]; NV]);
+        let mut C = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
+        let mut Ci = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
+        let mut pref = OVector::<bool, NC>::from_element_generic(nc, U1, false);
+        for (d, &s) in pref.as_mut_slice().iter_mut().zip(prefer) {
+            *d = s;
+        }
+        let n = nv.value();
         let mut factor = Gram {
             ldp: self,
-            s: loaded.s0,
+            n,
+            s: loaded.s0.clone(),
             C: &mut C,
             Ci: &mut Ci,
             tol_dep2: tol_dep * tol_dep,
-            w: [0.0; NV],
+            w: OVector::zeros_generic(nv, U1),
+            b: OVector::zeros_generic(nv, U1),
+            z: OVector::zeros_generic(nv, U1),
+            w2: OVector::zeros_generic(nv, U1),
+            r2: OVector::zeros_generic(nv, U1),
             z2: 0.0,
             dependent: false,
         };
         // Zero rows are never added: they start (and stay) blocked.
         // No hot start (module docs): `hot` is false.
-        let Some(it) = active_set::iterate(&mut factor, self.m, self.zero, prefer, max_iter, false)
-        else {
+        let Some(it) = active_set::iterate(
+            &mut factor,
+            nv,
+            self.m,
+            0,
+            self.zero.clone(),
+            &pref,
+            max_iter,
+            false,
+        ) else {
             // The normal equations would lose too much accuracy.
             return self.fallback(loaded, prefer, max_iter);
         };
         // u = -M_A' lambda_A - u_new m_p (scaled rows, scaled multipliers).
-        let mut u = [0.0f64; NV];
-        for (&a, &la) in it.act.iter().zip(&it.mult).take(it.nact) {
-            if let Some(ma) = self.mhat.get(usize::from(a)) {
-                for (uk, mk) in u.iter_mut().zip(ma) {
+        let mut u = OVector::<f64, NV>::zeros_generic(nv, U1);
+        let mhat = self.mhat.as_slice();
+        for (&a, &la) in it
+            .act
+            .as_slice()
+            .iter()
+            .zip(it.mult.as_slice().iter())
+            .take(it.nact)
+        {
+            if let Some(ma) = column(mhat, n, usize::from(a)) {
+                for (uk, mk) in u.as_mut_slice().iter_mut().zip(ma) {
                     *uk -= la * mk;
                 }
             }
         }
         if let Some((p, un)) = it.adding
-            && let Some(mp) = self.mhat.get(p)
+            && let Some(mp) = column(mhat, n, p)
         {
-            for (uk, mk) in u.iter_mut().zip(mp) {
+            for (uk, mk) in u.as_mut_slice().iter_mut().zip(mp) {
                 *uk -= un * mk;
             }
         }
-        let mut uv = u;
-        for (a, b) in uv.iter_mut().zip(&loaded.v) {
+        let mut uv = u.clone();
+        for (a, b) in uv.as_mut_slice().iter_mut().zip(loaded.v.as_slice().iter()) {
             *a -= b;
         }
-        let x = self.solver.linvt_mul(&uv);
-        let objective = 0.5 * (dot(&u, &u) - loaded.vv);
+        let x = self.solver.linvt_mul(uv.as_slice());
+        let objective = 0.5 * (dot(u.as_slice(), u.as_slice()) - loaded.vv);
         // Multipliers in the units of G: lambda_i = lambda_hat_i / |m_i|.
-        it.solution(x, objective, |i| {
+        it.solution(nc, x, objective, |i| {
             self.inv_mnorm.get(i).copied().unwrap_or(1.0)
         })
     }
 
-    /// [`DualActiveSet::solve_prepared`] on the loaded QP: the answer for an
-    /// active set too ill-conditioned for the normal equations of the LDP.
+    /// [`DualActiveSetOf::solve_prepared`] on the loaded QP: the answer for an
+    /// active set too ill-conditioned for the normal equations of the LDP,
+    /// and for QPs with equality rows.
     #[cold]
     fn fallback(
         &self,
-        loaded: &LdpLoaded<NV, NC>,
-        prefer: &[bool; NC],
+        loaded: &LdpLoadedOf<NV, NC>,
+        prefer: &[bool],
         max_iter: u32,
-    ) -> QpSolution<NV, NC> {
+    ) -> QpSolutionOf<NV, NC> {
         let mut qp = self.qp.clone();
-        qp.q = loaded.q;
-        qp.h = loaded.h;
+        qp.q = loaded.q.clone();
+        qp.h = loaded.h.clone();
         self.solver
             .solve_prepared(&qp, &self.norms, prefer, max_iter)
     }
+}
 
-    /// `z -= M_A' r` over the first `nact` active rows (scaled rows).
-    #[inline(always)]
-    fn sub_active(&self, z: &mut [f64; NV], act: &[u16; NV], r: &[f64; NV], nact: usize) {
-        for (&a, &rj) in act.iter().zip(r).take(nact) {
-            if let Some(ma) = self.mhat.get(usize::from(a)) {
-                for (zk, mk) in z.iter_mut().zip(ma) {
-                    *zk -= rj * mk;
-                }
+/// `z -= M_A' r` over the first `nact` active rows (scaled rows `mhat`,
+/// column-major with `n` rows).
+#[inline(always)]
+fn sub_active(mhat: &[f64], n: usize, z: &mut [f64], act: &[u16], r: &[f64], nact: usize) {
+    for (&a, &rj) in act.iter().zip(r).take(nact) {
+        if let Some(ma) = column(mhat, n, usize::from(a)) {
+            for (zk, mk) in z.iter_mut().zip(ma) {
+                *zk -= rj * mk;
             }
         }
     }
 }
 
-/// The active set of [`LdpSolver::solve`]: the Cholesky factor `C` of
+/// The active set of [`LdpSolverOf::solve`]: the Cholesky factor `C` of
 /// `M_A M_A'` (scaled rows) and its inverse, with the scaled slacks of all
 /// rows standing for the primal iterate `u`. The iteration itself is
 /// [`crate::active_set::iterate`].
-struct Gram<'a, const NV: usize, const NC: usize> {
+struct Gram<'a, NV: Dim, NC: Dim>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
     /// The prepared rows, their Gram matrix and thresholds.
-    ldp: &'a LdpSolver<NV, NC>,
+    ldp: &'a LdpSolverOf<NV, NC>,
+    /// Number of variables (a constant for the static sizes).
+    n: usize,
     /// Scaled slacks `(d_i - m_i u) / |m_i|` of all rows.
-    s: [f64; NC],
-    /// Cholesky factor of `M_A M_A'`, row-major, zeros above the diagonal kept
-    /// exactly zero (the solves use full-length dots). The factors are the
-    /// caller's locals: their addresses go to [`chol_drop`], and an escaping
-    /// field would keep every other field of this struct in memory.
-    C: &'a mut [[f64; NV]; NV],
-    /// `C^-1`, lower triangular.
-    Ci: &'a mut [[f64; NV]; NV],
+    s: OVector<f64, NC>,
+    /// Cholesky factor of `M_A M_A'`, row `i` stored as column `i`, zeros
+    /// above the diagonal kept exactly zero (the solves use full-length
+    /// dots). The factors are the caller's locals: their addresses go to
+    /// [`chol_drop`], and an escaping field would keep every other field of
+    /// this struct in memory.
+    C: &'a mut OMatrix<f64, NV, NV>,
+    /// `C^-1`, lower triangular, stored as `C`.
+    Ci: &'a mut OMatrix<f64, NV, NV>,
     /// `tol_dependence^2`.
     tol_dep2: f64,
     /// `w = C^-1 M_A m_p` of the last direction: the new row of `C`.
-    w: [f64; NV],
+    w: OVector<f64, NV>,
+    /// Scratch: the right-hand side of the solves.
+    b: OVector<f64, NV>,
+    /// Scratch: the component of the new row outside the active span.
+    z: OVector<f64, NV>,
+    /// Scratch: the second projection's `w` and `r`.
+    w2: OVector<f64, NV>,
+    /// Scratch, see `w2`.
+    r2: OVector<f64, NV>,
     /// `|z|^2`, `z = m_p - M_A' r` the component of the last row outside the
     /// active span.
     z2: f64,
@@ -351,7 +451,10 @@ struct Gram<'a, const NV: usize, const NC: usize> {
     dependent: bool,
 }
 
-impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Gram<'_, NV, NC> {
+impl<NV: Dim, NC: Dim> ActiveSetFactor for Gram<'_, NV, NC>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
     #[inline(always)]
     fn violation(&mut self, i: usize, blocked: bool) -> Option<f64> {
         let (Some(&si), Some(&thr)) = (self.s.get(i), self.ldp.thr.get(i)) else {
@@ -364,53 +467,67 @@ impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Gram<'_, NV, NC> 
     }
 
     #[inline(always)]
-    fn direction(
-        &mut self,
-        p: usize,
-        act: &[u16; NV],
-        nact: usize,
-        r: &mut [f64; NV],
-    ) -> Option<f64> {
+    fn direction(&mut self, p: usize, act: &[u16], nact: usize, r: &mut [f64]) -> Option<f64> {
         let ldp = self.ldp;
-        let (Some(mp), Some(kp), Some(&sp)) = (ldp.mhat.get(p), ldp.K.get(p), self.s.get(p)) else {
+        let n = self.n;
+        let mhat = ldp.mhat.as_slice();
+        let nc = ldp.K.nrows();
+        let (Some(mp), Some(kp), Some(&sp)) = (
+            column(mhat, n, p),
+            column(ldp.K.as_slice(), nc, p),
+            self.s.get(p),
+        ) else {
             return None;
         };
         // w = C^-1 M_A m_p, r = C^-T w = (M_A M_A')^-1 M_A m_p.
-        let mut b = [0.0f64; NV];
-        for (bi, &a) in b.iter_mut().zip(act).take(nact) {
+        self.b.as_mut_slice().fill(0.0);
+        for (bi, &a) in self.b.as_mut_slice().iter_mut().zip(act).take(nact) {
             *bi = kp.get(usize::from(a)).copied().unwrap_or(0.0);
         }
         // Zero beyond `nact`: `w` becomes a row of the triangle `C`.
-        self.w = [0.0; NV];
-        chol_solve(self.Ci, &b, nact, &mut self.w, r);
+        self.w.as_mut_slice().fill(0.0);
+        chol_solve(self.Ci, self.b.as_slice(), nact, self.w.as_mut_slice(), r);
         // z = m_p - M_A' r: the component of m_p outside the active span.
-        let mut z = *mp;
-        ldp.sub_active(&mut z, act, r, nact);
-        let mut z2 = dot(&z, &z);
+        let z = self.z.as_mut_slice();
+        crate::active_set::copy(z, mp);
+        sub_active(mhat, n, z, act, r, nact);
+        let mut z2 = dot(z, z);
         if z2 < REFINE2 {
             // Cancellation: z carries rounding of order eps cond(M_A)^2.
             // Project it once more (Gram-Schmidt "twice is enough"),
             // r2 = (M_A M_A')^-1 M_A z, z -= M_A' r2, r += r2.
-            let mut b = [0.0f64; NV];
-            for (bi, &a) in b.iter_mut().zip(act).take(nact) {
-                if let Some(ma) = ldp.mhat.get(usize::from(a)) {
-                    *bi = dot(ma, &z);
+            self.b.as_mut_slice().fill(0.0);
+            for (bi, &a) in self.b.as_mut_slice().iter_mut().zip(act).take(nact) {
+                if let Some(ma) = column(mhat, n, usize::from(a)) {
+                    *bi = dot(ma, z);
                 }
             }
-            let (mut w2, mut r2) = ([0.0f64; NV], [0.0f64; NV]);
-            chol_solve(self.Ci, &b, nact, &mut w2, &mut r2);
-            ldp.sub_active(&mut z, act, &r2, nact);
-            for (ri, r2i) in r.iter_mut().zip(&r2) {
+            self.w2.as_mut_slice().fill(0.0);
+            self.r2.as_mut_slice().fill(0.0);
+            chol_solve(
+                self.Ci,
+                self.b.as_slice(),
+                nact,
+                self.w2.as_mut_slice(),
+                self.r2.as_mut_slice(),
+            );
+            sub_active(mhat, n, z, act, self.r2.as_slice(), nact);
+            for (ri, r2i) in r.iter_mut().zip(self.r2.as_slice().iter()) {
                 *ri += r2i;
             }
-            for (wi, w2i) in self.w.iter_mut().zip(&w2) {
+            for (wi, w2i) in self
+                .w
+                .as_mut_slice()
+                .iter_mut()
+                .zip(self.w2.as_slice().iter())
+            {
                 *wi += w2i;
             }
-            z2 = dot(&z, &z);
+            z2 = dot(z, z);
         }
         // Full (primal) step length t2 (|mhat_p| = 1).
         // With NV rows active (independent) the span is everything.
-        let dependent = z2 <= self.tol_dep2 || nact >= NV;
+        let dependent = z2 <= self.tol_dep2 || nact >= n;
         let t2 = if dependent { f64::INFINITY } else { -sp / z2 };
         self.z2 = z2;
         self.dependent = dependent;
@@ -418,20 +535,23 @@ impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Gram<'_, NV, NC> 
     }
 
     #[inline(always)]
-    fn advance(&mut self, p: usize, t: f64, r: &[f64; NV], act: &[u16; NV], nact: usize) {
-        let m = self.ldp.m.min(NC);
-        let (false, Some(kp)) = (self.dependent, self.ldp.K.get(p)) else {
+    fn advance(&mut self, p: usize, t: f64, r: &[f64], act: &[u16], nact: usize) {
+        let K = self.ldp.K.as_slice();
+        let nc = self.ldp.K.nrows();
+        let m = self.ldp.m.min(nc);
+        let (false, Some(kp)) = (self.dependent, column(K, nc, p)) else {
             return;
         };
+        let s = self.s.as_mut_slice();
         // u moves by -t z: slack_i grows by t mhat_i . z
         // = t (K_ip - sum_j r_j K_i,A_j).
-        for (si, &k) in self.s[..m].iter_mut().zip(&kp[..m]) {
+        for (si, &k) in s.iter_mut().zip(kp).take(m) {
             *si += t * k;
         }
         for (&a, &rj) in act.iter().zip(r).take(nact) {
-            if let Some(ka) = self.ldp.K.get(usize::from(a)) {
+            if let Some(ka) = column(K, nc, usize::from(a)) {
                 let f = t * rj;
-                for (si, &k) in self.s[..m].iter_mut().zip(&ka[..m]) {
+                for (si, &k) in s.iter_mut().zip(ka).take(m) {
                     *si -= f * k;
                 }
             }
@@ -441,9 +561,10 @@ impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Gram<'_, NV, NC> 
     /// Appends the row `[w', |z|]` to `C` and `[-r', 1] / |z|` to `C^-1`;
     /// asks for a restart when `|z| <` [`PIVOT_FALLBACK`].
     #[inline(always)]
-    fn add(&mut self, p: usize, r: &[f64; NV], nact: usize) -> Result<(), AddError> {
+    fn add(&mut self, p: usize, r: &[f64], nact: usize) -> Result<(), AddError> {
+        let n = self.n;
         let diag = libm::sqrt(self.z2);
-        let Some(row) = self.C.get_mut(nact) else {
+        let Some(row) = column_mut(self.C.as_mut_slice(), n, nact) else {
             return Err(AddError::Numerical);
         };
         if !(diag > 0.0 && diag.is_finite()) {
@@ -452,15 +573,19 @@ impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Gram<'_, NV, NC> 
         if diag < PIVOT_FALLBACK {
             return Err(AddError::Restart);
         }
-        *row = self.w;
-        row[nact] = diag;
+        crate::active_set::copy(row, self.w.as_slice());
+        if let Some(c) = row.get_mut(nact) {
+            *c = diag;
+        }
         // C^-1 gains the row [-(C^-T w)' / |z|, 1 / |z|] = [-r', 1] / |z|.
-        if let Some(ci) = self.Ci.get_mut(nact) {
+        if let Some(ci) = column_mut(self.Ci.as_mut_slice(), n, nact) {
             let inv = 1.0 / diag;
             for (c, rk) in ci.iter_mut().zip(r) {
                 *c = -rk * inv;
             }
-            ci[nact] = inv;
+            if let Some(c) = ci.get_mut(nact) {
+                *c = inv;
+            }
         }
         if let Some(sp) = self.s.get_mut(p) {
             *sp = 0.0;
@@ -479,7 +604,7 @@ impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Gram<'_, NV, NC> 
 /// about 1e-6 rad from that span yet not linearly dependent to
 /// `tol_dependence`, makes `M_A M_A'` too ill-conditioned (condition number
 /// above 1e12, so the normal equations lose all but a few digits): the solve
-/// restarts with [`DualActiveSet::solve_prepared`] on the same data, which
+/// restarts with [`DualActiveSetOf::solve_prepared`] on the same data, which
 /// works with an orthogonal factor. Rare: not on the LIPMWALK set or the
 /// controller's exported QPs (see `docs/solvers.md`).
 pub const PIVOT_FALLBACK: f64 = 1e-6;
@@ -491,83 +616,113 @@ const REFINE2: f64 = 1e-2;
 
 /// `w = C^-1 b` and `r = C^-T w = (C C')^-1 b` on the leading `nact x nact`
 /// block, from the inverse factor `Ci = C^-1` (lower triangular, zeros above
-/// the diagonal): two matrix-vector products, no chain of dependent
-/// divisions or dot products as in substitution. `r` must come zeroed;
-/// entries `nact..` of `w` are left as they are.
+/// the diagonal, row `i` stored as column `i`): two matrix-vector products,
+/// no chain of dependent divisions or dot products as in substitution. `r`
+/// must come zeroed; entries `nact..` of `w` are left as they are.
 #[inline(always)]
-fn chol_solve<const NV: usize>(
-    Ci: &[[f64; NV]; NV],
-    b: &[f64; NV],
+fn chol_solve<NV: Dim>(
+    Ci: &OMatrix<f64, NV, NV>,
+    b: &[f64],
     nact: usize,
-    w: &mut [f64; NV],
-    r: &mut [f64; NV],
-) {
-    for (wi, row) in w.iter_mut().zip(Ci).take(nact) {
+    w: &mut [f64],
+    r: &mut [f64],
+) where
+    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
+{
+    let n = Ci.nrows();
+    for (wi, row) in w.iter_mut().zip(columns(Ci.as_slice(), n)).take(nact) {
         *wi = dot(row, b);
     }
-    for (&wi, row) in w.iter().zip(Ci).take(nact) {
+    for (&wi, row) in w.iter().zip(columns(Ci.as_slice(), n)).take(nact) {
         for (rk, c) in r.iter_mut().zip(row) {
             *rk += wi * c;
         }
     }
 }
 
-/// Removes row `l` (of `nact`) from the Cholesky factor `C` of `M_A M_A'`:
-/// the rows below move up, and Givens rotations of column pairs restore the
-/// triangle (`C C'` stays the Gram matrix of the remaining rows). The rows
-/// `l..` of the inverse factor `Ci` are then recomputed from `C Ci = I`.
-fn chol_drop<const NV: usize>(
-    C: &mut [[f64; NV]; NV],
-    Ci: &mut [[f64; NV]; NV],
+/// Removes row `l` (of `nact`) from the Cholesky factor `C` of `M_A M_A'`
+/// (row `i` stored as column `i`): the rows below move up, and Givens
+/// rotations of column pairs restore the triangle (`C C'` stays the Gram
+/// matrix of the remaining rows). The rows `l..` of the inverse factor `Ci`
+/// are then recomputed from `C Ci = I`.
+fn chol_drop<NV: Dim>(
+    C: &mut OMatrix<f64, NV, NV>,
+    Ci: &mut OMatrix<f64, NV, NV>,
     nact: usize,
     l: usize,
-) {
-    let nact = nact.min(NV);
+) where
+    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV> + nalgebra::allocator::Allocator<NV>,
+{
+    let (nvd, _) = C.shape_generic();
+    let n = nvd.value();
+    let nact = nact.min(n);
     if l >= nact {
         return;
     }
     let last = nact - 1;
+    // `C[(k, i)]` is entry (i, k) of the factor (row i stored as column i).
     // Checked access (the optimiser does not prove `i + 1 < NV` on every
     // target, see nopanic/); always in bounds.
     for i in l..last {
-        if let Some(&next) = C.get(i + 1)
-            && let Some(row) = C.get_mut(i)
+        if let Some(pair) = i
+            .checked_mul(n)
+            .and_then(|a| C.as_mut_slice().get_mut(a..a.saturating_add(2 * n)))
         {
-            *row = next;
+            let (row, next) = pair.split_at_mut(n.min(pair.len()));
+            crate::active_set::copy(row, next);
         }
     }
-    C[last] = [0.0; NV];
-    Ci[last] = [0.0; NV];
+    if let Some(row) = column_mut(C.as_mut_slice(), n, last) {
+        row.fill(0.0);
+    }
+    if let Some(row) = column_mut(Ci.as_mut_slice(), n, last) {
+        row.fill(0.0);
+    }
     // Rows k..last-1 now reach column k+1; rotate columns k, k+1.
     for k in l..last {
-        let (a, b) = (C[k][k], C[k][k + 1]);
+        let (Some(&a), Some(&b)) = (C.get((k, k)), C.get((k + 1, k))) else {
+            continue;
+        };
         if b == 0.0 {
             continue;
         }
         let (c, s, r) = givens(a, b);
-        C[k][k] = r;
-        C[k][k + 1] = 0.0;
-        for row in C.iter_mut().take(last).skip(k + 1) {
-            let (a, b) = (row[k], row[k + 1]);
-            row[k] = c * a + s * b;
-            row[k + 1] = -s * a + c * b;
+        if let Some(v) = C.get_mut((k, k)) {
+            *v = r;
+        }
+        if let Some(v) = C.get_mut((k + 1, k)) {
+            *v = 0.0;
+        }
+        for row in crate::qp::columns_in_mut(C.as_mut_slice(), n, k + 1, last) {
+            if let Some([ra, rb]) = row.get_mut(k..k + 2) {
+                let (a, b) = (*ra, *rb);
+                *ra = c * a + s * b;
+                *rb = -s * a + c * b;
+            }
         }
     }
     // Row i of C Ci = I: C_ii Ci_i = e_i - sum_{k<i} C_ik Ci_k.
+    let mut row = OVector::<f64, NV>::zeros_generic(nvd, U1);
     for i in l..last {
-        let mut row = [0.0f64; NV];
-        row[i] = 1.0;
+        row.fill(0.0);
+        if let Some(v) = row.get_mut(i) {
+            *v = 1.0;
+        }
         for k in 0..i {
-            let f = C[i][k];
-            for (a, b) in row.iter_mut().zip(&Ci[k]) {
-                *a -= f * b;
+            let f = C.get((k, i)).copied().unwrap_or(0.0);
+            if let Some(cik) = column(Ci.as_slice(), n, k) {
+                for (a, b) in row.iter_mut().zip(cik) {
+                    *a -= f * b;
+                }
             }
         }
-        let inv = 1.0 / C[i][i];
+        let inv = 1.0 / C.get((i, i)).copied().unwrap_or(0.0);
         for a in row.iter_mut() {
             *a *= inv;
         }
-        Ci[i] = row;
+        if let Some(dst) = column_mut(Ci.as_mut_slice(), n, i) {
+            crate::active_set::copy(dst, row.as_slice());
+        }
     }
 }
 

@@ -44,6 +44,9 @@
 #![deny(unsafe_code)]
 #![warn(clippy::std_instead_of_core, clippy::alloc_instead_of_core)]
 
+#[cfg(feature = "alloc")]
+extern crate alloc;
+
 mod active_set;
 pub mod constraints;
 mod float;
@@ -80,7 +83,9 @@ pub use geometry::{
     convex_hull_into,
 };
 pub use heading::{HeadingPlan, plan_heading, wrap_angle};
-pub use ldp::{LdpLoaded, LdpSolver};
+pub use ldp::{LdpLoaded, LdpLoadedOf, LdpSolver, LdpSolverOf};
+#[cfg(feature = "alloc")]
+pub use ldp::{LdpLoadedDyn, LdpSolverDyn};
 pub use lip::Lip;
 pub use mpc::{
     ActiveObstacle, Assembly, CommandSource, Config, ConfigError, Controller, CycleInfo,
@@ -88,6 +93,8 @@ pub use mpc::{
     Plan, Prediction, RecordedInput, RobotController, Side, constraint_capacity,
 };
 pub use qp::{
-    DenseQp, DualActiveSet, HessianError, OwnSolver, QpBackend, QpSettings, QpSolution, QpStatus,
-    RowNorms,
+    DenseQp, DenseQpOf, DualActiveSet, DualActiveSetOf, HessianError, OwnSolver, QpAllocator,
+    QpBackend, QpSettings, QpSolution, QpSolutionOf, QpStatus, RowNorms, RowNormsOf,
 };
+#[cfg(feature = "alloc")]
+pub use qp::{DenseQpDyn, DualActiveSetDyn, QpSolutionDyn, RowNormsDyn};

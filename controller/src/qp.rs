@@ -25,10 +25,34 @@
 //! first time it is found violated, and per add or drop `O(m NV + NV^2)`. When `G`
 //! is the same over many solves (only `q` and `h` change), the row norms can be
 //! computed once with [`DualActiveSet::prepare_rows`] and passed to
-//! [`DualActiveSet::solve_prepared`]. The kernels are written over fixed-size
-//! arrays (lengths are the constants `NV`, `NC`), so the compiler unrolls and
-//! vectorises them without bounds checks; see `docs/solvers.md` for the
-//! measurements that chose them.
+//! [`DualActiveSet::solve_prepared`]. The kernels run over slices whose
+//! lengths are the dimensions (the constants `NV`, `NC` for the static
+//! sizes), so the compiler unrolls and vectorises them without bounds checks
+//! there; see `docs/solvers.md` for the measurements that chose them.
+//!
+//! # One algorithm, any size
+//!
+//! Written once, generic over nalgebra's dimension types: `NV` (variables)
+//! and `NC` (row capacity) are [`Dim`]s. With `Const<N>` every buffer is a
+//! fixed-size array on the stack (no heap, `no_std`): the controller and the
+//! firmware use this through the aliases [`DualActiveSet`], [`DenseQp`],
+//! [`QpSolution`] and [`RowNorms`], whose sizes are `const` parameters. With
+//! `Dyn` (feature `alloc`, never in the `no_std` build) the sizes are chosen
+//! at run time and the buffers live on the heap: `DualActiveSetDyn`,
+//! `DenseQpDyn`, `QpSolutionDyn`, `RowNormsDyn`. Both run the same code,
+//! operation for operation, so they give bit-identical results on the same
+//! data.
+//!
+//! # Equality rows
+//!
+//! The first `me` rows of a [`DenseQpOf`] may be equalities `g_i'x = h_i`
+//! ([`DenseQpOf::push_equality`]). They enter the active set before the
+//! first scan, are never dropped, and their multipliers have either sign
+//! (DAQP's and qpOASES' treatment); dependent equality rows are checked for
+//! consistency (redundant, or a Farkas certificate). They are compiled in
+//! with the hot start: from [`HOT_START_MIN_NV`] variables on for the static
+//! sizes, always for `Dyn`; a static instance below that answers a QP with
+//! equality rows with [`QpStatus::NumericalError`].
 //!
 //! Iteration count = number of adds plus drops; it never exceeds the budget passed
 //! to `solve`. Every loop is bounded by `NV`, `NC` or the budget.
@@ -57,7 +81,14 @@
 //! [`QpStatus::Infeasible`].
 #![allow(non_snake_case)]
 
-use nalgebra::{ArrayStorage, SMatrix, SVector};
+use core::marker::PhantomData;
+
+#[cfg(feature = "alloc")]
+use nalgebra::Dyn;
+use nalgebra::allocator::Allocator;
+use nalgebra::{
+    ArrayStorage, Const, DefaultAllocator, Dim, OMatrix, OVector, SMatrix, SVector, U1,
+};
 
 use crate::active_set::{self, dot};
 
@@ -69,12 +100,26 @@ use orthogonal::Orthogonal;
 /// rows: satisfied when `h_i >= -tol`, infeasible otherwise.
 pub(crate) const ZERO_ROW2: f64 = 0.0;
 
-/// Smallest number of variables for which [`QpSettings::hot_start`] is
-/// compiled in (the controller's horizons `N >= 8`). Below it, scanning the
-/// marked rows first gets most of the gain, and the hot start's code (3.8 KiB
-/// of Thumb at `NV = 6`) would not fit the firmware's 64 KiB of flash
-/// (`docs/horizon.md`).
+/// Smallest number of variables for which [`QpSettings::hot_start`] and
+/// equality rows are compiled into a static instance (the controller's
+/// horizons `N >= 8`; `Dyn` instances use the same threshold at run time).
+/// Below it, scanning the marked rows first gets most of the gain, and the
+/// hot start's code (3.8 KiB of Thumb at `NV = 6`) would not fit the
+/// firmware's 64 KiB of flash (`docs/horizon.md`).
 pub const HOT_START_MIN_NV: usize = 16;
+
+/// The allocations the solver needs for `NV` variables and `NC` rows: every
+/// `DefaultAllocator` over `Const` sizes has them (no heap), and so has the
+/// one over `Dyn` with nalgebra's `alloc` feature.
+pub trait QpAllocator<NV: Dim, NC: Dim>:
+    Allocator<NV> + Allocator<NC> + Allocator<NV, NV> + Allocator<NV, NC> + Allocator<NC, NC>
+{
+}
+
+impl<NV: Dim, NC: Dim, A> QpAllocator<NV, NC> for A where
+    A: Allocator<NV> + Allocator<NC> + Allocator<NV, NV> + Allocator<NV, NC> + Allocator<NC, NC>
+{
+}
 
 /// What one solve did. `Copy`, so it can travel in every cycle's diagnostics.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -103,7 +148,7 @@ impl QpStatus {
     }
 }
 
-/// Error from [`DualActiveSet::new`]: the Hessian cannot be used.
+/// Error from [`DualActiveSetOf::new`]: the Hessian cannot be used.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum HessianError {
     /// An entry of `H` is NaN or infinite.
@@ -112,6 +157,9 @@ pub enum HessianError {
     NotSymmetric,
     /// The Cholesky factorisation failed: `H` is not positive definite.
     NotPositiveDefinite,
+    /// `H` has no rows, or more than 65535 (only possible with run-time
+    /// sizes; the static sizes are checked at compile time).
+    BadSize,
 }
 
 impl core::fmt::Display for HessianError {
@@ -120,6 +168,7 @@ impl core::fmt::Display for HessianError {
             HessianError::NotFinite => f.write_str("Hessian has a non-finite entry"),
             HessianError::NotSymmetric => f.write_str("Hessian is not symmetric"),
             HessianError::NotPositiveDefinite => f.write_str("Hessian is not positive definite"),
+            HessianError::BadSize => f.write_str("Hessian has size 0 or above 65535"),
         }
     }
 }
@@ -152,142 +201,283 @@ impl Default for QpSettings {
     }
 }
 
-/// Result of one solve. `lambda` holds one multiplier per row (zero for inactive
+/// Result of one solve, for any dimension types (see [`QpSolution`] for the
+/// static sizes). `lambda` holds one multiplier per row (zero for inactive
 /// rows), so `H x + q + G' lambda = 0` at a solution.
-#[derive(Clone, Copy, Debug)]
-pub struct QpSolution<const NV: usize, const NC: usize> {
+#[derive(Clone, Debug)]
+pub struct QpSolutionOf<NV: Dim, NC: Dim>
+where
+    DefaultAllocator: Allocator<NV> + Allocator<NC>,
+{
     /// Primal solution (or last iterate when not solved).
-    pub x: SVector<f64, NV>,
-    /// Lagrange multipliers, one per row, in the order of the rows of `G`.
+    pub x: OVector<f64, NV>,
+    /// Lagrange multipliers, one per row, in the order of the rows of `G`
+    /// (`>= 0` for inequality rows, either sign for equality rows).
     /// When the status is [`QpStatus::Infeasible`] it holds instead a Farkas
-    /// certificate of infeasibility: `y >= 0` with `G'y = 0` and `h'y < 0` (up
-    /// to rounding), scaled so that the entry of the row that could not be
-    /// added is 1.
-    pub lambda: SVector<f64, NC>,
+    /// certificate of infeasibility: `y` with `G'y = 0` and `h'y < 0` (up
+    /// to rounding), `>= 0` on inequality rows, scaled so that the entry of
+    /// the row that could not be added is 1 (or -1 for an equality row
+    /// violated from below).
+    pub lambda: OVector<f64, NC>,
     /// Objective `1/2 x'Hx + q'x` at `x`.
     pub objective: f64,
     /// Outcome.
     pub status: QpStatus,
     /// Adds plus drops performed.
     pub iterations: u32,
-    /// Indices of the active rows (first `n_active` entries valid).
-    pub active: [u16; NV],
+    /// Indices of the active rows (first `n_active` entries valid; the
+    /// equality rows first).
+    pub active: OVector<u16, NV>,
     /// Number of active rows.
     pub n_active: usize,
 }
 
-impl<const NV: usize, const NC: usize> QpSolution<NV, NC> {
+/// [`QpSolutionOf`] with the sizes as constants (stack only, `Copy`).
+pub type QpSolution<const NV: usize, const NC: usize> = QpSolutionOf<Const<NV>, Const<NC>>;
+
+impl<const NV: usize, const NC: usize> Copy for QpSolutionOf<Const<NV>, Const<NC>> {}
+
+impl<NV: Dim, NC: Dim> QpSolutionOf<NV, NC>
+where
+    DefaultAllocator: Allocator<NV> + Allocator<NC>,
+{
     /// The active rows as a slice.
     pub fn active_set(&self) -> &[u16] {
-        &self.active[..self.n_active.min(NV)]
+        let a = self.active.as_slice();
+        a.get(..self.n_active.min(a.len())).unwrap_or(&[])
     }
 }
 
-/// A QP of the form solved here, stored with fixed capacity: `m <= NC` rows are
-/// used. `gt` holds `G` transposed (one constraint normal per column) so each row of
-/// `G` is contiguous.
+/// A QP of the form solved here, for any dimension types (see [`DenseQp`]
+/// for the static sizes), stored with a capacity of `NC` rows of which the
+/// first `m` are used; the first `me` of those are equalities
+/// `g_i'x = h_i`, the others inequalities `g_i'x <= h_i`. `gt` holds `G`
+/// transposed (one constraint normal per column) so each row of `G` is
+/// contiguous.
 #[derive(Clone, Debug)]
-pub struct DenseQp<const NV: usize, const NC: usize> {
+pub struct DenseQpOf<NV: Dim, NC: Dim>
+where
+    DefaultAllocator: Allocator<NV> + Allocator<NC> + Allocator<NV, NC>,
+{
     /// Linear cost term `q`.
-    pub q: SVector<f64, NV>,
+    pub q: OVector<f64, NV>,
     /// `G` transposed: column `i` is row `i` of `G`.
-    pub gt: SMatrix<f64, NV, NC>,
+    pub gt: OMatrix<f64, NV, NC>,
     /// Right-hand side `h`.
-    pub h: SVector<f64, NC>,
+    pub h: OVector<f64, NC>,
     /// Number of rows in use.
     pub m: usize,
+    /// Number of equality rows (rows `0..me`; `me <= m`).
+    pub me: usize,
 }
 
-impl<const NV: usize, const NC: usize> Default for DenseQp<NV, NC> {
+/// [`DenseQpOf`] with the sizes as constants (stack only).
+pub type DenseQp<const NV: usize, const NC: usize> = DenseQpOf<Const<NV>, Const<NC>>;
+
+impl<const NV: usize, const NC: usize> Default for DenseQpOf<Const<NV>, Const<NC>> {
     fn default() -> Self {
-        DenseQp {
-            q: SVector::zeros(),
-            gt: SMatrix::zeros(),
-            h: SVector::zeros(),
-            m: 0,
-        }
+        Self::EMPTY
     }
 }
 
-impl<const NV: usize, const NC: usize> DenseQp<NV, NC> {
+impl<const NV: usize, const NC: usize> DenseQpOf<Const<NV>, Const<NC>> {
     /// An empty QP (no rows, `q = 0`), all storage zero: usable in `const` and
     /// `static` initialisers (a `static` holding it lands in `.bss`).
-    pub const EMPTY: Self = DenseQp {
+    pub const EMPTY: Self = DenseQpOf {
         q: SVector::from_array_storage(ArrayStorage([[0.0; NV]; 1])),
         gt: SMatrix::from_array_storage(ArrayStorage([[0.0; NV]; NC])),
         h: SVector::from_array_storage(ArrayStorage([[0.0; NC]; 1])),
         m: 0,
+        me: 0,
     };
 
     /// An empty QP with linear term `q`.
     pub fn with_q(q: SVector<f64, NV>) -> Self {
-        DenseQp {
-            q,
-            ..DenseQp::default()
-        }
-    }
-
-    /// Removes all rows and zeroes `q`.
-    pub fn clear(&mut self) {
-        self.q.fill(0.0);
-        self.m = 0;
-    }
-
-    /// Appends the row `g' x <= h`. Returns `Err(())` (and changes nothing) when the
-    /// capacity `NC` is full.
-    #[allow(clippy::result_unit_err)]
-    pub fn push_row(&mut self, g: &SVector<f64, NV>, h: f64) -> Result<(), ()> {
-        // `gt` is column-major: `gt.data.0[i]` is column `i` of `gt`, row `i` of `G`.
-        let (Some(col), Some(rhs)) = (self.gt.data.0.get_mut(self.m), self.h.get_mut(self.m))
-        else {
-            return Err(());
-        };
-        *col = (*g).into();
-        *rhs = h;
-        self.m += 1;
-        Ok(())
+        DenseQpOf { q, ..Self::EMPTY }
     }
 
     /// Row `i` of `G` (a column of `gt`).
     ///
     /// # Panics
     ///
-    /// If `i >= NC`; see [`DenseQp::get_row`] for the non-panicking form.
+    /// If `i >= NC`; see [`DenseQpOf::get_row`] for the non-panicking form.
     pub fn row(&self, i: usize) -> SVector<f64, NV> {
         self.gt.column(i).into_owned()
+    }
+}
+
+#[cfg(feature = "alloc")]
+impl DenseQpOf<Dyn, Dyn> {
+    /// An empty QP with linear term `q` and room for `nc` rows (all zero).
+    pub fn with_capacity(q: nalgebra::DVector<f64>, nc: usize) -> Self {
+        let nv = q.len();
+        DenseQpOf {
+            q,
+            gt: nalgebra::DMatrix::zeros(nv, nc),
+            h: nalgebra::DVector::zeros(nc),
+            m: 0,
+            me: 0,
+        }
+    }
+}
+
+/// Column `j` of a column-major matrix with `n` rows stored in `s`.
+#[inline(always)]
+pub(crate) fn column(s: &[f64], n: usize, j: usize) -> Option<&[f64]> {
+    // One test, `j < columns` (for the static sizes a compare with the
+    // constant NC, as indexing an array of columns); then `j n + n <= len`
+    // cannot overflow, and the slice's length is visibly `n` (a constant
+    // there too), so loops over the column unroll.
+    if n == 0 || j >= s.len() / n {
+        return None;
+    }
+    let start = j * n;
+    s.get(start..start + n)
+}
+
+/// Column `j` of a column-major matrix with `n` rows stored in `s`, mutable.
+#[inline(always)]
+pub(crate) fn column_mut(s: &mut [f64], n: usize, j: usize) -> Option<&mut [f64]> {
+    if n == 0 || j >= s.len() / n {
+        return None;
+    }
+    let start = j * n;
+    s.get_mut(start..start + n)
+}
+
+/// The columns of a column-major matrix with `n > 0` rows stored in `s`
+/// (nothing for `n = 0`).
+#[inline(always)]
+pub(crate) fn columns(s: &[f64], n: usize) -> core::slice::ChunksExact<'_, f64> {
+    // `n.max(1)`: a zero chunk size would panic; with n = 0 the slice is empty.
+    s.chunks_exact(n.max(1))
+}
+
+/// Columns `j0..j1` of a column-major matrix with `n > 0` rows stored in `s`
+/// (fewer when `s` ends before; no `skip` or `take` on the chunks, which the
+/// compiler may leave as an out-of-line `nth`).
+#[inline(always)]
+pub(crate) fn columns_in(
+    s: &[f64],
+    n: usize,
+    j0: usize,
+    j1: usize,
+) -> core::slice::ChunksExact<'_, f64> {
+    let end = j1.saturating_mul(n).min(s.len());
+    let start = j0.saturating_mul(n).min(end);
+    columns(s.get(start..end).unwrap_or(&[]), n)
+}
+
+/// [`columns_in`], mutable.
+#[inline(always)]
+pub(crate) fn columns_in_mut(
+    s: &mut [f64],
+    n: usize,
+    j0: usize,
+    j1: usize,
+) -> core::slice::ChunksExactMut<'_, f64> {
+    let end = j1.saturating_mul(n).min(s.len());
+    let start = j0.saturating_mul(n).min(end);
+    columns_mut(s.get_mut(start..end).unwrap_or(&mut []), n)
+}
+
+/// [`columns`], mutable.
+#[inline(always)]
+pub(crate) fn columns_mut(s: &mut [f64], n: usize) -> core::slice::ChunksExactMut<'_, f64> {
+    s.chunks_exact_mut(n.max(1))
+}
+
+impl<NV: Dim, NC: Dim> DenseQpOf<NV, NC>
+where
+    DefaultAllocator: Allocator<NV> + Allocator<NC> + Allocator<NV, NC>,
+{
+    /// Removes all rows and zeroes `q`.
+    pub fn clear(&mut self) {
+        self.q.as_mut_slice().fill(0.0);
+        self.m = 0;
+        self.me = 0;
+    }
+
+    /// Row capacity (`NC`).
+    pub fn capacity(&self) -> usize {
+        self.gt.ncols()
+    }
+
+    /// Appends the row `g' x <= h`. Returns `Err(())` (and changes nothing)
+    /// when the capacity `NC` is full.
+    #[allow(clippy::result_unit_err)]
+    pub fn push_row(&mut self, g: &OVector<f64, NV>, h: f64) -> Result<(), ()> {
+        let nv = self.gt.nrows();
+        // `gt` is column-major: column `m` of `gt` is row `m` of `G`.
+        let (Some(col), Some(rhs)) = (
+            column_mut(self.gt.as_mut_slice(), nv, self.m),
+            self.h.as_mut_slice().get_mut(self.m),
+        ) else {
+            return Err(());
+        };
+        crate::active_set::copy(col, g.as_slice());
+        *rhs = h;
+        self.m += 1;
+        Ok(())
+    }
+
+    /// Appends the equality row `g' x = h`. Equality rows come first:
+    /// `Err(())` (and nothing changes) when an inequality row is already
+    /// there or the capacity is full.
+    #[allow(clippy::result_unit_err)]
+    pub fn push_equality(&mut self, g: &OVector<f64, NV>, h: f64) -> Result<(), ()> {
+        if self.me != self.m {
+            return Err(());
+        }
+        self.push_row(g, h)?;
+        self.me += 1;
+        Ok(())
     }
 
     /// Row `i` as `(g_i, h_i)`, or `None` when `i >= NC` (rows `m..NC` are unused
     /// but exist).
-    pub fn get_row(&self, i: usize) -> Option<(SVector<f64, NV>, f64)> {
-        let g = self.gt.data.0.get(i)?;
-        let h = self.h.get(i)?;
-        Some((SVector::from(*g), *h))
+    pub fn get_row(&self, i: usize) -> Option<(OVector<f64, NV>, f64)> {
+        let h = *self.h.as_slice().get(i)?;
+        let g = column(self.gt.as_slice(), self.gt.nrows(), i)?;
+        Some((self.owned_row(g), h))
+    }
+
+    /// A row of `G` (a column of `gt`) as a vector (no allocation for static
+    /// sizes, no panic: entries copied pairwise).
+    fn owned_row(&self, g: &[f64]) -> OVector<f64, NV> {
+        let mut v = OVector::zeros_generic(self.q.shape_generic().0, U1);
+        for (a, &b) in v.as_mut_slice().iter_mut().zip(g) {
+            *a = b;
+        }
+        v
     }
 
     /// The rows in use, `(g_i, h_i)` for `i = 0..m`, in order.
-    pub fn rows(&self) -> impl Iterator<Item = (SVector<f64, NV>, f64)> + '_ {
-        let m = self.m.min(NC);
-        // `gt` is column-major: `gt.data.0[i]` is column `i` of `gt`, row `i` of `G`.
-        self.gt.data.0[..m]
-            .iter()
-            .zip(&self.h.as_slice()[..m])
-            .map(|(g, h)| (SVector::from(*g), *h))
+    pub fn rows(&self) -> impl Iterator<Item = (OVector<f64, NV>, f64)> + '_ {
+        let m = self.m.min(self.gt.ncols());
+        columns(self.gt.as_slice(), self.gt.nrows())
+            .zip(self.h.as_slice().iter())
+            .take(m)
+            .map(|(g, h)| (self.owned_row(g), *h))
     }
 
     /// The used rows with their Euclidean norms: `(g_i, h_i, |g_i|)`.
-    pub fn rows_with_norm(&self) -> impl Iterator<Item = (SVector<f64, NV>, f64, f64)> + '_ {
+    pub fn rows_with_norm(&self) -> impl Iterator<Item = (OVector<f64, NV>, f64, f64)> + '_ {
         self.rows().map(|(g, h)| {
             let n = g.norm();
             (g, h, n)
         })
     }
 
-    /// Largest violation `max_i (g_i x - h_i)^+` over the used rows, unscaled.
-    pub fn max_violation(&self, x: &SVector<f64, NV>) -> f64 {
+    /// Largest violation over the used rows, unscaled: `(g_i x - h_i)^+` of
+    /// the inequality rows, `|g_i x - h_i|` of the equality rows.
+    pub fn max_violation(&self, x: &OVector<f64, NV>) -> f64 {
         let mut worst: f64 = 0.0;
-        for (g, h) in self.rows() {
-            let v = g.dot(x) - h;
+        for (i, (g, h)) in self.rows().enumerate() {
+            let mut v = g.dot(x) - h;
+            if i < self.me {
+                v = v.abs();
+            }
             if v > worst {
                 worst = v;
             }
@@ -299,32 +489,48 @@ impl<const NV: usize, const NC: usize> DenseQp<NV, NC> {
 /// Per-row data of a constraint matrix `G` used by a solve: squared Euclidean
 /// norms `|g_i|^2` and reciprocal norms in the metric of `H^-1`,
 /// `1 / |L^-1 g_i|` (both 0 for a zero row). Built by
-/// [`DualActiveSet::prepare_rows`] for [`DualActiveSet::solve_prepared`].
+/// [`DualActiveSetOf::prepare_rows`] for [`DualActiveSetOf::solve_prepared`].
 #[derive(Clone, Debug)]
-pub struct RowNorms<const NC: usize> {
+pub struct RowNormsOf<NC: Dim>
+where
+    DefaultAllocator: Allocator<NC>,
+{
     /// `|g_i|^2`, in the units of `G` squared (no square root or division, so
     /// the pass over all rows is cheap; the violation test squares the slack).
-    norm2: [f64; NC],
+    norm2: OVector<f64, NC>,
     /// `1 / |L^-1 g_i|`, 0 = not computed yet.
-    inv_hnorm: [f64; NC],
+    inv_hnorm: OVector<f64, NC>,
     /// Rows covered.
     m: usize,
     /// Every entry of the covered rows is finite.
     finite: bool,
 }
 
-impl<const NC: usize> RowNorms<NC> {
+/// [`RowNormsOf`] with the row capacity as a constant.
+pub type RowNorms<const NC: usize> = RowNormsOf<Const<NC>>;
+
+impl<NC: Dim> RowNormsOf<NC>
+where
+    DefaultAllocator: Allocator<NC>,
+{
     /// Squared Euclidean norms of the used rows of `qp` (H^-1 norms not
     /// computed).
-    fn euclidean<const NV: usize>(qp: &DenseQp<NV, NC>) -> Self {
-        let m = qp.m.min(NC);
-        let mut rows = RowNorms {
-            norm2: [0.0; NC],
-            inv_hnorm: [0.0; NC],
+    fn euclidean<NV: Dim>(qp: &DenseQpOf<NV, NC>) -> Self
+    where
+        DefaultAllocator: Allocator<NV> + Allocator<NV, NC>,
+    {
+        let nc = qp.h.shape_generic().0;
+        let m = qp.m.min(nc.value());
+        let mut rows = RowNormsOf {
+            norm2: OVector::zeros_generic(nc, U1),
+            inv_hnorm: OVector::zeros_generic(nc, U1),
             m,
             finite: true,
         };
-        for (g, n2) in qp.gt.data.0.iter().zip(&mut rows.norm2).take(m) {
+        for (g, n2) in columns(qp.gt.as_slice(), qp.gt.nrows())
+            .zip(rows.norm2.as_mut_slice().iter_mut())
+            .take(m)
+        {
             *n2 = dot(g, g);
             // A NaN or infinite entry makes `n2` non-finite, and so does a row
             // whose squared norm overflows (|g| > ~1e154): both are numerical
@@ -337,27 +543,52 @@ impl<const NC: usize> RowNorms<NC> {
     }
 }
 
-/// The solver: the factored Hessian and the settings. Build once per Hessian;
+/// The solver: the factored Hessian and the settings, for any dimension types
+/// (see [`DualActiveSet`] for the static sizes). Build once per Hessian;
 /// `solve` takes `&self`.
 #[derive(Clone, Debug)]
-pub struct DualActiveSet<const NV: usize, const NC: usize> {
-    H: SMatrix<f64, NV, NV>,
+pub struct DualActiveSetOf<NV: Dim, NC: Dim>
+where
+    DefaultAllocator: Allocator<NV, NV>,
+{
+    H: OMatrix<f64, NV, NV>,
     /// `L^-1` with `H = L L'`: lower triangular, entries above the diagonal
     /// exactly zero. Its transpose `J0 = L^-T` starts `J` in every solve.
-    Linv: SMatrix<f64, NV, NV>,
+    Linv: OMatrix<f64, NV, NV>,
     /// `L^-1` (so `H`) is diagonal: products with `L^-1` and `L^-T` cost `NV`
     /// instead of `NV^2`.
     linv_diag: bool,
     settings: QpSettings,
+    /// The row capacity is a parameter of the QPs solved, not of the solver's
+    /// data.
+    _nc: PhantomData<NC>,
 }
 
-impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
+/// [`DualActiveSetOf`] with the sizes as constants (stack only, `no_std`):
+/// the controller's solver.
+pub type DualActiveSet<const NV: usize, const NC: usize> = DualActiveSetOf<Const<NV>, Const<NC>>;
+
+/// The run-time-sized instances (feature `alloc`): any number of variables
+/// and rows, heap storage, the same code as the static ones.
+#[cfg(feature = "alloc")]
+pub type DualActiveSetDyn = DualActiveSetOf<Dyn, Dyn>;
+/// [`DenseQpOf`] with run-time sizes (feature `alloc`).
+#[cfg(feature = "alloc")]
+pub type DenseQpDyn = DenseQpOf<Dyn, Dyn>;
+/// [`QpSolutionOf`] with run-time sizes (feature `alloc`).
+#[cfg(feature = "alloc")]
+pub type QpSolutionDyn = QpSolutionOf<Dyn, Dyn>;
+/// [`RowNormsOf`] with run-time sizes (feature `alloc`).
+#[cfg(feature = "alloc")]
+pub type RowNormsDyn = RowNormsOf<Dyn>;
+
+impl<const NV: usize, const NC: usize> DualActiveSetOf<Const<NV>, Const<NC>> {
     /// A placeholder with `H = 0`, `L^-1 = 0` and zero tolerances, all storage
     /// zero, for `const` and `static` initialisers (e.g. an unconfigured
     /// controller). Not a solver: overwrite it with one from
-    /// [`DualActiveSet::new`] before solving (its solves never panic but mean
+    /// [`DualActiveSetOf::new`] before solving (its solves never panic but mean
     /// nothing).
-    pub const PLACEHOLDER: Self = DualActiveSet {
+    pub const PLACEHOLDER: Self = DualActiveSetOf {
         H: SMatrix::from_array_storage(ArrayStorage([[0.0; NV]; NV])),
         Linv: SMatrix::from_array_storage(ArrayStorage([[0.0; NV]; NV])),
         linv_diag: false,
@@ -366,54 +597,71 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
             tol_dependence: 0.0,
             hot_start: false,
         },
+        _nc: PhantomData,
     };
+}
 
+impl<NV: Dim, NC: Dim> DualActiveSetOf<NV, NC>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
     /// Factors `H` (symmetric positive definite) once.
-    pub fn new(H: &SMatrix<f64, NV, NV>, settings: QpSettings) -> Result<Self, HessianError> {
-        const {
-            assert!(NV > 0, "NV must be positive");
-            assert!(NV <= u16::MAX as usize && NC <= u16::MAX as usize);
+    pub fn new(H: &OMatrix<f64, NV, NV>, settings: QpSettings) -> Result<Self, HessianError> {
+        if let (Some(nv), Some(nc)) = (NV::try_to_usize(), NC::try_to_usize()) {
+            // Static sizes: a compile-time constant test.
+            if nv == 0 || nv > usize::from(u16::MAX) || nc > usize::from(u16::MAX) {
+                return Err(HessianError::BadSize);
+            }
         }
-        if H.iter().any(|v| !v.is_finite()) {
+        let n = H.nrows();
+        if n == 0 || n > usize::from(u16::MAX) {
+            return Err(HessianError::BadSize);
+        }
+        if H.as_slice().iter().any(|v| !v.is_finite()) {
             return Err(HessianError::NotFinite);
         }
         let scale = H.amax().max(f64::MIN_POSITIVE);
-        // |H_ij - H_ji| for i > j; `cols[j][i]` is H_ij (column-major), read
-        // with checked access (bounds the optimiser could not prove for every
-        // NV, see nopanic/).
-        let cols = &H.data.0;
-        for (j, col) in cols.iter().enumerate() {
+        // |H_ij - H_ji| for i > j; column `j` holds H_ij at `i` (column-major),
+        // read with checked access (bounds the optimiser could not prove for
+        // every NV, see nopanic/).
+        let hs = H.as_slice();
+        for (j, col) in columns(hs, n).enumerate() {
             for (i, &hij) in col.iter().enumerate().skip(j + 1) {
-                let hji = cols.get(i).and_then(|c| c.get(j)).copied().unwrap_or(hij);
+                let hji = column(hs, n, i)
+                    .and_then(|c| c.get(j))
+                    .copied()
+                    .unwrap_or(hij);
                 if (hij - hji).abs() > 1e-12 * scale {
                     return Err(HessianError::NotSymmetric);
                 }
             }
         }
-        let chol = nalgebra::linalg::Cholesky::new(*H).ok_or(HessianError::NotPositiveDefinite)?;
+        let chol =
+            nalgebra::linalg::Cholesky::new(H.clone()).ok_or(HessianError::NotPositiveDefinite)?;
         let L = chol.l();
-        let mut J0 = SMatrix::<f64, NV, NV>::identity();
-        if !L.transpose().solve_upper_triangular_mut(&mut J0) || J0.iter().any(|v| !v.is_finite()) {
+        let (nv, _) = H.shape_generic();
+        let mut J0 = OMatrix::<f64, NV, NV>::identity_generic(nv, nv);
+        if !L.transpose().solve_upper_triangular_mut(&mut J0)
+            || J0.as_slice().iter().any(|v| !v.is_finite())
+        {
             return Err(HessianError::NotPositiveDefinite);
         }
         // L^-1 with exact zeros above the diagonal.
         let mut Linv = J0.transpose();
-        for (j, col) in Linv.data.0.iter_mut().enumerate() {
+        for (j, col) in columns_mut(Linv.as_mut_slice(), n).enumerate() {
             for v in col.iter_mut().take(j) {
                 *v = 0.0;
             }
         }
-        let linv_diag = Linv
-            .data
-            .0
-            .iter()
+        let linv_diag = columns(Linv.as_slice(), n)
             .enumerate()
             .all(|(j, col)| col.iter().enumerate().all(|(k, &v)| k == j || v == 0.0));
-        Ok(DualActiveSet {
-            H: *H,
+        Ok(DualActiveSetOf {
+            H: H.clone(),
             Linv,
             linv_diag,
             settings,
+            _nc: PhantomData,
         })
     }
 
@@ -426,7 +674,7 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
     }
 
     /// The Hessian this solver was built for.
-    pub fn hessian(&self) -> &SMatrix<f64, NV, NV> {
+    pub fn hessian(&self) -> &OMatrix<f64, NV, NV> {
         &self.H
     }
 
@@ -435,28 +683,55 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         &self.settings
     }
 
+    /// The number of variables as a dimension (a constant for the static
+    /// sizes).
+    #[inline(always)]
+    pub(crate) fn nv(&self) -> NV {
+        self.H.shape_generic().0
+    }
+
+    /// Whether the hot start and equality rows are compiled in for this
+    /// size (module docs): a constant for the static sizes.
+    #[inline(always)]
+    pub(crate) fn hot_start_capable(&self) -> bool {
+        NV::try_to_usize().unwrap_or(self.H.nrows()) >= HOT_START_MIN_NV
+    }
+
     /// Objective `1/2 x'Hx + q'x`.
-    pub fn objective(&self, q: &SVector<f64, NV>, x: &SVector<f64, NV>) -> f64 {
+    pub fn objective(&self, q: &OVector<f64, NV>, x: &OVector<f64, NV>) -> f64 {
+        let n = self.nv().value();
+        let (Some(x), Some(q)) = (x.as_slice().get(..n), q.as_slice().get(..n)) else {
+            return f64::NAN;
+        };
         let mut xhx = 0.0;
-        for (col, xj) in self.H.data.0.iter().zip(x.iter()) {
-            xhx += xj * dot(col, &x.data.0[0]);
+        for (col, xj) in columns(self.H.as_slice(), n).zip(x.iter()) {
+            xhx += xj * dot(col, x);
         }
-        0.5 * xhx + dot(&q.data.0[0], &x.data.0[0])
+        0.5 * xhx + dot(q, x)
     }
 
     /// `L^-1 g` (`= J0' g`) as column axpys (no reductions);
-    /// `NV` products when `H` is diagonal.
+    /// `NV` products when `H` is diagonal. Entries of `g` beyond `NV` are
+    /// not read; a shorter `g` gives 0.
     // Inlined on hosts (vectorised into the callers); the compiler decides on
     // bare-metal targets, where one out-of-line copy saves flash.
     #[cfg_attr(not(target_os = "none"), inline(always))]
-    pub(crate) fn linv_mul(&self, g: &[f64; NV]) -> [f64; NV] {
-        let mut w = [0.0f64; NV];
-        for (k, (col, &gk)) in self.Linv.data.0.iter().zip(g).enumerate() {
+    pub(crate) fn linv_mul(&self, g: &[f64]) -> OVector<f64, NV> {
+        let nv = self.nv();
+        let n = nv.value();
+        let mut w = OVector::<f64, NV>::zeros_generic(nv, U1);
+        let Some(g) = g.get(..n) else {
+            return w;
+        };
+        let ws = w.as_mut_slice();
+        for (k, (col, &gk)) in columns(self.Linv.as_slice(), n).zip(g).enumerate() {
             if self.linv_diag {
-                w[k] = col[k] * gk;
+                if let (Some(wk), Some(&c)) = (ws.get_mut(k), col.get(k)) {
+                    *wk = c * gk;
+                }
             } else {
                 // zeros above the diagonal included: fixed length, vectorised
-                for (wi, c) in w.iter_mut().zip(col) {
+                for (wi, c) in ws.iter_mut().zip(col) {
                     *wi += c * gk;
                 }
             }
@@ -468,11 +743,21 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
     // Inlined on hosts (vectorised into the callers); the compiler decides on
     // bare-metal targets, where one out-of-line copy saves flash.
     #[cfg_attr(not(target_os = "none"), inline(always))]
-    pub(crate) fn linvt_mul(&self, w: &[f64; NV]) -> [f64; NV] {
-        let mut x = [0.0f64; NV];
-        for (k, (xk, col)) in x.iter_mut().zip(&self.Linv.data.0).enumerate() {
+    pub(crate) fn linvt_mul(&self, w: &[f64]) -> OVector<f64, NV> {
+        let nv = self.nv();
+        let n = nv.value();
+        let mut x = OVector::<f64, NV>::zeros_generic(nv, U1);
+        let Some(w) = w.get(..n) else {
+            return x;
+        };
+        for (k, (xk, col)) in x
+            .as_mut_slice()
+            .iter_mut()
+            .zip(columns(self.Linv.as_slice(), n))
+            .enumerate()
+        {
             *xk = if self.linv_diag {
-                col[k] * w[k]
+                col.get(k).copied().unwrap_or(0.0) * w.get(k).copied().unwrap_or(0.0)
             } else {
                 dot(col, w) // zeros above the diagonal included: no branches
             };
@@ -481,27 +766,23 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
     }
 
     /// Solves the QP `qp` with at most `max_iter` adds plus drops. `prefer[i]` marks
-    /// row `i` as expected active (warm start); pass all `false` for a cold start.
+    /// row `i` as expected active (warm start); pass all `false` for a cold start
+    /// (entries beyond the capacity are ignored, missing ones are `false`).
     pub fn solve(
         &self,
-        qp: &DenseQp<NV, NC>,
-        prefer: &[bool; NC],
+        qp: &DenseQpOf<NV, NC>,
+        prefer: &[bool],
         max_iter: u32,
-    ) -> QpSolution<NV, NC> {
+    ) -> QpSolutionOf<NV, NC> {
         // The H^-1 norms are left to the solve, which computes them only for
         // rows found violated.
-        let mut rows = RowNorms::euclidean(qp);
-        self.solve_with(
-            qp,
-            &qp.h.data.0[0],
-            &[false; NC],
-            &mut rows,
-            prefer,
-            max_iter,
-        )
+        let mut rows = RowNormsOf::euclidean(qp);
+        let nc = qp.h.shape_generic().0;
+        let excluded = OVector::<bool, NC>::from_element_generic(nc, U1, false);
+        self.solve_with(qp, &qp.h, excluded, &mut rows, prefer, max_iter)
     }
 
-    /// [`DualActiveSet::solve`] on a selection of `qp`'s rows with other
+    /// [`DualActiveSetOf::solve`] on a selection of `qp`'s rows with other
     /// right-hand sides: `min 1/2 x'Hx + q'x` subject to `g_i'x <= h[i]` for the
     /// rows `i < qp.m` with `enabled[i]`; the other rows are left out, as if
     /// absent, and `qp.h` is not used. Multipliers (or the Farkas certificate)
@@ -513,35 +794,33 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
     /// (else [`QpStatus::NumericalError`]).
     pub fn solve_selected(
         &self,
-        qp: &DenseQp<NV, NC>,
-        h: &SVector<f64, NC>,
-        enabled: &[bool; NC],
-        prefer: &[bool; NC],
+        qp: &DenseQpOf<NV, NC>,
+        h: &OVector<f64, NC>,
+        enabled: &[bool],
+        prefer: &[bool],
         max_iter: u32,
-    ) -> QpSolution<NV, NC> {
-        let mut excluded = [false; NC];
-        for (x, &on) in excluded.iter_mut().zip(enabled) {
+    ) -> QpSolutionOf<NV, NC> {
+        let nc = qp.h.shape_generic().0;
+        let mut excluded = OVector::<bool, NC>::from_element_generic(nc, U1, true);
+        for (x, &on) in excluded.as_mut_slice().iter_mut().zip(enabled) {
             *x = !on;
         }
-        let mut rows = RowNorms::euclidean(qp);
-        self.solve_with(qp, &h.data.0[0], &excluded, &mut rows, prefer, max_iter)
+        let mut rows = RowNormsOf::euclidean(qp);
+        self.solve_with(qp, h, excluded, &mut rows, prefer, max_iter)
     }
 
-    /// The per-row data of `qp`'s constraint matrix that [`DualActiveSet::solve`]
+    /// The per-row data of `qp`'s constraint matrix that [`DualActiveSetOf::solve`]
     /// otherwise computes in every call (`m` Euclidean and `m` H^-1 row norms):
     /// prepare it once when `G` stays the same over many solves (only `q` and `h`
     /// change, as in a linear MPC with fixed constraints) and pass it to
-    /// [`DualActiveSet::solve_prepared`].
-    pub fn prepare_rows(&self, qp: &DenseQp<NV, NC>) -> RowNorms<NC> {
-        let mut rows = RowNorms::euclidean(qp);
-        for ((g, &n2), inv_hn) in qp
-            .gt
-            .data
-            .0
-            .iter()
-            .zip(&rows.norm2)
-            .zip(&mut rows.inv_hnorm)
-            .take(rows.m)
+    /// [`DualActiveSetOf::solve_prepared`].
+    pub fn prepare_rows(&self, qp: &DenseQpOf<NV, NC>) -> RowNormsOf<NC> {
+        let mut rows = RowNormsOf::euclidean(qp);
+        let m = rows.m;
+        for ((g, &n2), inv_hn) in columns(qp.gt.as_slice(), qp.gt.nrows())
+            .zip(rows.norm2.as_slice().iter())
+            .zip(rows.inv_hnorm.as_mut_slice().iter_mut())
+            .take(m)
         {
             if n2 > ZERO_ROW2 {
                 *inv_hn = self.inv_hnorm(g, n2);
@@ -550,38 +829,33 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         rows
     }
 
-    /// [`DualActiveSet::solve`] with the row data prepared by
-    /// [`DualActiveSet::prepare_rows`] from a QP with the same rows of `G` (same
+    /// [`DualActiveSetOf::solve`] with the row data prepared by
+    /// [`DualActiveSetOf::prepare_rows`] from a QP with the same rows of `G` (same
     /// `m`; `q` and `h` may differ). Same result as `solve`, less work per call.
     /// A `rows` prepared for a different `m` gives [`QpStatus::NumericalError`].
     pub fn solve_prepared(
         &self,
-        qp: &DenseQp<NV, NC>,
-        rows: &RowNorms<NC>,
-        prefer: &[bool; NC],
+        qp: &DenseQpOf<NV, NC>,
+        rows: &RowNormsOf<NC>,
+        prefer: &[bool],
         max_iter: u32,
-    ) -> QpSolution<NV, NC> {
+    ) -> QpSolutionOf<NV, NC> {
         let mut rows = rows.clone();
-        if rows.m != qp.m.min(NC) {
+        let nc = qp.h.shape_generic().0;
+        if rows.m != qp.m.min(nc.value()) || rows.norm2.len() != nc.value() {
             rows.finite = false;
         }
-        self.solve_with(
-            qp,
-            &qp.h.data.0[0],
-            &[false; NC],
-            &mut rows,
-            prefer,
-            max_iter,
-        )
+        let excluded = OVector::<bool, NC>::from_element_generic(nc, U1, false);
+        self.solve_with(qp, &qp.h, excluded, &mut rows, prefer, max_iter)
     }
 
     /// `1 / |L^-1 g|` for a row with `|g|^2 = n2 > 0`.
     // Inlined on hosts (vectorised into the callers); the compiler decides on
     // bare-metal targets, where one out-of-line copy saves flash.
     #[cfg_attr(not(target_os = "none"), inline(always))]
-    fn inv_hnorm(&self, g: &[f64; NV], n2: f64) -> f64 {
+    fn inv_hnorm(&self, g: &[f64], n2: f64) -> f64 {
         let w = self.linv_mul(g);
-        let hn = crate::float::sqrt(dot(&w, &w));
+        let hn = crate::float::sqrt(dot(w.as_slice(), w.as_slice()));
         // L^-1 is nonsingular, so hn > 0 for a non-zero row (barring underflow,
         // where the Euclidean norm stands in).
         if hn > 0.0 {
@@ -596,53 +870,89 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
     /// H^-1 norms there or computed on demand (0 = not yet).
     fn solve_with(
         &self,
-        qp: &DenseQp<NV, NC>,
-        h: &[f64; NC],
-        excluded: &[bool; NC],
-        norms: &mut RowNorms<NC>,
-        prefer: &[bool; NC],
+        qp: &DenseQpOf<NV, NC>,
+        hv: &OVector<f64, NC>,
+        excluded: OVector<bool, NC>,
+        norms: &mut RowNormsOf<NC>,
+        prefer: &[bool],
         max_iter: u32,
-    ) -> QpSolution<NV, NC> {
-        let m = qp.m.min(NC);
-        let q = &qp.q.data.0[0];
+    ) -> QpSolutionOf<NV, NC> {
+        let nv = self.nv();
+        let n = nv.value();
+        let nc = qp.h.shape_generic().0;
+        let m = qp.m.min(nc.value());
+        let q = qp.q.as_slice();
+        let (h, norm2) = (hv.as_slice(), norms.norm2.as_slice());
+        if h.len() != nc.value() || norm2.len() != nc.value() || norms.inv_hnorm.len() != nc.value()
+        {
+            return active_set::stopped(nv, nc, QpStatus::NumericalError, None);
+        }
         if !norms.finite
+            || qp.gt.nrows() != n
+            || q.len() != n
             || !q.iter().all(|v| v.is_finite())
             || !h
                 .iter()
-                .zip(excluded)
+                .zip(excluded.as_slice().iter())
                 .take(m)
                 .all(|(v, &out)| out || v.is_finite())
         {
-            return active_set::stopped(QpStatus::NumericalError, None);
+            return active_set::stopped(nv, nc, QpStatus::NumericalError, None);
         }
         let tol = self.settings.tol_primal;
-        let RowNorms {
-            norm2, inv_hnorm, ..
-        } = norms;
+        // Equality rows only where they are compiled in (module docs): for
+        // the small static sizes `me` is the constant 0 from here on.
+        let capable = self.hot_start_capable();
+        if !capable && qp.me > 0 {
+            return active_set::stopped(nv, nc, QpStatus::NumericalError, None);
+        }
+        let me = if capable { qp.me.min(m) } else { 0 };
         let zero_infeasible = h
             .iter()
             .zip(norm2.iter())
-            .zip(excluded)
+            .zip(excluded.as_slice().iter())
             .take(m)
-            .position(|((&hi, &n2), &out)| !out && n2 <= ZERO_ROW2 && hi < -tol);
-        if zero_infeasible.is_some() {
-            // 0'x <= h with h < 0: nothing satisfies it; y = e_i certifies it.
-            return active_set::stopped(QpStatus::Infeasible, zero_infeasible);
+            .enumerate()
+            .position(|(i, ((&hi, &n2), &out))| {
+                !out && n2 <= ZERO_ROW2 && (hi < -tol || (i < me && hi > tol))
+            });
+        if let Some(i) = zero_infeasible {
+            // 0'x <= h with h < 0 (or 0'x = h with h != 0): nothing satisfies
+            // it; y = e_i (or -e_i) certifies it.
+            let mut sol = active_set::stopped(nv, nc, QpStatus::Infeasible, Some(i));
+            if h.get(i).is_some_and(|&hi| hi > 0.0)
+                && let Some(y) = sol.lambda.get_mut(i)
+            {
+                *y = -1.0;
+            }
+            return sol;
+        }
+        let mut blocked = excluded;
+        // Zero rows are never added (an equality zero row holds here).
+        for (b, &n2) in blocked.as_mut_slice().iter_mut().zip(norm2.iter()).take(me) {
+            if n2 <= ZERO_ROW2 {
+                *b = true;
+            }
+        }
+        let mut pref = OVector::<bool, NC>::from_element_generic(nc, U1, false);
+        for (d, &s) in pref.as_mut_slice().iter_mut().zip(prefer) {
+            *d = s;
         }
         // Unconstrained minimiser x = -J0 J0' q = -L^-T L^-1 q.
-        let mut x = self.linvt_mul(&self.linv_mul(q));
-        for v in x.iter_mut() {
+        let mut x = self.linvt_mul(self.linv_mul(q).as_slice());
+        for v in x.as_mut_slice() {
             *v = -*v;
         }
         let mut J = self.Linv.transpose();
-        let mut R = SMatrix::<f64, NV, NV>::zeros();
-        let (mut d, mut z) = ([0.0; NV], [0.0; NV]);
+        let mut R = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
+        let mut d = OVector::<f64, NV>::zeros_generic(nv, U1);
+        let mut z = OVector::<f64, NV>::zeros_generic(nv, U1);
         let mut factor = Orthogonal {
             solver: self,
-            rows: &qp.gt.data.0,
-            h,
-            norm2,
-            inv_hnorm,
+            rows: &qp.gt,
+            h: hv,
+            norm2: &norms.norm2,
+            inv_hnorm: &mut norms.inv_hnorm,
             tol2: tol * tol,
             x,
             J: &mut J,
@@ -654,12 +964,14 @@ impl<const NV: usize, const NC: usize> DualActiveSet<NV, NC> {
         // Rows left out are never scanned: they start (and stay) blocked as if
         // active, but never enter the active list.
         let hot = self.settings.hot_start;
-        let Some(it) = active_set::iterate(&mut factor, m, *excluded, prefer, max_iter, hot) else {
+        let Some(it) = active_set::iterate(&mut factor, nv, m, me, blocked, &pref, max_iter, hot)
+        else {
             // The orthogonal factor never asks for a restart.
-            return active_set::stopped(QpStatus::NumericalError, None);
+            return active_set::stopped(nv, nc, QpStatus::NumericalError, None);
         };
         let x = factor.x;
-        it.solution(x, self.objective(&qp.q, &SVector::from(x)), |_| 1.0)
+        let objective = self.objective(&qp.q, &x);
+        it.solution(nc, x, objective, |_| 1.0)
     }
 }
 
@@ -714,12 +1026,12 @@ pub trait QpBackend<const NV: usize, const NC: usize> {
             lambda: SVector::zeros(),
             ..s
         };
-        for (&y, &o) in s.lambda.iter().zip(&orig).take(sub.m) {
+        for (&y, &o) in s.lambda.as_slice().iter().zip(&orig).take(sub.m) {
             if let Some(l) = out.lambda.get_mut(usize::from(o)) {
                 *l = y;
             }
         }
-        for a in out.active.iter_mut().take(s.n_active) {
+        for a in out.active.as_mut_slice().iter_mut().take(s.n_active) {
             *a = orig.get(usize::from(*a)).copied().unwrap_or(*a);
         }
         out

@@ -256,7 +256,7 @@ impl<const NV: usize, const NC: usize> QpBackend<NV, NC> for ClarabelBackend {
                 RefStatus::Failed => QpStatus::NumericalError,
             },
             iterations: r.iterations,
-            active: [0; NV],
+            active: [0; NV].into(),
             n_active: 0,
         };
         if out.status == QpStatus::Infeasible {

@@ -2,6 +2,8 @@
 
 use super::*;
 use crate::qp::QpSettings;
+use crate::qp::{DenseQp, DualActiveSet, QpSolution};
+use nalgebra::SVector;
 use nalgebra::{Matrix2, SMatrix, Vector2};
 
 /// Deterministic uniform numbers in [-1, 1) (64-bit LCG).
@@ -421,7 +423,12 @@ fn chol_drop_keeps_the_gram_matrix() {
                 Ci[i][j] = acc / C[i][i];
             }
         }
-        chol_drop(&mut C, &mut Ci, 5, l);
+        // Row i of the factor is column i of the storage.
+        let mut Cm = nalgebra::SMatrix::<f64, 5, 5>::from_array_storage(nalgebra::ArrayStorage(C));
+        let mut Cim =
+            nalgebra::SMatrix::<f64, 5, 5>::from_array_storage(nalgebra::ArrayStorage(Ci));
+        chol_drop(&mut Cm, &mut Cim, 5, l);
+        let (C, Ci) = (Cm.data.0, Cim.data.0);
         let keep: [usize; 4] = core::array::from_fn(|k| if k < l { k } else { k + 1 });
         for (a, &i) in keep.iter().enumerate() {
             assert!(C[a][a] > 0.0);

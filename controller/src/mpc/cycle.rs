@@ -592,7 +592,7 @@ fn remember_active<const N: usize, const NV: usize, const NC: usize, const NOBS:
     work: &Assembly<N, NV, NC, NOBS>,
 ) {
     let n = sol.n_active.min(NV);
-    for (dst, &row) in memory.active.iter_mut().zip(&sol.active[..n]) {
+    for (dst, &row) in memory.active.iter_mut().zip(sol.active_set()) {
         *dst = work.rows.get(row as usize).copied().unwrap_or_default();
     }
     memory.n_active = n;

@@ -4,47 +4,93 @@
 //! rotations per drop (no re-factorisation, no normal equations). The
 //! iteration itself is [`crate::active_set::iterate`].
 
-use nalgebra::SMatrix;
+use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
-use super::{DualActiveSet, ZERO_ROW2};
+use super::{
+    DualActiveSetOf, QpAllocator, ZERO_ROW2, column, columns, columns_in, columns_in_mut,
+    columns_mut,
+};
 use crate::active_set::{ActiveSetFactor, AddError, dot, givens};
 
 /// The orthogonal factor of the active set, the iterate and the rows, for one
-/// solve.
-pub(super) struct Orthogonal<'a, const NV: usize, const NC: usize> {
+/// solve. Slices of length `NV` or `NC` as named (constants for the static
+/// sizes).
+pub(super) struct Orthogonal<'a, NV: Dim, NC: Dim>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
     /// The solver (for `L^-1`, the tolerances and the `H^-1` row norms).
-    pub solver: &'a DualActiveSet<NV, NC>,
-    /// `rows[i]` is row `i` of `G`.
-    pub rows: &'a [[f64; NV]; NC],
+    pub solver: &'a DualActiveSetOf<NV, NC>,
+    /// `G'` (`NV x NC`): column `i` is row `i` of `G`. (References to the
+    /// nalgebra storage, not slices: their lengths are the types' constants
+    /// for the static sizes even where this struct stays in memory.)
+    pub rows: &'a OMatrix<f64, NV, NC>,
     /// Right-hand side.
-    pub h: &'a [f64; NC],
+    pub h: &'a OVector<f64, NC>,
     /// `|g_i|^2`.
-    pub norm2: &'a [f64; NC],
+    pub norm2: &'a OVector<f64, NC>,
     /// `1 / |L^-1 g_i|`, filled on demand (0 = not computed yet).
-    pub inv_hnorm: &'a mut [f64; NC],
+    pub inv_hnorm: &'a mut OVector<f64, NC>,
     /// `tol_primal^2`: a row is violated when `slack < 0` and
     /// `slack^2 > tol2 |g_i|^2`.
     pub tol2: f64,
     /// The primal iterate.
-    pub x: [f64; NV],
+    pub x: OVector<f64, NV>,
     /// `J = L^-T Q`: columns `0..nact` span the active normals in the metric
     /// of `H^-1`, the others their complement. (The factors are the caller's
     /// locals, not fields: their addresses go to the add and drop, which the
     /// compiler may leave out of line, and an escaping field would keep every
     /// other field of this struct in memory.)
-    pub J: &'a mut SMatrix<f64, NV, NV>,
+    pub J: &'a mut OMatrix<f64, NV, NV>,
     /// Upper-triangular `R` (leading `nact x nact` block).
-    pub R: &'a mut SMatrix<f64, NV, NV>,
+    pub R: &'a mut OMatrix<f64, NV, NV>,
     /// `d = J' n_p` of the last direction (`n_p = -g_p`; the caller's
     /// local, as `J`).
-    pub d: &'a mut [f64; NV],
+    pub d: &'a mut OVector<f64, NV>,
     /// The primal step direction of the last direction (the caller's local).
-    pub z: &'a mut [f64; NV],
+    pub z: &'a mut OVector<f64, NV>,
     /// The last row `p` was linearly dependent on the active rows.
     pub dependent: bool,
 }
 
-impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Orthogonal<'_, NV, NC> {
+impl<'a, NV: Dim, NC: Dim> Orthogonal<'a, NV, NC>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
+    /// Number of variables (a constant for the static sizes).
+    #[inline(always)]
+    fn n(&self) -> usize {
+        self.solver.nv().value()
+    }
+
+    /// Row `i` of `G` and `h_i`.
+    #[inline(always)]
+    fn row(&self, i: usize) -> Option<(&'a [f64], f64)> {
+        Some((
+            column(self.rows.as_slice(), self.n(), i)?,
+            *self.h.as_slice().get(i)?,
+        ))
+    }
+
+    /// `d = J' n_p = -J' g_p`.
+    #[inline(always)]
+    fn project(&mut self, gp: &[f64]) {
+        let n = self.n();
+        for (dj, col) in self
+            .d
+            .as_mut_slice()
+            .iter_mut()
+            .zip(columns(self.J.as_slice(), n))
+        {
+            *dj = -dot(col, gp);
+        }
+    }
+}
+
+impl<NV: Dim, NC: Dim> ActiveSetFactor for Orthogonal<'_, NV, NC>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
     // Row norms: Euclidean for the scale-free violation test, and in the
     // metric of H^-1 (|J0' g_i| = |L^-1 g_i|) for choosing which row to add:
     // `s_i / |L^-1 g_i|` is the square root of the cost increase of enforcing
@@ -54,18 +100,19 @@ impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Orthogonal<'_, NV
     // root as `slack < 0` and `slack^2 > tol^2 |g|^2`.
     #[inline(always)]
     fn violation(&mut self, i: usize, blocked: bool) -> Option<f64> {
+        let n = self.n();
         let (Some(g), Some(&hi), Some(&n2), Some(ihn)) = (
-            self.rows.get(i),
-            self.h.get(i),
-            self.norm2.get(i),
-            self.inv_hnorm.get_mut(i),
+            column(self.rows.as_slice(), n, i),
+            self.h.as_slice().get(i),
+            self.norm2.as_slice().get(i),
+            self.inv_hnorm.as_mut_slice().get_mut(i),
         ) else {
             return None;
         };
         if blocked || n2 <= ZERO_ROW2 {
             return None;
         }
-        let slack = hi - dot(g, &self.x);
+        let slack = hi - dot(g, self.x.as_slice());
         if !slack.is_finite() {
             return Some(f64::NAN);
         }
@@ -80,36 +127,27 @@ impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Orthogonal<'_, NV
     }
 
     #[inline(always)]
-    fn direction(
-        &mut self,
-        p: usize,
-        _act: &[u16; NV],
-        nact: usize,
-        r: &mut [f64; NV],
-    ) -> Option<f64> {
-        let (Some(gp), Some(&hp)) = (self.rows.get(p), self.h.get(p)) else {
-            return None;
-        };
+    fn direction(&mut self, p: usize, _act: &[u16], nact: usize, r: &mut [f64]) -> Option<f64> {
+        let n = self.n();
+        let (gp, hp) = self.row(p)?;
         // d = J' n_p with the GI normal n_p = -g_p (n_p'x >= -h_p).
-        let d = &mut *self.d;
-        for (dj, col) in d.iter_mut().zip(&self.J.data.0) {
-            *dj = -dot(col, gp);
-        }
+        self.project(gp);
+        let slack_p = hp - dot(gp, self.x.as_slice()); // < 0 while violated
         // z = J2 d2: component of the step outside the active span.
-        let z = &mut *self.z;
-        *z = [0.0; NV];
+        let z = self.z.as_mut_slice();
+        z.fill(0.0);
         let mut d2sq = 0.0;
-        for (col, &dj) in self.J.data.0.iter().zip(d.iter()).skip(nact) {
+        let d2 = self.d.as_slice().get(nact..).unwrap_or(&[]);
+        for (col, &dj) in columns_in(self.J.as_slice(), n, nact, n).zip(d2) {
             for (zk, c) in z.iter_mut().zip(col) {
                 *zk += c * dj; // column j of J, j >= nact
             }
             d2sq += dj * dj;
         }
-        back_substitute(self.R, d, nact, r);
+        back_substitute(self.R, self.d.as_slice(), nact, r);
         // Full (primal) step length t2.
-        let dn = crate::float::sqrt(dot(d, d));
+        let dn = crate::float::sqrt(dot(self.d.as_slice(), self.d.as_slice()));
         let dependent = crate::float::sqrt(d2sq) <= self.solver.settings.tol_dependence * dn;
-        let slack_p = hp - dot(gp, &self.x); // < 0 while violated
         let t2 = if dependent {
             f64::INFINITY
         } else {
@@ -120,9 +158,14 @@ impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Orthogonal<'_, NV
     }
 
     #[inline(always)]
-    fn advance(&mut self, _p: usize, t: f64, _r: &[f64; NV], _act: &[u16; NV], _nact: usize) {
+    fn advance(&mut self, _p: usize, t: f64, _r: &[f64], _act: &[u16], _nact: usize) {
         if !self.dependent {
-            for (xk, zk) in self.x.iter_mut().zip(self.z.iter()) {
+            for (xk, zk) in self
+                .x
+                .as_mut_slice()
+                .iter_mut()
+                .zip(self.z.as_slice().iter())
+            {
                 *xk += t * zk;
             }
         }
@@ -130,8 +173,8 @@ impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Orthogonal<'_, NV
 
     /// Adds row `p` (see [`householder_add`]).
     #[inline(always)]
-    fn add(&mut self, _p: usize, _r: &[f64; NV], nact: usize) -> Result<(), AddError> {
-        if householder_add(self.J, self.R, nact, self.d) {
+    fn add(&mut self, _p: usize, _r: &[f64], nact: usize) -> Result<(), AddError> {
+        if householder_add(self.J, self.R, nact, self.d.as_slice()) {
             Ok(())
         } else {
             Err(AddError::Numerical)
@@ -144,7 +187,18 @@ impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Orthogonal<'_, NV
         givens_drop(self.J, self.R, nact, l);
     }
 
-    const HOT_START: bool = NV >= super::HOT_START_MIN_NV;
+    #[inline(always)]
+    fn hot_start_capable(&self) -> bool {
+        self.solver.hot_start_capable()
+    }
+
+    #[inline(always)]
+    fn slack(&self, i: usize) -> (f64, f64) {
+        match (self.row(i), self.norm2.as_slice().get(i)) {
+            (Some((g, hi)), Some(&n2)) => (hi - dot(g, self.x.as_slice()), self.tol2 * n2),
+            _ => (f64::NAN, 0.0),
+        }
+    }
 
     /// On the normal equations of the marked rows: `M = G_A L^-T` (rows
     /// `m_j = L^-1 g_j`), `K = M M'` by Cholesky (a pivot below `1e-10` of its
@@ -152,33 +206,33 @@ impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Orthogonal<'_, NV
     /// `K lambda = G_A x0 - h_A`, `x = x0 - L^-T M' lambda`; then one pass
     /// over all rows. Cheaper than the adds of `J` and `R` (`O(k^2 NV)`
     /// against `O(k NV^2)`), which are only needed if an iteration follows.
-    fn hot_guess(
-        &mut self,
-        act: &[u16; NV],
-        k: usize,
-        mult: &mut [f64; NV],
-        blocked: &[bool],
-    ) -> bool {
-        let k = k.min(NV);
-        let mut M = [[0.0f64; NV]; NV]; // rows 0..k: m_j
-        let mut c = [0.0f64; NV];
-        for j in 0..k {
-            let a = usize::from(act[j]);
-            let (Some(g), Some(&ha)) = (self.rows.get(a), self.h.get(a)) else {
+    fn hot_guess(&mut self, act: &[u16], k: usize, mult: &mut [f64], blocked: &[bool]) -> bool {
+        let nv = self.solver.nv();
+        let n = nv.value();
+        let k = k.min(n);
+        // Column j of `M` (NV x NV, column-major) is m_j = L^-1 g_j.
+        let mut M = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
+        let mut c = OVector::<f64, NV>::zeros_generic(nv, nalgebra::U1);
+        for (&a, (mcol, cj)) in act
+            .iter()
+            .zip(columns_mut(M.as_mut_slice(), n).zip(c.as_mut_slice().iter_mut()))
+            .take(k)
+        {
+            let Some((g, ha)) = self.row(usize::from(a)) else {
                 return false;
             };
-            M[j] = self.solver.linv_mul(g);
-            c[j] = dot(g, &self.x) - ha;
+            crate::active_set::copy(mcol, self.solver.linv_mul(g).as_slice());
+            *cj = dot(g, self.x.as_slice()) - ha;
         }
-        // K = C C' (lower C, row-major in `C[i][j]`, j <= i). Checked access
+        let Ms = M.as_slice();
+        // K = C C' (lower C, `C[(i, j)]`, j <= i). Checked access
         // throughout (nopanic/: the optimiser does not see every bound).
-        let at = |C: &[[f64; NV]; NV], i: usize, j: usize| {
-            C.get(i).and_then(|r| r.get(j)).copied().unwrap_or(0.0)
-        };
-        let mut C = [[0.0f64; NV]; NV];
+        let mut C = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
+        let at =
+            |C: &OMatrix<f64, NV, NV>, i: usize, j: usize| C.get((i, j)).copied().unwrap_or(0.0);
         for i in 0..k {
             for j in 0..=i {
-                let (Some(mi), Some(mj)) = (M.get(i), M.get(j)) else {
+                let (Some(mi), Some(mj)) = (column(Ms, n, i), column(Ms, n, j)) else {
                     return false;
                 };
                 let mut s = dot(mi, mj);
@@ -193,13 +247,13 @@ impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Orthogonal<'_, NV
                 } else {
                     s / at(&C, j, j)
                 };
-                if let Some(cij) = C.get_mut(i).and_then(|r| r.get_mut(j)) {
+                if let Some(cij) = C.get_mut((i, j)) {
                     *cij = v;
                 }
             }
         }
         // C y = c, C' lambda = y.
-        let mut y = [0.0f64; NV];
+        let mut y = OVector::<f64, NV>::zeros_generic(nv, nalgebra::U1);
         for i in 0..k {
             let mut s = c.get(i).copied().unwrap_or(0.0);
             for l in 0..i {
@@ -209,7 +263,7 @@ impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Orthogonal<'_, NV
                 *yi = s / at(&C, i, i);
             }
         }
-        let mut lambda = [0.0f64; NV];
+        let mut lambda = OVector::<f64, NV>::zeros_generic(nv, nalgebra::U1);
         for i in (0..k).rev() {
             let mut s = y.get(i).copied().unwrap_or(0.0);
             for l in (i + 1)..k {
@@ -219,58 +273,57 @@ impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Orthogonal<'_, NV
                 *li = s / at(&C, i, i);
             }
         }
-        if !lambda.iter().all(|&l| l >= 0.0 && l.is_finite()) {
+        if !lambda.as_slice().iter().all(|&l| l >= 0.0 && l.is_finite()) {
             return false;
         }
         // x = x0 - L^-T M' lambda.
-        let mut w = [0.0f64; NV];
-        for (row, &l) in M.iter().zip(&lambda).take(k) {
-            for (wk, &mk) in w.iter_mut().zip(row) {
+        let mut w = OVector::<f64, NV>::zeros_generic(nv, nalgebra::U1);
+        for (col, &l) in columns(Ms, n).zip(lambda.as_slice().iter()).take(k) {
+            for (wk, &mk) in w.as_mut_slice().iter_mut().zip(col) {
                 *wk += l * mk;
             }
         }
-        let step = self.solver.linvt_mul(&w);
-        let x0 = self.x;
-        for (xk, sk) in self.x.iter_mut().zip(&step) {
+        let step = self.solver.linvt_mul(w.as_slice());
+        let x0 = self.x.clone();
+        for (xk, sk) in self.x.as_mut_slice().iter_mut().zip(step.as_slice().iter()) {
             *xk -= sk;
         }
         // Every row must hold (the marked ones do, to rounding; if rounding
         // says otherwise the guess is dropped).
         let mut holds = true;
-        for (i, &b) in blocked.iter().enumerate().take(NC) {
+        for (i, &b) in blocked.iter().enumerate() {
             if self.violation(i, b).is_some() {
                 holds = false;
                 break;
             }
         }
-        if !holds || !self.x.iter().all(|v| v.is_finite()) {
+        if !holds || !self.x.as_slice().iter().all(|v| v.is_finite()) {
             self.x = x0;
             return false;
         }
-        *mult = lambda;
+        for (m, &l) in mult.iter_mut().zip(lambda.as_slice().iter()) {
+            *m = l;
+        }
         true
     }
 
     /// `d = J' n_p`, then the add of [`householder_add`] unless the part of
     /// `d` outside the active span is below `tol_dependence |d|`.
     fn hot_add(&mut self, p: usize, nact: usize) -> Result<bool, AddError> {
-        let Some(gp) = self.rows.get(p) else {
+        let Some((gp, _)) = self.row(p) else {
             return Err(AddError::Numerical);
         };
-        let d = &mut *self.d;
-        for (dj, col) in d.iter_mut().zip(&self.J.data.0) {
-            *dj = -dot(col, gp);
-        }
+        self.project(gp);
         let mut d2sq = 0.0;
-        for &dj in d.iter().skip(nact) {
+        for &dj in self.d.as_slice().iter().skip(nact) {
             d2sq += dj * dj;
         }
         let outside = crate::float::sqrt(d2sq);
-        let dn = crate::float::sqrt(dot(d, d));
+        let dn = crate::float::sqrt(dot(self.d.as_slice(), self.d.as_slice()));
         if outside.is_nan() || outside <= self.solver.settings.tol_dependence * dn {
             return Ok(false);
         }
-        if householder_add(self.J, self.R, nact, self.d) {
+        if householder_add(self.J, self.R, nact, self.d.as_slice()) {
             Ok(true)
         } else {
             Err(AddError::Numerical)
@@ -278,37 +331,45 @@ impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Orthogonal<'_, NV
     }
 
     /// With the active normals `N = [-g_a]` (`J' N = [R; 0]`) and `x` the
-    /// unconstrained minimiser: `R' w = c`, `c_j = g_j'x - h_j` (forward
+    /// current iterate: `R' w = c`, `c_j = g_j'x - h_j` (forward
     /// substitution; `w` kept in `d`), and `mult = R^-1 w`; the minimiser on
     /// the active rows is `x + J1 w` ([`ActiveSetFactor::hot_move`]).
-    fn hot_multipliers(&mut self, act: &[u16; NV], nact: usize, mult: &mut [f64; NV]) -> bool {
-        let n = nact.min(NV);
-        let w = &mut *self.d;
-        *w = [0.0; NV];
+    fn hot_multipliers(&mut self, act: &[u16], nact: usize, mult: &mut [f64]) -> bool {
+        let n = nact.min(self.n());
+        self.d.as_mut_slice().fill(0.0);
         for j in 0..n {
-            let a = usize::from(act[j]);
-            let (Some(g), Some(&ha)) = (self.rows.get(a), self.h.get(a)) else {
+            let Some(&a) = act.get(j) else {
                 return false;
             };
-            let mut acc = dot(g, &self.x) - ha;
+            let Some((g, ha)) = self.row(usize::from(a)) else {
+                return false;
+            };
+            let mut acc = dot(g, self.x.as_slice()) - ha;
             for k in 0..j {
-                if let Some(&rkj) = self.R.get((k, j)) {
-                    acc -= rkj * w[k];
+                if let (Some(&rkj), Some(&wk)) = (self.R.get((k, j)), self.d.as_slice().get(k)) {
+                    acc -= rkj * wk;
                 }
             }
-            let Some(&rjj) = self.R.get((j, j)) else {
+            let (Some(&rjj), Some(wj)) = (self.R.get((j, j)), self.d.as_mut_slice().get_mut(j))
+            else {
                 return false;
             };
-            w[j] = acc / rjj;
+            *wj = acc / rjj;
         }
-        *mult = [0.0; NV];
-        back_substitute(self.R, w, n, mult);
-        mult.iter().chain(w.iter()).all(|v| v.is_finite())
+        mult.fill(0.0);
+        back_substitute(self.R, self.d.as_slice(), n, mult);
+        mult.iter()
+            .chain(self.d.as_slice().iter())
+            .all(|v| v.is_finite())
     }
 
     fn hot_move(&mut self, nact: usize) {
-        for (col, &wj) in self.J.data.0.iter().zip(self.d.iter()).take(nact) {
-            for (xk, c) in self.x.iter_mut().zip(col) {
+        let n = self.n();
+        for (col, &wj) in columns(self.J.as_slice(), n)
+            .zip(self.d.as_slice().iter())
+            .take(nact)
+        {
+            for (xk, c) in self.x.as_mut_slice().iter_mut().zip(col) {
                 *xk += c * wj;
             }
         }
@@ -320,21 +381,24 @@ impl<const NV: usize, const NC: usize> ActiveSetFactor<NV> for Orthogonal<'_, NV
 /// same products and subtractions in the same order in both forms: for small
 /// `NV` (the controller's 6) both loops run over the constant `NV` with the
 /// test `< nact` inside, which the compiler unrolls fully; for larger `NV`
-/// over `nact` (fully unrolled, the `NV^2 / 2` tests would cost more than
-/// they save). Measured in `docs/solvers.md`.
+/// (and run-time sizes) over `nact` (fully unrolled, the `NV^2 / 2` tests
+/// would cost more than they save). Measured in `docs/solvers.md`.
 #[inline(always)]
-fn back_substitute<const NV: usize>(
-    R: &SMatrix<f64, NV, NV>,
-    d: &[f64; NV],
-    nact: usize,
-    r: &mut [f64; NV],
-) {
-    let nact = nact.min(NV);
-    if NV <= 8 {
-        for i in (0..NV).rev() {
+fn back_substitute<NV: Dim>(R: &OMatrix<f64, NV, NV>, d: &[f64], nact: usize, r: &mut [f64])
+where
+    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
+{
+    let small = NV::try_to_usize().is_some_and(|n| n <= 8);
+    let nv = R.nrows();
+    let (Some(d), Some(r)) = (d.get(..nv), r.get_mut(..nv)) else {
+        return;
+    };
+    let nact = nact.min(nv);
+    if small {
+        for i in (0..nv).rev() {
             if i < nact {
                 let mut acc = d[i];
-                for k in (i + 1)..NV {
+                for k in (i + 1)..nv {
                     if k < nact {
                         acc -= R[(i, k)] * r[k];
                     }
@@ -368,53 +432,69 @@ fn back_substitute<const NV: usize>(
 /// the flops of the equivalent Givens sweep, and all of them vectorise. False
 /// when the active set is full (`nact == NV`) or the new diagonal of `R` is
 /// zero or not finite.
-fn householder_add<const NV: usize>(
-    J: &mut SMatrix<f64, NV, NV>,
-    R: &mut SMatrix<f64, NV, NV>,
+fn householder_add<NV: Dim>(
+    J: &mut OMatrix<f64, NV, NV>,
+    R: &mut OMatrix<f64, NV, NV>,
     nact: usize,
-    d: &[f64; NV],
-) -> bool {
-    if nact >= NV {
+    d: &[f64],
+) -> bool
+where
+    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV> + nalgebra::allocator::Allocator<NV>,
+{
+    let (nvd, _) = J.shape_generic();
+    let n = nvd.value();
+    if nact >= n {
         return false;
     }
-    let mut d = *d;
-    let d0 = d[nact];
+    let mut v = OVector::<f64, NV>::zeros_generic(nvd, nalgebra::U1);
+    for (a, &b) in v.as_mut_slice().iter_mut().zip(d) {
+        *a = b;
+    }
+    let d0 = v.get(nact).copied().unwrap_or(0.0);
     let mut tail = 0.0; // |d[nact+1..]|^2
-    for &dj in d.iter().skip(nact + 1) {
+    for &dj in v.as_slice().iter().skip(nact + 1) {
         tail += dj * dj;
     }
+    let mut diag = d0;
     if tail > 0.0 {
         // x = d[nact..], alpha = -sign(x_0) |x|, v = x - alpha e_0 (no
         // cancellation), reflection I - beta v v' with beta = 2 / v'v and
         // v'v = 2 |x| (|x| + |x_0|).
         let norm = crate::float::sqrt(d0 * d0 + tail);
         let alpha = if d0 >= 0.0 { -norm } else { norm };
-        let mut v = d;
-        v[nact] = d0 - alpha;
+        if let Some(vn) = v.get_mut(nact) {
+            *vn = d0 - alpha;
+        }
         let beta = 1.0 / (norm * (norm + d0.abs()));
         // J2 <- J2 (I - beta v v'): w = J2 v, then column j -= beta v_j w.
-        let mut w = [0.0f64; NV];
-        for (col, &vj) in J.data.0.iter().zip(&v).skip(nact) {
-            for (wk, c) in w.iter_mut().zip(col) {
+        let mut w = OVector::<f64, NV>::zeros_generic(nvd, nalgebra::U1);
+        let v2 = v.as_slice().get(nact..).unwrap_or(&[]);
+        for (col, &vj) in columns_in(J.as_slice(), n, nact, n).zip(v2) {
+            for (wk, c) in w.as_mut_slice().iter_mut().zip(col) {
                 *wk += c * vj;
             }
         }
-        for (col, &vj) in J.data.0.iter_mut().zip(&v).skip(nact) {
+        for (col, &vj) in columns_in_mut(J.as_mut_slice(), n, nact, n).zip(v2) {
             let f = beta * vj;
-            for (c, wk) in col.iter_mut().zip(&w) {
+            for (c, wk) in col.iter_mut().zip(w.as_slice().iter()) {
                 *c -= f * wk;
             }
         }
-        d[nact] = alpha;
+        diag = alpha;
     }
-    // Column `nact` of R gets d[..=nact] (checked access, as in givens_drop).
-    let Some(col) = R.data.0.get_mut(nact) else {
+    // Column `nact` of R gets d[..nact], then the new diagonal (checked
+    // access, as in givens_drop).
+    let Some(col) = super::column_mut(R.as_mut_slice(), n, nact) else {
         return false;
     };
-    for (r, &di) in col.iter_mut().zip(&d).take(nact + 1) {
+    for (r, &di) in col.iter_mut().zip(d).take(nact) {
         *r = di;
     }
-    col.get(nact).is_some_and(|&r| r != 0.0 && r.is_finite())
+    let Some(rd) = col.get_mut(nact) else {
+        return false;
+    };
+    *rd = diag;
+    diag != 0.0 && diag.is_finite()
 }
 
 /// Removes active row `l` (of `nact`): deletes column `l` of `R` and
@@ -422,22 +502,30 @@ fn householder_add<const NV: usize>(
 // Inlined (as the compiler chose when the loop was written out here, on
 // x86-64 and on the Cortex-M7; out of line it costs the paper QPs 4 %).
 #[inline(always)]
-fn givens_drop<const NV: usize>(
-    J: &mut SMatrix<f64, NV, NV>,
-    R: &mut SMatrix<f64, NV, NV>,
+fn givens_drop<NV: Dim>(
+    J: &mut OMatrix<f64, NV, NV>,
+    R: &mut OMatrix<f64, NV, NV>,
     nact: usize,
     l: usize,
-) {
-    let nact = nact.min(NV); // invariant of the iteration, stated for the compiler
+) where
+    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
+{
+    let nv = R.nrows();
+    let nact = nact.min(nv); // invariant of the iteration, stated for the compiler
     for col in l..nact.saturating_sub(1) {
-        for i in 0..NV {
-            R[(i, col)] = R[(i, col + 1)];
+        if let Some(pair) = col
+            .checked_mul(nv)
+            .and_then(|a| R.as_mut_slice().get_mut(a..a.saturating_add(2 * nv)))
+        {
+            let (dst, src) = pair.split_at_mut(nv.min(pair.len()));
+            crate::active_set::copy(dst, src);
         }
     }
-    if nact >= 1 {
-        for i in 0..NV {
-            R[(i, nact - 1)] = 0.0;
-        }
+    if let Some(last) = nact
+        .checked_sub(1)
+        .and_then(|c| super::column_mut(R.as_mut_slice(), nv, c))
+    {
+        last.fill(0.0);
     }
     // Column `col` now has a sub-diagonal entry at row col+1 for col >= l.
     for col in l..nact.saturating_sub(1) {
@@ -450,7 +538,7 @@ fn givens_drop<const NV: usize>(
         R[(col + 1, col)] = 0.0;
         // Columns k in col+1..nact-1 (checked access: the optimiser cannot
         // prove the bounds for every NV, see nopanic/).
-        for rk in R.data.0.iter_mut().take(nact - 1).skip(col + 1) {
+        for rk in columns_in_mut(R.as_mut_slice(), nv, col + 1, nact - 1) {
             if let [.., ra, rb] = rk.get_mut(..col + 2).unwrap_or(&mut []) {
                 let (a, b) = (*ra, *rb);
                 *ra = c * a + s * b;
@@ -463,13 +551,22 @@ fn givens_drop<const NV: usize>(
 
 /// `[Ji, Jj] <- [c Ji + s Jj, -s Ji + c Jj]` for the adjacent columns `i` and
 /// `j = i + 1` (the callers' only use); with `j >= NV` nothing happens.
-fn rotate_columns<const NV: usize>(J: &mut SMatrix<f64, NV, NV>, i: usize, c: f64, s: f64) {
-    // Column-major storage: `J.data.0[k]` is column `k`.
-    if let Some([ji, jj]) = J.data.0.get_mut(i..i.saturating_add(2)) {
-        for k in 0..NV {
-            let (a, b) = (ji[k], jj[k]);
-            ji[k] = c * a + s * b;
-            jj[k] = -s * a + c * b;
-        }
+fn rotate_columns<NV: Dim>(J: &mut OMatrix<f64, NV, NV>, i: usize, c: f64, s: f64)
+where
+    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
+{
+    let n = J.nrows();
+    // Column-major storage: columns i and i + 1 are contiguous.
+    let Some(start) = i.checked_mul(n) else {
+        return;
+    };
+    let Some(pair) = J.as_mut_slice().get_mut(start..start.saturating_add(2 * n)) else {
+        return;
+    };
+    let (ji, jj) = pair.split_at_mut(n.min(pair.len()));
+    for (a, b) in ji.iter_mut().zip(jj.iter_mut()) {
+        let (x, y) = (*a, *b);
+        *a = c * x + s * y;
+        *b = -s * x + c * y;
     }
 }
