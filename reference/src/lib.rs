@@ -24,6 +24,7 @@ use ldcbf_controller::{Assembly, DualActiveSet};
 
 mod clarabel_solve;
 mod equivalence;
+mod npz;
 mod problem;
 
 pub use clarabel_solve::{ClarabelBackend, RefSolution, RefStatus, solve_clarabel};

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use ldcbf_controller::QpStatus;
 
-use super::problem::parse_npy_f64;
+use super::npz::parse_npy_f64;
 use super::*;
 
 fn small() -> DenseProblem {
