@@ -6,11 +6,17 @@ use std::path::Path;
 use crate::problem::{DenseProblem, ProblemError};
 
 impl DenseProblem {
-    /// Reads `P, q, G, h` from an `.npz` file of the mpc_qpbenchmark layout (other
-    /// keys, pickled `None`s, are ignored): float64 arrays of shapes `[n, n]`,
-    /// `[n]`, `[m, n]`, `[m]` (C or Fortran order). Errors name the file and the
-    /// key: not a zip archive, a missing key, a truncated or corrupted member
-    /// (the zip CRC is checked), another dtype, a wrong shape.
+    /// Reads an `.npz` file of the qpbenchmark layout: float64 arrays `P`
+    /// `[n, n]`, `q` `[n]` (both required), `G` `[m, n]` with `h` `[m]`, `A`
+    /// `[me, n]` with `b` `[me]`, `lb` `[n]`, `ub` `[n]` (C or Fortran order).
+    /// Each of the last six may be absent: missing, an empty array, or a pickled
+    /// `None` (a 0-d object array holding `None`, matched byte-wise, never
+    /// unpickled); `G` and `h` (`A` and `b`) must be both absent or both
+    /// present. Other keys are ignored. The values are checked as by
+    /// [`DenseProblem::validate`] (no NaN; infinities only as absent bounds;
+    /// `lb <= ub`). Errors name the file and the key: not a zip archive, a
+    /// missing key, a truncated or corrupted member (the zip CRC is checked),
+    /// another dtype, a wrong shape, a bad value.
     pub fn from_npz(path: &Path) -> Result<Self, ProblemError> {
         let name = path.display().to_string();
         let fail = |m: String| ProblemError(format!("{name}: {m}"));
@@ -26,11 +32,19 @@ impl DenseProblem {
                 _ => format!("cannot open: {e}"),
             })
         })?;
-        let mut read = |key: &str| -> Result<(Vec<u64>, Vec<f64>), ProblemError> {
-            let bytes =
-                read_npz_member(&mut npz, key).map_err(|m| fail(format!("key `{key}`: {m}")))?;
-            let (shape, fortran, data) =
-                parse_npy_f64(&bytes).map_err(|m| fail(format!("key `{key}`: {m}")))?;
+        let mut read = |key: &str, required: bool| -> Result<Member, ProblemError> {
+            let at = |m: String| fail(format!("key `{key}`: {m}"));
+            if !required && !npz.array_names().any(|n| n == key) {
+                return Ok(Err("is missing"));
+            }
+            let bytes = read_npz_member(&mut npz, key).map_err(at)?;
+            if !required && is_pickled_none(&bytes) {
+                return Ok(Err("is a pickled None"));
+            }
+            let (shape, fortran, data) = parse_npy_f64(&bytes).map_err(at)?;
+            if !required && data.is_empty() {
+                return Ok(Err("is empty"));
+            }
             let data = if fortran && shape.len() == 2 {
                 let (r, c) = (shape[0] as usize, shape[1] as usize);
                 let mut t = vec![0.0; r * c];
@@ -43,56 +57,110 @@ impl DenseProblem {
             } else {
                 data
             };
-            Ok((shape, data))
+            Ok(Ok((shape, data)))
         };
-        let (ps, P) = read("P")?;
-        let (qs, q) = read("q")?;
-        let (gs, G) = read("G")?;
-        let (hs, h) = read("h")?;
+        let (ps, P) = read("P", true)?.unwrap_or_default();
+        let (qs, q) = read("q", true)?.unwrap_or_default();
+        let g = read("G", false)?;
+        let h = read("h", false)?;
+        let a = read("A", false)?;
+        let b = read("b", false)?;
+        let lb = read("lb", false)?;
+        let ub = read("ub", false)?;
         let bad = |key: &str, got: &[u64], want: String| {
-            Err(fail(format!(
-                "key `{key}` has shape {got:?}, expected {want}"
-            )))
+            fail(format!("key `{key}` has shape {got:?}, expected {want}"))
         };
         let [n, n2] = ps[..] else {
-            return bad("P", &ps, "[n, n]".into());
+            return Err(bad("P", &ps, "[n, n]".into()));
         };
         if n != n2 {
-            return bad("P", &ps, "[n, n]".into());
+            return Err(bad("P", &ps, "[n, n]".into()));
         }
         if qs[..] != [n] {
-            return bad("q", &qs, format!("[{n}] (the size of `P`)"));
+            return Err(bad("q", &qs, format!("[{n}] (the size of `P`)")));
         }
-        let [m, n3] = gs[..] else {
-            return bad("G", &gs, format!("[m, {n}]"));
+        // A matrix and its right-hand side: both absent, or [r, n] and [r].
+        let pair = |rows: &str,
+                    (mk, mat): (&str, Member),
+                    (vk, vec): (&str, Member)|
+         -> Result<(usize, Vec<f64>, Vec<f64>), ProblemError> {
+            let (ms, mat, vs, vec) = match (mat, vec) {
+                (Err(_), Err(_)) => return Ok((0, Vec::new(), Vec::new())),
+                (Ok((ms, mat)), Ok((vs, vec))) => (ms, mat, vs, vec),
+                (Ok((ms, _)), Err(how)) => {
+                    return Err(fail(format!(
+                        "key `{vk}`: {how}, but `{mk}` is given (shape {ms:?})"
+                    )));
+                }
+                (Err(how), Ok((vs, _))) => {
+                    return Err(fail(format!(
+                        "key `{mk}`: {how}, but `{vk}` is given (shape {vs:?})"
+                    )));
+                }
+            };
+            let [r, c] = ms[..] else {
+                return Err(bad(mk, &ms, format!("[{rows}, {n}]")));
+            };
+            if c != n {
+                return Err(bad(mk, &ms, format!("[{rows}, {n}]")));
+            }
+            if vs[..] != [r] {
+                return Err(bad(vk, &vs, format!("[{r}] (the rows of `{mk}`)")));
+            }
+            Ok((r as usize, mat, vec))
         };
-        if n3 != n {
-            return bad("G", &gs, format!("[m, {n}]"));
-        }
-        if hs[..] != [m] {
-            return bad("h", &hs, format!("[{m}] (the rows of `G`)"));
-        }
-        let (n, m) = (n as usize, m as usize);
-        Ok(DenseProblem { n, m, P, q, G, h })
+        let (m, G, h) = pair("m", ("G", g), ("h", h))?;
+        let (me, A, b) = pair("me", ("A", a), ("b", b))?;
+        let bound = |key: &str, v: Member| match v {
+            Err(_) => Ok(Vec::new()),
+            Ok((s, v)) if s[..] == [n] => Ok(v),
+            Ok((s, _)) => Err(bad(key, &s, format!("[{n}] (the size of `P`)"))),
+        };
+        let (lb, ub) = (bound("lb", lb)?, bound("ub", ub)?);
+        let p = DenseProblem {
+            n: n as usize,
+            m,
+            me,
+            P,
+            q,
+            G,
+            h,
+            A,
+            b,
+            lb,
+            ub,
+        };
+        p.check("key").map_err(|e| fail(e.0))?;
+        Ok(p)
     }
 
-    /// Writes `P, q, G, h` (float64, C order, shapes `[n, n]`, `[n]`, `[m, n]`,
-    /// `[m]`) to an `.npz` file, the layout [`DenseProblem::from_npz`] reads and
-    /// `numpy.load` opens. (The mpc_qpbenchmark files also carry pickled `None`s
-    /// for `A, b, lb, ub`; they are not written.) Errors name the file.
+    /// Writes the problem to an `.npz` file, the layout
+    /// [`DenseProblem::from_npz`] reads and `numpy.load` opens: float64, C
+    /// order, `P` `[n, n]`, `q` `[n]`, `G` `[m, n]` and `h` `[m]` always (also
+    /// when `m = 0`, for readers that expect them), `A` `[me, n]` and `b` `[me]`
+    /// when `me > 0`, `lb` and `ub` `[n]` when present. Absent members are not
+    /// written (the qpbenchmark files carry pickled `None`s instead), so a round
+    /// trip gives the same problem. Errors name the file.
     pub fn write_npz(&self, path: &Path) -> Result<(), ProblemError> {
         use npyz::WriterBuilder;
         let name = path.display().to_string();
         let err = |e: std::io::Error| ProblemError(format!("{name}: cannot write npz: {e}"));
         let mut npz = npyz::npz::NpzWriter::create(path).map_err(err)?;
-        let (n, m) = (self.n as u64, self.m as u64);
-        let arrays: [(&str, Vec<u64>, &[f64]); 4] = [
-            ("P", vec![n, n], &self.P),
-            ("q", vec![n], &self.q),
-            ("G", vec![m, n], &self.G),
-            ("h", vec![m], &self.h),
+        let (n, m, me) = (self.n as u64, self.m as u64, self.me as u64);
+        let arrays: [(&str, Vec<u64>, &[f64], bool); 8] = [
+            ("P", vec![n, n], &self.P, true),
+            ("q", vec![n], &self.q, true),
+            ("G", vec![m, n], &self.G, true),
+            ("h", vec![m], &self.h, true),
+            ("A", vec![me, n], &self.A, me > 0),
+            ("b", vec![me], &self.b, me > 0),
+            ("lb", vec![n], &self.lb, !self.lb.is_empty()),
+            ("ub", vec![n], &self.ub, !self.ub.is_empty()),
         ];
-        for (key, shape, data) in arrays {
+        for (key, shape, data, present) in arrays {
+            if !present {
+                continue;
+            }
             let mut w = npz
                 .array::<f64>(key, Default::default())
                 .map_err(err)?
@@ -106,6 +174,10 @@ impl DenseProblem {
         Ok(())
     }
 }
+
+/// An optional member as read: its shape and values (row-major), or how it is
+/// absent (`is missing`, `is a pickled None`, `is empty`).
+type Member = Result<(Vec<u64>, Vec<f64>), &'static str>;
 
 /// Largest `.npy` member read from an npz file, bytes (the QPs of this project
 /// are a few kB; the cap keeps a corrupt size field from exhausting memory).
@@ -151,11 +223,8 @@ fn npy_header_value<'a>(header: &'a str, key: &str) -> Result<&'a str, String> {
         .ok_or_else(|| format!("malformed .npy header near `{key}`"))
 }
 
-/// Parses one `.npy` array of float64 (`<f8` or `>f8`): its shape, whether it
-/// is in Fortran order, and the values in file order. Every size is checked
-/// against the bytes present, so no header makes this allocate more than the
-/// member holds.
-pub(crate) fn parse_npy_f64(bytes: &[u8]) -> Result<(Vec<u64>, bool, Vec<f64>), String> {
+/// The header dict of an `.npy` array and the offset of its data.
+fn npy_header(bytes: &[u8]) -> Result<(&str, usize), String> {
     let not_npy = || "not an .npy array (no NPY header)".to_string();
     if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
         return Err(not_npy());
@@ -175,6 +244,56 @@ pub(crate) fn parse_npy_f64(bytes: &[u8]) -> Result<(Vec<u64>, bool, Vec<f64>), 
         .get(start..start.saturating_add(len))
         .and_then(|h| core::str::from_utf8(h).ok())
         .ok_or_else(|| "truncated or malformed .npy header".to_string())?;
+    Ok((header, start + len))
+}
+
+/// Whether an `.npy` member is a pickled `None`, the qpbenchmark marker of an
+/// absent member: dtype `|O`, shape `()`, and a pickle that is `None` itself
+/// (`[PROTO v] [FRAME len] N .`) or numpy's 0-d object array holding `None`
+/// (its element list `] [memo] N a`, then the end `.`). The pickle is matched
+/// byte-wise, never executed.
+fn is_pickled_none(bytes: &[u8]) -> bool {
+    let Ok((header, start)) = npy_header(bytes) else {
+        return false;
+    };
+    let is = |key, want: &[&str]| {
+        npy_header_value(header, key).is_ok_and(|v| want.iter().any(|w| v.starts_with(w)))
+    };
+    if !is("descr", &["'|O'", "\"|O\""]) || !is("shape", &["()"]) {
+        return false;
+    }
+    let mut data = &bytes[start..];
+    if let [0x80, _, rest @ ..] = data {
+        data = rest; // PROTO
+    }
+    if let [0x95, rest @ ..] = data
+        && rest.len() >= 8
+    {
+        data = &rest[8..]; // FRAME
+    }
+    if data == b"N." {
+        return true;
+    }
+    // `]` EMPTY_LIST, an optional memo op (BINPUT `q n`, LONG_BINPUT `r nnnn`,
+    // MEMOIZE 0x94), `N` NONE, `a` APPEND: a one-element list holding None.
+    let list_of_none = |after: &[u8]| {
+        let memo = match after.first() {
+            Some(b'q') => 2,
+            Some(b'r') => 5,
+            Some(0x94) => 1,
+            _ => 0,
+        };
+        after.get(memo..memo + 2) == Some(b"Na")
+    };
+    data.ends_with(b".") && (0..data.len()).any(|i| data[i] == b']' && list_of_none(&data[i + 1..]))
+}
+
+/// Parses one `.npy` array of float64 (`<f8` or `>f8`): its shape, whether it
+/// is in Fortran order, and the values in file order. Every size is checked
+/// against the bytes present, so no header makes this allocate more than the
+/// member holds.
+pub(crate) fn parse_npy_f64(bytes: &[u8]) -> Result<(Vec<u64>, bool, Vec<f64>), String> {
+    let (header, start) = npy_header(bytes)?;
     let descr = npy_header_value(header, "descr")?;
     let big_endian = if descr.starts_with("'<f8'") || descr.starts_with("\"<f8\"") {
         false
@@ -209,7 +328,7 @@ pub(crate) fn parse_npy_f64(bytes: &[u8]) -> Result<(Vec<u64>, bool, Vec<f64>), 
                 .map_err(|_| format!("malformed `shape` ({shape_text}) in the .npy header"))?,
         );
     }
-    let data = &bytes[start + len..];
+    let data = &bytes[start..];
     let need = shape
         .iter()
         .try_fold(8u64, |acc, &d| acc.checked_mul(d))

@@ -6,22 +6,42 @@ use core::fmt;
 use ldcbf_controller::nalgebra::{SMatrix, SVector};
 use ldcbf_controller::{Assembly, DenseQp, DualActiveSet};
 
-/// A dense QP `min 1/2 x'Px + q'x  s.t.  Gx <= h` with `n` variables and `m`
-/// rows. Matrices are row-major.
+/// A dense QP in the layout of the qpbenchmark npz files,
+///
+/// ```text
+/// minimise 1/2 x'Px + q'x  s.t.  Gx <= h,  Ax = b,  lb <= x <= ub,
+/// ```
+///
+/// with `n` variables, `m` inequality rows and `me` equality rows; matrices are
+/// row-major. `G, h` and `A, b` may be absent (`m = 0`, `me = 0`: empty
+/// vectors); `lb` and `ub` are each either absent (empty) or of length `n`, with
+/// `-inf` (in `lb`) and `+inf` (in `ub`) meaning no bound. The solvers take the
+/// problem as one list of rows, [`DenseProblem::stacked`]. [`DenseProblem::validate`]
+/// checks that the members fit together.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DenseProblem {
     /// Number of variables.
     pub n: usize,
-    /// Number of inequality rows.
+    /// Number of inequality rows (rows of `G`).
     pub m: usize,
+    /// Number of equality rows (rows of `A`).
+    pub me: usize,
     /// `P`, `n x n`, row-major, symmetric positive definite.
     pub P: Vec<f64>,
     /// `q`, length `n`.
     pub q: Vec<f64>,
-    /// `G`, `m x n`, row-major.
+    /// `G`, `m x n`, row-major (empty when `m = 0`).
     pub G: Vec<f64>,
     /// `h`, length `m`.
     pub h: Vec<f64>,
+    /// `A`, `me x n`, row-major (empty when `me = 0`).
+    pub A: Vec<f64>,
+    /// `b`, length `me`.
+    pub b: Vec<f64>,
+    /// Lower bounds on `x`: empty (absent) or length `n`; `-inf` is no bound.
+    pub lb: Vec<f64>,
+    /// Upper bounds on `x`: empty (absent) or length `n`; `+inf` is no bound.
+    pub ub: Vec<f64>,
 }
 
 /// Error reading or shaping a problem.
@@ -37,6 +57,25 @@ impl fmt::Display for ProblemError {
 impl core::error::Error for ProblemError {}
 
 impl DenseProblem {
+    /// A problem with inequality rows only (`me = 0`, no bounds): `m` is the
+    /// length of `h`. The members are taken as given ([`DenseProblem::validate`]
+    /// checks them).
+    pub fn inequalities(n: usize, P: Vec<f64>, q: Vec<f64>, G: Vec<f64>, h: Vec<f64>) -> Self {
+        DenseProblem {
+            n,
+            m: h.len(),
+            me: 0,
+            P,
+            q,
+            G,
+            h,
+            A: Vec::new(),
+            b: Vec::new(),
+            lb: Vec::new(),
+            ub: Vec::new(),
+        }
+    }
+
     /// The QP of one controller cycle: `P = H` of the solver, `q, G, h` of the
     /// assembly (only the `m` rows in use).
     pub fn from_assembly<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>(
@@ -64,19 +103,84 @@ impl DenseProblem {
                 G.push(qp.gt[(j, i)]);
             }
         }
-        DenseProblem {
-            n: NV,
-            m,
+        DenseProblem::inequalities(
+            NV,
             P,
-            q: qp.q.iter().copied().collect(),
+            qp.q.iter().copied().collect(),
             G,
-            h: qp.h.iter().take(m).copied().collect(),
-        }
+            qp.h.iter().take(m).copied().collect(),
+        )
     }
 
-    /// Objective `1/2 x'Px + q'x`.
+    /// Checks the members: their lengths against `n`, `m`, `me` (`P` `n x n`,
+    /// `q` `n`, `G` `m x n`, `h` `m`, `A` `me x n`, `b` `me`, `lb` and `ub` empty
+    /// or `n`); no NaN anywhere; no infinity except `-inf` in `lb` and `+inf` in
+    /// `ub`; `lb_j <= ub_j`. Errors name the field and the entry.
+    pub fn validate(&self) -> Result<(), ProblemError> {
+        self.check("field")
+    }
+
+    /// [`DenseProblem::validate`] with `what` (`field`, `key`) naming the members.
+    pub(crate) fn check(&self, what: &str) -> Result<(), ProblemError> {
+        let (n, m, me) = (self.n, self.m, self.me);
+        let vector = |v: &[f64]| if v.is_empty() { 0 } else { n };
+        // (key, values, rows, columns of a matrix)
+        let members: [(&str, &[f64], usize, Option<usize>); 8] = [
+            ("P", &self.P, n, Some(n)),
+            ("q", &self.q, n, None),
+            ("G", &self.G, m, Some(n)),
+            ("h", &self.h, m, None),
+            ("A", &self.A, me, Some(n)),
+            ("b", &self.b, me, None),
+            ("lb", &self.lb, vector(&self.lb), None),
+            ("ub", &self.ub, vector(&self.ub), None),
+        ];
+        for (key, v, rows, cols) in members {
+            if rows.checked_mul(cols.unwrap_or(1)) != Some(v.len()) {
+                let shape = match cols {
+                    Some(c) => format!("{rows} x {c}"),
+                    None => format!("{rows}"),
+                };
+                return Err(ProblemError(format!(
+                    "{what} `{key}` has {} entries, expected {shape} (n = {n}, m = {m}, me = {me})",
+                    v.len()
+                )));
+            }
+            for (k, &x) in v.iter().enumerate() {
+                let bad = match (key, x) {
+                    (_, x) if x.is_nan() => "NaN",
+                    ("lb", f64::INFINITY) => "+inf (a lower bound no x meets)",
+                    ("ub", f64::NEG_INFINITY) => "-inf (an upper bound no x meets)",
+                    ("lb" | "ub", _) => continue,
+                    (_, x) if x.is_infinite() => "infinite",
+                    _ => continue,
+                };
+                let at = match cols {
+                    Some(c) => format!("[{}, {}]", k / c, k % c),
+                    None => format!("[{k}]"),
+                };
+                return Err(ProblemError(format!("{what} `{key}`: entry {at} is {bad}")));
+            }
+        }
+        if !self.lb.is_empty() && !self.ub.is_empty() {
+            for (j, (l, u)) in self.lb.iter().zip(&self.ub).enumerate() {
+                if l > u {
+                    return Err(ProblemError(format!(
+                        "{what} `lb`: lb[{j}] = {l} is above ub[{j}] = {u}"
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Objective `1/2 x'Px + q'x` (NaN when `x` or the members have the wrong
+    /// length).
     pub fn objective(&self, x: &[f64]) -> f64 {
         let n = self.n;
+        if x.len() != n || self.q.len() != n || Some(self.P.len()) != n.checked_mul(n) {
+            return f64::NAN;
+        }
         let mut f = 0.0;
         for i in 0..n {
             let mut px = 0.0;
@@ -88,35 +192,69 @@ impl DenseProblem {
         f
     }
 
-    /// Largest row violation `max_i (G_i x - h_i)^+`.
+    /// Largest violation of any member at `x`: `(G_i x - h_i)^+`, `|A_i x - b_i|`,
+    /// `(lb_j - x_j)^+`, `(x_j - ub_j)^+` (NaN when the lengths do not fit).
     pub fn max_violation(&self, x: &[f64]) -> f64 {
-        (0..self.m)
-            .map(|i| self.row_dot(i, x) - self.h[i])
-            .fold(0.0, f64::max)
+        let st = self.stacked();
+        if x.len() != self.n {
+            return f64::NAN;
+        }
+        (0..st.m)
+            .map(|i| {
+                let r = st.row_dot(i, x) - st.h[i];
+                if i < st.me { r.abs() } else { r }
+            })
+            .fold(0.0, |a: f64, r| if r.is_nan() { r } else { a.max(r) })
     }
 
+    /// `G_i x`, row `i` of the inequalities (NaN when out of range).
     pub(crate) fn row_dot(&self, i: usize, x: &[f64]) -> f64 {
-        (0..self.n).map(|j| self.G[i * self.n + j] * x[j]).sum()
+        crate::stacked::dot_row(&self.G, self.n, i, x)
     }
 
-    /// Copies the problem into the controller's fixed-size types.
+    /// Number of rows of [`DenseProblem::stacked`]: `me + m` plus one per finite
+    /// entry of `ub` and of `lb`.
+    pub fn rows(&self) -> usize {
+        let finite = |v: &[f64]| v.iter().filter(|x| x.is_finite()).count();
+        self.me + self.m + finite(&self.ub) + finite(&self.lb)
+    }
+
+    /// Copies the problem into the controller's fixed-size types: the rows of
+    /// [`DenseProblem::stacked`] (inequalities, then the finite bounds) as rows of
+    /// the [`DenseQp`], so the solution's multipliers come in the stacked order.
+    /// Errors on another size, more rows than `NC`, and equality rows (the
+    /// fixed-size solver has none).
     pub fn to_fixed<const NV: usize, const NC: usize>(
         &self,
     ) -> Result<(SMatrix<f64, NV, NV>, DenseQp<NV, NC>), ProblemError> {
-        if self.n != NV || self.m > NC {
+        if self.me > 0 {
             return Err(ProblemError(format!(
-                "problem has n = {}, m = {}; the fixed size is NV = {NV}, NC = {NC}",
-                self.n, self.m
+                "problem has {} equality rows; the fixed-size solver takes inequalities only",
+                self.me
             )));
         }
+        let rows = self.rows();
+        if self.n != NV || rows > NC {
+            return Err(ProblemError(format!(
+                "problem has n = {}, m = {rows} (inequality and bound rows); the fixed size is \
+                 NV = {NV}, NC = {NC}",
+                self.n
+            )));
+        }
+        if Some(self.P.len()) != NV.checked_mul(NV) || self.q.len() != NV {
+            return Err(ProblemError(format!(
+                "field `P` or `q` does not have n = {NV} (run `validate`)"
+            )));
+        }
+        let st = self.stacked();
         let H = SMatrix::<f64, NV, NV>::from_fn(|i, j| self.P[i * NV + j]);
         let mut qp = DenseQp::<NV, NC> {
             q: SVector::<f64, NV>::from_fn(|i, _| self.q[i]),
             ..DenseQp::default()
         };
-        for i in 0..self.m {
-            let g = SVector::<f64, NV>::from_fn(|j, _| self.G[i * NV + j]);
-            qp.push_row(&g, self.h[i])
+        for i in 0..st.m {
+            let g = SVector::<f64, NV>::from_fn(|j, _| st.G[i * NV + j]);
+            qp.push_row(&g, st.h[i])
                 .map_err(|_| ProblemError("row capacity exceeded".into()))?;
         }
         Ok((H, qp))
