@@ -16,8 +16,11 @@
 //! * [`solve_clarabel`] solves it with Clarabel (verbose off, tight tolerances).
 //! * [`solve_own`] solves it with [`DualActiveSet`] at a fixed size (no
 //!   equality rows).
-//! * [`compare`] checks the agreement contract of SPEC section 3; [`kkt`] measures
-//!   the KKT residuals of a primal-dual pair.
+//! * [`compare_stacked`] checks any solver's answer, given as slices
+//!   ([`Candidate`]), against Clarabel's; [`kkt_stacked`] measures the KKT
+//!   residuals of a primal-dual pair, [`farkas_holds`] an infeasibility
+//!   certificate. [`compare`] and [`kkt`] are the same checks for the
+//!   fixed-size [`QpSolution`] (SPEC section 3 scaling).
 //! * [`ClarabelBackend`] plugs Clarabel into [`Controller::step_with`] so a whole
 //!   closed loop can be run with the reference solver.
 //!
@@ -26,14 +29,19 @@
 
 // Named in the crate docs only (intra-doc links).
 #[cfg(doc)]
-use ldcbf_controller::{Assembly, DualActiveSet};
+use ldcbf_controller::{Assembly, DualActiveSet, QpSolution};
 
+mod check;
 mod clarabel_solve;
 mod equivalence;
 mod npz;
 mod problem;
 mod stacked;
 
+pub use check::{
+    AGREEMENT_TOL, Candidate, Farkas, StackedAgreement, StackedKkt, compare_stacked, farkas_holds,
+    farkas_residuals, kkt_stacked,
+};
 pub use clarabel_solve::{ClarabelBackend, RefSolution, RefStatus, solve_clarabel};
 pub use equivalence::{Agreement, Kkt, compare, kkt, solve_own};
 pub use problem::{DenseProblem, ProblemError};

@@ -349,6 +349,7 @@ fn bad_members_are_rejected_naming_the_key() {
             .0
             .contains("field `ub` has 1 entries, expected 2")
     );
+    assert_eq!(solve_clarabel(&bad).status, RefStatus::Failed);
 }
 
 #[test]
@@ -399,4 +400,151 @@ fn stacked_rows_come_in_order_and_split_back() {
     // 2 + 1 + 3 - 8 = -2, the inequality by 8 + 2.5 + 6 - 7 = 9.5.
     assert_eq!(p.max_violation(&[2.0, 0.5, 1.0]), 9.5);
     assert!(p.max_violation(&[0.0; 2]).is_nan());
+}
+
+#[test]
+fn equalities_and_bounds_are_solved_with_signed_multipliers() {
+    // x + y = 1, y <= 0.5: x = y = 0.5; 2(x - 1) + y_eq = 0 gives y_eq = 1,
+    // 2(y - 2) + y_eq + u = 0 gives u = 2.
+    let p = two_var(vec![1.0, 1.0], vec![1.0], vec![], vec![f64::INFINITY, 0.5]);
+    let r = solve_clarabel(&p);
+    assert_eq!(r.status, RefStatus::Solved);
+    assert!(r.polished);
+    let close = |a: &[f64], b: &[f64]| a.iter().zip(b).all(|(u, v)| (u - v).abs() < 1e-9);
+    assert!(close(&r.x, &[0.5, 0.5]), "{:?}", r.x);
+    assert!(close(&r.z, &[1.0, 2.0]), "{:?}", r.z);
+    let k = kkt_stacked(&p, &r.x, &r.z).unwrap();
+    assert!(k.max() < 1e-12, "{k:?}");
+    // x + y = 4, x <= 1.2: x = 1.2, y = 2.8; 2(y - 2) + y_eq = 0 gives a
+    // negative y_eq = -1.6, which the polish keeps (free sign), and
+    // 2(x - 1) + y_eq + u = 0 gives u = 1.2.
+    let p = two_var(vec![1.0, 1.0], vec![4.0], vec![], vec![1.2, f64::INFINITY]);
+    let r = solve_clarabel(&p);
+    assert_eq!(r.status, RefStatus::Solved);
+    assert!(r.polished);
+    assert!(
+        close(&r.x, &[1.2, 2.8]) && close(&r.z, &[-1.6, 1.2]),
+        "{:?} {:?}",
+        r.x,
+        r.z
+    );
+    let k = kkt_stacked(&p, &r.x, &r.z).unwrap();
+    assert!(k.max() < 1e-12 && k.dual == 0.0, "{k:?}");
+    assert!(kkt_stacked(&p, &r.x, &[]).is_err());
+    // The numpy fixture with every member.
+    let p = DenseProblem::from_npz(&fixture("full.npz")).unwrap();
+    let r = solve_clarabel(&p);
+    assert_eq!(r.status, RefStatus::Solved);
+    assert_eq!(r.z.len(), p.rows());
+    let k = kkt_stacked(&p, &r.x, &r.z).unwrap();
+    assert!(k.max() < 1e-9, "{k:?}");
+}
+
+#[test]
+fn farkas_certificates_are_checked() {
+    // x + y = 3 with x <= 1, y <= 1: y = (-1, 1, 1) gives G'y = 0, h'y = -1.
+    let p = two_var(vec![1.0, 1.0], vec![3.0], vec![], vec![1.0, 1.0]);
+    let st = p.stacked();
+    assert!(farkas_holds(&st, &[-1.0, 1.0, 1.0], 1e-12));
+    assert!(farkas_holds(&st, &[-1e-6, 1e-6, 1e-6], 1e-12), "scale-free");
+    let f = farkas_residuals(&st, &[-1.0, 1.0, 1.0]).unwrap();
+    assert_eq!((f.sign, f.stationarity), (0.0, 0.0));
+    assert!((f.objective + 0.2).abs() < 1e-15, "{f:?}"); // -1 / (3 + 1 + 1)
+    assert!(!farkas_holds(&st, &[1.0, -1.0, -1.0], 1e-9), "wrong signs");
+    assert!(!farkas_holds(&st, &[-1.0, 1.0, 0.5], 1e-9), "G'y != 0");
+    assert!(!farkas_holds(&st, &[0.0; 3], 1e-9) && !farkas_holds(&st, &[1.0], 1e-9));
+    let r = solve_clarabel(&p);
+    assert_eq!(r.status, RefStatus::Infeasible);
+    assert!(
+        farkas_holds(&st, &r.z, 1e-9),
+        "{:?}",
+        farkas_residuals(&st, &r.z)
+    );
+    // Our answer as slices: a good certificate agrees, a bad one does not.
+    let own = |status, x: &'static [f64], y: &'static [f64]| Candidate {
+        status,
+        x,
+        y,
+        objective: f64::NAN,
+    };
+    let a = compare_stacked(&p, &own(QpStatus::Infeasible, &[], &[-2.0, 2.0, 2.0]), &r);
+    assert!(a.holds() && a.certificate == Some(true), "{a:?}");
+    let a = compare_stacked(&p, &own(QpStatus::Infeasible, &[], &[0.0, 1.0, 1.0]), &r);
+    assert!(!a.holds() && a.certificate == Some(false), "{a:?}");
+    let a = compare_stacked(&p, &own(QpStatus::Solved, &[1.0, 2.0], &[]), &r);
+    assert!(!a.holds() && !a.feasibility_agrees);
+}
+
+#[test]
+fn stacked_agreement_of_solved_problems() {
+    let p = two_var(vec![1.0, 1.0], vec![1.0], vec![], vec![f64::INFINITY, 0.5]);
+    let r = solve_clarabel(&p);
+    let mut x = r.x.clone();
+    let cand = |x: &[f64]| {
+        compare_stacked(
+            &p,
+            &Candidate {
+                status: QpStatus::Solved,
+                x,
+                y: &r.z,
+                objective: p.objective(x),
+            },
+            &r,
+        )
+    };
+    let a = cand(&x);
+    assert!(
+        a.holds() && a.both_solved && a.certificate.is_none(),
+        "{a:?}"
+    );
+    assert_eq!((a.dx, a.objective), (0.0, 0.0));
+    x[0] += 2e-6;
+    let a = cand(&x);
+    assert!(!a.holds() && a.primal() > 1e-6, "{a:?}");
+    assert!(!cand(&x[..1]).holds(), "x of the wrong length");
+    let a = compare_stacked(
+        &p,
+        &Candidate {
+            status: QpStatus::IterationLimit,
+            x: &r.x,
+            y: &r.z,
+            objective: r.objective,
+        },
+        &r,
+    );
+    assert!(!a.holds());
+}
+
+#[test]
+fn bounds_reach_our_fixed_size_solver_as_rows() {
+    // min (x-1)^2 + (y-2)^2, x + y <= 1, 0.25 <= x, y <= 0.5: x = y = 0.5.
+    let p = DenseProblem {
+        lb: vec![0.25, f64::NEG_INFINITY],
+        ub: vec![f64::INFINITY, 0.5],
+        ..small()
+    };
+    assert_eq!(p.rows(), 3);
+    let own = solve_own::<2, 4>(&p, 20).unwrap();
+    let r = solve_clarabel(&p);
+    assert!(compare(&p, &own, &r).holds());
+    let y = &own.lambda.as_slice()[..p.rows()];
+    let c = Candidate {
+        status: own.status,
+        x: own.x.as_slice(),
+        y,
+        objective: own.objective,
+    };
+    assert!(compare_stacked(&p, &c, &r).holds());
+    assert!(kkt_stacked(&p, own.x.as_slice(), y).unwrap().max() < 1e-12);
+    assert!(kkt(&p, own.x.as_slice(), own.lambda.as_slice()).max() < 1e-12);
+    let m = p.stacked().split_multipliers(y).unwrap();
+    assert!(m.upper[1] > 0.0 && m.lower == vec![0.0, 0.0]);
+    assert!(
+        solve_own::<2, 2>(&p, 20).is_err(),
+        "3 rows do not fit NC = 2"
+    );
+    let e = two_var(vec![1.0, 1.0], vec![1.0], vec![], vec![])
+        .to_fixed::<2, 4>()
+        .unwrap_err();
+    assert!(e.0.contains("equality rows"), "{e}");
 }
