@@ -21,6 +21,8 @@
 //!   residuals of a primal-dual pair, [`farkas_holds`] an infeasibility
 //!   certificate. [`compare`] and [`kkt`] are the same checks for the
 //!   fixed-size [`QpSolution`] (SPEC section 3 scaling).
+//! * [`random_problem`] makes deterministic random QPs, feasible or infeasible
+//!   by construction ([`QpKind`]).
 //! * [`ClarabelBackend`] plugs Clarabel into [`Controller::step_with`] so a whole
 //!   closed loop can be run with the reference solver.
 //!
@@ -36,6 +38,7 @@ mod clarabel_solve;
 mod equivalence;
 mod npz;
 mod problem;
+mod random;
 mod stacked;
 
 pub use check::{
@@ -45,6 +48,7 @@ pub use check::{
 pub use clarabel_solve::{ClarabelBackend, RefSolution, RefStatus, solve_clarabel};
 pub use equivalence::{Agreement, Kkt, compare, kkt, solve_own};
 pub use problem::{DenseProblem, ProblemError};
+pub use random::{QpKind, random_problem};
 pub use stacked::{Multipliers, RowOrigin, Stacked};
 
 #[cfg(test)]
