@@ -277,14 +277,7 @@ fn spec_foot_qp(n: usize, c: &Cycle, cfg: &Config) -> DenseProblem {
             }
         }
     }
-    DenseProblem {
-        n: nv,
-        m: h.len(),
-        P: pm,
-        q: qv,
-        G: g_rows.concat(),
-        h,
-    }
+    DenseProblem::inequalities(nv, pm, qv, g_rows.concat(), h)
 }
 
 #[derive(Default, Debug)]

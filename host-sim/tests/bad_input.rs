@@ -459,14 +459,13 @@ fn merge_and_table_reject_bad_batch_directories() {
 /// A small valid QP (n = 6, m = 1) and its npz bytes.
 fn good_npz() -> Vec<u8> {
     let tmp = tempfile::tempdir().unwrap();
-    let mut p = DenseProblem {
-        n: 6,
-        m: 1,
-        P: vec![0.0; 36],
-        q: vec![-2.0; 6],
-        G: vec![1.0, 1.0, 0.0, 0.0, 0.0, 0.0],
-        h: vec![1.0],
-    };
+    let mut p = DenseProblem::inequalities(
+        6,
+        vec![0.0; 36],
+        vec![-2.0; 6],
+        vec![1.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+        vec![1.0],
+    );
     for i in 0..6 {
         p.P[i * 6 + i] = 2.0;
     }
@@ -562,7 +561,25 @@ fn qp_solve_rejects_bad_npz_files() {
         (
             "pickle.npz",
             npz_with("G", Some(npy("|O", false, "()", b"\x80\x02N."))),
-            vec!["pickle.npz: key `G`: dtype '|O' is not float64"],
+            vec!["pickle.npz: key `G`: is a pickled None, but `h` is given (shape [1])"],
+        ),
+        (
+            "noneP.npz",
+            npz_with("P", Some(npy("|O", false, "()", b"\x80\x02N."))),
+            vec!["noneP.npz: key `P`: dtype '|O' is not float64"],
+        ),
+        (
+            "object.npz",
+            npz_with("G", Some(npy("|O", false, "(1, 6)", b"\x80\x02N."))),
+            vec!["object.npz: key `G`: dtype '|O' is not float64"],
+        ),
+        (
+            "nanlb.npz",
+            npz_with(
+                "lb",
+                Some(npy_f64(&[6], &[0.0, f64::NAN, 0.0, 0.0, 0.0, 0.0])),
+            ),
+            vec!["nanlb.npz: key `lb`: entry [1] is NaN"],
         ),
         (
             "notnpy.npz",

@@ -2,10 +2,15 @@
 //! [`DenseProblem`], its agreement with Clarabel's (SPEC section 3) and the KKT
 //! residuals of a primal-dual pair.
 
-use ldcbf_controller::{DualActiveSet, QpSettings, QpSolution, QpStatus};
+use ldcbf_controller::{DualActiveSet, QpSettings, QpSolution};
 
-use crate::clarabel_solve::{RefSolution, RefStatus};
+use crate::check::{Candidate, compare_stacked, kkt_rows};
+use crate::clarabel_solve::RefSolution;
 use crate::problem::{DenseProblem, ProblemError};
+
+// Named in the docs only (intra-doc links).
+#[cfg(doc)]
+use crate::check::kkt_stacked;
 
 /// Solves with our dual active-set solver at the fixed size `(NV, NC)`, cold start.
 pub fn solve_own<const NV: usize, const NC: usize>(
@@ -40,37 +45,27 @@ impl Agreement {
     }
 }
 
-/// Compares our solution with Clarabel's on problem `p`.
+/// Compares our solution with Clarabel's on problem `p`: [`compare_stacked`]
+/// with the objective recomputed at our `x`, its figures in the SPEC section 3
+/// scaling.
 pub fn compare<const NV: usize, const NC: usize>(
     p: &DenseProblem,
     own: &QpSolution<NV, NC>,
     r: &RefSolution,
 ) -> Agreement {
-    let ref_solved = matches!(r.status, RefStatus::Solved | RefStatus::AlmostSolved);
-    let own_solved = own.status == QpStatus::Solved;
-    let feasibility_agrees = matches!(
-        (own.status, r.status),
-        (
-            QpStatus::Solved,
-            RefStatus::Solved | RefStatus::AlmostSolved
-        ) | (QpStatus::Infeasible, RefStatus::Infeasible)
-    );
-    if !(ref_solved && own_solved) {
-        return Agreement {
-            primal: f64::NAN,
-            objective: f64::NAN,
-            feasibility_agrees,
-            both_solved: false,
-        };
-    }
-    let xr_norm = r.x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-    let dx = (0..p.n).fold(0.0f64, |a, i| a.max((own.x[i] - r.x[i]).abs()));
-    let fo = p.objective(own.x.as_slice());
+    let rows = p.rows().min(NC);
+    let own = Candidate {
+        status: own.status,
+        x: own.x.as_slice(),
+        y: &own.lambda.as_slice()[..rows],
+        objective: p.objective(own.x.as_slice()),
+    };
+    let a = compare_stacked(p, &own, r);
     Agreement {
-        primal: dx / (1.0 + xr_norm),
-        objective: (fo - r.objective).abs() / r.objective.abs().max(1.0),
-        feasibility_agrees,
-        both_solved: true,
+        primal: a.dx / (1.0 + a.x_ref_norm),
+        objective: a.objective,
+        feasibility_agrees: a.feasibility_agrees,
+        both_solved: a.both_solved,
     }
 }
 
@@ -99,29 +94,17 @@ impl Kkt {
     }
 }
 
-/// Measures the KKT residuals of `(x, lambda)` on `p`.
+/// Measures the KKT residuals of `(x, lambda)` on `p`: [`kkt_stacked`] with the
+/// primal residuals in one figure; `lambda` holds the multipliers of the
+/// stacked rows (extra entries are ignored). Slices too short give NaN
+/// residuals.
 pub fn kkt(p: &DenseProblem, x: &[f64], lambda: &[f64]) -> Kkt {
-    let n = p.n;
-    let mut grad: Vec<f64> = (0..n)
-        .map(|i| (0..n).map(|j| p.P[i * n + j] * x[j]).sum::<f64>() + p.q[i])
-        .collect();
-    let mut primal: f64 = 0.0;
-    let mut dual: f64 = 0.0;
-    let mut comp: f64 = 0.0;
-    for i in 0..p.m {
-        let l = lambda[i];
-        for (j, g) in grad.iter_mut().enumerate() {
-            *g += p.G[i * n + j] * l;
-        }
-        let slack = p.h[i] - p.row_dot(i, x);
-        primal = primal.max(-slack);
-        dual = dual.max(-l);
-        comp = comp.max((l * slack).abs());
-    }
+    let st = p.stacked();
+    let k = kkt_rows(p, &st, x, lambda.get(..st.m).unwrap_or(&[]));
     Kkt {
-        stationarity: grad.iter().fold(0.0, |a, g| a.max(g.abs())),
-        primal,
-        dual,
-        complementarity: comp,
+        stationarity: k.stationarity,
+        primal: k.primal(),
+        dual: k.dual,
+        complementarity: k.complementarity,
     }
 }

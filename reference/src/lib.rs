@@ -5,13 +5,24 @@
 //! [Clarabel](https://clarabel.org), and compared with our dense dual
 //! active-set solution.
 //!
-//! * [`DenseProblem`] holds any dense QP `min 1/2 x'Px + q'x  s.t.  Gx <= h`
-//!   (row-major), built from a controller [`Assembly`] ([`DenseProblem::from_assembly`])
-//!   or read from the npz layout of the external test set ([`DenseProblem::from_npz`]).
+//! * [`DenseProblem`] holds any dense QP of the qpbenchmark form
+//!   `min 1/2 x'Px + q'x  s.t.  Gx <= h, Ax = b, lb <= x <= ub` (row-major; any
+//!   of the last three absent), built from a controller [`Assembly`]
+//!   ([`DenseProblem::from_assembly`]) or read from the npz layout of the
+//!   external test set ([`DenseProblem::from_npz`]).
+//! * [`DenseProblem::stacked`] gives it as one row list, equalities first, then
+//!   `G`, then the finite bounds ([`Stacked`]): the solvers' input, in whose
+//!   order all multipliers come ([`Stacked::split_multipliers`] maps them back).
 //! * [`solve_clarabel`] solves it with Clarabel (verbose off, tight tolerances).
-//! * [`solve_own`] solves it with [`DualActiveSet`] at a fixed size.
-//! * [`compare`] checks the agreement contract of SPEC section 3; [`kkt`] measures
-//!   the KKT residuals of a primal-dual pair.
+//! * [`solve_own`] solves it with [`DualActiveSet`] at a fixed size (no
+//!   equality rows).
+//! * [`compare_stacked`] checks any solver's answer, given as slices
+//!   ([`Candidate`]), against Clarabel's; [`kkt_stacked`] measures the KKT
+//!   residuals of a primal-dual pair, [`farkas_holds`] an infeasibility
+//!   certificate. [`compare`] and [`kkt`] are the same checks for the
+//!   fixed-size [`QpSolution`] (SPEC section 3 scaling).
+//! * [`random_problem`] makes deterministic random QPs, feasible or infeasible
+//!   by construction ([`QpKind`]).
 //! * [`ClarabelBackend`] plugs Clarabel into [`Controller::step_with`] so a whole
 //!   closed loop can be run with the reference solver.
 //!
@@ -20,15 +31,25 @@
 
 // Named in the crate docs only (intra-doc links).
 #[cfg(doc)]
-use ldcbf_controller::{Assembly, DualActiveSet};
+use ldcbf_controller::{Assembly, DualActiveSet, QpSolution};
 
+mod check;
 mod clarabel_solve;
 mod equivalence;
+mod npz;
 mod problem;
+mod random;
+mod stacked;
 
+pub use check::{
+    AGREEMENT_TOL, Candidate, Farkas, StackedAgreement, StackedKkt, compare_stacked, farkas_holds,
+    farkas_residuals, kkt_stacked,
+};
 pub use clarabel_solve::{ClarabelBackend, RefSolution, RefStatus, solve_clarabel};
 pub use equivalence::{Agreement, Kkt, compare, kkt, solve_own};
 pub use problem::{DenseProblem, ProblemError};
+pub use random::{QpKind, random_problem};
+pub use stacked::{Multipliers, RowOrigin, Stacked};
 
 #[cfg(test)]
 mod tests;

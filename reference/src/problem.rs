@@ -1,29 +1,47 @@
 //! The dense QP [`DenseProblem`]: built from the controller's assembly or
-//! storage types, shaped back into them, and read from and written to the npz
-//! layout of the external test set.
+//! storage types and shaped back into them (the npz layout is in `npz.rs`).
 
 use core::fmt;
-use std::path::Path;
 
 use ldcbf_controller::nalgebra::{SMatrix, SVector};
 use ldcbf_controller::{Assembly, DenseQp, DualActiveSet};
 
-/// A dense QP `min 1/2 x'Px + q'x  s.t.  Gx <= h` with `n` variables and `m`
-/// rows. Matrices are row-major.
+/// A dense QP in the layout of the qpbenchmark npz files,
+///
+/// ```text
+/// minimise 1/2 x'Px + q'x  s.t.  Gx <= h,  Ax = b,  lb <= x <= ub,
+/// ```
+///
+/// with `n` variables, `m` inequality rows and `me` equality rows; matrices are
+/// row-major. `G, h` and `A, b` may be absent (`m = 0`, `me = 0`: empty
+/// vectors); `lb` and `ub` are each either absent (empty) or of length `n`, with
+/// `-inf` (in `lb`) and `+inf` (in `ub`) meaning no bound. The solvers take the
+/// problem as one list of rows, [`DenseProblem::stacked`]. [`DenseProblem::validate`]
+/// checks that the members fit together.
 #[derive(Clone, Debug, PartialEq)]
 pub struct DenseProblem {
     /// Number of variables.
     pub n: usize,
-    /// Number of inequality rows.
+    /// Number of inequality rows (rows of `G`).
     pub m: usize,
+    /// Number of equality rows (rows of `A`).
+    pub me: usize,
     /// `P`, `n x n`, row-major, symmetric positive definite.
     pub P: Vec<f64>,
     /// `q`, length `n`.
     pub q: Vec<f64>,
-    /// `G`, `m x n`, row-major.
+    /// `G`, `m x n`, row-major (empty when `m = 0`).
     pub G: Vec<f64>,
     /// `h`, length `m`.
     pub h: Vec<f64>,
+    /// `A`, `me x n`, row-major (empty when `me = 0`).
+    pub A: Vec<f64>,
+    /// `b`, length `me`.
+    pub b: Vec<f64>,
+    /// Lower bounds on `x`: empty (absent) or length `n`; `-inf` is no bound.
+    pub lb: Vec<f64>,
+    /// Upper bounds on `x`: empty (absent) or length `n`; `+inf` is no bound.
+    pub ub: Vec<f64>,
 }
 
 /// Error reading or shaping a problem.
@@ -39,6 +57,25 @@ impl fmt::Display for ProblemError {
 impl core::error::Error for ProblemError {}
 
 impl DenseProblem {
+    /// A problem with inequality rows only (`me = 0`, no bounds): `m` is the
+    /// length of `h`. The members are taken as given ([`DenseProblem::validate`]
+    /// checks them).
+    pub fn inequalities(n: usize, P: Vec<f64>, q: Vec<f64>, G: Vec<f64>, h: Vec<f64>) -> Self {
+        DenseProblem {
+            n,
+            m: h.len(),
+            me: 0,
+            P,
+            q,
+            G,
+            h,
+            A: Vec::new(),
+            b: Vec::new(),
+            lb: Vec::new(),
+            ub: Vec::new(),
+        }
+    }
+
     /// The QP of one controller cycle: `P = H` of the solver, `q, G, h` of the
     /// assembly (only the `m` rows in use).
     pub fn from_assembly<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>(
@@ -66,119 +103,84 @@ impl DenseProblem {
                 G.push(qp.gt[(j, i)]);
             }
         }
-        DenseProblem {
-            n: NV,
-            m,
+        DenseProblem::inequalities(
+            NV,
             P,
-            q: qp.q.iter().copied().collect(),
+            qp.q.iter().copied().collect(),
             G,
-            h: qp.h.iter().take(m).copied().collect(),
-        }
+            qp.h.iter().take(m).copied().collect(),
+        )
     }
 
-    /// Reads `P, q, G, h` from an `.npz` file of the mpc_qpbenchmark layout (other
-    /// keys, pickled `None`s, are ignored): float64 arrays of shapes `[n, n]`,
-    /// `[n]`, `[m, n]`, `[m]` (C or Fortran order). Errors name the file and the
-    /// key: not a zip archive, a missing key, a truncated or corrupted member
-    /// (the zip CRC is checked), another dtype, a wrong shape.
-    pub fn from_npz(path: &Path) -> Result<Self, ProblemError> {
-        let name = path.display().to_string();
-        let fail = |m: String| ProblemError(format!("{name}: {m}"));
-        if path.is_dir() {
-            return Err(fail("is a directory, not an npz file".into()));
-        }
-        let mut npz = npyz::npz::NpzArchive::open(path).map_err(|e| {
-            fail(match e.kind() {
-                std::io::ErrorKind::NotFound => "no such file".into(),
-                std::io::ErrorKind::InvalidData => {
-                    format!("not an npz file (a zip archive of .npy arrays): {e}")
-                }
-                _ => format!("cannot open: {e}"),
-            })
-        })?;
-        let mut read = |key: &str| -> Result<(Vec<u64>, Vec<f64>), ProblemError> {
-            let bytes =
-                read_npz_member(&mut npz, key).map_err(|m| fail(format!("key `{key}`: {m}")))?;
-            let (shape, fortran, data) =
-                parse_npy_f64(&bytes).map_err(|m| fail(format!("key `{key}`: {m}")))?;
-            let data = if fortran && shape.len() == 2 {
-                let (r, c) = (shape[0] as usize, shape[1] as usize);
-                let mut t = vec![0.0; r * c];
-                for i in 0..r {
-                    for j in 0..c {
-                        t[i * c + j] = data[j * r + i];
-                    }
-                }
-                t
-            } else {
-                data
-            };
-            Ok((shape, data))
-        };
-        let (ps, P) = read("P")?;
-        let (qs, q) = read("q")?;
-        let (gs, G) = read("G")?;
-        let (hs, h) = read("h")?;
-        let bad = |key: &str, got: &[u64], want: String| {
-            Err(fail(format!(
-                "key `{key}` has shape {got:?}, expected {want}"
-            )))
-        };
-        let [n, n2] = ps[..] else {
-            return bad("P", &ps, "[n, n]".into());
-        };
-        if n != n2 {
-            return bad("P", &ps, "[n, n]".into());
-        }
-        if qs[..] != [n] {
-            return bad("q", &qs, format!("[{n}] (the size of `P`)"));
-        }
-        let [m, n3] = gs[..] else {
-            return bad("G", &gs, format!("[m, {n}]"));
-        };
-        if n3 != n {
-            return bad("G", &gs, format!("[m, {n}]"));
-        }
-        if hs[..] != [m] {
-            return bad("h", &hs, format!("[{m}] (the rows of `G`)"));
-        }
-        let (n, m) = (n as usize, m as usize);
-        Ok(DenseProblem { n, m, P, q, G, h })
+    /// Checks the members: their lengths against `n`, `m`, `me` (`P` `n x n`,
+    /// `q` `n`, `G` `m x n`, `h` `m`, `A` `me x n`, `b` `me`, `lb` and `ub` empty
+    /// or `n`); no NaN anywhere; no infinity except `-inf` in `lb` and `+inf` in
+    /// `ub`; `lb_j <= ub_j`. Errors name the field and the entry.
+    pub fn validate(&self) -> Result<(), ProblemError> {
+        self.check("field")
     }
 
-    /// Writes `P, q, G, h` (float64, C order, shapes `[n, n]`, `[n]`, `[m, n]`,
-    /// `[m]`) to an `.npz` file, the layout [`DenseProblem::from_npz`] reads and
-    /// `numpy.load` opens. (The mpc_qpbenchmark files also carry pickled `None`s
-    /// for `A, b, lb, ub`; they are not written.) Errors name the file.
-    pub fn write_npz(&self, path: &Path) -> Result<(), ProblemError> {
-        use npyz::WriterBuilder;
-        let name = path.display().to_string();
-        let err = |e: std::io::Error| ProblemError(format!("{name}: cannot write npz: {e}"));
-        let mut npz = npyz::npz::NpzWriter::create(path).map_err(err)?;
-        let (n, m) = (self.n as u64, self.m as u64);
-        let arrays: [(&str, Vec<u64>, &[f64]); 4] = [
-            ("P", vec![n, n], &self.P),
-            ("q", vec![n], &self.q),
-            ("G", vec![m, n], &self.G),
-            ("h", vec![m], &self.h),
+    /// [`DenseProblem::validate`] with `what` (`field`, `key`) naming the members.
+    pub(crate) fn check(&self, what: &str) -> Result<(), ProblemError> {
+        let (n, m, me) = (self.n, self.m, self.me);
+        let vector = |v: &[f64]| if v.is_empty() { 0 } else { n };
+        // (key, values, rows, columns of a matrix)
+        let members: [(&str, &[f64], usize, Option<usize>); 8] = [
+            ("P", &self.P, n, Some(n)),
+            ("q", &self.q, n, None),
+            ("G", &self.G, m, Some(n)),
+            ("h", &self.h, m, None),
+            ("A", &self.A, me, Some(n)),
+            ("b", &self.b, me, None),
+            ("lb", &self.lb, vector(&self.lb), None),
+            ("ub", &self.ub, vector(&self.ub), None),
         ];
-        for (key, shape, data) in arrays {
-            let mut w = npz
-                .array::<f64>(key, Default::default())
-                .map_err(err)?
-                .default_dtype()
-                .shape(&shape)
-                .begin_nd()
-                .map_err(err)?;
-            w.extend(data.iter().copied()).map_err(err)?;
-            w.finish().map_err(err)?;
+        for (key, v, rows, cols) in members {
+            if rows.checked_mul(cols.unwrap_or(1)) != Some(v.len()) {
+                let shape = match cols {
+                    Some(c) => format!("{rows} x {c}"),
+                    None => format!("{rows}"),
+                };
+                return Err(ProblemError(format!(
+                    "{what} `{key}` has {} entries, expected {shape} (n = {n}, m = {m}, me = {me})",
+                    v.len()
+                )));
+            }
+            for (k, &x) in v.iter().enumerate() {
+                let bad = match (key, x) {
+                    (_, x) if x.is_nan() => "NaN",
+                    ("lb", f64::INFINITY) => "+inf (a lower bound no x meets)",
+                    ("ub", f64::NEG_INFINITY) => "-inf (an upper bound no x meets)",
+                    ("lb" | "ub", _) => continue,
+                    (_, x) if x.is_infinite() => "infinite",
+                    _ => continue,
+                };
+                let at = match cols {
+                    Some(c) => format!("[{}, {}]", k / c, k % c),
+                    None => format!("[{k}]"),
+                };
+                return Err(ProblemError(format!("{what} `{key}`: entry {at} is {bad}")));
+            }
+        }
+        if !self.lb.is_empty() && !self.ub.is_empty() {
+            for (j, (l, u)) in self.lb.iter().zip(&self.ub).enumerate() {
+                if l > u {
+                    return Err(ProblemError(format!(
+                        "{what} `lb`: lb[{j}] = {l} is above ub[{j}] = {u}"
+                    )));
+                }
+            }
         }
         Ok(())
     }
 
-    /// Objective `1/2 x'Px + q'x`.
+    /// Objective `1/2 x'Px + q'x` (NaN when `x` or the members have the wrong
+    /// length).
     pub fn objective(&self, x: &[f64]) -> f64 {
         let n = self.n;
+        if x.len() != n || self.q.len() != n || Some(self.P.len()) != n.checked_mul(n) {
+            return f64::NAN;
+        }
         let mut f = 0.0;
         for i in 0..n {
             let mut px = 0.0;
@@ -190,165 +192,71 @@ impl DenseProblem {
         f
     }
 
-    /// Largest row violation `max_i (G_i x - h_i)^+`.
+    /// Largest violation of any member at `x`: `(G_i x - h_i)^+`, `|A_i x - b_i|`,
+    /// `(lb_j - x_j)^+`, `(x_j - ub_j)^+` (NaN when the lengths do not fit).
     pub fn max_violation(&self, x: &[f64]) -> f64 {
-        (0..self.m)
-            .map(|i| self.row_dot(i, x) - self.h[i])
-            .fold(0.0, f64::max)
+        let st = self.stacked();
+        if x.len() != self.n {
+            return f64::NAN;
+        }
+        (0..st.m)
+            .map(|i| {
+                let r = st.row_dot(i, x) - st.h[i];
+                if i < st.me { r.abs() } else { r }
+            })
+            .fold(0.0, |a: f64, r| if r.is_nan() { r } else { a.max(r) })
     }
 
+    /// `G_i x`, row `i` of the inequalities (NaN when out of range).
     pub(crate) fn row_dot(&self, i: usize, x: &[f64]) -> f64 {
-        (0..self.n).map(|j| self.G[i * self.n + j] * x[j]).sum()
+        crate::stacked::dot_row(&self.G, self.n, i, x)
     }
 
-    /// Copies the problem into the controller's fixed-size types.
+    /// Number of rows of [`DenseProblem::stacked`]: `me + m` plus one per finite
+    /// entry of `ub` and of `lb`.
+    pub fn rows(&self) -> usize {
+        let finite = |v: &[f64]| v.iter().filter(|x| x.is_finite()).count();
+        self.me + self.m + finite(&self.ub) + finite(&self.lb)
+    }
+
+    /// Copies the problem into the controller's fixed-size types: the rows of
+    /// [`DenseProblem::stacked`] (inequalities, then the finite bounds) as rows of
+    /// the [`DenseQp`], so the solution's multipliers come in the stacked order.
+    /// Errors on another size, more rows than `NC`, and equality rows (the
+    /// fixed-size solver has none).
     pub fn to_fixed<const NV: usize, const NC: usize>(
         &self,
     ) -> Result<(SMatrix<f64, NV, NV>, DenseQp<NV, NC>), ProblemError> {
-        if self.n != NV || self.m > NC {
+        if self.me > 0 {
             return Err(ProblemError(format!(
-                "problem has n = {}, m = {}; the fixed size is NV = {NV}, NC = {NC}",
-                self.n, self.m
+                "problem has {} equality rows; the fixed-size solver takes inequalities only",
+                self.me
             )));
         }
+        let rows = self.rows();
+        if self.n != NV || rows > NC {
+            return Err(ProblemError(format!(
+                "problem has n = {}, m = {rows} (inequality and bound rows); the fixed size is \
+                 NV = {NV}, NC = {NC}",
+                self.n
+            )));
+        }
+        if Some(self.P.len()) != NV.checked_mul(NV) || self.q.len() != NV {
+            return Err(ProblemError(format!(
+                "field `P` or `q` does not have n = {NV} (run `validate`)"
+            )));
+        }
+        let st = self.stacked();
         let H = SMatrix::<f64, NV, NV>::from_fn(|i, j| self.P[i * NV + j]);
         let mut qp = DenseQp::<NV, NC> {
             q: SVector::<f64, NV>::from_fn(|i, _| self.q[i]),
             ..DenseQp::default()
         };
-        for i in 0..self.m {
-            let g = SVector::<f64, NV>::from_fn(|j, _| self.G[i * NV + j]);
-            qp.push_row(&g, self.h[i])
+        for i in 0..st.m {
+            let g = SVector::<f64, NV>::from_fn(|j, _| st.G[i * NV + j]);
+            qp.push_row(&g, st.h[i])
                 .map_err(|_| ProblemError("row capacity exceeded".into()))?;
         }
         Ok((H, qp))
     }
-}
-
-/// Largest `.npy` member read from an npz file, bytes (the QPs of this project
-/// are a few kB; the cap keeps a corrupt size field from exhausting memory).
-const MAX_NPY_BYTES: u64 = 1 << 28;
-
-/// The bytes of `<key>.npy` in `npz`, read to the end so that the zip CRC is
-/// checked (a truncated or corrupted member is an error, not wrong numbers).
-fn read_npz_member<R: std::io::Read + std::io::Seek>(
-    npz: &mut npyz::npz::NpzArchive<R>,
-    key: &str,
-) -> Result<Vec<u8>, String> {
-    use std::io::Read as _;
-    if !npz.array_names().any(|n| n == key) {
-        return Err("is missing".into());
-    }
-    let member = npz
-        .zip_archive()
-        .by_name(&format!("{key}.npy"))
-        .map_err(|e| format!("cannot read: {e}"))?;
-    if member.size() > MAX_NPY_BYTES {
-        return Err(format!(
-            "{} bytes, more than the {MAX_NPY_BYTES} read",
-            member.size()
-        ));
-    }
-    let mut bytes = Vec::new();
-    member
-        .take(MAX_NPY_BYTES + 1)
-        .read_to_end(&mut bytes)
-        .map_err(|e| format!("truncated or corrupted ({e})"))?;
-    Ok(bytes)
-}
-
-/// The value text after `'key':` in an `.npy` header dict.
-fn npy_header_value<'a>(header: &'a str, key: &str) -> Result<&'a str, String> {
-    let at = header
-        .find(&format!("'{key}'"))
-        .or_else(|| header.find(&format!("\"{key}\"")))
-        .ok_or_else(|| format!("the .npy header has no `{key}`"))?;
-    let rest = header[at + key.len() + 2..].trim_start();
-    rest.strip_prefix(':')
-        .map(str::trim_start)
-        .ok_or_else(|| format!("malformed .npy header near `{key}`"))
-}
-
-/// Parses one `.npy` array of float64 (`<f8` or `>f8`): its shape, whether it
-/// is in Fortran order, and the values in file order. Every size is checked
-/// against the bytes present, so no header makes this allocate more than the
-/// member holds.
-pub(crate) fn parse_npy_f64(bytes: &[u8]) -> Result<(Vec<u64>, bool, Vec<f64>), String> {
-    let not_npy = || "not an .npy array (no NPY header)".to_string();
-    if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
-        return Err(not_npy());
-    }
-    let (len, start) = match bytes[6] {
-        1 => (
-            usize::from(u16::from_le_bytes([bytes[8], bytes[9]])),
-            10usize,
-        ),
-        2 | 3 if bytes.len() >= 12 => (
-            u32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]) as usize,
-            12,
-        ),
-        v => return Err(format!("unsupported .npy format version {v}")),
-    };
-    let header = bytes
-        .get(start..start.saturating_add(len))
-        .and_then(|h| core::str::from_utf8(h).ok())
-        .ok_or_else(|| "truncated or malformed .npy header".to_string())?;
-    let descr = npy_header_value(header, "descr")?;
-    let big_endian = if descr.starts_with("'<f8'") || descr.starts_with("\"<f8\"") {
-        false
-    } else if descr.starts_with("'>f8'") || descr.starts_with("\">f8\"") {
-        true
-    } else {
-        let shown: String = descr.chars().take_while(|&c| c != ',').collect();
-        return Err(format!("dtype {shown} is not float64 ('<f8')"));
-    };
-    let order = npy_header_value(header, "fortran_order")?;
-    let fortran = if order.starts_with("True") {
-        true
-    } else if order.starts_with("False") {
-        false
-    } else {
-        return Err("malformed `fortran_order` in the .npy header".into());
-    };
-    let shape_text = npy_header_value(header, "shape")?;
-    let shape_text = shape_text
-        .strip_prefix('(')
-        .and_then(|t| t.split_once(')'))
-        .map(|(inside, _)| inside)
-        .ok_or_else(|| "malformed `shape` in the .npy header".to_string())?;
-    let mut shape = Vec::new();
-    for d in shape_text
-        .split(',')
-        .map(str::trim)
-        .filter(|d| !d.is_empty())
-    {
-        shape.push(
-            d.parse::<u64>()
-                .map_err(|_| format!("malformed `shape` ({shape_text}) in the .npy header"))?,
-        );
-    }
-    let data = &bytes[start + len..];
-    let need = shape
-        .iter()
-        .try_fold(8u64, |acc, &d| acc.checked_mul(d))
-        .filter(|&b| b <= data.len() as u64);
-    if need != Some(data.len() as u64) {
-        return Err(format!(
-            "shape {shape:?} does not match the {} bytes of data (truncated or malformed array)",
-            data.len()
-        ));
-    }
-    let values = data
-        .chunks_exact(8)
-        .map(|c| {
-            let mut b = [0u8; 8];
-            b.copy_from_slice(c);
-            if big_endian {
-                f64::from_be_bytes(b)
-            } else {
-                f64::from_le_bytes(b)
-            }
-        })
-        .collect();
-    Ok((shape, fortran, values))
 }

@@ -2,7 +2,9 @@
 //! npz layout of `../shared/qpbench/` (`P, q, G, h` for
 //! `min 1/2 x'Px + q'x  s.t.  Gx <= h`), timed so that anyone can compare it with
 //! other solvers on identical problems (`run --export-qps DIR` writes every
-//! cycle's QP of a simulation in the same layout).
+//! cycle's QP of a simulation in the same layout). Bounds `lb`, `ub` in a file
+//! become rows of `G` (the `m` below counts them); equality rows `A, b` are
+//! rejected (the fixed-size solver has none).
 //!
 //! The solver is sized at compile time; a file is solved at the smallest
 //! supported size `(NV, NC)` with `NV = n` and `NC >= m` (see [`SIZES`]). The
@@ -237,19 +239,20 @@ fn check_ldp<const NV: usize, const NC: usize>(
 /// Reads and solves one file (see the module docs).
 pub fn solve_file(file: &Path, repeat: usize, max_iter: u32) -> Result<QpRow> {
     let p = DenseProblem::from_npz(file).map_err(|e| anyhow!("{e}"))?;
+    // The solver's rows: `G` and the finite bounds (`to_fixed` rejects `A`).
+    let rows = p.rows();
     macro_rules! dispatch {
         ($(($nv:literal, $nc:literal)),*) => {
-            $(if p.n == $nv && p.m <= $nc {
+            $(if p.n == $nv && rows <= $nc {
                 return solve_fixed::<$nv, $nc>(file, &p, repeat, max_iter);
             })*
         };
     }
     with_qp_sizes!(dispatch);
     Err(anyhow!(
-        "{}: a QP with n = {}, m = {} has no compiled solver size (supported (n, max m): {:?})",
+        "{}: a QP with n = {}, m = {rows} has no compiled solver size (supported (n, max m): {:?})",
         file.display(),
         p.n,
-        p.m,
         SIZES
     ))
 }
@@ -262,14 +265,13 @@ mod tests {
     fn solves_a_small_file_and_rejects_unsupported_sizes() {
         let dir = tempfile::tempdir().unwrap();
         // min sum (x_i - 1)^2 over 6 variables with x_0 + x_1 <= 1.
-        let mut p = DenseProblem {
-            n: 6,
-            m: 1,
-            P: vec![0.0; 36],
-            q: vec![-2.0; 6],
-            G: vec![1.0, 1.0, 0.0, 0.0, 0.0, 0.0],
-            h: vec![1.0],
-        };
+        let mut p = DenseProblem::inequalities(
+            6,
+            vec![0.0; 36],
+            vec![-2.0; 6],
+            vec![1.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+            vec![1.0],
+        );
         for i in 0..6 {
             p.P[i * 6 + i] = 2.0;
         }
@@ -286,14 +288,7 @@ mod tests {
             row.csv()
                 .starts_with(&format!("{},6,1,solved,1,", f.display()))
         );
-        let q = DenseProblem {
-            n: 7,
-            m: 0,
-            P: vec![0.0; 49],
-            q: vec![0.0; 7],
-            G: vec![],
-            h: vec![],
-        };
+        let q = DenseProblem::inequalities(7, vec![0.0; 49], vec![0.0; 7], vec![], vec![]);
         let g = dir.path().join("b.npz");
         q.write_npz(&g).unwrap();
         let e = solve_file(&g, 1, 50).unwrap_err().to_string();
