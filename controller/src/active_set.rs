@@ -78,11 +78,18 @@ pub(crate) trait ActiveSetFactor {
     /// Removes active row `l` of `nact`.
     fn drop(&mut self, l: usize, nact: usize);
 
-    /// Whether [`iterate`] may hot-start this representation and hold
-    /// equality rows (the four methods below); when false they are never
-    /// called. Constant for the static sizes, so the code behind it is left
-    /// out of their builds when false.
+    /// Whether [`iterate`] may hot-start this representation (the methods
+    /// below); when false (and [`ActiveSetFactor::equalities_capable`] too)
+    /// they are never called. Constant for the static sizes, so the code
+    /// behind it is left out of their builds when false.
     fn hot_start_capable(&self) -> bool {
+        false
+    }
+
+    /// Whether the representation holds equality rows (with
+    /// [`ActiveSetFactor::hot_add`], [`ActiveSetFactor::hot_multipliers`],
+    /// [`ActiveSetFactor::hot_move`] and [`ActiveSetFactor::slack`]).
+    fn equalities_capable(&self) -> bool {
         false
     }
 
@@ -102,24 +109,26 @@ pub(crate) trait ActiveSetFactor {
         false
     }
 
-    /// Hot start, first phase: appends row `p` as active row `nact` without a
-    /// step (the iterate stays). `Ok(false)` when `p`'s normal depends on the
-    /// active ones (not added).
-    fn hot_add(&mut self, _p: usize, _nact: usize) -> Result<bool, AddError> {
+    /// Hot start, first phase: appends row `p` as active row `nact` (after
+    /// the `nact` rows `act`) without a step (the iterate stays). `Ok(false)`
+    /// when `p`'s normal depends on the active ones (not added).
+    fn hot_add(&mut self, _p: usize, _act: &[u16], _nact: usize) -> Result<bool, AddError> {
         Err(AddError::Numerical)
     }
 
     /// Hot start, second phase: the multipliers `mult[..nact]` of the
-    /// minimiser on the `nact` active rows `act` held as equalities, from the
-    /// current iterate; what [`ActiveSetFactor::hot_move`] needs is kept.
-    /// False when not finite.
+    /// minimiser on the `nact` active rows `act` held as equalities, less
+    /// those of the current iterate (which is the unconstrained minimiser, or
+    /// the minimiser on the leading equality rows: [`hot_start`] adds theirs
+    /// back); what [`ActiveSetFactor::hot_move`] needs is kept. False when
+    /// not finite.
     fn hot_multipliers(&mut self, _act: &[u16], _nact: usize, _mult: &mut [f64]) -> bool {
         false
     }
 
     /// Hot start, last step: moves the iterate to the minimiser of the last
     /// [`ActiveSetFactor::hot_multipliers`].
-    fn hot_move(&mut self, _nact: usize) {}
+    fn hot_move(&mut self, _act: &[u16], _nact: usize) {}
 }
 
 /// Where [`iterate`] stopped.
@@ -186,9 +195,8 @@ where
     let mut farkas: Option<(usize, f64, OVector<f64, NV>)> = None;
     let mut adding: Option<(usize, f64)> = None;
     let mut stop = None;
-    let capable = factor.hot_start_capable();
     if neq > 0 {
-        if !capable {
+        if !factor.equalities_capable() {
             stop = Some(QpStatus::NumericalError);
         } else {
             let mut start = Start {
@@ -201,7 +209,11 @@ where
             };
             match equalities(factor, m, neq, max_iter, &mut start) {
                 Ok(n) => neq_act = n,
+                Err(EqStop::Restart) => return None,
                 Err(e) => {
+                    // The certificate's entries of the active equality rows
+                    // keep their sign.
+                    neq_act = nact;
                     if let EqStop::Infeasible(p, sign) = e {
                         let mut neg_r = r.clone();
                         for v in neg_r.as_mut_slice() {
@@ -229,7 +241,7 @@ where
         .zip(blocked_s.iter())
         .take(m)
         .any(|(&p, &b)| p && !b);
-    if stop.is_none() && capable && hot {
+    if stop.is_none() && hot && factor.hot_start_capable() {
         let mut start = Start {
             blocked: &mut *blocked_s,
             act: &mut *act_s,
@@ -399,6 +411,8 @@ struct Start<'a> {
 enum EqStop {
     /// A non-finite number, or a factor that could not take a row.
     Numerical,
+    /// The factor asked for a restart with another representation.
+    Restart,
     /// The budget ran out.
     Budget,
     /// Equality row `p` depends on the others and contradicts them; the sign
@@ -409,7 +423,7 @@ enum EqStop {
 impl EqStop {
     fn status(&self) -> QpStatus {
         match self {
-            EqStop::Numerical => QpStatus::NumericalError,
+            EqStop::Numerical | EqStop::Restart => QpStatus::NumericalError,
             EqStop::Budget => QpStatus::IterationLimit,
             EqStop::Infeasible(..) => QpStatus::Infeasible,
         }
@@ -453,7 +467,7 @@ fn equalities<F: ActiveSetFactor>(
         if *st.iters >= max_iter {
             return Err(EqStop::Budget);
         }
-        match factor.hot_add(p, nact) {
+        match factor.hot_add(p, st.act, nact) {
             Ok(false) => dependent = true,
             Ok(true) => {
                 if let Some(a) = st.act.get_mut(nact) {
@@ -462,7 +476,8 @@ fn equalities<F: ActiveSetFactor>(
                 nact += 1;
                 *st.iters += 1;
             }
-            Err(_) => return Err(EqStop::Numerical),
+            Err(AddError::Restart) => return Err(EqStop::Restart),
+            Err(AddError::Numerical) => return Err(EqStop::Numerical),
         }
     }
     *st.nact = nact;
@@ -470,7 +485,7 @@ fn equalities<F: ActiveSetFactor>(
         if !factor.hot_multipliers(st.act, nact, st.mult) {
             return Err(EqStop::Numerical);
         }
-        factor.hot_move(nact);
+        factor.hot_move(st.act, nact);
     }
     if dependent {
         // The rows left out of the factor must hold at the minimiser on the
@@ -570,7 +585,7 @@ fn hot_start<F: ActiveSetFactor>(
         if iters >= max_iter {
             break;
         }
-        match factor.hot_add(usize::from(a), nact) {
+        match factor.hot_add(usize::from(a), st.act, nact) {
             Ok(false) => continue,
             Ok(true) => {}
             Err(_) => return Some(QpStatus::NumericalError),
@@ -587,6 +602,12 @@ fn hot_start<F: ActiveSetFactor>(
     for a in st.act.iter_mut().skip(nact) {
         *a = 0;
     }
+    // The iterate is the minimiser on the equality rows, with their
+    // multipliers `mu`; `hot_multipliers` gives the change from there, so
+    // the equality rows' multipliers are `mu` plus it (`r` holds `mu`).
+    for (r, &u) in st.r.iter_mut().zip(st.mult.iter()).take(neq) {
+        *r = u;
+    }
     let stop = loop {
         let n = nact.min(nv);
         if n == 0 {
@@ -594,6 +615,9 @@ fn hot_start<F: ActiveSetFactor>(
         }
         if !factor.hot_multipliers(st.act, n, st.mult) {
             break Some(QpStatus::NumericalError);
+        }
+        for (u, &mu) in st.mult.iter_mut().zip(st.r.iter()).take(neq) {
+            *u += mu;
         }
         let mut worst: Option<usize> = None;
         let mut worst_u = 0.0;
@@ -604,11 +628,11 @@ fn hot_start<F: ActiveSetFactor>(
             }
         }
         let Some(l) = worst else {
-            factor.hot_move(n);
+            factor.hot_move(st.act, n);
             break None;
         };
         if iters >= max_iter {
-            factor.hot_move(n);
+            factor.hot_move(st.act, n);
             break Some(QpStatus::IterationLimit);
         }
         if let Some(flag) = st

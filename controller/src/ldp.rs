@@ -62,7 +62,7 @@ use nalgebra::{Const, DefaultAllocator, Dim, OMatrix, OVector, U1};
 
 use crate::active_set::{self, ActiveSetFactor, AddError, dot, givens};
 #[cfg(doc)]
-use crate::qp::QpSettings;
+use crate::qp::{DualActiveSet, QpSettings};
 use crate::qp::{
     DenseQpOf, DualActiveSetOf, QpAllocator, QpSolutionOf, QpStatus, RowNormsOf, ZERO_ROW2, column,
     column_mut, columns,
@@ -260,7 +260,8 @@ where
                 ld.finite = false;
             }
             if zero {
-                if hi < -tol && ld.zero_infeasible.is_none() {
+                let equality = i < self.qp.me;
+                if (hi < -tol || (equality && hi > tol)) && ld.zero_infeasible.is_none() {
                     ld.zero_infeasible = Some(i);
                 }
                 continue;
@@ -298,13 +299,27 @@ where
         if !self.finite || !loaded.finite || loaded.m != self.m {
             return active_set::stopped(nv, nc, QpStatus::NumericalError, None);
         }
-        if loaded.zero_infeasible.is_some() {
-            // 0'x <= h with h < 0: y = e_i certifies it.
-            return active_set::stopped(nv, nc, QpStatus::Infeasible, loaded.zero_infeasible);
+        if let Some(i) = loaded.zero_infeasible {
+            // 0'x <= h with h < 0 (or 0'x = h with h != 0): y = e_i (or
+            // -e_i) certifies it.
+            let mut sol = active_set::stopped(nv, nc, QpStatus::Infeasible, Some(i));
+            if loaded.h.as_slice().get(i).is_some_and(|&hi| hi > 0.0)
+                && let Some(y) = sol.lambda.get_mut(i)
+            {
+                *y = -1.0;
+            }
+            return sol;
         }
-        if self.qp.me > 0 {
-            // Equality rows: held by the orthogonal factor (module docs).
+        let me = self.qp.me;
+        if me > 0 && !self.solver.equalities_capable() {
+            // Not compiled in at this size: the fallback's answer (a
+            // numerical error, as `solve`'s).
             return self.fallback(loaded, prefer, max_iter);
+        }
+        if me == 0
+            && let Some(sol) = self.unconstrained(loaded)
+        {
+            return sol;
         }
         let tol_dep = self.solver.settings().tol_dependence;
         let mut C = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
@@ -326,6 +341,7 @@ where
             z: OVector::zeros_generic(nv, U1),
             w2: OVector::zeros_generic(nv, U1),
             r2: OVector::zeros_generic(nv, U1),
+            s0: &loaded.s0,
             z2: 0.0,
             dependent: false,
         };
@@ -335,7 +351,7 @@ where
             &mut factor,
             nv,
             self.m,
-            0,
+            me,
             self.zero.clone(),
             &pref,
             max_iter,
@@ -377,6 +393,41 @@ where
         it.solution(nc, x, objective, |i| {
             self.inv_mnorm.get(i).copied().unwrap_or(1.0)
         })
+    }
+
+    /// The cheap case, after one pass over the slacks at `u = 0` and before
+    /// any factor is set up: when no row is violated there (the test of the
+    /// iteration's scan), the unconstrained minimiser `x = -L^-T v` is the
+    /// solution, with no active row, as DAQP returns it from its setup.
+    /// Bit for bit what the iteration would return. `None` otherwise (or on
+    /// a non-finite slack, which the iteration reports).
+    #[inline]
+    fn unconstrained(&self, loaded: &LdpLoadedOf<NV, NC>) -> Option<QpSolutionOf<NV, NC>> {
+        let m = self.m.min(loaded.s0.len());
+        let holds = loaded.s0.as_slice()[..m]
+            .iter()
+            .zip(self.thr.as_slice())
+            .zip(self.zero.as_slice())
+            .all(|((&si, &thr), &zero)| si >= 0.0 || zero || si * si <= thr);
+        if !holds {
+            return None;
+        }
+        let (nv, nc) = (self.solver.nv(), self.inv_mnorm.shape_generic().0);
+        // u = 0: x = L^-T (0 - v), objective 1/2 (0 - |v|^2), as in `solve`.
+        let mut uv = OVector::<f64, NV>::zeros_generic(nv, U1);
+        for (a, b) in uv.as_mut_slice().iter_mut().zip(loaded.v.as_slice()) {
+            *a -= b;
+        }
+        let x = self.solver.linvt_mul(uv.as_slice());
+        let mut sol = active_set::stopped(nv, nc, QpStatus::Solved, None);
+        sol.objective = 0.5 * (0.0 - loaded.vv);
+        sol.status = if x.as_slice().iter().all(|v| v.is_finite()) && sol.objective.is_finite() {
+            QpStatus::Solved
+        } else {
+            QpStatus::NumericalError
+        };
+        sol.x = x;
+        Some(sol)
     }
 
     /// [`DualActiveSetOf::solve_prepared`] on the loaded QP: the answer for an
@@ -442,8 +493,12 @@ where
     z: OVector<f64, NV>,
     /// Scratch: the second projection's `w` and `r`.
     w2: OVector<f64, NV>,
-    /// Scratch, see `w2`.
+    /// Scratch, see `w2`; also the multipliers of the last
+    /// [`ActiveSetFactor::hot_multipliers`].
     r2: OVector<f64, NV>,
+    /// The scaled slacks at `u = 0`, `d_i / |m_i|` (for the equality rows:
+    /// their minimiser does not depend on the iterate).
+    s0: &'a OVector<f64, NC>,
     /// `|z|^2`, `z = m_p - M_A' r` the component of the last row outside the
     /// active span.
     z2: f64,
@@ -596,6 +651,88 @@ where
     #[inline(always)]
     fn drop(&mut self, l: usize, nact: usize) {
         chol_drop(self.C, self.Ci, nact, l);
+    }
+
+    fn equalities_capable(&self) -> bool {
+        self.ldp.solver.equalities_capable()
+    }
+
+    fn slack(&self, i: usize) -> (f64, f64) {
+        match (self.s.get(i), self.ldp.thr.get(i)) {
+            (Some(&si), Some(&thr)) => (si, thr),
+            _ => (f64::NAN, 0.0),
+        }
+    }
+
+    /// [`ActiveSetFactor::direction`] for the new row (its `w` and `|z|`),
+    /// then the add of the factor without a step (the slacks stay).
+    fn hot_add(&mut self, p: usize, act: &[u16], nact: usize) -> Result<bool, AddError> {
+        // (`direction` uses the scratch vectors itself.)
+        let mut r = OVector::<f64, NV>::zeros_generic(self.w.shape_generic().0, U1);
+        let dir = self.direction(p, act, nact, r.as_mut_slice());
+        match dir {
+            None => Err(AddError::Numerical),
+            Some(_) if self.dependent => Ok(false),
+            Some(_) => {
+                let sp = self.s.get(p).copied();
+                let added = self.add(p, r.as_slice(), nact);
+                // `add` zeroes the slack of `p` (a full step); no step here.
+                if let (Some(s), Some(v)) = (self.s.get_mut(p), sp) {
+                    *s = v;
+                }
+                added.map(|()| true)
+            }
+        }
+    }
+
+    /// The minimiser of `1/2 |u|^2` on the active rows held as equalities,
+    /// `u = M_A' (M_A M_A')^-1 d_A` (scaled rows; it does not depend on the
+    /// iterate), has the multipliers `-(M_A M_A')^-1 d_A`.
+    fn hot_multipliers(&mut self, act: &[u16], nact: usize, mult: &mut [f64]) -> bool {
+        let n = nact.min(self.n);
+        self.b.as_mut_slice().fill(0.0);
+        for (bi, &a) in self.b.as_mut_slice().iter_mut().zip(act).take(n) {
+            *bi = self.s0.get(usize::from(a)).copied().unwrap_or(f64::NAN);
+        }
+        self.w2.as_mut_slice().fill(0.0);
+        self.r2.as_mut_slice().fill(0.0);
+        chol_solve(
+            self.Ci,
+            self.b.as_slice(),
+            n,
+            self.w2.as_mut_slice(),
+            self.r2.as_mut_slice(),
+        );
+        mult.fill(0.0);
+        for (m, &r) in mult.iter_mut().zip(self.r2.as_slice()).take(n) {
+            *m = -r;
+        }
+        mult.iter().all(|v| v.is_finite())
+    }
+
+    /// The slacks at that minimiser: `s_i = s0_i + sum_j lambda_j K_{i,a_j}`
+    /// (`0` on the active rows).
+    fn hot_move(&mut self, act: &[u16], nact: usize) {
+        let K = self.ldp.K.as_slice();
+        let nc = self.ldp.K.nrows();
+        let m = self.ldp.m.min(nc);
+        let s = self.s.as_mut_slice();
+        for (si, &s0) in s.iter_mut().zip(self.s0.as_slice()).take(m) {
+            *si = s0;
+        }
+        for (&a, &r) in act.iter().zip(self.r2.as_slice()).take(nact) {
+            if let Some(ka) = column(K, nc, usize::from(a)) {
+                // lambda_j = -r_j
+                for (si, &k) in s.iter_mut().zip(ka).take(m) {
+                    *si -= r * k;
+                }
+            }
+        }
+        for &a in act.iter().take(nact) {
+            if let Some(sa) = s.get_mut(usize::from(a)) {
+                *sa = 0.0;
+            }
+        }
     }
 }
 

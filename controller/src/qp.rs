@@ -690,11 +690,20 @@ where
         self.H.shape_generic().0
     }
 
-    /// Whether the hot start and equality rows are compiled in for this
-    /// size (module docs): a constant for the static sizes.
+    /// Whether the hot start is compiled in for this size (module docs): a
+    /// constant for the static sizes; for `Dyn` the same threshold at run
+    /// time, so both instances take the same path.
     #[inline(always)]
     pub(crate) fn hot_start_capable(&self) -> bool {
         NV::try_to_usize().unwrap_or(self.H.nrows()) >= HOT_START_MIN_NV
+    }
+
+    /// Whether equality rows are compiled in (module docs): from
+    /// [`HOT_START_MIN_NV`] variables on for the static sizes, always for
+    /// `Dyn`.
+    #[inline(always)]
+    pub(crate) fn equalities_capable(&self) -> bool {
+        NV::try_to_usize().is_none_or(|n| n >= HOT_START_MIN_NV)
     }
 
     /// Objective `1/2 x'Hx + q'x`.
@@ -902,7 +911,7 @@ where
         let tol = self.settings.tol_primal;
         // Equality rows only where they are compiled in (module docs): for
         // the small static sizes `me` is the constant 0 from here on.
-        let capable = self.hot_start_capable();
+        let capable = self.equalities_capable();
         if !capable && qp.me > 0 {
             return active_set::stopped(nv, nc, QpStatus::NumericalError, None);
         }

@@ -216,14 +216,17 @@ enum Command {
 
 #[derive(Subcommand)]
 enum QpCommand {
-    /// Solve each file with our solver; print CSV: status, iterations, objective
-    /// and the minimum solve times over the repeats (ns, solver call only): from
-    /// the raw rows, with the row norms prepared outside the timing, and by the
-    /// least-distance path (prepare per G and load per q, h outside the timing;
-    /// the load and the prepare are timed separately). The other paths are
-    /// checked against the plain solve first (an error if they disagree).
+    /// Solve each file with our solver (any size: a compiled static size when
+    /// one fits, the run-time-sized instance otherwise, named in the `path`
+    /// column); print CSV: status, iterations, objective and the minimum solve
+    /// times over the repeats (ns, solver call only): from the raw rows, with
+    /// the row norms prepared outside the timing, and by the least-distance
+    /// path (prepare per G and load per q, h outside the timing; the load and
+    /// the prepare are timed separately). The other paths are checked against
+    /// the plain solve first (an error if they disagree).
     Solve {
-        /// npz files (P, q, G, h).
+        /// npz files of the qpbenchmark layout (P, q and any of G, h, A, b,
+        /// lb, ub).
         #[arg(required = true)]
         files: Vec<PathBuf>,
         /// Timed repeats per file (the minimum is printed).
@@ -232,6 +235,12 @@ enum QpCommand {
         /// Iteration budget per solve.
         #[arg(long, default_value_t = 1000)]
         max_iter: u32,
+        /// Also solve each file with Clarabel and check the agreement (primal
+        /// 1e-6 scaled, objective 1e-6, feasibility verdict, Farkas
+        /// certificate); columns clarabel_dx, clarabel_dobj; a disagreement is
+        /// an error.
+        #[arg(long)]
+        check: bool,
     },
 }
 
@@ -479,12 +488,18 @@ fn main() -> ExitCode {
                     files,
                     repeat,
                     max_iter,
+                    check,
                 },
         } => {
+            let opts = ldcbf_sim::studies::qpbench::SolveOptions {
+                repeat,
+                max_iter,
+                check,
+            };
             // Solve everything first: on any error nothing is printed but the error.
             let mut rows = Vec::with_capacity(files.len());
             for f in &files {
-                match ldcbf_sim::studies::qpbench::solve_file(f, repeat, max_iter) {
+                match ldcbf_sim::studies::qpbench::solve_file(f, &opts) {
                     Ok(r) => rows.push(r),
                     Err(e) => return fail(e),
                 }

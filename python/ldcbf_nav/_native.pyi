@@ -147,8 +147,10 @@ def solve_qp(
 
     Returns ``x``, ``lambda`` (one multiplier per row), ``objective``,
     ``status`` (``solved``, ``infeasible``, ``iteration_limit``,
-    ``numerical_error``), ``iterations`` and ``active_set``. ``n`` and ``m``
-    must fit one of :data:`QP_SIZES`.
+    ``numerical_error``), ``iterations``, ``active_set`` and ``path``
+    (``static`` when ``n`` and ``m`` fit one of the compiled sizes
+    :data:`QP_SIZES`, ``dynamic`` otherwise: the run-time-sized instance of
+    the same solver, any size).
     """
 
 def load_scenario(

@@ -18,10 +18,13 @@
 //!
 //! Frames and units as in the controller: world frame, m, s, rad.
 
-use ldcbf_controller::nalgebra::{SMatrix, SVector, Vector2};
+use ldcbf_controller::nalgebra::{
+    Const, DefaultAllocator, Dim, Dyn, OMatrix, OVector, SMatrix, SVector, U1, Vector2,
+};
 use ldcbf_controller::{
-    CommandSource, Config, ConvexPolygon, CycleInput, CycleOutput, CycleStatus, DenseQp,
-    DualActiveSet, InputError, PaperController, QpSettings, QpStatus, RobotController, Side,
+    CommandSource, Config, ConvexPolygon, CycleInput, CycleOutput, CycleStatus, DenseQpOf,
+    DualActiveSetOf, InputError, PaperController, QpAllocator, QpSettings, QpStatus,
+    RobotController, Side,
 };
 use ldcbf_sim::scenario::{LoadOptions, Scenario};
 use ldcbf_sim::sim::{MpcRate, SimOptions, SimResult, Solver};
@@ -978,13 +981,15 @@ fn result_dict<'py>(
 
 // ------------------------------------------------------------------ QP
 
-/// The compiled solver sizes `(NV, max NC)`: the list of `ldcbf-sim qp solve`.
+/// The compiled solver sizes `(NV, max NC)`: the list of `ldcbf-sim qp solve`
+/// (any other size is solved by the run-time-sized instance).
 const QP_SIZES: [(usize, usize); 7] = ldcbf_sim::studies::qpbench::SIZES;
 
 /// `min 1/2 x'Px + q'x  s.t.  Gx <= h` with the controller's dual active-set
-/// solver (`ldcbf_controller::DualActiveSet`), cold start, at the smallest
-/// compiled size with `n` variables and room for `m` rows. See the Python
-/// docs of `ldcbf_nav.solve_qp`.
+/// solver (`ldcbf_controller::DualActiveSetOf`), cold start: at the smallest
+/// compiled size with `n` variables and room for `m` rows, or by the
+/// run-time-sized instance (the same code) for any other size. See the
+/// Python docs of `ldcbf_nav.solve_qp`.
 #[pyfunction]
 #[pyo3(signature = (P, q, G=None, h=None, *, max_iter=1000, tol_primal=1e-10, tol_dependence=1e-12))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
@@ -1072,20 +1077,14 @@ fn solve_qp<'py>(
     macro_rules! dispatch {
         ($(($nv:literal, $nc:literal)),*) => {
             $(if n == $nv && m <= $nc {
-                let sol = py.detach(|| solve_fixed::<$nv, $nc>(&data, settings, max_iter));
+                let sol = py.detach(|| solve_sized(&data, (Const::<$nv>, Const::<$nc>), settings, max_iter, "static"));
                 return qp_dict(py, sol.map_err(|e| arg_err(py, "P", e))?, m);
             })*
         };
     }
     ldcbf_sim::with_qp_sizes!(dispatch);
-    Err(arg_err(
-        py,
-        "P",
-        format!(
-            "a QP with n = {n} variables and m = {m} rows has no compiled solver size \
-             (supported (n, max m): {QP_SIZES:?})"
-        ),
-    ))
+    let sol = py.detach(|| solve_sized(&data, (Dyn(n), Dyn(m)), settings, max_iter, "dynamic"));
+    qp_dict(py, sol.map_err(|e| arg_err(py, "P", e))?, m)
 }
 
 /// A QP's data, row-major.
@@ -1106,23 +1105,39 @@ struct QpOut {
     status: QpStatus,
     iterations: u32,
     active: Vec<u16>,
+    /// `static` (a compiled size) or `dynamic`.
+    path: &'static str,
 }
 
-fn solve_fixed<const NV: usize, const NC: usize>(
+/// Solves `d` with the instance of dimensions `(nv, nc)` (static or
+/// dynamic: the same code).
+fn solve_sized<V: Dim, C: Dim>(
     d: &QpData,
+    (nv, nc): (V, C),
     settings: QpSettings,
     max_iter: u32,
-) -> Result<QpOut, String> {
-    let hess = SMatrix::<f64, NV, NV>::from_fn(|i, j| d.p[i * NV + j]);
-    let solver = DualActiveSet::<NV, NC>::new(&hess, settings).map_err(|e| e.to_string())?;
-    let mut qp = DenseQp::<NV, NC>::with_q(SVector::<f64, NV>::from_fn(|i, _| d.q[i]));
+    path: &'static str,
+) -> Result<QpOut, String>
+where
+    DefaultAllocator: QpAllocator<V, C>,
+{
+    let n = nv.value();
+    let hess = OMatrix::<f64, V, V>::from_fn_generic(nv, nv, |i, j| d.p[i * n + j]);
+    let solver = DualActiveSetOf::<V, C>::new(&hess, settings).map_err(|e| e.to_string())?;
+    let mut qp = DenseQpOf::<V, C> {
+        q: OVector::<f64, V>::from_fn_generic(nv, U1, |i, _| d.q[i]),
+        gt: OMatrix::zeros_generic(nv, nc),
+        h: OVector::zeros_generic(nc, U1),
+        m: 0,
+        me: 0,
+    };
     for r in 0..d.m {
-        let g = SVector::<f64, NV>::from_fn(|j, _| d.g[r * NV + j]);
+        let g = OVector::<f64, V>::from_fn_generic(nv, U1, |j, _| d.g[r * n + j]);
         qp.push_row(&g, d.h[r])
             .map_err(|_| "row capacity exceeded".to_string())?;
     }
-    debug_assert_eq!(d.n, NV);
-    let sol = solver.solve(&qp, &[false; NC], max_iter);
+    debug_assert_eq!(d.n, n);
+    let sol = solver.solve(&qp, &[], max_iter);
     Ok(QpOut {
         x: sol.x.iter().copied().collect(),
         lambda: sol.lambda.iter().take(d.m).copied().collect(),
@@ -1130,6 +1145,7 @@ fn solve_fixed<const NV: usize, const NC: usize>(
         status: sol.status,
         iterations: sol.iterations,
         active: sol.active_set().to_vec(),
+        path,
     })
 }
 
@@ -1143,6 +1159,7 @@ fn qp_dict(py: Python<'_>, s: QpOut, m: usize) -> PyResult<Bound<'_, PyDict>> {
     d.set_item("iterations", s.iterations)?;
     let active: Vec<i64> = s.active.iter().map(|&a| i64::from(a)).collect();
     d.set_item("active_set", PyArray1::from_vec(py, active))?;
+    d.set_item("path", s.path)?;
     Ok(d)
 }
 

@@ -150,16 +150,19 @@ def test_bad_qp_arguments_name_the_matrix():
     raises_naming(ArgumentError, "tol_primal", ldcbf_nav.solve_qp, P, q, tol_primal=0.0)
 
 
-def test_an_uncompiled_size_names_the_sizes():
-    e = raises_naming(ArgumentError, "P", ldcbf_nav.solve_qp, 2 * np.eye(7), np.zeros(7))
-    assert "n = 7" in str(e)
-    for n, m in ldcbf_nav.QP_SIZES:
-        assert f"({n}, {m})" in str(e)
-    # Too many rows for every size with n = 6.
+def test_an_uncompiled_size_is_solved_by_the_dynamic_instance():
+    # n = 7 has no compiled size; nor has n = 6 with more rows than any.
+    r = ldcbf_nav.solve_qp(2 * np.eye(7), -2 * np.ones(7))
+    assert (r["status"], r["path"]) == ("solved", "dynamic")
+    assert np.allclose(r["x"], np.ones(7))
     most = max(m for n, m in ldcbf_nav.QP_SIZES if n == 6)
     G = np.vstack([np.eye(6)] * (most // 6 + 1))
-    e = raises_naming(ArgumentError, "P", ldcbf_nav.solve_qp, 2 * np.eye(6), np.zeros(6), G, np.ones(len(G)))
-    assert f"m = {len(G)}" in str(e)
+    r = ldcbf_nav.solve_qp(2 * np.eye(6), -2 * np.ones(6), G, 0.5 * np.ones(len(G)))
+    assert (r["status"], r["path"]) == ("solved", "dynamic")
+    assert np.allclose(r["x"], 0.5 * np.ones(6))
+    assert len(r["lambda"]) == len(G)
+    r = ldcbf_nav.solve_qp(2 * np.eye(6), -2 * np.ones(6), np.eye(6), np.ones(6))
+    assert r["path"] == "static"
 
 
 JUNK = [None, "x", 1, 1.5, True, [1], [[1, 2]], {"a": 1}, object(), np.zeros((3, 3)), float("nan")]

@@ -41,10 +41,11 @@ def test_infeasible_and_iteration_limit():
     assert s["status"] == "iteration_limit" and s["iterations"] == 2
 
 
-@pytest.mark.parametrize("n, m", ldcbf_nav.QP_SIZES)
-def test_kkt_at_every_compiled_size(n, m):
-    """A random strictly convex QP, feasible by construction, at the size's
-    full row count: the answer satisfies the KKT conditions."""
+@pytest.mark.parametrize("n, m", ldcbf_nav.QP_SIZES + [(2, 8), (7, 3), (50, 200)])
+def test_kkt_at_every_compiled_size_and_others(n, m):
+    """A random strictly convex QP, feasible by construction, at each compiled
+    size's full row count and at sizes solved by the dynamic instance: the
+    answer satisfies the KKT conditions."""
     rng = np.random.default_rng(n * 1000 + m)
     A = rng.standard_normal((n, n))
     P = A @ A.T + n * np.eye(n)

@@ -2,7 +2,7 @@
 //! [`DenseProblem`], its agreement with Clarabel's (SPEC section 3) and the KKT
 //! residuals of a primal-dual pair.
 
-use ldcbf_controller::{DualActiveSet, QpSettings, QpSolution};
+use ldcbf_controller::{DualActiveSet, DualActiveSetDyn, QpSettings, QpSolution, QpSolutionDyn};
 
 use crate::check::{Candidate, compare_stacked, kkt_rows};
 use crate::clarabel_solve::RefSolution;
@@ -21,6 +21,15 @@ pub fn solve_own<const NV: usize, const NC: usize>(
     let solver = DualActiveSet::<NV, NC>::new(&H, QpSettings::default())
         .map_err(|e| ProblemError(format!("Hessian rejected: {e}")))?;
     Ok(solver.solve(&qp, &[false; NC], max_iter))
+}
+
+/// Solves with the run-time-sized instance of our solver (any `n`, any
+/// number of rows, equality rows held as equalities), cold start.
+pub fn solve_own_dyn(p: &DenseProblem, max_iter: u32) -> Result<QpSolutionDyn, ProblemError> {
+    let (H, qp) = p.to_dyn()?;
+    let solver = DualActiveSetDyn::new(&H, QpSettings::default())
+        .map_err(|e| ProblemError(format!("Hessian rejected: {e}")))?;
+    Ok(solver.solve(&qp, &[], max_iter))
 }
 
 /// The agreement figures of SPEC section 3 for one problem.

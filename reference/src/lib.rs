@@ -14,7 +14,7 @@
 //!   `G`, then the finite bounds ([`Stacked`]): the solvers' input, in whose
 //!   order all multipliers come ([`Stacked::split_multipliers`] maps them back).
 //! * [`solve_clarabel`] solves it with Clarabel (verbose off, tight tolerances).
-//! * [`solve_own`] solves it with [`DualActiveSet`] at a fixed size (no
+//! * [`solve_own`] solves it with [`DualActiveSet`] at a fixed size, [`solve_own_dyn`] with the run-time-sized instance (no
 //!   equality rows).
 //! * [`compare_stacked`] checks any solver's answer, given as slices
 //!   ([`Candidate`]), against Clarabel's; [`kkt_stacked`] measures the KKT
@@ -46,8 +46,8 @@ pub use check::{
     farkas_residuals, kkt_stacked,
 };
 pub use clarabel_solve::{ClarabelBackend, RefSolution, RefStatus, solve_clarabel};
-pub use equivalence::{Agreement, Kkt, compare, kkt, solve_own};
-pub use problem::{DenseProblem, ProblemError};
+pub use equivalence::{Agreement, Kkt, compare, kkt, solve_own, solve_own_dyn};
+pub use problem::{DenseProblem, ProblemError, SizedQp};
 pub use random::{QpKind, random_problem};
 pub use stacked::{Multipliers, RowOrigin, Stacked};
 

@@ -3,8 +3,10 @@
 
 use core::fmt;
 
-use ldcbf_controller::nalgebra::{SMatrix, SVector};
-use ldcbf_controller::{Assembly, DenseQp, DualActiveSet};
+use ldcbf_controller::nalgebra::{
+    Const, DMatrix, DefaultAllocator, Dim, Dyn, OMatrix, OVector, SMatrix, U1,
+};
+use ldcbf_controller::{Assembly, DenseQp, DenseQpDyn, DenseQpOf, DualActiveSet, QpAllocator};
 
 /// A dense QP in the layout of the qpbenchmark npz files,
 ///
@@ -55,6 +57,9 @@ impl fmt::Display for ProblemError {
 }
 
 impl core::error::Error for ProblemError {}
+
+/// A problem in the solver's types: the Hessian and the QP (stacked rows).
+pub type SizedQp<V, C> = (OMatrix<f64, V, V>, DenseQpOf<V, C>);
 
 impl DenseProblem {
     /// A problem with inequality rows only (`me = 0`, no bounds): `m` is the
@@ -219,43 +224,64 @@ impl DenseProblem {
         self.me + self.m + finite(&self.ub) + finite(&self.lb)
     }
 
-    /// Copies the problem into the controller's fixed-size types: the rows of
-    /// [`DenseProblem::stacked`] (inequalities, then the finite bounds) as rows of
-    /// the [`DenseQp`], so the solution's multipliers come in the stacked order.
-    /// Errors on another size, more rows than `NC`, and equality rows (the
-    /// fixed-size solver has none).
+    /// Copies the problem into the controller's fixed-size types: the
+    /// stacked rows of [`DenseProblem::stacked`] (equality rows first, held
+    /// as equalities; then `G`; then the finite bounds as rows).
     pub fn to_fixed<const NV: usize, const NC: usize>(
         &self,
     ) -> Result<(SMatrix<f64, NV, NV>, DenseQp<NV, NC>), ProblemError> {
-        if self.me > 0 {
-            return Err(ProblemError(format!(
-                "problem has {} equality rows; the fixed-size solver takes inequalities only",
-                self.me
-            )));
-        }
+        self.to_qp(Const::<NV>, Const::<NC>)
+    }
+
+    /// The same with run-time sizes (`n` variables, room for exactly the
+    /// stacked rows): the solver's `Dyn` instance takes any size.
+    pub fn to_dyn(&self) -> Result<(DMatrix<f64>, DenseQpDyn), ProblemError> {
+        self.to_qp(Dyn(self.n), Dyn(self.rows()))
+    }
+
+    /// [`DenseProblem::to_fixed`] and [`DenseProblem::to_dyn`], written once
+    /// for any dimension types (`nv` must be `n`, `nc` at least the stacked
+    /// rows).
+    pub fn to_qp<V: Dim, C: Dim>(
+        &self,
+        nv: V,
+        nc: C,
+    ) -> Result<SizedQp<V, C>, ProblemError>
+    where
+        DefaultAllocator: QpAllocator<V, C>,
+    {
+        let n = nv.value();
         let rows = self.rows();
-        if self.n != NV || rows > NC {
+        if self.n != n || rows > nc.value() {
             return Err(ProblemError(format!(
-                "problem has n = {}, m = {rows} (inequality and bound rows); the fixed size is \
-                 NV = {NV}, NC = {NC}",
-                self.n
+                "problem has n = {}, m = {rows} (equality, inequality and bound rows); the \
+                 solver size is NV = {n}, NC = {}",
+                self.n,
+                nc.value()
             )));
         }
-        if Some(self.P.len()) != NV.checked_mul(NV) || self.q.len() != NV {
+        if Some(self.P.len()) != n.checked_mul(n) || self.q.len() != n {
             return Err(ProblemError(format!(
-                "field `P` or `q` does not have n = {NV} (run `validate`)"
+                "field `P` or `q` does not have n = {n} (run `validate`)"
             )));
         }
         let st = self.stacked();
-        let H = SMatrix::<f64, NV, NV>::from_fn(|i, j| self.P[i * NV + j]);
-        let mut qp = DenseQp::<NV, NC> {
-            q: SVector::<f64, NV>::from_fn(|i, _| self.q[i]),
-            ..DenseQp::default()
+        let H = OMatrix::<f64, V, V>::from_fn_generic(nv, nv, |i, j| self.P[i * n + j]);
+        let mut qp = DenseQpOf::<V, C> {
+            q: OVector::<f64, V>::from_fn_generic(nv, U1, |i, _| self.q[i]),
+            gt: OMatrix::zeros_generic(nv, nc),
+            h: OVector::zeros_generic(nc, U1),
+            m: 0,
+            me: 0,
         };
         for i in 0..st.m {
-            let g = SVector::<f64, NV>::from_fn(|j, _| st.G[i * NV + j]);
-            qp.push_row(&g, st.h[i])
-                .map_err(|_| ProblemError("row capacity exceeded".into()))?;
+            let g = OVector::<f64, V>::from_fn_generic(nv, U1, |j, _| st.G[i * n + j]);
+            let pushed = if i < st.me {
+                qp.push_equality(&g, st.h[i])
+            } else {
+                qp.push_row(&g, st.h[i])
+            };
+            pushed.map_err(|_| ProblemError("row capacity exceeded".into()))?;
         }
         Ok((H, qp))
     }

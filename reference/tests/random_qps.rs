@@ -1,12 +1,14 @@
 //! Random QPs of every member kind ([`random_problem`]) solved by Clarabel: the
 //! feasible ones solved with small KKT residuals, the infeasible ones reported
-//! infeasible with a valid Farkas certificate; and our fixed-size solver on the
-//! ones without equality rows, agreeing with Clarabel row by row.
+//! infeasible with a valid Farkas certificate; our run-time-sized solver on
+//! all of them (equalities, bounds, infeasible ones included) and our
+//! fixed-size solver on the ones without equality rows, agreeing with
+//! Clarabel row by row; and the two instances bit for bit equal.
 
 use ldcbf_controller::QpStatus;
 use ldcbf_reference::{
     Candidate, DenseProblem, QpKind, RefStatus, compare_stacked, farkas_holds, farkas_residuals,
-    kkt_stacked, random_problem, solve_clarabel, solve_own,
+    kkt_stacked, random_problem, solve_clarabel, solve_own, solve_own_dyn,
 };
 
 /// `(n, m, me)` of the sizes tested: `m` up to `4n`, `me` up to `n/2`.
@@ -137,4 +139,150 @@ fn our_solver_agrees_on_random_problems_without_equalities() {
             own_agrees::<16, 96>(&random_problem(seed, 16, 64, 0, seed % 2 == 0, kind), &tag);
         }
     }
+}
+
+/// `own` (status, `x`, stacked multipliers or certificate, objective) checked
+/// against Clarabel with [`compare_stacked`], and its KKT residuals when
+/// solved. Returns the scaled primal difference (0 unless both solved).
+fn agrees(
+    p: &DenseProblem,
+    status: QpStatus,
+    x: &[f64],
+    y: &[f64],
+    objective: f64,
+    tag: &str,
+) -> f64 {
+    let r = solve_clarabel(p);
+    let c = Candidate {
+        status,
+        x,
+        y,
+        objective,
+    };
+    let a = compare_stacked(p, &c, &r);
+    assert!(
+        a.holds(),
+        "{tag}: {a:?} (ours {status:?}, Clarabel {:?})",
+        r.raw_status
+    );
+    if status == QpStatus::Solved {
+        let k = kkt_stacked(p, x, y).unwrap();
+        assert!(k.max() <= 1e-9 * amax(&p.q).max(1.0), "{tag}: {k:?}");
+        a.dx / a.x_ref_norm.max(1.0)
+    } else {
+        0.0
+    }
+}
+
+#[test]
+fn the_dynamic_solver_agrees_at_every_size_with_equalities_bounds_and_infeasible_ones() {
+    let mut worst: f64 = 0.0;
+    let (mut solved, mut infeasible) = (0, 0);
+    for (i, (p, kind)) in instances().into_iter().enumerate() {
+        // And a second seed of each, for more active sets.
+        let q = random_problem(1000 + i as u64, p.n, p.m, p.me, !p.lb.is_empty(), kind);
+        for p in [p, q] {
+            let tag = format!("n = {}, m = {}, me = {}, {kind:?}", p.n, p.m, p.me);
+            let own = solve_own_dyn(&p, 10_000).unwrap();
+            assert_eq!(own.lambda.len(), p.rows(), "{tag}");
+            assert_eq!(
+                own.status == QpStatus::Solved,
+                kind.is_feasible(),
+                "{tag}: {:?}",
+                own.status
+            );
+            match own.status {
+                QpStatus::Solved => solved += 1,
+                QpStatus::Infeasible => infeasible += 1,
+                s => panic!("{tag}: {s:?}"),
+            }
+            let d = agrees(
+                &p,
+                own.status,
+                own.x.as_slice(),
+                own.lambda.as_slice(),
+                own.objective,
+                &tag,
+            );
+            worst = worst.max(d);
+        }
+    }
+    assert_eq!((solved, infeasible), (20, 30));
+    println!("worst scaled primal difference to Clarabel: {worst:.2e}");
+}
+
+/// The static instance at `(NV, NC)` and the dynamic one on the same data:
+/// the same status, iterations, active set and bits of `x`, multipliers and
+/// objective.
+fn static_and_dynamic_are_identical<const NV: usize, const NC: usize>(p: &DenseProblem) {
+    let s = solve_own::<NV, NC>(p, 500).unwrap();
+    let d = solve_own_dyn(p, 500).unwrap();
+    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+    assert_eq!(s.status, d.status);
+    assert_eq!(s.iterations, d.iterations);
+    assert_eq!(s.active_set(), d.active_set());
+    assert_eq!(bits(s.x.as_slice()), bits(d.x.as_slice()));
+    assert_eq!(
+        bits(&s.lambda.as_slice()[..p.rows()]),
+        bits(d.lambda.as_slice())
+    );
+    assert_eq!(s.objective.to_bits(), d.objective.to_bits());
+}
+
+#[test]
+fn static_and_dynamic_instances_are_bit_identical_on_the_controllers_sizes() {
+    // The controller's sizes (N = 3: NV = 6; N = 5: 10; N = 8: 16; N = 10:
+    // 20) and LIPMWALK's, feasible and infeasible, with and without bounds;
+    // NV >= 16 also with equality rows (compiled in from there on).
+    for seed in 0..6 {
+        for kind in [QpKind::Feasible, QpKind::OpposedRows] {
+            let b = seed % 2 == 0;
+            static_and_dynamic_are_identical::<6, 48>(&random_problem(seed, 6, 30, 0, b, kind));
+            static_and_dynamic_are_identical::<10, 80>(&random_problem(seed, 10, 50, 0, b, kind));
+            static_and_dynamic_are_identical::<16, 128>(&random_problem(seed, 16, 80, 4, b, kind));
+            static_and_dynamic_are_identical::<20, 160>(&random_problem(seed, 20, 100, 5, b, kind));
+        }
+    }
+    let dir =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/qpbench/lipmwalk");
+    let mut files = 0;
+    for f in std::fs::read_dir(&dir).unwrap() {
+        let f = f.unwrap().path();
+        if f.extension().is_none_or(|e| e != "npz") {
+            continue;
+        }
+        let p = DenseProblem::from_npz(&f).unwrap();
+        static_and_dynamic_are_identical::<16, 32>(&p);
+        files += 1;
+    }
+    assert_eq!(files, 30);
+}
+
+#[test]
+fn the_least_distance_path_agrees_with_the_orthogonal_one_with_equalities() {
+    use ldcbf_controller::{DualActiveSetDyn, LdpSolverDyn, QpSettings};
+    let mut checked = 0;
+    for (i, (p, kind)) in instances().into_iter().enumerate() {
+        let tag = format!("n = {}, m = {}, me = {}, {kind:?}", p.n, p.m, p.me);
+        let (hess, qp) = p.to_dyn().unwrap();
+        let s = DualActiveSetDyn::new(&hess, QpSettings::default()).unwrap();
+        let a = s.without_hot_start().solve(&qp, &[], 10_000);
+        let ldp = LdpSolverDyn::prepare(&s, &qp);
+        let b = ldp.solve_qp(&qp, &[], 10_000);
+        assert_eq!(a.status, b.status, "{tag}");
+        if a.status == QpStatus::Solved {
+            let dx = (&a.x - &b.x).amax() / a.x.amax().max(1.0);
+            assert!(dx <= 1e-9, "{tag}: {dx:e}");
+            let y = b.lambda.as_slice();
+            let k = kkt_stacked(&p, b.x.as_slice(), y).unwrap();
+            assert!(k.max() <= 1e-9 * amax(&p.q).max(1.0), "{tag}: {k:?}");
+        } else {
+            assert!(
+                farkas_holds(&p.stacked(), b.lambda.as_slice(), 1e-9),
+                "{tag} ({i})"
+            );
+        }
+        checked += 1;
+    }
+    assert_eq!(checked, 25);
 }

@@ -193,6 +193,11 @@ where
     }
 
     #[inline(always)]
+    fn equalities_capable(&self) -> bool {
+        self.solver.equalities_capable()
+    }
+
+    #[inline(always)]
     fn slack(&self, i: usize) -> (f64, f64) {
         match (self.row(i), self.norm2.as_slice().get(i)) {
             (Some((g, hi)), Some(&n2)) => (hi - dot(g, self.x.as_slice()), self.tol2 * n2),
@@ -309,7 +314,7 @@ where
 
     /// `d = J' n_p`, then the add of [`householder_add`] unless the part of
     /// `d` outside the active span is below `tol_dependence |d|`.
-    fn hot_add(&mut self, p: usize, nact: usize) -> Result<bool, AddError> {
+    fn hot_add(&mut self, p: usize, _act: &[u16], nact: usize) -> Result<bool, AddError> {
         let Some((gp, _)) = self.row(p) else {
             return Err(AddError::Numerical);
         };
@@ -363,7 +368,7 @@ where
             .all(|v| v.is_finite())
     }
 
-    fn hot_move(&mut self, nact: usize) {
+    fn hot_move(&mut self, _act: &[u16], nact: usize) {
         let n = self.n();
         for (col, &wj) in columns(self.J.as_slice(), n)
             .zip(self.d.as_slice().iter())

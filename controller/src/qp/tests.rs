@@ -3,6 +3,7 @@
 use super::*;
 use nalgebra::{Matrix2, Vector2};
 
+mod equalities;
 mod hot_start;
 
 fn solver2() -> DualActiveSet<2, 4> {

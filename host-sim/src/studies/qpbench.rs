@@ -1,46 +1,60 @@
 //! `ldcbf-sim qp solve`: our dual active-set solver on dense QPs stored in the
-//! npz layout of `../shared/qpbench/` (`P, q, G, h` for
-//! `min 1/2 x'Px + q'x  s.t.  Gx <= h`), timed so that anyone can compare it with
-//! other solvers on identical problems (`run --export-qps DIR` writes every
-//! cycle's QP of a simulation in the same layout). Bounds `lb`, `ub` in a file
-//! become rows of `G` (the `m` below counts them); equality rows `A, b` are
-//! rejected (the fixed-size solver has none).
+//! npz layout of qpbenchmark (`../shared/qpbench/`): `P, q, G, h, A, b, lb, ub`
+//! for `min 1/2 x'Px + q'x  s.t.  Gx <= h, Ax = b, lb <= x <= ub`, any of the
+//! last six absent or empty, timed so that anyone can compare it with other
+//! solvers on identical problems (`run --export-qps DIR` writes every cycle's
+//! QP of a simulation in the same layout). The solver takes the stacked rows
+//! of [`DenseProblem::stacked`]: the equality rows `A, b` first, held as
+//! equalities (never dropped, multipliers of either sign), then `G, h`, then
+//! the finite bounds as rows (the CSV's `m` counts all of them).
 //!
-//! The solver is sized at compile time; a file is solved at the smallest
-//! supported size `(NV, NC)` with `NV = n` and `NC >= m` (see [`SIZES`]). The
-//! Hessian is factored once per file, outside the timing, as the controller does
-//! once per configuration. Two times are reported, each the minimum over `repeat`
+//! One algorithm at every size: a file is solved by the static instance
+//! `(NV, NC)` of the solver when one is compiled with `NV = n` and `NC >= m`
+//! (see [`SIZES`]; for equality rows only from `NV = 16` on, where they are
+//! compiled in), and by the run-time-sized instance (`Dyn`) otherwise; the
+//! CSV's `path` column says which (`static` or `dynamic`). Both are the same
+//! code and give bit-identical results where both apply. The Hessian is
+//! factored once per file, outside the timing, as the controller does once per
+//! configuration. Five times are reported, each the minimum over `repeat`
 //! calls (cold start), in nanoseconds:
 //!
-//! * `min_solve_ns`: [`DualActiveSet::solve`], which starts from the raw rows of
-//!   `G` (row norms included), as the controller's cycle does (its `G` changes
-//!   every cycle);
-//! * `min_prepared_ns`: [`DualActiveSet::solve_prepared`] with the row norms of
-//!   [`DualActiveSet::prepare_rows`] computed outside the timing: the figure for
-//!   a QP family whose `G` is fixed and only `q`, `h` change (LIPMWALK), and the
-//!   counterpart of DAQP's `solve_time`, which excludes DAQP's own transform of
-//!   the rows;
-//! * `min_ldp_ns`: [`LdpSolver::solve`], the range-space (least-distance) path
-//!   for a fixed `G`, with [`LdpSolver::prepare`] (per `G`) and
-//!   [`LdpSolver::load`] (per `q`, `h`: `v = L^-1 q` and the slacks at the
+//! * `min_solve_ns`: [`DualActiveSetOf::solve`], which starts from the raw rows
+//!   of `G` (row norms included), as the controller's cycle does (its `G`
+//!   changes every cycle);
+//! * `min_prepared_ns`: [`DualActiveSetOf::solve_prepared`] with the row norms
+//!   of [`DualActiveSetOf::prepare_rows`] computed outside the timing: the
+//!   figure for a QP family whose `G` is fixed and only `q`, `h` change
+//!   (LIPMWALK);
+//! * `min_ldp_ns`: [`LdpSolverOf::solve`], the range-space (least-distance)
+//!   path for a fixed `G`, with [`LdpSolverOf::prepare`] (per `G`) and
+//!   [`LdpSolverOf::load`] (per `q`, `h`: `v = L^-1 q` and the slacks at the
 //!   unconstrained minimiser) outside the timing: the same split as DAQP's
-//!   `setup_time` / `solve_time`;
-//! * `min_ldp_load_ns`: [`LdpSolver::load`] alone, so that
+//!   `setup_time` / `solve_time` (with equality rows it solves by the
+//!   orthogonal factor, as `solve_prepared`);
+//! * `min_ldp_load_ns`: [`LdpSolverOf::load`] alone, so that
 //!   `min_ldp_ns + min_ldp_load_ns` is the per-`(q, h)` cost;
-//! * `min_ldp_prepare_ns`: [`LdpSolver::prepare`] alone (per `G`; what a
+//! * `min_ldp_prepare_ns`: [`LdpSolverOf::prepare`] alone (per `G`; what a
 //!   controller whose `G` changes every cycle would pay on top).
 //!
 //! Both other paths are checked against `solve` before timing (an error
 //! otherwise): `solve_prepared` bit for bit; the LDP path for the same status,
 //! the objective to 1e-9 relative (`|a - b| <= 1e-9 max(1, |a|, |b|)`) and `x`
-//! to 1e-9 scaled (`max |x_a - x_b| <= 1e-9 max(1, max |x|)`).
+//! to 1e-9 scaled (`max |x_a - x_b| <= 1e-9 max(1, max |x|)`). With `check`,
+//! every file is also solved by Clarabel and the answer checked with
+//! [`compare_stacked`] (primal to 1e-6 scaled, objective to 1e-6, the same
+//! feasibility verdict, a valid Farkas certificate when infeasible); the
+//! figures go to the columns `clarabel_dx` (scaled primal difference) and
+//! `clarabel_dobj`, and a disagreement is an error naming the file.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{Result, anyhow};
-use ldcbf_controller::{DualActiveSet, LdpSolver, QpSettings, QpStatus};
-use ldcbf_reference::DenseProblem;
+use ldcbf_controller::nalgebra::{Const, DefaultAllocator, Dim, Dyn};
+use ldcbf_controller::{
+    DualActiveSetOf, LdpSolverOf, QpAllocator, QpSettings, QpSolutionOf, QpStatus,
+};
+use ldcbf_reference::{Candidate, DenseProblem, compare_stacked, solve_clarabel};
 
 /// The compiled solver sizes `(NV, NC)`, listed once: `with_qp_sizes!(m)`
 /// expands to `m!((6, 48), (6, 72), ...)`. It defines [`SIZES`], the dispatch
@@ -64,8 +78,9 @@ macro_rules! size_list {
     ($(($nv:literal, $nc:literal)),*) => { [$(($nv, $nc)),*] };
 }
 
-/// Supported `(n, max m)`: the controller's configurations (N = 3 with 8 or 16
-/// obstacles and with foot clearance, N = 5, N = 10) and the external LIPMWALK set.
+/// The static instances `(n, max m)`: the controller's configurations (N = 3
+/// with 8 or 16 obstacles and with foot clearance, N = 5, N = 10) and the
+/// external LIPMWALK set. Any other size is solved by the `Dyn` instance.
 pub const SIZES: [(usize, usize); 7] = with_qp_sizes!(size_list);
 
 /// One file's result.
@@ -95,10 +110,15 @@ pub struct QpRow {
     pub min_ldp_prepare_ns: u64,
     /// Adds plus drops of the LDP solve.
     pub ldp_iterations: u32,
+    /// Which instance solved it: `static` (compiled size) or `dynamic`.
+    pub path: &'static str,
+    /// With `check`: Clarabel's agreement, `(|x - x_ref|_inf / max(1,
+    /// |x_ref|_inf), |f - f_ref| / max(1, |f_ref|))` (NaN unless both solved).
+    pub clarabel: Option<(f64, f64)>,
 }
 
 /// The CSV header of [`QpRow::csv`].
-pub const CSV_HEADER: &str = "file,n,m,status,iterations,objective,min_solve_ns,min_prepared_ns,min_ldp_ns,min_ldp_load_ns,ldp_iterations,min_ldp_prepare_ns";
+pub const CSV_HEADER: &str = "file,n,m,status,iterations,objective,min_solve_ns,min_prepared_ns,min_ldp_ns,min_ldp_load_ns,ldp_iterations,min_ldp_prepare_ns,path,clarabel_dx,clarabel_dobj";
 
 impl QpRow {
     /// One CSV line (no newline).
@@ -109,8 +129,12 @@ impl QpRow {
             QpStatus::IterationLimit => "iteration_limit",
             QpStatus::NumericalError => "numerical_error",
         };
+        let (dx, dobj) = match self.clarabel {
+            Some((dx, dobj)) => (format!("{dx:.3e}"), format!("{dobj:.3e}")),
+            None => (String::new(), String::new()),
+        };
         format!(
-            "{},{},{},{},{},{:.17e},{},{},{},{},{},{}",
+            "{},{},{},{},{},{:.17e},{},{},{},{},{},{},{},{dx},{dobj}",
             self.file.display(),
             self.n,
             self.m,
@@ -122,28 +146,36 @@ impl QpRow {
             self.min_ldp_ns,
             self.min_ldp_load_ns,
             self.ldp_iterations,
-            self.min_ldp_prepare_ns
+            self.min_ldp_prepare_ns,
+            self.path
         )
     }
 }
 
-fn solve_fixed<const NV: usize, const NC: usize>(
+/// Solves and times one file with the instance of dimensions `(nv, nc)`
+/// (static or dynamic: the same code).
+fn solve_sized<V: Dim, C: Dim>(
     file: &Path,
     p: &DenseProblem,
-    repeat: usize,
-    max_iter: u32,
-) -> Result<QpRow> {
+    (nv, nc): (V, C),
+    opts: &SolveOptions,
+    path: &'static str,
+) -> Result<QpRow>
+where
+    DefaultAllocator: QpAllocator<V, C>,
+{
+    let (repeat, max_iter) = (opts.repeat, opts.max_iter);
     let (h, qp) = p
-        .to_fixed::<NV, NC>()
+        .to_qp(nv, nc)
         .map_err(|e| anyhow!("{}: {e}", file.display()))?;
-    let solver = DualActiveSet::<NV, NC>::new(&h, QpSettings::default())
+    let solver = DualActiveSetOf::<V, C>::new(&h, QpSettings::default())
         .map_err(|e| anyhow!("{}: field `P`: {e}", file.display()))?;
-    let prefer = [false; NC];
+    let prefer: &[bool] = &[];
     let rows = solver.prepare_rows(&qp);
     let (mut best, mut best_prepared) = (u64::MAX, u64::MAX);
     let (mut best_ldp, mut best_load, mut best_prep) = (u64::MAX, u64::MAX, u64::MAX);
-    let mut sol = solver.solve(&qp, &prefer, max_iter);
-    let prepared = solver.solve_prepared(&qp, &rows, &prefer, max_iter);
+    let mut sol = solver.solve(&qp, prefer, max_iter);
+    let prepared = solver.solve_prepared(&qp, &rows, prefer, max_iter);
     let same_x = prepared
         .x
         .iter()
@@ -158,38 +190,43 @@ fn solve_fixed<const NV: usize, const NC: usize>(
         ));
     }
     // The LDP path: `ldp` per G, `loaded` per (q, h), both outside the timing.
-    let ldp = Box::new(LdpSolver::prepare(&solver, &qp));
+    let ldp = Box::new(LdpSolverOf::prepare(&solver, &qp));
     let loaded = ldp.load(&qp.q, &qp.h);
-    let lsol = ldp.solve(&loaded, &prefer, max_iter);
+    let lsol = ldp.solve(&loaded, prefer, max_iter);
     check_ldp(file, &sol, &lsol)?;
     let ns = |t0: Instant| u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX);
     for _ in 0..repeat.max(1) {
         let t0 = Instant::now();
-        sol = std::hint::black_box(solver.solve(std::hint::black_box(&qp), &prefer, max_iter));
+        sol = std::hint::black_box(solver.solve(std::hint::black_box(&qp), prefer, max_iter));
         best = best.min(ns(t0));
         let t0 = Instant::now();
         std::hint::black_box(solver.solve_prepared(
             std::hint::black_box(&qp),
             &rows,
-            &prefer,
+            prefer,
             max_iter,
         ));
         best_prepared = best_prepared.min(ns(t0));
         let t0 = Instant::now();
-        std::hint::black_box(ldp.solve(std::hint::black_box(&loaded), &prefer, max_iter));
+        std::hint::black_box(ldp.solve(std::hint::black_box(&loaded), prefer, max_iter));
         best_ldp = best_ldp.min(ns(t0));
         let t0 = Instant::now();
         std::hint::black_box(ldp.load(std::hint::black_box(&qp.q), &qp.h));
         best_load = best_load.min(ns(t0));
         let t0 = Instant::now();
-        let prepared = LdpSolver::prepare(&solver, std::hint::black_box(&qp));
+        let prepared = LdpSolverOf::prepare(&solver, std::hint::black_box(&qp));
         best_prep = best_prep.min(ns(t0));
         std::hint::black_box(&prepared);
     }
+    let clarabel = if opts.check {
+        Some(check_clarabel(file, p, &sol)?)
+    } else {
+        None
+    };
     Ok(QpRow {
         file: file.to_path_buf(),
         n: p.n,
-        m: p.m,
+        m: p.rows(),
         status: sol.status,
         iterations: sol.iterations,
         objective: if sol.status.is_solved() {
@@ -203,16 +240,21 @@ fn solve_fixed<const NV: usize, const NC: usize>(
         min_ldp_load_ns: best_load,
         ldp_iterations: lsol.iterations,
         min_ldp_prepare_ns: best_prep,
+        path,
+        clarabel,
     })
 }
 
 /// The LDP solution `b` agrees with `solve`'s `a`: same status; when solved,
 /// objective to 1e-9 relative and `x` to 1e-9 scaled.
-fn check_ldp<const NV: usize, const NC: usize>(
+fn check_ldp<V: Dim, C: Dim>(
     file: &Path,
-    a: &ldcbf_controller::QpSolution<NV, NC>,
-    b: &ldcbf_controller::QpSolution<NV, NC>,
-) -> Result<()> {
+    a: &QpSolutionOf<V, C>,
+    b: &QpSolutionOf<V, C>,
+) -> Result<()>
+where
+    DefaultAllocator: QpAllocator<V, C>,
+{
     if a.status != b.status {
         return Err(anyhow!(
             "{}: solve and the LDP solve disagree on the status ({:?} vs {:?})",
@@ -224,7 +266,7 @@ fn check_ldp<const NV: usize, const NC: usize>(
     if a.status.is_solved() {
         let (oa, ob) = (a.objective, b.objective);
         let dobj = (oa - ob).abs() / oa.abs().max(ob.abs()).max(1.0);
-        let dx = (a.x - b.x).amax() / a.x.amax().max(1.0);
+        let dx = (&a.x - &b.x).amax() / a.x.amax().max(1.0);
         if !(dobj <= 1e-9 && dx <= 1e-9) {
             return Err(anyhow!(
                 "{}: solve and the LDP solve disagree (objective {oa} vs {ob}, scaled x \
@@ -236,25 +278,65 @@ fn check_ldp<const NV: usize, const NC: usize>(
     Ok(())
 }
 
+/// Clarabel's agreement with our solution `sol` of `p` (module docs): an
+/// error naming the file when it does not hold.
+fn check_clarabel<V: Dim, C: Dim>(
+    file: &Path,
+    p: &DenseProblem,
+    sol: &QpSolutionOf<V, C>,
+) -> Result<(f64, f64)>
+where
+    DefaultAllocator: QpAllocator<V, C>,
+{
+    let r = solve_clarabel(p);
+    let y = sol.lambda.as_slice().get(..p.rows()).unwrap_or(&[]);
+    let own = Candidate {
+        status: sol.status,
+        x: sol.x.as_slice(),
+        y,
+        objective: sol.objective,
+    };
+    let a = compare_stacked(p, &own, &r);
+    if !a.holds() {
+        return Err(anyhow!(
+            "{}: our solution and Clarabel's disagree (ours {:?}, Clarabel {:?}; scaled primal \
+             difference {:e}, objective {:e}, certificate {:?})",
+            file.display(),
+            sol.status,
+            r.raw_status,
+            a.dx / a.x_ref_norm.max(1.0),
+            a.objective,
+            a.certificate
+        ));
+    }
+    Ok((a.dx / a.x_ref_norm.max(1.0), a.objective))
+}
+
+/// What `qp solve` does with each file.
+#[derive(Clone, Copy, Debug)]
+pub struct SolveOptions {
+    /// Timed repeats per file (the minimum is reported).
+    pub repeat: usize,
+    /// Iteration budget per solve.
+    pub max_iter: u32,
+    /// Also solve with Clarabel and check the agreement.
+    pub check: bool,
+}
+
 /// Reads and solves one file (see the module docs).
-pub fn solve_file(file: &Path, repeat: usize, max_iter: u32) -> Result<QpRow> {
+pub fn solve_file(file: &Path, opts: &SolveOptions) -> Result<QpRow> {
     let p = DenseProblem::from_npz(file).map_err(|e| anyhow!("{e}"))?;
-    // The solver's rows: `G` and the finite bounds (`to_fixed` rejects `A`).
+    // The solver's rows: `A` (equalities), `G` and the finite bounds.
     let rows = p.rows();
     macro_rules! dispatch {
         ($(($nv:literal, $nc:literal)),*) => {
-            $(if p.n == $nv && rows <= $nc {
-                return solve_fixed::<$nv, $nc>(file, &p, repeat, max_iter);
+            $(if p.n == $nv && rows <= $nc && (p.me == 0 || $nv >= ldcbf_controller::qp::HOT_START_MIN_NV) {
+                return solve_sized(file, &p, (Const::<$nv>, Const::<$nc>), opts, "static");
             })*
         };
     }
     with_qp_sizes!(dispatch);
-    Err(anyhow!(
-        "{}: a QP with n = {}, m = {rows} has no compiled solver size (supported (n, max m): {:?})",
-        file.display(),
-        p.n,
-        SIZES
-    ))
+    solve_sized(file, &p, (Dyn(p.n), Dyn(rows)), opts, "dynamic")
 }
 
 #[cfg(test)]
@@ -262,7 +344,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn solves_a_small_file_and_rejects_unsupported_sizes() {
+    fn solves_a_small_file_statically_and_any_other_size_dynamically() {
         let dir = tempfile::tempdir().unwrap();
         // min sum (x_i - 1)^2 over 6 variables with x_0 + x_1 <= 1.
         let mut p = DenseProblem::inequalities(
@@ -277,7 +359,12 @@ mod tests {
         }
         let f = dir.path().join("a.npz");
         p.write_npz(&f).unwrap();
-        let row = solve_file(&f, 3, 50).unwrap();
+        let opts = |check| SolveOptions {
+            repeat: 3,
+            max_iter: 50,
+            check,
+        };
+        let row = solve_file(&f, &opts(true)).unwrap();
         assert_eq!(row.status, QpStatus::Solved);
         assert_eq!(row.iterations, 1);
         assert_eq!(row.ldp_iterations, 1);
@@ -288,12 +375,19 @@ mod tests {
             row.csv()
                 .starts_with(&format!("{},6,1,solved,1,", f.display()))
         );
-        let q = DenseProblem::inequalities(7, vec![0.0; 49], vec![0.0; 7], vec![], vec![]);
+        // n = 7 has no static instance: the dynamic one solves it (x = 0).
+        let mut q = DenseProblem::inequalities(7, vec![0.0; 49], vec![0.0; 7], vec![], vec![]);
+        for i in 0..7 {
+            q.P[i * 7 + i] = 1.0;
+        }
         let g = dir.path().join("b.npz");
         q.write_npz(&g).unwrap();
-        let e = solve_file(&g, 1, 50).unwrap_err().to_string();
-        assert!(e.contains("b.npz") && e.contains("n = 7"), "{e}");
-        let e = solve_file(&dir.path().join("missing.npz"), 1, 50)
+        let row = solve_file(&g, &opts(false)).unwrap();
+        assert_eq!(
+            (row.path, row.status, row.clarabel),
+            ("dynamic", QpStatus::Solved, None)
+        );
+        let e = solve_file(&dir.path().join("missing.npz"), &opts(false))
             .unwrap_err()
             .to_string();
         assert!(e.contains("missing.npz"), "{e}");
