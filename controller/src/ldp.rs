@@ -61,12 +61,12 @@
 use nalgebra::{Const, DefaultAllocator, Dim, OMatrix, OVector, U1};
 
 use crate::active_set::{self, ActiveSetFactor, AddError, dot, givens};
-#[cfg(doc)]
-use crate::qp::{DualActiveSet, QpSettings};
 use crate::qp::{
     DenseQpOf, DualActiveSetOf, QpAllocator, QpSolutionOf, QpStatus, RowNormsOf, ZERO_ROW2, column,
     column_mut, columns,
 };
+#[cfg(doc)]
+use crate::qp::{DualActiveSet, QpSettings};
 
 /// The least-distance form of one constraint matrix `G` for one Hessian, for
 /// any dimension types (see [`LdpSolver`] for the static sizes): build once

@@ -19,7 +19,7 @@
 //! Frames and units as in the controller: world frame, m, s, rad.
 
 use ldcbf_controller::nalgebra::{
-    Const, DefaultAllocator, Dim, Dyn, OMatrix, OVector, SMatrix, SVector, U1, Vector2,
+    Const, DefaultAllocator, Dim, Dyn, OMatrix, OVector, U1, Vector2,
 };
 use ldcbf_controller::{
     CommandSource, Config, ConvexPolygon, CycleInput, CycleOutput, CycleStatus, DenseQpOf,

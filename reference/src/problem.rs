@@ -242,11 +242,7 @@ impl DenseProblem {
     /// [`DenseProblem::to_fixed`] and [`DenseProblem::to_dyn`], written once
     /// for any dimension types (`nv` must be `n`, `nc` at least the stacked
     /// rows).
-    pub fn to_qp<V: Dim, C: Dim>(
-        &self,
-        nv: V,
-        nc: C,
-    ) -> Result<SizedQp<V, C>, ProblemError>
+    pub fn to_qp<V: Dim, C: Dim>(&self, nv: V, nc: C) -> Result<SizedQp<V, C>, ProblemError>
     where
         DefaultAllocator: QpAllocator<V, C>,
     {

@@ -143,7 +143,8 @@ fn our_solver_agrees_on_random_problems_without_equalities() {
 
 /// `own` (status, `x`, stacked multipliers or certificate, objective) checked
 /// against Clarabel with [`compare_stacked`], and its KKT residuals when
-/// solved. Returns the scaled primal difference (0 unless both solved).
+/// solved. Returns the scaled primal and the objective difference (0 unless
+/// both solved).
 fn agrees(
     p: &DenseProblem,
     status: QpStatus,
@@ -151,7 +152,7 @@ fn agrees(
     y: &[f64],
     objective: f64,
     tag: &str,
-) -> f64 {
+) -> (f64, f64) {
     let r = solve_clarabel(p);
     let c = Candidate {
         status,
@@ -168,15 +169,18 @@ fn agrees(
     if status == QpStatus::Solved {
         let k = kkt_stacked(p, x, y).unwrap();
         assert!(k.max() <= 1e-9 * amax(&p.q).max(1.0), "{tag}: {k:?}");
-        a.dx / a.x_ref_norm.max(1.0)
+        (a.dx / a.x_ref_norm.max(1.0), a.objective)
     } else {
-        0.0
+        (0.0, 0.0)
     }
 }
 
 #[test]
 fn the_dynamic_solver_agrees_at_every_size_with_equalities_bounds_and_infeasible_ones() {
     let mut worst: f64 = 0.0;
+    // Per n: (solved, infeasible, worst scaled primal difference, worst
+    // objective difference).
+    let mut by_n = std::collections::BTreeMap::<usize, (u32, u32, f64, f64)>::new();
     let (mut solved, mut infeasible) = (0, 0);
     for (i, (p, kind)) in instances().into_iter().enumerate() {
         // And a second seed of each, for more active sets.
@@ -196,7 +200,7 @@ fn the_dynamic_solver_agrees_at_every_size_with_equalities_bounds_and_infeasible
                 QpStatus::Infeasible => infeasible += 1,
                 s => panic!("{tag}: {s:?}"),
             }
-            let d = agrees(
+            let (d, dobj) = agrees(
                 &p,
                 own.status,
                 own.x.as_slice(),
@@ -205,10 +209,23 @@ fn the_dynamic_solver_agrees_at_every_size_with_equalities_bounds_and_infeasible
                 &tag,
             );
             worst = worst.max(d);
+            let e = by_n.entry(p.n).or_default();
+            match own.status {
+                QpStatus::Solved => e.0 += 1,
+                _ => e.1 += 1,
+            }
+            e.2 = e.2.max(d);
+            e.3 = e.3.max(dobj);
         }
     }
     assert_eq!((solved, infeasible), (20, 30));
     println!("worst scaled primal difference to Clarabel: {worst:.2e}");
+    println!(
+        "| n | solved | infeasible (certificate checked) | worst primal diff | worst objective diff |"
+    );
+    for (n, (s, i, dx, dobj)) in by_n {
+        println!("| {n} | {s} | {i} | {dx:.1e} | {dobj:.1e} |");
+    }
 }
 
 /// The static instance at `(NV, NC)` and the dynamic one on the same data:
