@@ -543,8 +543,16 @@ fn bounds_reach_our_fixed_size_solver_as_rows() {
         solve_own::<2, 2>(&p, 20).is_err(),
         "3 rows do not fit NC = 2"
     );
-    let e = two_var(vec![1.0, 1.0], vec![1.0], vec![], vec![])
-        .to_fixed::<2, 4>()
-        .unwrap_err();
-    assert!(e.0.contains("equality rows"), "{e}");
+    // Equality rows reach the solver as equalities (`me`); the static
+    // instance holds them from 16 variables on, the dynamic one always.
+    let eq = two_var(vec![1.0, 1.0], vec![1.0], vec![], vec![]);
+    let (_, qp) = eq.to_fixed::<2, 4>().unwrap();
+    assert_eq!((qp.m, qp.me), (1, 1));
+    let own = solve_own::<2, 4>(&eq, 20).unwrap();
+    assert_eq!(own.status, QpStatus::NumericalError);
+    let own = crate::solve_own_dyn(&eq, 20).unwrap();
+    assert_eq!(own.status, QpStatus::Solved);
+    // min (x-1)^2 + (y-2)^2 with x + y = 1: x = 0, y = 1, multiplier 2.
+    assert!((own.x[0]).abs() < 1e-14 && (own.x[1] - 1.0).abs() < 1e-14);
+    assert!((own.lambda[0] - 2.0).abs() < 1e-12);
 }
