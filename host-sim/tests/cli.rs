@@ -129,15 +129,26 @@ fn exported_qps_solve_again() {
     assert_eq!(
         lines[0],
         "file,n,m,status,iterations,objective,min_solve_ns,min_prepared_ns,min_ldp_ns,\
-         min_ldp_load_ns,ldp_iterations,min_ldp_prepare_ns"
+         min_ldp_load_ns,ldp_iterations,min_ldp_prepare_ns,path,clarabel_dx,clarabel_dobj"
     );
     assert_eq!(lines.len(), 6);
     assert!(
         lines[1..]
             .iter()
-            .all(|l| l.contains(",6,") && l.contains(",solved,")),
+            .all(|l| l.contains(",6,") && l.contains(",solved,") && l.ends_with(",static,,")),
         "{out}"
     );
+    // With --check each file is also solved by Clarabel; the two agree.
+    let mut args = vec!["qp", "solve", "--check"];
+    args.extend(files.iter().take(3).map(String::as_str));
+    let o = sim(&args, tmp.path());
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let out = text(&o.stdout);
+    for l in out.lines().skip(1) {
+        let c: Vec<&str> = l.split(',').collect();
+        let dx: f64 = c[c.len() - 2].parse().unwrap();
+        assert!(dx <= 1e-6, "{l}");
+    }
     let o = sim(&["qp", "solve", &files[0], "nope.npz"], tmp.path());
     assert!(!o.status.success());
     assert!(o.stdout.is_empty());
