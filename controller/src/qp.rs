@@ -90,7 +90,7 @@ use nalgebra::{
     ArrayStorage, Const, DefaultAllocator, Dim, OMatrix, OVector, SMatrix, SVector, U1,
 };
 
-use crate::active_set::{self, dot};
+use crate::active_set::{self, dot, dot_d};
 
 mod orthogonal;
 use orthogonal::Orthogonal;
@@ -531,7 +531,7 @@ where
             .zip(rows.norm2.as_mut_slice().iter_mut())
             .take(m)
         {
-            *n2 = dot(g, g);
+            *n2 = dot_d::<NV>(g, g);
             // A NaN or infinite entry makes `n2` non-finite, and so does a row
             // whose squared norm overflows (|g| > ~1e154): both are numerical
             // errors.
@@ -864,7 +864,7 @@ where
     #[cfg_attr(not(target_os = "none"), inline(always))]
     fn inv_hnorm(&self, g: &[f64], n2: f64) -> f64 {
         let w = self.linv_mul(g);
-        let hn = crate::float::sqrt(dot(w.as_slice(), w.as_slice()));
+        let hn = crate::float::sqrt(dot_d::<NV>(w.as_slice(), w.as_slice()));
         // L^-1 is nonsingular, so hn > 0 for a non-zero row (barring underflow,
         // where the Euclidean norm stands in).
         if hn > 0.0 {

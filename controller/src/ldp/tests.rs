@@ -1,6 +1,7 @@
 //! Unit tests of the least-distance path: against `DualActiveSet::solve`.
 
 use super::*;
+
 use crate::qp::QpSettings;
 use crate::qp::{DenseQp, DualActiveSet, QpSolution};
 use nalgebra::SVector;

@@ -10,7 +10,7 @@ use super::{
     DualActiveSetOf, QpAllocator, ZERO_ROW2, column, columns, columns_in, columns_in_mut,
     columns_mut,
 };
-use crate::active_set::{ActiveSetFactor, AddError, dot, givens};
+use crate::active_set::{ActiveSetFactor, AddError, dot, dot_d, givens};
 
 /// The orthogonal factor of the active set, the iterate and the rows, for one
 /// solve. Slices of length `NV` or `NC` as named (constants for the static
@@ -82,7 +82,7 @@ where
             .iter_mut()
             .zip(columns(self.J.as_slice(), n))
         {
-            *dj = -dot(col, gp);
+            *dj = -dot_d::<NV>(col, gp);
         }
     }
 }
@@ -112,7 +112,8 @@ where
         if blocked || n2 <= ZERO_ROW2 {
             return None;
         }
-        let slack = hi - dot(g, self.x.as_slice());
+        // (`dot_d`: as pairs for run-time sizes, the scan over all rows.)
+        let slack = hi - dot_d::<NV>(g, self.x.as_slice());
         if !slack.is_finite() {
             return Some(f64::NAN);
         }
