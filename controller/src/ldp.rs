@@ -155,11 +155,10 @@ where
         let m = qp.m.min(nc.value());
         let tol = solver.settings().tol_primal;
         let rows = DenseQpOf {
-            q: OVector::zeros_generic(nv, U1),
             gt: qp.gt.clone(),
-            h: OVector::zeros_generic(nc, U1),
             m,
             me: qp.me.min(m),
+            ..DenseQpOf::with_q_generic(OVector::zeros_generic(nv, U1), nc)
         };
         let mut p = LdpSolverOf {
             // The LDP iterations have no hot start (module docs): its

@@ -310,14 +310,7 @@ impl<const NV: usize, const NC: usize> DenseQpOf<Const<NV>, Const<NC>> {
 impl DenseQpOf<Dyn, Dyn> {
     /// An empty QP with linear term `q` and room for `nc` rows (all zero).
     pub fn with_capacity(q: nalgebra::DVector<f64>, nc: usize) -> Self {
-        let nv = q.len();
-        DenseQpOf {
-            q,
-            gt: nalgebra::DMatrix::zeros(nv, nc),
-            h: nalgebra::DVector::zeros(nc),
-            m: 0,
-            me: 0,
-        }
+        Self::with_q_generic(q, Dyn(nc))
     }
 }
 
@@ -391,6 +384,19 @@ impl<NV: Dim, NC: Dim> DenseQpOf<NV, NC>
 where
     DefaultAllocator: Allocator<NV> + Allocator<NC> + Allocator<NV, NC>,
 {
+    /// An empty QP with linear term `q` and room for `nc` rows (all zero),
+    /// for any dimension types.
+    pub fn with_q_generic(q: OVector<f64, NV>, nc: NC) -> Self {
+        let nv = q.shape_generic().0;
+        DenseQpOf {
+            q,
+            gt: OMatrix::zeros_generic(nv, nc),
+            h: OVector::zeros_generic(nc, U1),
+            m: 0,
+            me: 0,
+        }
+    }
+
     /// Removes all rows and zeroes `q`.
     pub fn clear(&mut self) {
         self.q.as_mut_slice().fill(0.0);

@@ -1124,13 +1124,10 @@ where
     let n = nv.value();
     let hess = OMatrix::<f64, V, V>::from_fn_generic(nv, nv, |i, j| d.p[i * n + j]);
     let solver = DualActiveSetOf::<V, C>::new(&hess, settings).map_err(|e| e.to_string())?;
-    let mut qp = DenseQpOf::<V, C> {
-        q: OVector::<f64, V>::from_fn_generic(nv, U1, |i, _| d.q[i]),
-        gt: OMatrix::zeros_generic(nv, nc),
-        h: OVector::zeros_generic(nc, U1),
-        m: 0,
-        me: 0,
-    };
+    let mut qp = DenseQpOf::<V, C>::with_q_generic(
+        OVector::<f64, V>::from_fn_generic(nv, U1, |i, _| d.q[i]),
+        nc,
+    );
     for r in 0..d.m {
         let g = OVector::<f64, V>::from_fn_generic(nv, U1, |j, _| d.g[r * n + j]);
         qp.push_row(&g, d.h[r])

@@ -263,13 +263,10 @@ impl DenseProblem {
         }
         let st = self.stacked();
         let H = OMatrix::<f64, V, V>::from_fn_generic(nv, nv, |i, j| self.P[i * n + j]);
-        let mut qp = DenseQpOf::<V, C> {
-            q: OVector::<f64, V>::from_fn_generic(nv, U1, |i, _| self.q[i]),
-            gt: OMatrix::zeros_generic(nv, nc),
-            h: OVector::zeros_generic(nc, U1),
-            m: 0,
-            me: 0,
-        };
+        let mut qp = DenseQpOf::<V, C>::with_q_generic(
+            OVector::<f64, V>::from_fn_generic(nv, U1, |i, _| self.q[i]),
+            nc,
+        );
         for i in 0..st.m {
             let g = OVector::<f64, V>::from_fn_generic(nv, U1, |j, _| st.G[i * n + j]);
             let pushed = if i < st.me {

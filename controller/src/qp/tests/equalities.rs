@@ -3,7 +3,7 @@
 //! redundant or a Farkas certificate; refused below `HOT_START_MIN_NV`
 //! variables, where they are not compiled in.
 
-use super::uniform;
+use super::{assert_certificate, uniform};
 use crate::qp::{DenseQp, DualActiveSet, HOT_START_MIN_NV, QpSettings, QpSolution, QpStatus};
 use nalgebra::{SMatrix, SVector};
 
@@ -44,21 +44,6 @@ fn assert_kkt(s: &DualActiveSet<N, C>, qp: &DenseQp<N, C>, sol: &QpSolution<N, C
         stat += g * sol.lambda[i];
     }
     assert!(stat.amax() <= 1e-9 * scale, "stationarity {stat:?}");
-}
-
-/// Farkas certificate with free-sign entries on the equality rows.
-fn assert_certificate(qp: &DenseQp<N, C>, y: &SVector<f64, C>) {
-    let mut gty = SVector::<f64, N>::zeros();
-    let mut hty = 0.0;
-    for i in 0..qp.m {
-        if i >= qp.me {
-            assert!(y[i] >= 0.0, "inequality entry {i} = {}", y[i]);
-        }
-        gty += qp.row(i) * y[i];
-        hty += qp.h[i] * y[i];
-    }
-    assert!(gty.amax() <= 1e-12 * (1.0 + y.amax()), "G'y = {gty:?}");
-    assert!(hty < 0.0, "h'y = {hty}");
 }
 
 #[test]
