@@ -1,5 +1,6 @@
 //! Unit tests of the least-distance path: against `DualActiveSet::solve`.
 
+use super::gram::chol_drop;
 use super::*;
 
 use crate::qp::QpSettings;

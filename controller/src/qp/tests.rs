@@ -1,7 +1,7 @@
 //! Unit tests of the dual active-set solver.
 
 use super::*;
-use nalgebra::{Matrix2, Vector2};
+use nalgebra::{Matrix2, SVector, Vector2};
 
 mod equalities;
 mod hot_start;
