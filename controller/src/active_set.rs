@@ -403,6 +403,21 @@ impl<NV: Dim> Iterate<NV>
 where
     DefaultAllocator: Allocator<NV>,
 {
+    /// The end of an iteration that found no row violated at the
+    /// unconstrained minimiser: solved, no active row, no iteration.
+    pub(crate) fn unconstrained(nv: NV) -> Self {
+        Iterate {
+            status: QpStatus::Solved,
+            act: OVector::zeros_generic(nv, U1),
+            mult: OVector::zeros_generic(nv, U1),
+            nact: 0,
+            neq: 0,
+            iters: 0,
+            farkas: None,
+            adding: None,
+        }
+    }
+
     /// The solution with primal `x` and its objective: the multipliers (or
     /// the Farkas certificate, whose entry of the row that could not be added
     /// is 1 or, for an equality row violated from below, -1) in the units of
@@ -501,18 +516,12 @@ fn remove_at<T: Copy>(s: &mut [T], l: usize, n: usize) {
 }
 
 /// The result of a solve that stopped before iterating: `status`, `x = 0`, no
-/// active row; for [`QpStatus::Infeasible`] with `zero_row = Some(i)` (the
-/// zero row `0'x <= h_i` with `h_i < 0`) the certificate `y = e_i`.
-pub(crate) fn stopped<NV: Dim, NC: Dim>(
-    nv: NV,
-    nc: NC,
-    status: QpStatus,
-    zero_row: Option<usize>,
-) -> QpSolutionOf<NV, NC>
+/// active row, no multiplier.
+pub(crate) fn stopped<NV: Dim, NC: Dim>(nv: NV, nc: NC, status: QpStatus) -> QpSolutionOf<NV, NC>
 where
     DefaultAllocator: QpAllocator<NV, NC>,
 {
-    let mut sol = QpSolutionOf {
+    QpSolutionOf {
         x: OVector::zeros_generic(nv, U1),
         lambda: OVector::zeros_generic(nc, U1),
         objective: 0.0,
@@ -520,11 +529,45 @@ where
         iterations: 0,
         active: OVector::zeros_generic(nv, U1),
         n_active: 0,
-    };
-    if let Some(y) = zero_row.and_then(|i| sol.lambda.get_mut(i)) {
-        *y = 1.0;
+    }
+}
+
+/// Whether the zero row `i` (`0'x <= h_i`, or `0'x = h_i` for an equality
+/// row) contradicts itself at the tolerance `tol`.
+pub(crate) fn zero_row_contradicts(h_i: f64, tol: f64, equality: bool) -> bool {
+    h_i < -tol || (equality && h_i > tol)
+}
+
+/// The answer for a zero row `i` that contradicts itself
+/// ([`zero_row_contradicts`]): [`QpStatus::Infeasible`] with the certificate
+/// `y = e_i` (`h_i < 0`) or `y = -e_i` (an equality row with `h_i > 0`).
+pub(crate) fn zero_row_infeasible<NV: Dim, NC: Dim>(
+    nv: NV,
+    nc: NC,
+    i: usize,
+    h_i: f64,
+) -> QpSolutionOf<NV, NC>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
+    let mut sol = stopped(nv, nc, QpStatus::Infeasible);
+    if let Some(y) = sol.lambda.get_mut(i) {
+        *y = if h_i > 0.0 { -1.0 } else { 1.0 };
     }
     sol
+}
+
+/// The warm-start marks `prefer` (any length; missing entries `false`) as a
+/// vector of the row capacity, whose length the scan's bounds are taken from.
+pub(crate) fn marks<NC: Dim>(nc: NC, prefer: &[bool]) -> OVector<bool, NC>
+where
+    DefaultAllocator: Allocator<NC>,
+{
+    let mut out = OVector::<bool, NC>::from_element_generic(nc, U1, false);
+    for (d, &s) in out.as_mut_slice().iter_mut().zip(prefer) {
+        *d = s;
+    }
+    out
 }
 
 /// `a . b` over the shorter length, with two partial sums (independent add

@@ -263,7 +263,9 @@ where
             }
             if zero {
                 let equality = i < self.qp.me;
-                if (hi < -tol || (equality && hi > tol)) && ld.zero_infeasible.is_none() {
+                if active_set::zero_row_contradicts(hi, tol, equality)
+                    && ld.zero_infeasible.is_none()
+                {
                     ld.zero_infeasible = Some(i);
                 }
                 continue;
@@ -299,18 +301,11 @@ where
         let nv = self.solver.nv();
         let nc = self.inv_mnorm.shape_generic().0;
         if !self.finite || !loaded.finite || loaded.m != self.m {
-            return active_set::stopped(nv, nc, QpStatus::NumericalError, None);
+            return active_set::stopped(nv, nc, QpStatus::NumericalError);
         }
         if let Some(i) = loaded.zero_infeasible {
-            // 0'x <= h with h < 0 (or 0'x = h with h != 0): y = e_i (or
-            // -e_i) certifies it.
-            let mut sol = active_set::stopped(nv, nc, QpStatus::Infeasible, Some(i));
-            if loaded.h.as_slice().get(i).is_some_and(|&hi| hi > 0.0)
-                && let Some(y) = sol.lambda.get_mut(i)
-            {
-                *y = -1.0;
-            }
-            return sol;
+            let hi = loaded.h.as_slice().get(i).copied().unwrap_or(0.0);
+            return active_set::zero_row_infeasible(nv, nc, i, hi);
         }
         let me = self.qp.me;
         if me > 0 && !self.solver.equalities_capable() {
@@ -326,10 +321,7 @@ where
         let tol_dep = self.solver.settings().tol_dependence;
         let mut C = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
         let mut Ci = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
-        let mut pref = OVector::<bool, NC>::from_element_generic(nc, U1, false);
-        for (d, &s) in pref.as_mut_slice().iter_mut().zip(prefer) {
-            *d = s;
-        }
+        let pref = active_set::marks(nc, prefer);
         let n = nv.value();
         let mut factor = Gram {
             ldp: self,
@@ -385,13 +377,25 @@ where
                 *uk -= un * mk;
             }
         }
+        self.finish(it, &u, loaded)
+    }
+
+    /// The answer from the iteration's end `it` and the LDP's primal `u`:
+    /// `x = L^-T (u - v)`, the objective `1/2 |u|^2 - 1/2 |v|^2`, the
+    /// multipliers in the units of `G` (`lambda_i = lambda_hat_i / |m_i|`).
+    fn finish(
+        &self,
+        it: active_set::Iterate<NV>,
+        u: &OVector<f64, NV>,
+        loaded: &LdpLoadedOf<NV, NC>,
+    ) -> QpSolutionOf<NV, NC> {
         let mut uv = u.clone();
         for (a, b) in uv.as_mut_slice().iter_mut().zip(loaded.v.as_slice().iter()) {
             *a -= b;
         }
         let x = self.solver.linvt_mul(uv.as_slice());
         let objective = 0.5 * (dot(u.as_slice(), u.as_slice()) - loaded.vv);
-        // Multipliers in the units of G: lambda_i = lambda_hat_i / |m_i|.
+        let nc = self.inv_mnorm.shape_generic().0;
         it.solution(nc, x, objective, |i| {
             self.inv_mnorm.get(i).copied().unwrap_or(1.0)
         })
@@ -410,26 +414,17 @@ where
             .iter()
             .zip(self.thr.as_slice())
             .zip(self.zero.as_slice())
-            .all(|((&si, &thr), &zero)| si >= 0.0 || zero || si * si <= thr);
+            .all(|((&si, &thr), &zero)| zero || slack_holds(si, thr));
         if !holds {
             return None;
         }
-        let (nv, nc) = (self.solver.nv(), self.inv_mnorm.shape_generic().0);
-        // u = 0: x = L^-T (0 - v), objective 1/2 (0 - |v|^2), as in `solve`.
-        let mut uv = OVector::<f64, NV>::zeros_generic(nv, U1);
-        for (a, b) in uv.as_mut_slice().iter_mut().zip(loaded.v.as_slice()) {
-            *a -= b;
-        }
-        let x = self.solver.linvt_mul(uv.as_slice());
-        let mut sol = active_set::stopped(nv, nc, QpStatus::Solved, None);
-        sol.objective = 0.5 * (0.0 - loaded.vv);
-        sol.status = if x.as_slice().iter().all(|v| v.is_finite()) && sol.objective.is_finite() {
-            QpStatus::Solved
-        } else {
-            QpStatus::NumericalError
-        };
-        sol.x = x;
-        Some(sol)
+        // u = 0, no active row: what the iteration's end gives.
+        let nv = self.solver.nv();
+        Some(self.finish(
+            active_set::Iterate::unconstrained(nv),
+            &OVector::zeros_generic(nv, U1),
+            loaded,
+        ))
     }
 
     /// [`DualActiveSetOf::solve_prepared`] on the loaded QP: the answer for an
@@ -448,6 +443,13 @@ where
         self.solver
             .solve_prepared(&qp, &self.norms, prefer, max_iter)
     }
+}
+
+/// A scaled slack `s_i` holds to the tolerance (its square threshold
+/// `thr_i`): the violation test of the scan.
+#[inline(always)]
+fn slack_holds(si: f64, thr: f64) -> bool {
+    si >= 0.0 || si * si <= thr
 }
 
 /// A row whose component outside the span of the active rows is shorter than

@@ -658,7 +658,7 @@ where
         let (h, norm2) = (hv.as_slice(), norms.norm2.as_slice());
         if h.len() != nc.value() || norm2.len() != nc.value() || norms.inv_hnorm.len() != nc.value()
         {
-            return active_set::stopped(nv, nc, QpStatus::NumericalError, None);
+            return active_set::stopped(nv, nc, QpStatus::NumericalError);
         }
         if !norms.finite
             || qp.gt.nrows() != n
@@ -670,14 +670,14 @@ where
                 .take(m)
                 .all(|(v, &out)| out || v.is_finite())
         {
-            return active_set::stopped(nv, nc, QpStatus::NumericalError, None);
+            return active_set::stopped(nv, nc, QpStatus::NumericalError);
         }
         let tol = self.settings.tol_primal;
         // Equality rows only where they are compiled in (module docs): for
         // the small static sizes `me` is the constant 0 from here on.
         let capable = self.equalities_capable();
         if !capable && qp.me > 0 {
-            return active_set::stopped(nv, nc, QpStatus::NumericalError, None);
+            return active_set::stopped(nv, nc, QpStatus::NumericalError);
         }
         let me = if capable { qp.me.min(m) } else { 0 };
         let zero_infeasible = h
@@ -687,18 +687,12 @@ where
             .take(m)
             .enumerate()
             .position(|(i, ((&hi, &n2), &out))| {
-                !out && n2 <= ZERO_ROW2 && (hi < -tol || (i < me && hi > tol))
+                !out && n2 <= ZERO_ROW2 && active_set::zero_row_contradicts(hi, tol, i < me)
             });
         if let Some(i) = zero_infeasible {
-            // 0'x <= h with h < 0 (or 0'x = h with h != 0): nothing satisfies
-            // it; y = e_i (or -e_i) certifies it.
-            let mut sol = active_set::stopped(nv, nc, QpStatus::Infeasible, Some(i));
-            if h.get(i).is_some_and(|&hi| hi > 0.0)
-                && let Some(y) = sol.lambda.get_mut(i)
-            {
-                *y = -1.0;
-            }
-            return sol;
+            // Nothing satisfies it: y = e_i (or -e_i) certifies it.
+            let hi = h.get(i).copied().unwrap_or(0.0);
+            return active_set::zero_row_infeasible(nv, nc, i, hi);
         }
         let mut blocked = excluded;
         // Zero rows are never added (an equality zero row holds here).
@@ -707,10 +701,7 @@ where
                 *b = true;
             }
         }
-        let mut pref = OVector::<bool, NC>::from_element_generic(nc, U1, false);
-        for (d, &s) in pref.as_mut_slice().iter_mut().zip(prefer) {
-            *d = s;
-        }
+        let pref = active_set::marks(nc, prefer);
         // Unconstrained minimiser x = -J0 J0' q = -L^-T L^-1 q.
         let mut x = self.linvt_mul(self.linv_mul(q).as_slice());
         for v in x.as_mut_slice() {
@@ -748,7 +739,7 @@ where
         };
         let Some(it) = it else {
             // The orthogonal factor never asks for a restart.
-            return active_set::stopped(nv, nc, QpStatus::NumericalError, None);
+            return active_set::stopped(nv, nc, QpStatus::NumericalError);
         };
         let x = factor.x;
         let objective = self.objective(&qp.q, &x);

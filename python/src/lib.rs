@@ -18,14 +18,12 @@
 //!
 //! Frames and units as in the controller: world frame, m, s, rad.
 
-use ldcbf_controller::nalgebra::{
-    Const, DefaultAllocator, Dim, Dyn, OMatrix, OVector, U1, Vector2,
-};
+use ldcbf_controller::nalgebra::{Const, DefaultAllocator, Dim, Dyn, Vector2};
 use ldcbf_controller::{
-    CommandSource, Config, ConvexPolygon, CycleInput, CycleOutput, CycleStatus, DenseQpOf,
-    DualActiveSetOf, InputError, PaperController, QpAllocator, QpSettings, QpStatus,
-    RobotController, Side,
+    CommandSource, Config, ConvexPolygon, CycleInput, CycleOutput, CycleStatus, DualActiveSetOf,
+    InputError, PaperController, QpAllocator, QpSettings, QpStatus, RobotController, Side,
 };
+use ldcbf_reference::DenseProblem;
 use ldcbf_sim::scenario::{LoadOptions, Scenario};
 use ldcbf_sim::sim::{MpcRate, SimOptions, SimResult, Solver};
 use ldcbf_sim::world::robot::RobotParams;
@@ -1066,14 +1064,7 @@ fn solve_qp<'py>(
         tol_dependence,
         ..QpSettings::default()
     };
-    let data = QpData {
-        n,
-        m,
-        p: pd,
-        q: qd,
-        g: gd,
-        h: hd,
-    };
+    let data = DenseProblem::inequalities(n, pd, qd, gd, hd);
     macro_rules! dispatch {
         ($(($nv:literal, $nc:literal)),*) => {
             $(if n == $nv && m <= $nc {
@@ -1085,16 +1076,6 @@ fn solve_qp<'py>(
     ldcbf_sim::with_qp_sizes!(dispatch);
     let sol = py.detach(|| solve_sized(&data, (Dyn(n), Dyn(m)), settings, max_iter, "dynamic"));
     qp_dict(py, sol.map_err(|e| arg_err(py, "P", e))?, m)
-}
-
-/// A QP's data, row-major.
-struct QpData {
-    n: usize,
-    m: usize,
-    p: Vec<f64>,
-    q: Vec<f64>,
-    g: Vec<f64>,
-    h: Vec<f64>,
 }
 
 /// A solution, sized.
@@ -1112,7 +1093,7 @@ struct QpOut {
 /// Solves `d` with the instance of dimensions `(nv, nc)` (static or
 /// dynamic: the same code).
 fn solve_sized<V: Dim, C: Dim>(
-    d: &QpData,
+    d: &DenseProblem,
     (nv, nc): (V, C),
     settings: QpSettings,
     max_iter: u32,
@@ -1121,19 +1102,9 @@ fn solve_sized<V: Dim, C: Dim>(
 where
     DefaultAllocator: QpAllocator<V, C>,
 {
-    let n = nv.value();
-    let hess = OMatrix::<f64, V, V>::from_fn_generic(nv, nv, |i, j| d.p[i * n + j]);
+    // The reference's one conversion into the solver's types.
+    let (hess, qp) = d.to_qp(nv, nc).map_err(|e| e.0)?;
     let solver = DualActiveSetOf::<V, C>::new(&hess, settings).map_err(|e| e.to_string())?;
-    let mut qp = DenseQpOf::<V, C>::with_q_generic(
-        OVector::<f64, V>::from_fn_generic(nv, U1, |i, _| d.q[i]),
-        nc,
-    );
-    for r in 0..d.m {
-        let g = OVector::<f64, V>::from_fn_generic(nv, U1, |j, _| d.g[r * n + j]);
-        qp.push_row(&g, d.h[r])
-            .map_err(|_| "row capacity exceeded".to_string())?;
-    }
-    debug_assert_eq!(d.n, n);
     let sol = solver.solve(&qp, &[], max_iter);
     Ok(QpOut {
         x: sol.x.iter().copied().collect(),

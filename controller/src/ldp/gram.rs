@@ -4,7 +4,7 @@
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector, U1};
 
-use super::{LdpSolverOf, PIVOT_FALLBACK};
+use super::{LdpSolverOf, PIVOT_FALLBACK, slack_holds};
 use crate::active_set::{ActiveSetFactor, AddError, dot, givens};
 use crate::qp::{QpAllocator, column, column_mut, columns};
 
@@ -75,7 +75,7 @@ where
         let (Some(&si), Some(&thr)) = (self.s.get(i), self.ldp.thr.get(i)) else {
             return None;
         };
-        if si >= 0.0 || blocked || si * si <= thr {
+        if blocked || slack_holds(si, thr) {
             return None;
         }
         Some(if si.is_finite() { si } else { f64::NAN })
