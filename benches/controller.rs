@@ -6,7 +6,7 @@
 //! in miniature). Each benchmark replays the recorded inputs in order.
 //!
 //! * `paper_config/*`: `PaperController` (N = 3, capacity 8) walking from (0, 0)
-//!   to (10, 10) among the six obstacles of the SPEC's `paper` scenario:
+//!   to (10, 10) among the six obstacles of the `paper` scenario:
 //!   `step/warm` (in order, warm start as on the robot), `step/cold` (memory reset
 //!   before each cycle), `solve/cold` (the QP solve alone on the recorded QPs).
 //! * `horizon/N`: the same walk with horizon N in {3, 5, 10, 20} (capacity 8,

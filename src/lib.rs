@@ -2,7 +2,7 @@
 //! and the benchmarks in `benches/`, and the fixtures they share ([`fixtures`]).
 
 pub mod fixtures {
-    //! Shared test and benchmark fixtures: the SPEC's `paper` obstacles and a
+    //! Shared test and benchmark fixtures: the `paper` scenario's obstacles and a
     //! miniature closed loop that records controller cycles (as the
     //! simulator's [`RecordedInput`]).
     //!
@@ -18,10 +18,10 @@ pub mod fixtures {
     use ldcbf_controller::nalgebra::Vector2;
     use ldcbf_controller::{Config, Controller, ConvexPolygon, CycleOutput};
 
-    /// Goal of the SPEC's `paper` scenario, m (world).
+    /// Goal of the `paper` scenario, m (world).
     pub const PAPER_GOAL: [f64; 2] = [10.0, 10.0];
 
-    /// Obstacle point sets of the SPEC's `paper` scenario (each obstacle is the
+    /// Obstacle point sets of the `paper` scenario (each obstacle is the
     /// convex hull of its points), m (world).
     pub const PAPER_OBSTACLES: [&[[f64; 2]]; 6] = [
         &[[2.0, 7.5], [1.5, 7.0], [1.8, 6.5]],

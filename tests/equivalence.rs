@@ -1,4 +1,4 @@
-//! Property test of the SPEC section 3 contract on the controller's own QPs:
+//! Property test of the docs/maths.md §3 contract on the controller's own QPs:
 //! random but physically sensible cycles (state, heading, goal, 0..=10 random
 //! convex polygons around the robot, random gamma/delta), assembled by the
 //! controller, solved by our dual active-set solver and by Clarabel.

@@ -159,7 +159,7 @@ fn regenerate_recorded_cycles() {
     .unwrap();
     writeln!(
         f,
-        "// Closed loop of the SPEC `paper` scenario: start (0, 0), goal (10, 10), controller"
+        "// Closed loop of the `paper` scenario: start (0, 0), goal (10, 10), controller"
     )
     .unwrap();
     writeln!(

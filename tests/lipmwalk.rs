@@ -1,6 +1,6 @@
-//! The 30 external LIP-walking QPs of `../shared/qpbench/lipmwalk/` (n = 16,
+//! The 30 external LIP-walking QPs of `tests/data/lipmwalk/` (n = 16,
 //! m = 32, from the public mpc_qpbenchmark set), solved by our dual active-set
-//! solver at that fixed size and by Clarabel: the SPEC section 3 contract
+//! solver at that fixed size and by Clarabel: the docs/maths.md §3 contract
 //! (primal 1e-6 scaled, objective 1e-8 relative, feasibility) must hold for all.
 //! The same for the least-distance path (`LdpSolver`, prepared once for the
 //! shared `P` and `G`, loaded per file), which must also match `solve`.
@@ -10,13 +10,12 @@ use std::path::PathBuf;
 use ldcbf_controller::{DualActiveSet, LdpSolver, QpSettings};
 use ldcbf_reference::{DenseProblem, compare, kkt, solve_clarabel, solve_own};
 
-/// `../shared/qpbench/lipmwalk` relative to the repository root.
+/// `tests/data/lipmwalk` of the repository (source and license in its README).
 fn data_dir() -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/qpbench/lipmwalk");
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/lipmwalk");
     assert!(
         dir.is_dir(),
-        "test data missing: expected the external QP set at {} (the `shared/` folder \
-         beside the repository root)",
+        "test data missing: expected the external QP set at {}",
         dir.display()
     );
     dir

@@ -1,5 +1,5 @@
 //! The controller's QP (variables: the predicted CoM positions `p_1 .. p_N`, see
-//! `controller/src/constraints.rs`) is an exact reformulation of SPEC 2 item 3
+//! `controller/src/constraints.rs`) is an exact reformulation of docs/maths.md §2.4
 //! (variables: the footsteps `f_0 .. f_{N-1}`).
 //!
 //! Independent check: for random cycles this file builds the ORIGINAL
@@ -45,7 +45,7 @@ fn beta() -> f64 {
     (GRAVITY / COM_HEIGHT).sqrt()
 }
 
-/// SPEC 1: the closed-form LIP flow over `tau` with stance foot `f` (both axes).
+/// docs/maths.md §1: the closed-form LIP flow over `tau` with stance foot `f` (both axes).
 fn flow(p: V2, v: V2, f: V2, tau: f64) -> (V2, V2) {
     let b = beta();
     let (c, s) = ((b * tau).cosh(), (b * tau).sinh());
@@ -169,7 +169,7 @@ impl Affine {
     }
 }
 
-/// The QP of SPEC 2 in the footstep variables `u = (f_0x, f_0y, .., f_{N-1}y)`,
+/// The QP of docs/maths.md §2.4 in the footstep variables `u = (f_0x, f_0y, .., f_{N-1}y)`,
 /// built from the spec's formulas: `min 1/2 u'Pu + q'u, Gu <= h`.
 fn spec_foot_qp(n: usize, c: &Cycle, cfg: &Config) -> DenseProblem {
     let nv = 2 * n;

@@ -1,4 +1,4 @@
-//! Perception for unknown maps (SPEC 6, report 5.2): DBSCAN and the cluster
+//! Perception for unknown maps (docs/maths.md §6): DBSCAN and the cluster
 //! polygons on hand-made point sets, the simulated LiDAR against known
 //! geometry, and the `crowded` scenario, where the controller sees only the
 //! inferred obstacles and the CoM must stay out of the TRUE ones.

@@ -1,4 +1,4 @@
-//! Global planner (SPEC 5, report 5.1): the `trap` scenario stalls without
+//! Global planner (docs/maths.md §5): the `trap` scenario stalls without
 //! subgoals and reaches the goal with RRT* subgoals; the maze reaches its goal
 //! with them; RRT* is deterministic for a seed and its subgoal path stays clear
 //! of the inflated obstacles.

@@ -1,4 +1,4 @@
-//! Closed-loop scenario tests (SPEC 4): the shipped scenarios run in-process
+//! Closed-loop scenario tests (docs/maths.md §4): the shipped scenarios run in-process
 //! (no figures) with the own QP solver at 20 Hz, and the plant and the
 //! controller's prediction agree.
 //!

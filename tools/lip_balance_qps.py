@@ -13,7 +13,7 @@ rectangle; default 0.85, 0.7 with `--full`), `--prefix NAME` (file names
 `NAME<k>.npz`, default LIPBAL), `--full`.
 The same arguments give byte-identical files (with the same numpy and BLAS).
 
-The files follow the qpbenchmark npz layout of `../shared/qpbench/lipmwalk`
+The files follow the qpbenchmark npz layout of `tests/data/lipmwalk`
 (`min 1/2 x'Px + q'x  s.t.  Gx <= h, Ax = b, lb <= x <= ub`): keys P, q, G, h
 as float64 (C order) and A, b, lb, ub; an absent key is stored, as in the
 LIPMWALK files, as a 0-d object array holding None (pickle protocol 3, written

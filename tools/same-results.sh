@@ -15,7 +15,7 @@ set -euo pipefail
 old=${1:?usage: same-results.sh OLD_BIN NEW_BIN [WORKDIR]}
 new=${2:?usage: same-results.sh OLD_BIN NEW_BIN [WORKDIR]}
 work=${3:-$(mktemp -d)}
-qpdir=${QPBENCH:-../shared/qpbench/lipmwalk}
+qpdir=${QPBENCH:-tests/data/lipmwalk}
 
 run_all() {
     local bin=$1 out=$2

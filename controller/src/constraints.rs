@@ -1,5 +1,5 @@
 //! The condensed MPC in pre-stabilised variables: predictions, footsteps, the
-//! cost, and every constraint row of SPEC 2.5 as affine functions of the
+//! cost, and every constraint row of docs/maths.md §2.5 as affine functions of the
 //! predicted CoM positions.
 //!
 //! ## Decision variables
@@ -8,7 +8,7 @@
 //! `z = [p_1x, p_1y, p_2x, p_2y, ..., p_Nx, p_Ny]`: the predicted CoM positions
 //! at the ends of the planned steps (`p_k` = position of `x_k`, the state at the
 //! start of step `k`). This is an exact, invertible change of variables of the
-//! QP of SPEC 2 item 3 (whose variables are the footsteps `f_0 .. f_{N-1}`):
+//! QP of docs/maths.md §2.4 (whose variables are the footsteps `f_0 .. f_{N-1}`):
 //! both QPs have the same feasible set and cost under the map below, so they
 //! have the same optimal footsteps, which the controller recovers exactly
 //! (`tests/reparam.rs` checks this against the foot-variable QP built from the

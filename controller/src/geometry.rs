@@ -1,5 +1,5 @@
 //! Convex polygons (world frame, metres) and the closest-point query behind the
-//! LDCBF half-planes (SPEC 2.5).
+//! LDCBF half-planes (docs/maths.md §2.3).
 //!
 //! A [`ConvexPolygon`] can only be built through a validating constructor, so
 //! every polygon the controller sees is finite, has at least three distinct

@@ -1,4 +1,4 @@
-//! Heading pre-processing (SPEC 2.2): the turning rate is fixed before the QP so
+//! Heading pre-processing (docs/maths.md §2.2): the turning rate is fixed before the QP so
 //! every constraint is linear.
 //!
 //! `theta* = atan2(g_y - p_y0, g_x - p_x0)`, `d = wrap(theta* - theta_0)` in

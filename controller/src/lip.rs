@@ -1,4 +1,4 @@
-//! The 3D linear inverted pendulum (LIP) with heading (SPEC section 1).
+//! The 3D linear inverted pendulum (LIP) with heading (docs/maths.md §1).
 //!
 //! Per horizontal axis, with stance foot `f`, during a step the CoM obeys
 //! `p'' = beta^2 (p - f)`, `beta = sqrt(g / H)`. Over a duration `tau`, with

@@ -6,7 +6,7 @@
 //! the other row classes violated by no more than the relaxation the cycle
 //! reports. Each test then checks what its situation is about.
 //!
-//! The closed loops use the plant of SPEC 4 ([`Walker`]): the LIP in closed
+//! The closed loops use the plant of docs/maths.md §4 ([`Walker`]): the LIP in closed
 //! form, sampled at 1 kHz, the controller at 20 Hz, the swing foot landing at the
 //! latest `f_0` at the end of each 0.4 s step.
 
@@ -165,7 +165,7 @@ fn check_plan_clearance(ctl: &Ctl, out: &CycleOutput<N>, obstacles: &[Poly]) {
     }
 }
 
-/// The robot and the closed-form LIP plant of SPEC 4.
+/// The robot and the closed-form LIP plant of docs/maths.md §4.
 #[derive(Clone, Copy, Debug)]
 struct Walker {
     p: Vector2<f64>,

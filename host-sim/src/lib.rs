@@ -1,6 +1,6 @@
 //! # ldcbf-sim
 //!
-//! The host simulator of ldcbf-nav (SPEC section 4): the closed loop in which the
+//! The host simulator of ldcbf-nav (docs/maths.md §4): the closed loop in which the
 //! `ldcbf-controller` footstep MPC walks a simulated linear inverted pendulum
 //! through a scenario, the logs of the run, the figures, and the studies over
 //! many runs.
@@ -11,9 +11,9 @@
 //! * [`world`]: polygons, the robot's body, the map's R-tree and occupancy
 //!   grid, and the seeded map generators (the lowest room);
 //! * [`sense`]: simulated 2D LiDAR, DBSCAN and one convex obstacle per
-//!   cluster, for unknown maps (SPEC 6), and its `[lidar]` settings;
+//!   cluster, for unknown maps (docs/maths.md §6), and its `[lidar]` settings;
 //! * [`plan`]: RRT* on an occupancy grid of the known map, whose path gives
-//!   the subgoals (SPEC 5), and its `[rrt_star]` settings;
+//!   the subgoals (docs/maths.md §5), and its `[rrt_star]` settings;
 //! * [`plant`]: the continuous 3D-LIP integrated in closed form at 1 kHz, and
 //!   its disturbances (the `[disturbance]` table);
 //! * [`scenario`]: TOML scenario files, validation, `--set` overrides and the

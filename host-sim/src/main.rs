@@ -73,7 +73,7 @@ enum Command {
         #[arg(long, default_value_t = 1, value_name = "K")]
         repeat: u32,
     },
-    /// Dense QPs in the npz layout of ../shared/qpbench (P, q, G, h).
+    /// Dense QPs in the npz layout of tests/data/lipmwalk (P, q, G, h).
     Qp {
         #[command(subcommand)]
         command: QpCommand,

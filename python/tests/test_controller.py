@@ -7,7 +7,7 @@ import numpy as np
 import ldcbf_nav
 from ldcbf_nav import Controller
 
-PAPER = [  # the SPEC's paper obstacles (convex hulls, listed convex here)
+PAPER = [  # the paper scenario's obstacles (convex hulls, listed convex here)
     [[2.0, 7.5], [1.5, 7.0], [1.8, 6.5]],
     [[4.0, 6.5], [4.3, 6.8], [4.7, 6.5], [4.5, 6.2], [4.1, 6.2]],
     [[7.0, 7.0], [7.5, 7.5], [8.0, 7.0], [7.5, 6.5]],

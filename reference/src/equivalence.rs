@@ -1,5 +1,5 @@
 //! The equivalence checks: our dense dual active-set solution of a
-//! [`DenseProblem`], its agreement with Clarabel's (SPEC section 3) and the KKT
+//! [`DenseProblem`], its agreement with Clarabel's (docs/maths.md §3) and the KKT
 //! residuals of a primal-dual pair.
 
 use ldcbf_controller::{DualActiveSet, DualActiveSetDyn, QpSettings, QpSolution, QpSolutionDyn};
@@ -32,7 +32,7 @@ pub fn solve_own_dyn(p: &DenseProblem, max_iter: u32) -> Result<QpSolutionDyn, P
     Ok(solver.solve(&qp, &[], max_iter))
 }
 
-/// The agreement figures of SPEC section 3 for one problem.
+/// The agreement figures of docs/maths.md §3 for one problem.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Agreement {
     /// `|x_own - x_ref|_inf / (1 + |x_ref|_inf)` (NaN unless both solved).
@@ -55,7 +55,7 @@ impl Agreement {
 }
 
 /// Compares our solution with Clarabel's on problem `p`: [`compare_stacked`]
-/// with the objective recomputed at our `x`, its figures in the SPEC section 3
+/// with the objective recomputed at our `x`, its figures in the docs/maths.md §3
 /// scaling.
 pub fn compare<const NV: usize, const NC: usize>(
     p: &DenseProblem,

@@ -20,7 +20,7 @@
 //!   ([`Candidate`]), against Clarabel's; [`kkt_stacked`] measures the KKT
 //!   residuals of a primal-dual pair, [`farkas_holds`] an infeasibility
 //!   certificate. [`compare`] and [`kkt`] are the same checks for the
-//!   fixed-size [`QpSolution`] (SPEC section 3 scaling).
+//!   fixed-size [`QpSolution`] (docs/maths.md §3 scaling).
 //! * [`random_problem`] makes deterministic random QPs, feasible or infeasible
 //!   by construction ([`QpKind`]).
 //! * [`ClarabelBackend`] plugs Clarabel into [`Controller::step_with`] so a whole

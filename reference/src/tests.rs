@@ -243,8 +243,7 @@ fn numpy_files_with_absent_and_empty_members_are_read() {
     );
     assert_eq!(empty.ub, full.ub);
     // The external set: numpy's pickled None of another protocol.
-    let lip =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/qpbench/lipmwalk/LIPMWALK0.npz");
+    let lip = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/lipmwalk/LIPMWALK0.npz");
     let lip = DenseProblem::from_npz(&lip).unwrap();
     assert_eq!(
         (lip.n, lip.m, lip.me, lip.lb.len(), lip.ub.len()),

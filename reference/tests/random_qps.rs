@@ -260,8 +260,7 @@ fn static_and_dynamic_instances_are_bit_identical_on_the_controllers_sizes() {
             static_and_dynamic_are_identical::<20, 160>(&random_problem(seed, 20, 100, 5, b, kind));
         }
     }
-    let dir =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/qpbench/lipmwalk");
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/lipmwalk");
     let mut files = 0;
     for f in std::fs::read_dir(&dir).unwrap() {
         let f = f.unwrap().path();

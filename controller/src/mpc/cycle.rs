@@ -1,4 +1,4 @@
-//! One control cycle (SPEC section 2): the measured input ([`CycleInput`],
+//! One control cycle (docs/maths.md §2): the measured input ([`CycleInput`],
 //! rejected with an [`InputError`] when not finite or beyond [`MAX_RATE`] or
 //! [`crate::geometry::MAX_COORDINATE`]), the prediction of `x_0`, the
 //! headings, the QP's cost and rows, the solve with its warm start, the
@@ -149,7 +149,7 @@ impl core::error::Error for InputError {}
 impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
     Controller<N, NV, NC, NOBS>
 {
-    /// Steps 1-2 and 5 of SPEC section 2: prediction, headings, obstacle selection
+    /// docs/maths.md §2.1-2.5: prediction, headings, obstacle selection
     /// and all QP rows, written into `out`. Pure: uses no warm-start memory.
     /// `Err(InputError::NotConfigured)` (and `out` unchanged) on an
     /// unconfigured controller.
@@ -162,7 +162,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
             .assemble(input, input.obstacles.iter().enumerate(), out)
     }
 
-    /// One control cycle (SPEC section 2): predict, plan headings, assemble and
+    /// One control cycle (docs/maths.md §2): predict, plan headings, assemble and
     /// solve the QP, and return the command. Never panics on any input; the
     /// command is always finite (see the module docs for the fallbacks).
     pub fn step<const V: usize>(&mut self, input: &CycleInput<'_, V>) -> CycleOutput<N> {
@@ -233,7 +233,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
 
 impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
     /// Validates the measured input and predicts `(p_0, v_0, tau)`: the CoM
-    /// state at the end of the current step (step 1 of SPEC section 2) and the
+    /// state at the end of the current step (docs/maths.md §2.1) and the
     /// time left until then, s. Sets `time_clamped` once the time in step is
     /// known to be finite.
     pub(super) fn end_of_step<const V: usize>(
@@ -286,7 +286,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         Ok((p0, v0, tau))
     }
 
-    /// Steps 1-5 of SPEC section 2 into `out`, the obstacles being `obstacles`:
+    /// docs/maths.md §2.1-2.5 into `out`, the obstacles being `obstacles`:
     /// `(index in input.obstacles, polygon)` in the order the selection sees
     /// them (all of `input.obstacles`, or a caller's candidates).
     fn assemble<'o, const V: usize, const NOBS: usize>(

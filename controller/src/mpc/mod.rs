@@ -16,7 +16,7 @@
 //! [`PaperController`] is the paper's configuration (`N = 3`, 8 obstacles).
 //! Horizons up to `N = 20` (and beyond) work: the QP is solved in the
 //! well-conditioned variables `z = (p_1, .., p_N)` of [`crate::constraints`]
-//! (Hessian `2 I` for every `N`), an exact reformulation of SPEC 2 item 3; the
+//! (Hessian `2 I` for every `N`), an exact reformulation of docs/maths.md §2.4; the
 //! command and the plan are footsteps and states in the world frame, as the
 //! spec defines them.
 //!

@@ -20,7 +20,7 @@ pub enum Side {
 }
 
 impl Side {
-    /// `s`: +1 for the right foot, -1 for the left (SPEC 2.5).
+    /// `s`: +1 for the right foot, -1 for the left (docs/maths.md §2.5).
     pub fn sign(self) -> f64 {
         match self {
             Side::Left => -1.0,

@@ -1,4 +1,4 @@
-//! Obstacle selection (step 3 of SPEC section 2): the obstacles whose signed
+//! Obstacle selection (docs/maths.md §2.3): the obstacles whose signed
 //! distance to `p_0` is at most [`Config::r_active`], nearest first, at most
 //! `NOBS`, each linearised as the half-plane at its boundary point closest to
 //! `p_0` ([`ActiveObstacle`]). For a caller whose map is too large to scan

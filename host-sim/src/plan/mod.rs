@@ -1,4 +1,4 @@
-//! Global planner (SPEC 5, report 5.1): RRT* on an occupancy grid of the known
+//! Global planner (docs/maths.md §5): RRT* on an occupancy grid of the known
 //! map, whose path becomes a sequence of subgoals for the footstep MPC.
 //!
 //! All positions are in the world frame W, metres. A room of the simulator that
@@ -68,7 +68,7 @@ use serde::{Deserialize, Serialize};
 use crate::world::Polygon;
 use crate::world::grid::{GridTooLarge, MAX_CELLS, OccupancyGrid, dist, grid_search};
 
-/// Global planner (SPEC 5).
+/// Global planner (docs/maths.md §5).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "snake_case")]
 pub enum Planner {

@@ -1,4 +1,4 @@
-//! The simulated robot: the continuous 3D-LIP of SPEC section 1, integrated in
+//! The simulated robot: the continuous 3D-LIP of docs/maths.md §1, integrated in
 //! closed form on a fixed tick (1 ms by default).
 //!
 //! State (world frame W, SI units): CoM position `p` (m) and velocity `v` (m/s),

@@ -50,7 +50,7 @@ pub struct Summary {
     /// Some footstep's footprint overlapped a true obstacle
     /// (`min_footstep_clearance < -`[`crate::world::robot::CONTACT_TOLERANCE`]).
     pub foot_collision: bool,
-    /// Success: `reached_goal && !collision && !foot_collision` (SPEC 4, for a
+    /// Success: `reached_goal && !collision && !foot_collision` (docs/maths.md §4, for a
     /// robot with a body and feet).
     pub success: bool,
     /// Radius of the robot's body disk, m (`[robot]`, [`crate::world::robot`]).

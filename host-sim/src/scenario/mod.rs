@@ -15,12 +15,12 @@
 //! stance = "left"          # initial stance foot, "left" (default) or "right"
 //! goal = [5.0, 5.0]
 //! time_limit = 120.0       # s of simulated time (default 120)
-//! success_radius = 0.15    # m, goal reached when |p - goal| <= this (default 0.15, SPEC 4)
+//! success_radius = 0.15    # m, goal reached when |p - goal| <= this (default 0.15, docs/maths.md §4)
 //! stuck_window = 30.0      # s: stop as "stuck" when the best distance to the goal
 //!                          # has not improved by 5 cm for this long; 0 disables (default 30)
 //!                          # (with a planner: no 5 cm decrease of the remaining path length)
-//! planner = "none"         # "none" (walk to the goal) or "rrt_star" (subgoals, SPEC 5)
-//! perception = "known"     # "known" (true polygons) or "lidar" (LiDAR + DBSCAN, SPEC 6)
+//! planner = "none"         # "none" (walk to the goal) or "rrt_star" (subgoals, docs/maths.md §5)
+//! perception = "known"     # "known" (true polygons) or "lidar" (LiDAR + DBSCAN, docs/maths.md §6)
 //! seed = 0                 # seed of the generator, the planner and the LiDAR noise
 //!                          # (overridden by --seed)
 //!

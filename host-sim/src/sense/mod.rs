@@ -1,4 +1,4 @@
-//! Perception for unknown maps (SPEC 6, report 5.2): a simulated 2D LiDAR, DBSCAN
+//! Perception for unknown maps (docs/maths.md §6): a simulated 2D LiDAR, DBSCAN
 //! clustering of its hit points, and convex pieces that hug the points of each
 //! cluster without ever covering space the sensor has seen to be free.
 //! A room of the simulator that uses only [`crate::world`]; its settings are
@@ -106,7 +106,7 @@ pub use infer::{
     cluster_polygon, free_tolerance, infer_obstacles, simplify_outer, split_and_merge,
 };
 
-/// Obstacle perception (SPEC 6).
+/// Obstacle perception (docs/maths.md §6).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize, clap::ValueEnum)]
 #[serde(rename_all = "snake_case")]
 pub enum Perception {

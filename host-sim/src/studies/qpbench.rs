@@ -1,5 +1,5 @@
 //! `ldcbf-sim qp solve`: our dual active-set solver on dense QPs stored in the
-//! npz layout of qpbenchmark (`../shared/qpbench/`): `P, q, G, h, A, b, lb, ub`
+//! npz layout of qpbenchmark (`tests/data/lipmwalk/`): `P, q, G, h, A, b, lb, ub`
 //! for `min 1/2 x'Px + q'x  s.t.  Gx <= h, Ax = b, lb <= x <= ub`, any of the
 //! last six absent or empty, timed so that anyone can compare it with other
 //! solvers on identical problems (`run --export-qps DIR` writes every cycle's

@@ -22,7 +22,7 @@
 //!   writes the same three files for the whole study.
 //!
 //! Aggregates: success = goal reached with no CoM sample inside a TRUE obstacle
-//! (SPEC 4); steps and time to goal are over the successful runs; compute times
+//! (docs/maths.md §4); steps and time to goal are over the successful runs; compute times
 //! are per-run statistics (the p99 of each run's controller calls), summarised by
 //! their median and maximum over runs (the raw call times are not kept, so a
 //! merged study can still be summarised). Timings from different machines are
