@@ -141,7 +141,8 @@ enum Command {
         #[arg(value_name = "CASES")]
         cases: Vec<ldcbf_sim::studies::deadline::Case>,
         /// Also run seeds 0..N of the `random` family (pooled into one row).
-        #[arg(long, default_value_t = 0, value_name = "N")]
+        #[arg(long, default_value_t = 0, value_name = "N",
+              value_parser = clap::value_parser!(u64).range(..=ldcbf_sim::studies::batch::MAX_SEEDS))]
         random: u64,
         /// Deadline per control cycle, µs (250 = the 100,000
         /// instructions at 400 MHz).
@@ -188,7 +189,8 @@ enum Command {
         #[arg(value_name = "CASES")]
         cases: Vec<ldcbf_sim::studies::deadline::Case>,
         /// Also run seeds 0..N of the `random` family.
-        #[arg(long, default_value_t = 200, value_name = "N")]
+        #[arg(long, default_value_t = 200, value_name = "N",
+              value_parser = clap::value_parser!(u64).range(..=ldcbf_sim::studies::batch::MAX_SEEDS))]
         random: u64,
         /// Safety margins delta, m, comma separated (each replaces the files' own).
         #[arg(long = "delta", value_delimiter = ',', default_values_t = ldcbf_sim::studies::robustness::DEFAULT_DELTAS)]
@@ -339,6 +341,16 @@ fn print_batch(rep: &ldcbf_sim::studies::batch::BatchReport) {
     );
 }
 
+/// `--jobs J` capped by [`ldcbf_sim::studies::batch::cap_jobs`], with a note on
+/// stderr when lowered.
+fn capped_jobs(j: usize) -> usize {
+    let (n, note) = ldcbf_sim::studies::batch::cap_jobs(j);
+    if let Some(note) = note {
+        eprintln!("note: {note}");
+    }
+    n
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
@@ -362,7 +374,7 @@ fn main() -> ExitCode {
             req.planner = planner;
             req.perception = perception;
             if let Some(j) = jobs {
-                req.jobs = j;
+                req.jobs = capped_jobs(j);
             }
             req.shard = shard;
             req.out = out;
@@ -432,7 +444,7 @@ fn main() -> ExitCode {
             req.deadline_us = deadline_us;
             req.clock_mhz = clock_mhz;
             req.sets = sets;
-            req.jobs = jobs;
+            req.jobs = capped_jobs(jobs);
             req.repeat = repeat;
             req.instructions = instructions;
             match ldcbf_sim::studies::deadline::run_deadline(&req) {
@@ -462,7 +474,7 @@ fn main() -> ExitCode {
             req.deltas = deltas;
             req.sets = sets;
             if let Some(j) = jobs {
-                req.jobs = j;
+                req.jobs = capped_jobs(j);
             }
             req.out = out;
             req.progress = !quiet;

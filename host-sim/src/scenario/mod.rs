@@ -113,12 +113,14 @@ use crate::world::Polygon;
 use crate::world::random::{RandomParams, random_obstacles};
 use crate::world::robot::RobotParams;
 
+pub mod limits;
 mod overrides;
 mod parse;
 #[cfg(test)]
 mod tests;
 mod validate;
 
+pub use limits::exact;
 pub use overrides::{
     ControllerOverrides, ROBOT_FIELDS, SideSpec, config_map, controller_fields, overrides_map,
 };
@@ -366,21 +368,32 @@ pub fn load_path(path: &Path, opts: &LoadOptions) -> Result<Scenario, ScenarioEr
     parse_str(&text, &file, opts)
 }
 
+/// [`limits::check_table`] as a [`ScenarioError`] of `file`.
+fn check_limits(table: &toml::Table, file: &str) -> Result<(), ScenarioError> {
+    limits::check_table(table).map_err(|(field, message)| ScenarioError {
+        file: file.into(),
+        field,
+        line: None,
+        message,
+    })
+}
+
 /// Parses and validates scenario text; `file` names it in errors.
 pub fn parse_str(text: &str, file: &str, opts: &LoadOptions) -> Result<Scenario, ScenarioError> {
+    let mut table: toml::Table = toml::from_str(text).map_err(|e| toml_error(&e, text, file))?;
+    check_limits(&table, file)?;
     let raw: RawScenario = toml::from_str(text).map_err(|e| toml_error(&e, text, file))?;
     let mut sc = validate(raw, Some(text), file, opts.seed)?;
     if !opts.sets.is_empty() {
-        let mut table: toml::Table =
-            toml::from_str(text).map_err(|e| toml_error(&e, text, file))?;
         for (k, v) in &opts.sets {
             apply_set(&mut table, k, v).map_err(|message| ScenarioError {
                 file: "--set".into(),
-                field: k.clone(),
+                field: limits::shorten(k, limits::MAX_ECHO),
                 line: None,
                 message,
             })?;
         }
+        check_limits(&table, "--set")?;
         let patched = toml::to_string(&table).map_err(|e| ScenarioError {
             file: "--set".into(),
             field: "(all)".into(),

@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 use serde::Deserialize;
 use toml::Spanned;
 
+use super::limits::{MAX_ECHO, Xy, check_key, shorten};
 use super::{ControllerOverrides, ScenarioError, SideSpec, controller_fields};
 use crate::plan::{Planner, RrtParams};
 use crate::plant::disturbance::DisturbanceParams;
@@ -27,7 +28,7 @@ pub(super) struct RawScenario {
     pub(super) start: Spanned<RawStart>,
     #[serde(default)]
     pub(super) stance: SideSpec,
-    pub(super) goal: Spanned<[f64; 2]>,
+    pub(super) goal: Spanned<Xy>,
     #[serde(default = "default_time_limit")]
     pub(super) time_limit: Spanned<f64>,
     #[serde(default = "default_success_radius")]
@@ -82,7 +83,7 @@ pub(super) struct RawStart {
 #[serde(deny_unknown_fields)]
 pub(super) struct RawObstacle {
     #[serde(default)]
-    pub(super) vertices: Option<Spanned<Vec<[f64; 2]>>>,
+    pub(super) vertices: Option<Spanned<Vec<Xy>>>,
     #[serde(default)]
     pub(super) regular: Option<Spanned<RegularSpec>>,
     #[serde(default)]
@@ -96,7 +97,7 @@ pub(super) struct RawObstacle {
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RegularSpec {
-    pub(super) center: [f64; 2],
+    pub(super) center: Xy,
     pub(super) radius: f64,
     pub(super) sides: u32,
     #[serde(default)]
@@ -126,6 +127,7 @@ pub(super) fn apply_set(table: &mut toml::Table, key: &str, value: &str) -> Resu
         "disturbance",
         "robot",
     ];
+    check_key(key)?;
     let mut parts: Vec<&str> = key.split('.').collect();
     if parts.iter().any(|p| p.is_empty()) {
         return Err("empty key component".into());
@@ -141,8 +143,17 @@ pub(super) fn apply_set(table: &mut toml::Table, key: &str, value: &str) -> Resu
             ));
         }
     }
+    // A value that looks like a list or a table must parse as one; anything
+    // else that is not a TOML value is taken as a string.
     let parsed: toml::Value = match toml::from_str::<toml::Table>(&format!("v = {value}")) {
         Ok(mut t) => t.remove("v").unwrap_or(toml::Value::String(value.into())),
+        Err(e) if value.trim_start().starts_with(['[', '{']) => {
+            return Err(format!(
+                "value {} is not a TOML list or table: {}",
+                shorten(value, MAX_ECHO),
+                shorten(e.message().trim(), MAX_ECHO)
+            ));
+        }
         Err(_) => toml::Value::String(value.into()),
     };
     let (last, dirs) = parts.split_last().expect("non-empty");
@@ -180,7 +191,7 @@ pub(super) fn toml_error(e: &toml::de::Error, text: &str, file: &str) -> Scenari
         file: file.into(),
         field,
         line,
-        message: e.message().trim().to_string(),
+        message: shorten(e.message().trim(), 4 * MAX_ECHO),
     }
 }
 

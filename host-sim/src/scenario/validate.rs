@@ -61,7 +61,7 @@ pub(super) fn validate(
             "x, y and heading must be finite".into(),
         ));
     }
-    let g = raw.goal.get_ref();
+    let g = raw.goal.get_ref().0;
     if !(finite(g[0]) && finite(g[1])) {
         return Err(err("goal", Some(raw.goal.span()), "must be finite".into()));
     }
@@ -148,6 +148,21 @@ pub(super) fn validate(
             message: e.requirement.into(),
         });
     }
+    // The controller's own checks of the combination (e.g. the step map of
+    // gravity, com_height and step_duration), at load time, not mid-run.
+    if let Err(e) = ldcbf_controller::RobotController::new(config) {
+        let line = text.and_then(|t| find_key_line(t, "controller", e.field));
+        let beta_t = (config.gravity / config.com_height).sqrt() * config.step_duration;
+        return Err(ScenarioError {
+            file: file.into(),
+            field: format!("controller.{}", e.field),
+            line,
+            message: format!(
+                "{} (with gravity {} m/s^2, com_height {} m, step_duration {} s: beta T = {beta_t:.3e})",
+                e.requirement, config.gravity, config.com_height, config.step_duration
+            ),
+        });
+    }
     if overrides.foot_clearance.is_some() && !robot.keep_feet_clear {
         return Err(err(
             "controller.foot_clearance",
@@ -176,10 +191,11 @@ pub(super) fn validate(
                 return Err(err(&field, span, "needs `vertices` or `regular`".into()));
             }
             (Some(v), None) => {
+                let pts: Vec<[f64; 2]> = v.get_ref().iter().map(|p| p.0).collect();
                 let poly = if o.hull {
-                    Polygon::hull(v.get_ref())
+                    Polygon::hull(&pts)
                 } else {
-                    Polygon::new(v.get_ref())
+                    Polygon::new(&pts)
                 };
                 (poly, format!("{field}.vertices"), Some(v.span()))
             }
@@ -194,7 +210,7 @@ pub(super) fn validate(
                     ));
                 }
                 if !(pos(r.radius)
-                    && r.center.iter().all(|c| c.is_finite())
+                    && r.center.0.iter().all(|c| c.is_finite())
                     && r.rotation.is_finite())
                 {
                     return Err(err(
@@ -203,7 +219,8 @@ pub(super) fn validate(
                         "center and rotation must be finite, radius > 0".into(),
                     ));
                 }
-                let poly = Polygon::new(&regular_polygon(r.center, r.radius, r.sides, r.rotation));
+                let poly =
+                    Polygon::new(&regular_polygon(r.center.0, r.radius, r.sides, r.rotation));
                 (poly, f, Some(rs.span()))
             }
         };

@@ -31,16 +31,28 @@ pub struct RandomParams {
     #[serde(default = "default_count")]
     pub count: usize,
     /// Lower-left corner of the area where centres are drawn, m.
-    #[serde(default = "default_area_min")]
+    #[serde(
+        default = "default_area_min",
+        deserialize_with = "crate::scenario::exact"
+    )]
     pub area_min: [f64; 2],
     /// Upper-right corner of that area, m.
-    #[serde(default = "default_area_max")]
+    #[serde(
+        default = "default_area_max",
+        deserialize_with = "crate::scenario::exact"
+    )]
     pub area_max: [f64; 2],
     /// Range of the circumradius `[min, max]`, m.
-    #[serde(default = "default_radius")]
+    #[serde(
+        default = "default_radius",
+        deserialize_with = "crate::scenario::exact"
+    )]
     pub radius: [f64; 2],
     /// Range of the number of sampled points `[min, max]` (the polygon is their hull).
-    #[serde(default = "default_points")]
+    #[serde(
+        default = "default_points",
+        deserialize_with = "crate::scenario::exact"
+    )]
     pub points: [u32; 2],
     /// Minimum distance from the start and from the goal to every polygon, m.
     #[serde(default = "default_clearance")]

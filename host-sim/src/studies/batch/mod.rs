@@ -48,6 +48,33 @@ use crate::scenario::{LoadOptions, load};
 use crate::sense::Perception;
 use crate::sim::{MpcRate, SimOptions, Solver, run};
 
+/// Most seeds in one range (`batch --seeds`, `deadline` and `robustness
+/// --random N`): 1,000,000 runs are days of computing; a study that big is
+/// split into ranges or shards. A larger range is refused when parsed, before
+/// anything is allocated for it.
+pub const MAX_SEEDS: u64 = 1_000_000;
+
+/// Most worker threads per core that `--jobs` may start ([`cap_jobs`]).
+pub const JOBS_PER_CORE: usize = 4;
+
+/// `requested` worker threads capped at [`JOBS_PER_CORE`] times the cores of
+/// this machine; the second value is the note to print when it was lowered.
+/// (Each run is compute-bound: more threads than cores only share them.)
+pub fn cap_jobs(requested: usize) -> (usize, Option<String>) {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let max = cores * JOBS_PER_CORE;
+    if requested > max {
+        (
+            max,
+            Some(format!(
+                "--jobs {requested} lowered to {max} ({JOBS_PER_CORE} per core, {cores} cores)"
+            )),
+        )
+    } else {
+        (requested, None)
+    }
+}
+
 /// A half-open range of seeds `start..end`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct SeedRange {
@@ -91,6 +118,13 @@ impl core::str::FromStr for SeedRange {
         if end <= start {
             return Err(format!(
                 "empty seed range {s:?} (the end must be above the start)"
+            ));
+        }
+        if end - start > MAX_SEEDS {
+            return Err(format!(
+                "seed range {s:?} holds {} seeds, more than {MAX_SEEDS} (split the study \
+                 into ranges or shards)",
+                end - start
             ));
         }
         Ok(SeedRange { start, end })
@@ -470,6 +504,10 @@ pub fn run_batch(req: &BatchRequest) -> Result<BatchReport> {
     if req.jobs == 0 {
         bail!("--jobs must be >= 1");
     }
+    if req.seeds.len() > MAX_SEEDS {
+        bail!("seed range {} holds more than {MAX_SEEDS} seeds", req.seeds);
+    }
+    let jobs = cap_jobs(req.jobs).0;
     let sets = req.all_sets();
     let first = load(
         &req.family,
@@ -499,7 +537,7 @@ pub fn run_batch(req: &BatchRequest) -> Result<BatchReport> {
         .unwrap_or_else(|| req.default_out(&first.name, first.planner, first.perception));
     OutputDir::preflight(&out).with_context(|| format!("--out {}", out.display()))?;
     let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(req.jobs)
+        .num_threads(jobs)
         .build()
         .context("cannot start the worker threads")?;
     let bar = if req.progress {
@@ -594,7 +632,7 @@ pub fn run_batch(req: &BatchRequest) -> Result<BatchReport> {
             Solver::Clarabel => "clarabel".into(),
         },
         mpc_rate: req.mpc_rate.to_string(),
-        jobs: req.jobs,
+        jobs,
         wall_time_s: wall,
         runs: rows.len(),
     };

@@ -1,0 +1,150 @@
+//! Limits on hostile input, checked before anything recurses or allocates by
+//! the input's size: the nesting depth of a value, the parts and length of a
+//! `--set` key, the magnitude of every number of a scenario, exact list
+//! lengths, and the length of the text an error message echoes.
+
+use serde::{Deserialize, Deserializer};
+
+/// Deepest nesting of tables and arrays in a scenario value (a file has at
+/// most 5: `obstacles[i].vertices[j][k]`). Also the bound on Python objects
+/// converted to scenario values (cycles included).
+pub const MAX_DEPTH: usize = 16;
+
+/// Most dotted parts of a `--set` key (the longest real key has 3:
+/// `generator.area_min` or `rrt_star.iterations` with a table prefix).
+pub const MAX_KEY_PARTS: usize = 8;
+
+/// Longest `--set` key, bytes.
+pub const MAX_KEY_LEN: usize = 256;
+
+/// Largest magnitude of any number in a scenario (coordinates in m, times in
+/// s, gains): 1e6. Anything larger is a typo or an attack, refused with the
+/// field named before the controller turns it into an overflow elsewhere.
+/// Integers (seeds, counts) are not bound here; their own fields check them.
+pub const MAX_MAGNITUDE: f64 = 1e6;
+
+/// Longest piece of user text an error message repeats, characters.
+pub const MAX_ECHO: usize = 80;
+
+/// `s` for an error message: whole when it has at most `max` characters,
+/// otherwise its first `max` characters, `...` and its size ([`MAX_ECHO`] for
+/// a key or a value, more for a parser's whole message).
+pub fn shorten(s: &str, max: usize) -> String {
+    match s.char_indices().nth(max) {
+        None => s.to_string(),
+        Some((cut, _)) => format!("{}... ({} bytes in all)", &s[..cut], s.len()),
+    }
+}
+
+/// Checks a `--set` key before it is split: at most [`MAX_KEY_LEN`] bytes and
+/// [`MAX_KEY_PARTS`] dotted parts.
+pub fn check_key(key: &str) -> Result<(), String> {
+    if key.len() > MAX_KEY_LEN {
+        return Err(format!(
+            "key too long ({} bytes; at most {MAX_KEY_LEN})",
+            key.len()
+        ));
+    }
+    let parts = key.split('.').count();
+    if parts > MAX_KEY_PARTS {
+        return Err(format!(
+            "key has {parts} dotted parts (at most {MAX_KEY_PARTS})"
+        ));
+    }
+    Ok(())
+}
+
+/// Checks every value of `table` without recursion: nesting depth at most
+/// [`MAX_DEPTH`], every float finite or not, of magnitude at most
+/// [`MAX_MAGNITUDE`] (non-finite values are left to the fields' own checks,
+/// which name them). The error is `(dotted path, message)`.
+pub fn check_table(table: &toml::Table) -> Result<(), (String, String)> {
+    let mut stack: Vec<(String, usize, &toml::Value)> =
+        table.iter().map(|(k, v)| (k.clone(), 1, v)).collect();
+    while let Some((path, depth, v)) = stack.pop() {
+        if depth > MAX_DEPTH {
+            return Err((
+                path,
+                format!("nested more than {MAX_DEPTH} tables or arrays deep"),
+            ));
+        }
+        match v {
+            toml::Value::Float(x) if x.is_finite() && x.abs() > MAX_MAGNITUDE => {
+                return Err((
+                    path,
+                    format!("{x:e} is out of range (magnitude at most {MAX_MAGNITUDE:e})"),
+                ));
+            }
+            toml::Value::Table(t) => {
+                stack.extend(t.iter().map(|(k, v)| (format!("{path}.{k}"), depth + 1, v)));
+            }
+            toml::Value::Array(a) => stack.extend(
+                a.iter()
+                    .enumerate()
+                    .map(|(i, v)| (format!("{path}[{i}]"), depth + 1, v)),
+            ),
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// Deserializes exactly `N` values (a list of another length is an error,
+/// not cut or padded).
+pub fn exact<'de, D, T, const N: usize>(d: D) -> Result<[T; N], D::Error>
+where
+    D: Deserializer<'de>,
+    T: Deserialize<'de>,
+{
+    let v: Vec<T> = Vec::deserialize(d)?;
+    let got = v.len();
+    v.try_into().map_err(|_| {
+        serde::de::Error::custom(format!("expected a list of exactly {N} numbers, got {got}"))
+    })
+}
+
+/// A point `[x, y]` as written in a file: exactly two numbers.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Xy(pub [f64; 2]);
+
+impl<'de> Deserialize<'de> for Xy {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        exact(d).map(Xy)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shorten_keeps_short_text_and_cuts_long_text() {
+        assert_eq!(shorten("abc", MAX_ECHO), "abc");
+        let long = "é".repeat(10_000);
+        let s = shorten(&long, MAX_ECHO);
+        assert!(s.starts_with(&"é".repeat(MAX_ECHO)), "{s}");
+        assert!(s.ends_with("... (20000 bytes in all)"), "{s}");
+    }
+
+    #[test]
+    fn keys_are_bounded_before_splitting() {
+        assert!(check_key("controller.delta").is_ok());
+        assert!(check_key(&["a"; 20_000].join(".")).is_err());
+        assert!(check_key(&"a".repeat(MAX_KEY_LEN + 1)).is_err());
+    }
+
+    #[test]
+    fn depth_and_magnitude_name_the_path() {
+        let t: toml::Table = toml::from_str("goal = [1e300, 5.0]").unwrap();
+        let (p, m) = check_table(&t).unwrap_err();
+        assert_eq!(p, "goal[0]");
+        assert!(m.contains("out of range"), "{m}");
+        let mut v = toml::Value::Float(1.0);
+        for _ in 0..MAX_DEPTH {
+            v = toml::Value::Array(vec![v]);
+        }
+        let mut t = toml::Table::new();
+        t.insert("x".into(), v);
+        assert!(check_table(&t).unwrap_err().1.contains("nested"));
+    }
+}
