@@ -77,6 +77,7 @@ fn decode<'a>(r: &Row, goal: Vector2<f64>, obstacles: &'a [Poly]) -> CycleInput<
         time_in_step: f(8),
         goal,
         obstacles,
+        obstacle_velocities: &[],
     }
 }
 

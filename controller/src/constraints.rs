@@ -451,19 +451,39 @@ pub fn push_gait_rows<const N: usize, const NV: usize, const NC: usize>(
     push_row(qp, &-lat, &wd, &d_const, b.l_max)
 }
 
-/// A linearised obstacle: the half-plane `h(p) = eta'(p - c) - delta >= 0`.
+/// A linearised obstacle: the half-plane `h(p) = eta'(p - c) - delta >= 0`,
+/// moving along its normal at `rate` (see [`HalfPlane::h_at`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HalfPlane {
-    /// `c`: closest boundary point to `p_0` (m, world).
+    /// `c`: closest boundary point to `p_0` of the obstacle where it is at
+    /// the time of the cycle's input (m, world).
     pub c: Vector2<f64>,
     /// `eta`: unit normal towards the safe side.
     pub eta: Vector2<f64>,
+    /// `eta'u`, m/s: the obstacle's velocity `u` (world frame) along the
+    /// normal; > 0 when it moves towards the safe side. 0 for an obstacle at
+    /// rest. The half-plane at time `t` from the input is the one through
+    /// `c + u t`, the same normal.
+    pub rate: f64,
 }
 
 impl HalfPlane {
-    /// `h(p) = eta'(p - c) - delta` (m).
+    /// `h(p) = eta'(p - c) - delta` (m): the half-plane at the input's time.
     pub fn h(&self, p: &Vector2<f64>, delta: f64) -> f64 {
         self.eta.dot(&(p - self.c)) - delta
+    }
+
+    /// `h_t(p) = eta'(p - c - u t) - delta = h(p) - rate t` (m): the
+    /// half-plane of the obstacle moved for `t` seconds from the input's time.
+    /// Equal to [`HalfPlane::h`] bit for bit when `rate` is 0.
+    pub fn h_at(&self, p: &Vector2<f64>, delta: f64, t: f64) -> f64 {
+        self.h(p, delta) - self.shift(t)
+    }
+
+    /// `rate t` (m), exactly `+0` when `rate` is 0 (of either sign), so that
+    /// subtracting it changes no bit of a static row.
+    pub(crate) fn shift(&self, t: f64) -> f64 {
+        if self.rate == 0.0 { 0.0 } else { self.rate * t }
     }
 }
 
@@ -701,6 +721,7 @@ mod tests {
         let hp = HalfPlane {
             c: Vector2::new(1.0, 1.0),
             eta: Vector2::new(-0.6, -0.8),
+            rate: 0.0,
         };
         let (gamma, delta) = (0.3, 0.2);
         let mut qp = DenseQp::<6, 16>::default();

@@ -217,6 +217,15 @@ enum LdcbfInputError
    * succeeded yet).
    */
   LDCBF_INPUT_ERROR_NOT_CONFIGURED = 5,
+  /**
+   * Obstacle velocities were given, but not one per obstacle.
+   */
+  LDCBF_INPUT_ERROR_OBSTACLE_VELOCITY_COUNT = 6,
+  /**
+   * The velocity of a selected obstacle is not finite or faster than
+   * 100 m/s.
+   */
+  LDCBF_INPUT_ERROR_OBSTACLE_VELOCITY = 7,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L

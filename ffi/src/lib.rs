@@ -401,6 +401,7 @@ pub unsafe extern "C" fn ldcbf_step(
         time_in_step: input.time_in_step,
         goal: xy(input.goal),
         obstacles: &handle.obstacles,
+        obstacle_velocities: &[],
     };
     let result = handle.controller.step(&cycle);
     // SAFETY: non-NULL, aligned, writable by contract, outside the controller.

@@ -539,6 +539,7 @@ fn sentinel_rust() -> CycleOutput<LDCBF_HORIZON> {
         time_in_step: 0.0,
         goal: Vector2::new(1.0, 0.0),
         obstacles: &obstacles,
+        obstacle_velocities: &[],
     })
 }
 
@@ -651,6 +652,7 @@ fn robot_config_cycles_equal_the_rust_controller() {
             time_in_step: f64::from(i % 8) * 0.05,
             goal: Vector2::new(4.0, 5.0),
             obstacles: &polys,
+            obstacle_velocities: &[],
         };
         if i == 100 {
             assert_eq!(unsafe { ldcbf_reset(ctl) }, LdcbfResult::Ok);

@@ -208,6 +208,7 @@ fn decode<'a>(r: &[u64; 10], goal: Vector2<f64>, obstacles: &'a [Poly]) -> Cycle
         time_in_step: f(8),
         goal,
         obstacles,
+        obstacle_velocities: &[],
     }
 }
 

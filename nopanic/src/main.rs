@@ -119,6 +119,7 @@ fn input<'a>(r: &[f64; 64], obstacles: &'a [ConvexPolygon<V>]) -> CycleInput<'a,
         time_in_step: r[9],
         goal: Vector2::new(r[10], r[11]),
         obstacles,
+        obstacle_velocities: &[],
     }
 }
 

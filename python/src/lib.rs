@@ -228,6 +228,8 @@ fn input_error_name(e: InputError) -> &'static str {
         InputError::TimeInStep => "time_in_step",
         InputError::Goal => "goal",
         InputError::NotConfigured => "not_configured",
+        InputError::ObstacleVelocityCount => "obstacle_velocity_count",
+        InputError::ObstacleVelocity => "obstacle_velocity",
     }
 }
 
@@ -524,6 +526,7 @@ impl PyController {
             time_in_step: float(time_in_step, "time_in_step")?,
             goal: vec2(goal, "goal")?,
             obstacles: &obstacles,
+            obstacle_velocities: &[],
         };
         with_controller!(&mut self.inner, c => output_dict(py, &c.step(&input)))
     }
