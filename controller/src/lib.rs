@@ -38,6 +38,11 @@
 //! Sizes are const generics (horizon `N`, variables `NV = 2N`, row capacity `NC`,
 //! obstacle capacity `NOBS`), checked against each other at compile time; see
 //! [`mpc`] for the rules and [`PaperController`] for the paper's configuration.
+//!
+//! The maths of each step is in the repository's `docs/maths.md`; a whole
+//! closed loop runs with `cargo run -p ldcbf-controller --example closed_loop`
+//! (`examples/closed_loop.rs`). The enums that hosts print (statuses, command
+//! sources, sides) have one name each: their `name()`.
 #![no_std]
 // One audited `asm!` (the FPU square root of `float`, feature `hw-sqrt`) is
 // the only unsafe code; everything else stays safe.
@@ -55,6 +60,7 @@ pub mod heading;
 pub mod ldp;
 pub mod lip;
 pub mod mpc;
+mod names;
 pub mod qp;
 pub mod relax;
 

@@ -541,6 +541,22 @@ where
     /// Solves the QP `qp` with at most `max_iter` adds plus drops. `prefer[i]` marks
     /// row `i` as expected active (warm start); pass all `false` for a cold start
     /// (entries beyond the capacity are ignored, missing ones are `false`).
+    ///
+    /// ```
+    /// use ldcbf_controller::nalgebra::{SMatrix, SVector};
+    /// use ldcbf_controller::{DenseQp, DualActiveSet, QpSettings, QpStatus};
+    ///
+    /// // min 1/2 |x|^2 - x_0 - x_1  subject to  x_0 + x_1 <= 1 (capacity 4 rows)
+    /// let solver = DualActiveSet::<2, 4>::new(&SMatrix::identity(), QpSettings::default())
+    ///     .unwrap();
+    /// let mut qp = DenseQp::<2, 4>::with_q(SVector::from([-1.0, -1.0]));
+    /// qp.push_row(&SVector::from([1.0, 1.0]), 1.0).unwrap();
+    /// let sol = solver.solve(&qp, &[], 10);
+    /// assert_eq!(sol.status, QpStatus::Solved);
+    /// assert!((sol.x - SVector::from([0.5, 0.5])).amax() < 1e-12);
+    /// assert!((sol.lambda[0] - 0.5).abs() < 1e-12); // the row is active
+    /// assert_eq!(sol.iterations, 1); // one add
+    /// ```
     pub fn solve(
         &self,
         qp: &DenseQpOf<NV, NC>,

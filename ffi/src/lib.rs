@@ -72,7 +72,9 @@ use core::fmt::Write as _;
 use core::mem::{align_of, size_of};
 use core::ptr::addr_of_mut;
 
-use ldcbf_controller::{Config, ConvexPolygon, CycleInput, RobotController};
+use ldcbf_controller::{
+    Config, ConvexPolygon, CycleInput, CycleStatus, InputError, RobotController,
+};
 
 mod checks;
 mod types;
@@ -543,18 +545,46 @@ pub extern "C" fn ldcbf_result_name(result: u32) -> *const c_char {
 
 /// Name of an [`LdcbfCycleStatus`] value as a static NUL-terminated string
 /// (`"optimal"`, `"infeasible"`, `"budget_exhausted"`, `"numerical_failure"`,
-/// `"invalid_input"`, the Rust controller's names; `"unknown"` otherwise).
+/// `"invalid_input"`, the Rust controller's `CycleStatus::name`; `"unknown"`
+/// otherwise).
 #[unsafe(no_mangle)]
 pub extern "C" fn ldcbf_cycle_status_name(status: u32) -> *const c_char {
-    let s: &'static core::ffi::CStr = match status {
-        0 => c"optimal",
-        1 => c"infeasible",
-        2 => c"budget_exhausted",
-        3 => c"numerical_failure",
-        4 => c"invalid_input",
-        _ => c"unknown",
-    };
-    s.as_ptr()
+    match CYCLE_STATUS_NAMES.get(status as usize) {
+        Some(name) => name.as_ptr().cast(),
+        None => c"unknown".as_ptr(),
+    }
+}
+
+/// `CycleStatus::name` of each [`LdcbfCycleStatus`] value, in its order,
+/// NUL-terminated.
+static CYCLE_STATUS_NAMES: [[u8; NAME_CAPACITY]; 5] = [
+    nul_terminated(CycleStatus::Optimal.name()),
+    nul_terminated(CycleStatus::Infeasible.name()),
+    nul_terminated(CycleStatus::BudgetExhausted.name()),
+    nul_terminated(CycleStatus::NumericalFailure.name()),
+    nul_terminated(CycleStatus::InvalidInput(InputError::State).name()),
+];
+
+/// Bytes of a name in [`CYCLE_STATUS_NAMES`], its NUL included.
+const NAME_CAPACITY: usize = 24;
+
+/// `name` followed by NUL bytes; a longer name fails to compile.
+// Evaluated only at compile time (the statics above): an index out of bounds
+// would be a compile error, never a panic in the library.
+#[allow(clippy::indexing_slicing)]
+const fn nul_terminated(name: &str) -> [u8; NAME_CAPACITY] {
+    let bytes = name.as_bytes();
+    assert!(
+        bytes.len() < NAME_CAPACITY,
+        "name too long for NAME_CAPACITY"
+    );
+    let mut out = [0u8; NAME_CAPACITY];
+    let mut i = 0;
+    while i < bytes.len() {
+        out[i] = bytes[i];
+        i += 1;
+    }
+    out
 }
 
 #[cfg(test)]

@@ -20,8 +20,8 @@
 
 use ldcbf_controller::nalgebra::{Const, DefaultAllocator, Dim, Dyn, Vector2};
 use ldcbf_controller::{
-    CommandSource, Config, ConvexPolygon, CycleInput, CycleOutput, CycleStatus, DualActiveSetOf,
-    InputError, PaperController, QpAllocator, QpSettings, QpStatus, RobotController, Side,
+    Config, ConvexPolygon, CycleInput, CycleOutput, CycleStatus, DualActiveSetOf, PaperController,
+    QpAllocator, QpSettings, QpStatus, RobotController, Side,
 };
 use ldcbf_reference::DenseProblem;
 use ldcbf_sim::scenario::{LoadOptions, Scenario};
@@ -203,38 +203,6 @@ fn arr2<'py>(
 fn str_array<'py>(py: Python<'py>, v: Vec<&str>) -> PyResult<Bound<'py, PyAny>> {
     let list = PyList::new(py, v)?;
     py.import("numpy")?.call_method1("array", (list, "U"))
-}
-
-fn side_name(s: Side) -> &'static str {
-    match s {
-        Side::Left => "left",
-        Side::Right => "right",
-    }
-}
-
-fn qp_status_name(s: QpStatus) -> &'static str {
-    match s {
-        QpStatus::Solved => "solved",
-        QpStatus::Infeasible => "infeasible",
-        QpStatus::IterationLimit => "iteration_limit",
-        QpStatus::NumericalError => "numerical_error",
-    }
-}
-
-fn input_error_name(e: InputError) -> &'static str {
-    match e {
-        InputError::State => "state",
-        InputError::StanceFoot => "stance_foot",
-        InputError::TimeInStep => "time_in_step",
-        InputError::Goal => "goal",
-        InputError::NotConfigured => "not_configured",
-        InputError::ObstacleVelocityCount => "obstacle_velocity_count",
-        InputError::ObstacleVelocity => "obstacle_velocity",
-    }
-}
-
-fn source_name(s: CommandSource) -> &'static str {
-    s.name()
 }
 
 /// Polygons as a list of `(k, 2)` arrays.
@@ -526,7 +494,6 @@ impl PyController {
             time_in_step: float(time_in_step, "time_in_step")?,
             goal: vec2(goal, "goal")?,
             obstacles: &obstacles,
-            obstacle_velocities: &[],
         };
         with_controller!(&mut self.inner, c => output_dict(py, &c.step(&input)))
     }
@@ -569,7 +536,7 @@ fn output_dict<'py, const N: usize>(
     d.set_item(
         "input_error",
         match o.status {
-            CycleStatus::InvalidInput(e) => Some(input_error_name(e)),
+            CycleStatus::InvalidInput(e) => Some(e.name()),
             _ => None,
         },
     )?;
@@ -605,11 +572,11 @@ fn output_dict<'py, const N: usize>(
     plan.set_item("states", arr2(py, N, 5, states)?)?;
     let feet: Vec<f64> = o.plan.feet.iter().flat_map(|f| [f.x, f.y]).collect();
     plan.set_item("feet", arr2(py, N, 2, feet)?)?;
-    plan.set_item("first_side", side_name(o.plan.first_side))?;
+    plan.set_item("first_side", o.plan.first_side.name())?;
     d.set_item("plan", plan)?;
     let i = &o.info;
     let info = PyDict::new(py);
-    info.set_item("qp_status", i.qp_status.map(qp_status_name))?;
+    info.set_item("qp_status", i.qp_status.map(QpStatus::name))?;
     info.set_item("iterations", i.iterations)?;
     info.set_item("active_set_size", i.active_set_size)?;
     info.set_item("active_obstacles", i.active_obstacles)?;
@@ -617,7 +584,7 @@ fn output_dict<'py, const N: usize>(
     info.set_item("inside_obstacle", i.inside_obstacle)?;
     info.set_item("time_clamped", i.time_clamped)?;
     info.set_item("warm_started", i.warm_started)?;
-    info.set_item("source", source_name(i.source))?;
+    info.set_item("source", i.source.name())?;
     info.set_item("cost", i.cost)?;
     info.set_item("max_violation", i.max_violation)?;
     info.set_item("min_h0", i.min_h0)?;
@@ -744,7 +711,7 @@ fn scenario_dict<'py>(py: Python<'py>, s: &Scenario) -> PyResult<Bound<'py, PyDi
     d.set_item("source", &s.source)?;
     d.set_item("start", arr1(py, vec![s.start.x, s.start.y]))?;
     d.set_item("start_heading", s.start_heading)?;
-    d.set_item("stance", side_name(s.stance))?;
+    d.set_item("stance", s.stance.name())?;
     d.set_item("goal", arr1(py, vec![s.goal.x, s.goal.y]))?;
     d.set_item("time_limit", s.time_limit)?;
     d.set_item("success_radius", s.success_radius)?;
@@ -866,7 +833,7 @@ fn result_dict<'py>(
     cols.set_item("step", i(&|c| i64::from(c.step)))?;
     cols.set_item(
         "stance",
-        str_array(py, cy.iter().map(|c| side_name(c.stance_side)).collect())?,
+        str_array(py, cy.iter().map(|c| c.stance_side.name()).collect())?,
     )?;
     cols.set_item("x0_px", f(&|c| c.output.plan.x0.position.x))?;
     cols.set_item("x0_py", f(&|c| c.output.plan.x0.position.y))?;
@@ -884,12 +851,7 @@ fn result_dict<'py>(
     )?;
     cols.set_item(
         "source",
-        str_array(
-            py,
-            cy.iter()
-                .map(|c| source_name(c.output.info.source))
-                .collect(),
-        )?,
+        str_array(py, cy.iter().map(|c| c.output.info.source.name()).collect())?,
     )?;
     cols.set_item("iterations", i(&|c| i64::from(c.output.info.iterations)))?;
     cols.set_item(
@@ -927,7 +889,7 @@ fn result_dict<'py>(
     )?;
     cols.set_item(
         "side",
-        str_array(py, fs.iter().map(|s| side_name(s.side)).collect())?,
+        str_array(py, fs.iter().map(|s| s.side.name()).collect())?,
     )?;
     cols.set_item("x", arr1(py, fs.iter().map(|s| s.position.x).collect()))?;
     cols.set_item("y", arr1(py, fs.iter().map(|s| s.position.y).collect()))?;
@@ -961,7 +923,7 @@ fn result_dict<'py>(
     )?;
     cols.set_item(
         "stance",
-        str_array(py, sm.iter().map(|s| side_name(s.stance_side)).collect())?,
+        str_array(py, sm.iter().map(|s| s.stance_side.name()).collect())?,
     )?;
     cols.set_item(
         "clearance",
@@ -1126,7 +1088,7 @@ fn qp_dict(py: Python<'_>, s: QpOut, m: usize) -> PyResult<Bound<'_, PyDict>> {
     debug_assert_eq!(s.lambda.len(), m);
     d.set_item("lambda", arr1(py, s.lambda))?;
     d.set_item("objective", s.objective)?;
-    d.set_item("status", qp_status_name(s.status))?;
+    d.set_item("status", s.status.name())?;
     d.set_item("iterations", s.iterations)?;
     let active: Vec<i64> = s.active.iter().map(|&a| i64::from(a)).collect();
     d.set_item("active_set", PyArray1::from_vec(py, active))?;

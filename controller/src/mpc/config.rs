@@ -7,6 +7,17 @@ use nalgebra::Vector2;
 
 /// Controller settings. Units: SI (m, s, rad). Build with `Default` (the paper's
 /// Table I) and override fields; [`Config::validate`] names the first bad field.
+///
+/// ```
+/// use ldcbf_controller::Config;
+///
+/// // A robot with a 0.25 m body and a faster barrier decay than Table I's 0.3.
+/// let config = Config { body_radius: 0.25, gamma: 0.5, ..Config::default() };
+/// assert!(config.validate().is_ok());
+///
+/// let bad = Config { gamma: 0.0, ..Config::default() };
+/// assert_eq!(bad.validate().unwrap_err().field, "gamma");
+/// ```
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Config {
     /// Gravity `g`, m/s^2.

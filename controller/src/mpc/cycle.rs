@@ -202,6 +202,32 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
     /// One control cycle (docs/maths.md §2): predict, plan headings, assemble and
     /// solve the QP, and return the command. Never panics on any input; the
     /// command is always finite (see the module docs for the fallbacks).
+    ///
+    /// A robot at rest at the origin, facing +x, walks to (3, 0) past a box
+    /// (`controller/examples/closed_loop.rs` runs the whole loop):
+    ///
+    /// ```
+    /// use ldcbf_controller::nalgebra::Vector2;
+    /// use ldcbf_controller::{
+    ///     CommandSource, Config, ConvexPolygon, CycleStatus, PaperController, RecordedInput,
+    /// };
+    ///
+    /// let mut controller = PaperController::new(Config::default()).unwrap();
+    /// let obstacles =
+    ///     [ConvexPolygon::<8>::hull(&[[1.0, 0.3], [1.5, 0.3], [1.5, 0.8], [1.0, 0.8]]).unwrap()];
+    /// // At rest, left foot under the CoM, at the start of a step.
+    /// let input = RecordedInput::at_rest(Vector2::new(3.0, 0.0)).input(&obstacles);
+    /// let out = controller.step(&input);
+    /// assert_eq!(out.status, CycleStatus::Optimal);
+    /// assert_eq!(out.info.source, CommandSource::Optimal);
+    /// assert_eq!(out.info.active_obstacles, 1);
+    /// // The swing foot lands within reach of the CoM at the step end (l_max in
+    /// // each body axis; heading 0, so body and world axes agree) ...
+    /// let reach = (out.foot_target - out.plan.x0.position).amax();
+    /// assert!(reach <= Config::default().l_max + 1e-9);
+    /// // ... and the planned CoM moves towards the goal.
+    /// assert!(out.plan.states[2].position.x > out.plan.states[0].position.x);
+    /// ```
     pub fn step<const V: usize>(&mut self, input: &CycleInput<'_, V>) -> CycleOutput<N> {
         self.step_with(input, &mut OwnSolver)
     }

@@ -176,6 +176,16 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
     /// Validates `config` and precomputes the model and the Hessian
     /// factorisation: [`Controller::UNCONFIGURED`] followed by
     /// [`Controller::configure`].
+    ///
+    /// ```
+    /// use ldcbf_controller::{Config, PaperController};
+    ///
+    /// let controller = PaperController::new(Config::default()).unwrap();
+    /// assert!(controller.is_configured());
+    ///
+    /// let bad = Config { step_duration: -0.4, ..Config::default() };
+    /// assert_eq!(PaperController::new(bad).unwrap_err().field, "step_duration");
+    /// ```
     pub fn new(config: Config) -> Result<Self, ConfigError> {
         let mut controller = Self::UNCONFIGURED;
         controller.configure(config)?;

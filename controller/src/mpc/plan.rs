@@ -57,16 +57,6 @@ impl CycleStatus {
     pub fn is_optimal(self) -> bool {
         matches!(self, CycleStatus::Optimal)
     }
-    /// Short lower-case name, for logs.
-    pub fn name(self) -> &'static str {
-        match self {
-            CycleStatus::Optimal => "optimal",
-            CycleStatus::Infeasible => "infeasible",
-            CycleStatus::BudgetExhausted => "budget_exhausted",
-            CycleStatus::NumericalFailure => "numerical_failure",
-            CycleStatus::InvalidInput(_) => "invalid_input",
-        }
-    }
 }
 
 /// Where the returned command came from.
@@ -85,20 +75,6 @@ pub enum CommandSource {
     CaptureStep,
     /// Hold the last valid target (invalid input).
     Hold,
-}
-
-impl CommandSource {
-    /// Short lower-case name, for logs.
-    pub fn name(self) -> &'static str {
-        match self {
-            CommandSource::Optimal => "optimal",
-            CommandSource::RelaxedGait => "relaxed_gait",
-            CommandSource::RelaxedSafety => "relaxed_safety",
-            CommandSource::PreviousPlan => "previous_plan",
-            CommandSource::CaptureStep => "capture_step",
-            CommandSource::Hold => "hold",
-        }
-    }
 }
 
 /// A LIP state in the world frame.

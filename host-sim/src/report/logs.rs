@@ -5,7 +5,7 @@ use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 
-use super::{Summary, side_name, source_name};
+use super::Summary;
 use crate::sim::SimResult;
 
 fn write_file(path: &Path, text: &str) -> std::io::Result<()> {
@@ -35,7 +35,7 @@ status,source,iterations,active_set,compute_ns,max_violation,cost,min_h0,relax_g
             c.time,
             c.time_in_step,
             c.step,
-            side_name(c.stance_side),
+            c.stance_side.name(),
             x0.position.x,
             x0.position.y,
             x0.velocity.x,
@@ -44,7 +44,7 @@ status,source,iterations,active_set,compute_ns,max_violation,cost,min_h0,relax_g
             o.info.active_obstacles,
             u8::from(o.info.obstacles_truncated),
             o.status.name(),
-            source_name(o.info.source),
+            o.info.source.name(),
             o.info.iterations,
             o.info.active_set_size,
             c.compute_ns,
@@ -68,7 +68,7 @@ status,source,iterations,active_set,compute_ns,max_violation,cost,min_h0,relax_g
             s,
             "{},{},{},{},{:.3},{},{}",
             f.index,
-            side_name(f.side),
+            f.side.name(),
             f.position.x,
             f.position.y,
             f.time,
@@ -94,7 +94,7 @@ status,source,iterations,active_set,compute_ns,max_violation,cost,min_h0,relax_g
             p.velocity.y,
             p.heading,
             p.turning_rate,
-            side_name(p.stance_side),
+            p.stance_side.name(),
             p.clearance
         );
     }

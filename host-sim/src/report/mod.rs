@@ -39,8 +39,6 @@ mod summary;
 mod tests;
 
 pub use logs::{OutputDir, write_logs};
-use summary::side_name;
 pub use summary::{
-    ComputeStats, Summary, compute_stats, human_summary, nearest_rank, percentile, source_name,
-    summarize,
+    ComputeStats, Summary, compute_stats, human_summary, nearest_rank, percentile, summarize,
 };

@@ -4,7 +4,6 @@
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
 
-use ldcbf_controller::Side;
 use serde::Serialize;
 
 use crate::sim::SimResult;
@@ -178,31 +177,6 @@ pub fn compute_stats(ns: &[u64]) -> ComputeStats {
     }
 }
 
-/// `CommandSource` as a snake_case name (`Optimal` -> `optimal`,
-/// `RelaxedGait` -> `relaxed_gait`), derived from its `Debug` form so that new
-/// sources are logged without a change here.
-pub fn source_name(s: ldcbf_controller::CommandSource) -> String {
-    let mut out = String::new();
-    for (i, ch) in format!("{s:?}").chars().enumerate() {
-        if ch.is_ascii_uppercase() {
-            if i > 0 {
-                out.push('_');
-            }
-            out.push(ch.to_ascii_lowercase());
-        } else {
-            out.push(ch);
-        }
-    }
-    out
-}
-
-pub(super) fn side_name(s: Side) -> &'static str {
-    match s {
-        Side::Left => "left",
-        Side::Right => "right",
-    }
-}
-
 /// Builds the summary of a run.
 pub fn summarize(r: &SimResult) -> Summary {
     let sc = &r.scenario;
@@ -231,7 +205,7 @@ pub fn summarize(r: &SimResult) -> Summary {
             .entry(c.output.status.name().to_string())
             .or_insert(0) += 1;
         *source_counts
-            .entry(source_name(c.output.info.source))
+            .entry(c.output.info.source.name().to_string())
             .or_insert(0) += 1;
         let v = c.output.info.max_violation;
         if v.is_finite() {

@@ -123,12 +123,7 @@ pub const CSV_HEADER: &str = "file,n,m,status,iterations,objective,min_solve_ns,
 impl QpRow {
     /// One CSV line (no newline).
     pub fn csv(&self) -> String {
-        let status = match self.status {
-            QpStatus::Solved => "solved",
-            QpStatus::Infeasible => "infeasible",
-            QpStatus::IterationLimit => "iteration_limit",
-            QpStatus::NumericalError => "numerical_error",
-        };
+        let status = self.status.name();
         let (dx, dobj) = match self.clarabel {
             Some((dx, dobj)) => (format!("{dx:.3e}"), format!("{dobj:.3e}")),
             None => (String::new(), String::new()),
