@@ -1,0 +1,1 @@
+//! ldcbf-nav ROS 2 node.
