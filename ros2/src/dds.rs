@@ -203,8 +203,11 @@ pub fn spin(params: &Params, mut nav: NavNode, idle: Option<Duration>) -> Result
     loop {
         let mut any = false;
         for g in drain(&goal) {
-            nav.on_goal(&g);
             any = true;
+            if let Some(m) = nav.on_goal(&g) {
+                out.publish(m)?;
+                cycles += 1;
+            }
         }
         // Odometry before gait states: a gait state waits for its odometry.
         for o in drain(&odom) {
@@ -227,6 +230,85 @@ pub fn spin(params: &Params, mut nav: NavNode, idle: Option<Duration>) -> Result
             return Ok(cycles);
         } else {
             std::thread::sleep(Duration::from_micros(200));
+        }
+    }
+}
+
+/// The robot stand-in on DDS ([`crate::robot`]): publishes `/goal_pose`,
+/// `/odom` and `/gait_state` with the node's topic names and QoS, waits for
+/// each cycle's command (re-sending the cycle's messages every `retry` until
+/// it comes; the node ignores a repeated gait state) and applies it, until
+/// the walk ends. Fails when no command comes for `timeout`.
+pub fn run_robot(
+    params: &Params,
+    mut robot: crate::robot::Robot,
+    retry: Duration,
+    timeout: Duration,
+) -> Result<(crate::robot::End, u64)> {
+    let ctx = context(params.domain_id, params.localhost_only)?;
+    let mut node = node(&ctx, "ldcbf_robot")?;
+    let t = &params.topics;
+    let goal: Publisher<PoseStamped> = advertise(
+        &mut node,
+        &t.goal,
+        "geometry_msgs",
+        "PoseStamped",
+        reliable_qos(),
+    )?;
+    let odom: Publisher<Odometry> =
+        advertise(&mut node, &t.odom, "nav_msgs", "Odometry", sensor_qos())?;
+    let gait: Publisher<GaitState> = advertise(
+        &mut node,
+        &t.gait_state,
+        "ldcbf_msgs",
+        "GaitState",
+        reliable_qos(),
+    )?;
+    let command: Subscription<FootstepCommand> = subscribe(
+        &mut node,
+        &t.command,
+        "ldcbf_msgs",
+        "FootstepCommand",
+        reliable_qos(),
+    )?;
+    let mut cycles = 0;
+    loop {
+        let (o, g) = robot.sense();
+        let stamp = g.header.stamp;
+        let started = Instant::now();
+        let mut sent = None::<Instant>;
+        let cmd = loop {
+            if sent.is_none_or(|s| s.elapsed() > retry) {
+                let e = |w: &str| format!("cannot publish {w}");
+                goal.publish(robot.goal())
+                    .ok()
+                    .with_context(|| e("the goal"))?;
+                odom.publish(o.clone())
+                    .ok()
+                    .with_context(|| e("the odometry"))?;
+                gait.publish(g.clone())
+                    .ok()
+                    .with_context(|| e("the gait state"))?;
+                sent = Some(Instant::now());
+            }
+            if let Some(c) = drain(&command)
+                .into_iter()
+                .find(|c| c.header.stamp == stamp)
+            {
+                break c;
+            }
+            anyhow::ensure!(
+                started.elapsed() < timeout,
+                "no footstep command for t = {} s within {timeout:?} (is ldcbf-ros2 running on domain {}?)",
+                robot.time(),
+                params.domain_id
+            );
+            std::thread::sleep(Duration::from_micros(200));
+        };
+        robot.apply(&cmd);
+        cycles += 1;
+        if let Some(end) = robot.advance() {
+            return Ok((end, cycles));
         }
     }
 }

@@ -7,6 +7,7 @@
 //! * [`params`]: the YAML parameter file (ROS 2 layout);
 //! * [`record`]: the inputs of an `ldcbf-sim` run as messages, with the
 //!   commands the node must answer (the DDS test's data);
+//! * [`robot`]: the robot stand-in (the simulator's plant) without DDS;
 //! * [`dds`]: topics, QoS and the node's loop on DDS.
 
 pub mod dds;
@@ -14,6 +15,7 @@ pub mod msgs;
 pub mod node;
 pub mod params;
 pub mod record;
+pub mod robot;
 
 use anyhow::{Context, Result};
 use ldcbf_controller::RobotController;

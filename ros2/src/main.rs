@@ -2,6 +2,7 @@
 //!
 //! ```text
 //! ldcbf-ros2 [--params FILE] [--idle-exit S]    the node
+//! ldcbf-ros2 robot [--params FILE]              the robot stand-in (the map's scenario)
 //! ldcbf-ros2 record SCENARIO FILE [--set k=v]   a run's inputs as messages (JSON)
 //! ```
 
@@ -31,6 +32,10 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// The robot stand-in: the simulator's plant at the start of the map's
+    /// scenario, publishing /odom, /gait_state and /goal_pose and walking on
+    /// the node's commands until the goal or the time limit.
+    Robot,
     /// Simulate SCENARIO (no planner) and write its inputs as ROS 2 messages
     /// with the node's commands to FILE (JSON): the DDS test's data.
     Record {
@@ -74,6 +79,24 @@ fn main_result(cli: Cli) -> Result<()> {
             );
             let n = ldcbf_ros2::dds::spin(&params, nav, idle)?;
             eprintln!("ldcbf-ros2: {n} cycles");
+        }
+        Some(Command::Robot) => {
+            let sc = ldcbf_sim::scenario::load(
+                &params.map,
+                &ldcbf_sim::scenario::LoadOptions {
+                    seed: None,
+                    sets: params.sets.clone(),
+                },
+            )
+            .with_context(|| format!("map {}", params.map))?;
+            let robot = ldcbf_ros2::robot::Robot::new(&sc, &params.frame_id)?;
+            let (end, cycles) = ldcbf_ros2::dds::run_robot(
+                &params,
+                robot,
+                Duration::from_millis(500),
+                Duration::from_secs(30),
+            )?;
+            println!("ldcbf-ros2 robot: {end:?} after {cycles} cycles");
         }
         Some(Command::Record {
             scenario,

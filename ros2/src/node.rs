@@ -46,6 +46,7 @@ pub struct NavNode {
     goal: Option<Vector2<f64>>,
     odom: Option<Odometry>,
     pending: Option<GaitState>,
+    last: Option<Time>,
 }
 
 /// Yaw of a quaternion, rad.
@@ -149,12 +150,15 @@ impl NavNode {
             goal: None,
             odom: None,
             pending: None,
+            last: None,
         }
     }
 
-    /// A new goal (`/goal_pose`): its position.
-    pub fn on_goal(&mut self, goal: &PoseStamped) {
+    /// A new goal (`/goal_pose`): its position; runs a gait state's cycle
+    /// that waited for a goal.
+    pub fn on_goal(&mut self, goal: &PoseStamped) -> Option<CycleMessages> {
         self.goal = Some(Vector2::new(goal.pose.position.x, goal.pose.position.y));
+        self.try_cycle()
     }
 
     /// A new odometry (`/odom`); runs the waiting gait state's cycle if this
@@ -164,9 +168,14 @@ impl NavNode {
         self.try_cycle()
     }
 
-    /// A new gait state: one control cycle, now or when its odometry arrives
-    /// (a newer gait state replaces a waiting one). None without a goal yet.
+    /// A new gait state: one control cycle, now or when its odometry (and a
+    /// goal) arrives; a newer gait state replaces a waiting one. A gait state
+    /// not newer than the last one planned on is ignored (a repeated sample),
+    /// so a cycle runs once per gait state.
     pub fn on_gait(&mut self, gait: GaitState) -> Option<CycleMessages> {
+        if self.last.is_some_and(|t| gait.header.stamp <= t) {
+            return None;
+        }
         self.pending = Some(gait);
         self.try_cycle()
     }
@@ -178,6 +187,7 @@ impl NavNode {
         }
         let gait = self.pending.take()?;
         let odom = self.odom.clone()?;
+        self.last = Some(gait.header.stamp);
         let start = std::time::Instant::now();
         let out = self
             .controller

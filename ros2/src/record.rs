@@ -128,7 +128,7 @@ pub fn play(scenario: &str, sets: &[(String, String)], frame_id: &str) -> Result
             ..Pose::default()
         },
     };
-    nav.on_goal(&goal);
+    let _ = nav.on_goal(&goal);
     let mut cycles = Vec::with_capacity(rec.len());
     let mut same_as_run = 0;
     for (k, (inp, c)) in rec.inputs.iter().zip(&res.cycles).enumerate() {

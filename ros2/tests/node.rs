@@ -78,7 +78,7 @@ fn gait_state_waits_for_its_odometry() {
         )
     };
     assert!(nav.on_gait(gait(0.5)).is_none(), "no goal, no odometry");
-    nav.on_goal(&goal(9.0, 3.0));
+    assert!(nav.on_goal(&goal(9.0, 3.0)).is_none(), "no odometry");
     assert!(
         nav.on_odom(odom(0.45)).is_none(),
         "odometry older than the gait state"
@@ -87,6 +87,10 @@ fn gait_state_waits_for_its_odometry() {
     assert!(
         nav.on_odom(odom(0.55)).is_none(),
         "one cycle per gait state"
+    );
+    assert!(
+        nav.on_gait(gait(0.5)).is_none(),
+        "a repeated gait state is ignored"
     );
     let o = odom(0.5);
     let want = twin.step(&input_of(&o, &gait(0.5), Vector2::new(9.0, 3.0), &obs));
@@ -112,7 +116,7 @@ fn gait_state_waits_for_its_odometry() {
 fn bad_input_is_a_typed_result() {
     let (ctl, obs) = circles();
     let mut nav = NavNode::new(ctl, obs, "map");
-    nav.on_goal(&goal(9.0, 3.0));
+    let _ = nav.on_goal(&goal(9.0, 3.0));
     let mut o = odometry(
         stamp(0.0),
         "map",
@@ -190,4 +194,35 @@ fn recorded_run_as_messages() {
         play("maze", &[], "map").is_err(),
         "maze walks to RRT* subgoals"
     );
+}
+
+/// The stand-in and the node closed in one process (no DDS): the walk of
+/// `ldcbf-sim run circles`, to the goal in about as many cycles.
+#[test]
+fn stand_in_closes_the_loop() {
+    use ldcbf_ros2::robot::{End, Robot};
+    let sc = load("circles", &LoadOptions::default()).unwrap();
+    let (ctl, obs) = circles();
+    let mut nav = NavNode::new(ctl, obs, "map");
+    let mut robot = Robot::new(&sc, "map").unwrap();
+    let _ = nav.on_goal(&robot.goal());
+    let mut cycles = 0usize;
+    let end = loop {
+        let (o, g) = robot.sense();
+        assert!(nav.on_odom(o).is_none());
+        let m = nav.on_gait(g).expect("one cycle per gait state");
+        robot.apply(&m.command);
+        cycles += 1;
+        if let Some(end) = robot.advance() {
+            break end;
+        }
+    };
+    assert_eq!(end, End::GoalReached);
+    let sim = ldcbf_sim::run(&sc, ldcbf_sim::SimOptions::default()).unwrap();
+    let n = sim.cycles.len();
+    assert!(
+        cycles.abs_diff(n) <= n / 50,
+        "{cycles} cycles, ldcbf-sim {n}"
+    );
+    assert!(robot.steps() > 10 && (robot.position() - sc.goal).norm() <= sc.success_radius);
 }

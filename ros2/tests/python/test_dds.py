@@ -1,13 +1,15 @@
 """The `ldcbf-ros2` node against an independent DDS (Cyclone DDS, the DDS of
 ROS 2's `rmw_cyclonedds`), with ROS 2's topic and type naming.
 
-This test plays the robot: it publishes the inputs of a recorded `ldcbf-sim`
+The first test plays the robot: it publishes the inputs of a recorded `ldcbf-sim`
 run (`ldcbf-ros2 record circles`: `/goal_pose` once, then `/odom` and
 `/gait_state` per control cycle, in lockstep) and checks that each
 `/footstep_command` equals the Rust controller's command on those inputs
 field for field, bit for bit, cycle for cycle, and that `/footsteps`
 (`nav_msgs/Path`), `/markers` (`visualization_msgs/MarkerArray`) and
 `/diagnostics` (`diagnostic_msgs/DiagnosticArray`) arrive with every cycle.
+The second closes the loop with the stand-in: `ldcbf-ros2 robot` and the node,
+two processes, walk the scenario to its goal.
 Loopback only (Cyclone on 127.0.0.1 without multicast, the node with
 `localhost_only`), on a domain id of its own, bounded in time.
 
@@ -112,6 +114,31 @@ def test_node_commands_equal_the_controllers(played):
             node.kill()
             _, err = node.communicate()
         print(err)
+
+
+def test_stand_in_closes_the_loop_over_dds(played):
+    """Two processes, the node and `ldcbf-ros2 robot` (the simulator's plant),
+    walk the scenario to its goal over DDS."""
+    params, _ = played
+    node = subprocess.Popen(
+        [NODE, "--params", str(params), "--idle-exit", "10"],
+        cwd=ROOT,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    try:
+        robot = subprocess.run(
+            [NODE, "robot", "--params", str(params)],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            timeout=120,
+        )
+    finally:
+        node.terminate()
+        node.communicate(timeout=10)
+    assert robot.returncode == 0, robot.stderr
+    assert "GoalReached" in robot.stdout, robot.stdout
 
 
 def run_robot(rec, start):
