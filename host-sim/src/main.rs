@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! ldcbf-sim run <scenario> [--out DIR] [--seed S] [--set key=value ...]
-//!               [--solver own|clarabel] [--mpc-rate 20|step] [--no-plots] [--no-gif]
+//!               [--solver own|clarabel] [--mpc-rate 20|step] [--no-plots] [--no-gif] [--no-mcap]
 //!               [--repeat K]
 //! ldcbf-sim list
 //! ldcbf-sim batch --family random --seeds 0..200 [--planner none|rrt_star]
@@ -60,6 +60,9 @@ enum Command {
         /// Do not render the animated GIF.
         #[arg(long)]
         no_gif: bool,
+        /// Do not write run.mcap (the run for Foxglove, docs/foxglove.md).
+        #[arg(long)]
+        no_mcap: bool,
         /// Write every n-th 1 kHz sample to trajectory.csv (1 = all).
         #[arg(long, default_value_t = 10)]
         trajectory_every: usize,
@@ -534,6 +537,7 @@ fn main() -> ExitCode {
                 },
             no_plots,
             no_gif,
+            no_mcap,
             trajectory_every,
             export_qps,
             repeat,
@@ -546,6 +550,7 @@ fn main() -> ExitCode {
                 mpc_rate,
                 plots: !no_plots,
                 gif: !no_gif,
+                mcap: !no_mcap,
                 trajectory_every,
                 export_qps: export_qps.clone(),
                 timing_repeats: repeat,

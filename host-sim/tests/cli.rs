@@ -32,6 +32,7 @@ fn run_maze_main_command_writes_everything() {
         "cycles.csv",
         "footsteps.csv",
         "trajectory.csv",
+        "run.mcap",
         "map.png",
         "states.png",
         "frames.png",
@@ -195,4 +196,18 @@ fn run_repeat_changes_only_the_timings() {
         &["run", "simple", "--no-plots", "--repeat", "0"],
         &["--repeat must be >= 1"],
     );
+}
+
+/// `run --no-mcap` writes the logs without `run.mcap`, and says so.
+#[test]
+fn no_mcap_skips_run_mcap() {
+    let tmp = tempfile::tempdir().unwrap();
+    let o = sim(
+        &["run", "simple", "--no-plots", "--no-mcap", "--out", "o"],
+        tmp.path(),
+    );
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(tmp.path().join("o/cycles.csv").is_file());
+    assert!(!tmp.path().join("o/run.mcap").exists());
+    assert!(!text(&o.stdout).contains("run.mcap"));
 }

@@ -31,8 +31,11 @@ pub struct RunRequest {
     pub plots: bool,
     /// Render `walk.gif` (only with `plots`).
     pub gif: bool,
-    /// Write every n-th 1 kHz sample to `trajectory.csv`.
+    /// Write every n-th 1 kHz sample to `trajectory.csv` (and to `/tf` in
+    /// `run.mcap`).
     pub trajectory_every: usize,
+    /// Write `run.mcap` ([`crate::report::mcap`]).
+    pub mcap: bool,
     /// Also write every cycle's QP as `cycle_NNNNN.npz` (`P, q, G, h`) into this
     /// directory (created atomically like the output directory).
     pub export_qps: Option<PathBuf>,
@@ -43,7 +46,7 @@ pub struct RunRequest {
 
 impl RunRequest {
     /// A request with the defaults of the CLI: own solver, 20 Hz, all figures,
-    /// trajectory at 100 Hz, one timing per controller call.
+    /// trajectory at 100 Hz, `run.mcap`, one timing per controller call.
     pub fn new(scenario: &str) -> Self {
         RunRequest {
             scenario: scenario.into(),
@@ -55,6 +58,7 @@ impl RunRequest {
             plots: true,
             gif: true,
             trajectory_every: 10,
+            mcap: true,
             export_qps: None,
             timing_repeats: 1,
         }
@@ -165,6 +169,15 @@ pub fn execute_run(req: &RunRequest) -> Result<RunReport> {
     .iter()
     .map(|s| s.to_string())
     .collect();
+    if req.mcap {
+        crate::report::mcap::write_mcap(
+            &result,
+            &dir.path().join("run.mcap"),
+            req.trajectory_every,
+        )
+        .with_context(|| format!("--out {}: cannot write run.mcap", out.display()))?;
+        files.push("run.mcap".into());
+    }
     if req.plots {
         let opts = PlotOptions {
             gif: req.gif,

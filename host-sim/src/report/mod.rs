@@ -26,6 +26,7 @@
 //!   CoM, every `trajectory_every`-th 1 kHz plant sample (every sample with 1;
 //!   the clearance minimum in the summary always uses every sample).
 //! * `summary.json`: [`Summary`].
+//! * `run.mcap`: the run for Foxglove ([`mcap`]).
 
 //!
 //! The figures of a run (map, state panels, LDCBF frames, LiDAR and planner
@@ -33,6 +34,7 @@
 //! loop ([`crate::sim`]) recorded; the studies and the command line use it.
 
 mod logs;
+pub mod mcap;
 pub mod plot;
 mod summary;
 #[cfg(test)]

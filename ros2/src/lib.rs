@@ -1,0 +1,41 @@
+//! ldcbf-nav as a ROS 2 node in pure Rust (ros2-client over RustDDS, no ROS
+//! installation needed): docs/ros2.md.
+//!
+//! * [`msgs`]: the ROS 2 messages (standard ones and `ldcbf_msgs`), field for
+//!   field;
+//! * [`node`]: the node's logic without DDS (messages <-> controller, the cycle);
+//! * [`params`]: the YAML parameter file (ROS 2 layout);
+//! * [`record`]: the inputs of an `ldcbf-sim` run as messages, with the
+//!   commands the node must answer (the DDS test's data);
+//! * [`robot`]: the robot stand-in (the simulator's plant) without DDS;
+//! * [`dds`]: topics, QoS and the node's loop on DDS.
+
+pub mod dds;
+pub mod msgs;
+pub mod node;
+pub mod params;
+pub mod record;
+pub mod robot;
+
+use anyhow::{Context, Result};
+use ldcbf_controller::RobotController;
+use ldcbf_sim::scenario::{LoadOptions, load};
+
+use crate::node::NavNode;
+use crate::params::Params;
+
+/// The node of `params`: the controller configured by the map scenario, its
+/// obstacles as the known map.
+pub fn nav_node(params: &Params) -> Result<NavNode> {
+    let sc = load(
+        &params.map,
+        &LoadOptions {
+            seed: None,
+            sets: params.sets.clone(),
+        },
+    )
+    .with_context(|| format!("map {}", params.map))?;
+    let ctl = RobotController::new(sc.config)
+        .map_err(|e| anyhow::anyhow!("map {}: controller: {e}", params.map))?;
+    Ok(NavNode::new(ctl, sc.obstacles, &params.frame_id))
+}
