@@ -313,6 +313,15 @@ macro_rules! outln {
 /// closed stderr is ignored.
 fn fail(err: anyhow::Error) -> ExitCode {
     use std::io::Write as _;
+    // Stopped by SIGINT or SIGTERM: the temporary outputs are gone; the status
+    // is the shell's 128 + signal.
+    if let Err(c) = ldcbf_sim::sim::cancel::check() {
+        let _ = writeln!(
+            std::io::stderr().lock(),
+            "error: {c}: stopped, nothing written"
+        );
+        return ExitCode::from(128 + c.signal.map_or(2, |s| s as u8));
+    }
     let msg = format!("{err:#}");
     let one_line: Vec<&str> = msg
         .lines()
@@ -356,6 +365,11 @@ fn capped_jobs(j: usize) -> usize {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    if let Err(e) = ldcbf_sim::sim::cancel::install_signal_handlers() {
+        return fail(anyhow::anyhow!(
+            "cannot install the SIGINT/SIGTERM handlers: {e}"
+        ));
+    }
     match cli.command {
         Command::Batch {
             family,

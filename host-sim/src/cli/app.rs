@@ -157,6 +157,7 @@ pub fn execute_run(req: &RunRequest) -> Result<RunReport> {
                 .map_err(|e| anyhow::anyhow!("{e}"))?;
         }
     }
+    crate::sim::cancel::check()?;
     let summary = summarize(&result);
     write_logs(&result, &summary, dir.path(), req.trajectory_every)
         .with_context(|| format!("--out {}: cannot write the logs", out.display()))?;
@@ -185,7 +186,9 @@ pub fn execute_run(req: &RunRequest) -> Result<RunReport> {
         };
         files.extend(crate::report::plot::render_all(&result, dir.path(), &opts)?);
     }
-    // Everything is written: move the QPs, then the results, into place.
+    // Everything is written (unless a signal came meanwhile): move the QPs,
+    // then the results, into place.
+    crate::sim::cancel::check()?;
     if let (Some(qd), Some(qdir)) = (qd, &req.export_qps) {
         qd.commit()
             .with_context(|| format!("cannot move the QPs into {}", qdir.display()))?;

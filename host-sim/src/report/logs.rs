@@ -111,12 +111,17 @@ status,source,iterations,active_set,compute_ns,max_violation,cost,min_h0,relax_g
 /// previous `run --export-qps`); any other existing path is refused by
 /// [`OutputDir::create`], before anything is written. Dropped without `commit`,
 /// the temporary directory is removed, and so are the parent directories that
-/// `create` made, so a failed command leaves nothing behind.
+/// `create` made, so a failed command leaves nothing behind. A final path that
+/// is a symbolic link to a directory is written through (the link stays and
+/// names the new directory); a dangling link is refused.
 ///
 /// Errors of `create` and [`OutputDir::preflight`] do not repeat the path; the
 /// caller names it (e.g. `--out DIR: ...`).
 #[derive(Debug)]
 pub struct OutputDir {
+    /// The path as given (returned by `commit`).
+    given: PathBuf,
+    /// Where the directory goes: `given`, or the directory a link there names.
     final_path: PathBuf,
     tmp: PathBuf,
     /// Parent directories made by `create`, innermost first.
@@ -130,13 +135,63 @@ impl OutputDir {
     /// or a directory that is not a previous output, and its nearest existing
     /// ancestor is a directory. Commands that run for long call this first.
     pub fn preflight(final_path: &Path) -> std::io::Result<()> {
-        Self::plan(final_path).map(|_| ())
+        let (_, parent, _, missing) = Self::plan(final_path)?;
+        // The nearest existing ancestor must take a new directory.
+        let base = missing
+            .last()
+            .and_then(|p| p.parent())
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(if missing.is_empty() {
+                parent.as_path()
+            } else {
+                Path::new(".")
+            });
+        let probe = base.join(format!(".ldcbf-probe-{}", std::process::id()));
+        std::fs::create_dir(&probe).map_err(|e| {
+            std::io::Error::other(format!(
+                "cannot create a directory in {}: {e}",
+                base.display()
+            ))
+        })?;
+        let _ = std::fs::remove_dir(&probe);
+        Ok(())
     }
 
-    /// The checks of [`OutputDir::preflight`]; returns the parent and the
+    /// The checks of [`OutputDir::preflight`]; returns the final path (a
+    /// symbolic link resolved to its directory, so that the output is written
+    /// through the link and the link stays), its parent, its name and the
     /// parent directories that do not exist yet (innermost first).
-    fn plan(final_path: &Path) -> std::io::Result<(PathBuf, String, Vec<PathBuf>)> {
+    fn plan(final_path: &Path) -> std::io::Result<(PathBuf, PathBuf, String, Vec<PathBuf>)> {
         let err = |m: String| Err(std::io::Error::other(m));
+        let raw = final_path.as_os_str().as_encoded_bytes();
+        if raw.is_empty()
+            || raw == b"."
+            || raw == b".."
+            || raw.ends_with(b"/.")
+            || raw.ends_with(b"/..")
+        {
+            return err(
+                "has no usable last component (it ends in `.` or `..`; give a directory name)"
+                    .into(),
+            );
+        }
+        let resolved;
+        let final_path = match std::fs::symlink_metadata(final_path) {
+            Ok(m) if m.file_type().is_symlink() => match std::fs::canonicalize(final_path) {
+                Ok(t) => {
+                    resolved = t;
+                    resolved.as_path()
+                }
+                Err(e) => {
+                    let to = std::fs::read_link(final_path)
+                        .map_or_else(|_| "?".into(), |t| t.display().to_string());
+                    return err(format!(
+                        "is a symbolic link to {to}, which cannot be followed ({e})"
+                    ));
+                }
+            },
+            _ => final_path,
+        };
         let Some(name) = final_path
             .file_name()
             .and_then(|s| s.to_str())
@@ -176,14 +231,15 @@ impl OutputDir {
                 Err(e) => return err(format!("{}: {e}", p.display())),
             }
         }
-        Ok((parent, name.to_string(), missing))
+        Ok((final_path.to_path_buf(), parent, name.to_string(), missing))
     }
 
     /// Creates the temporary directory for `final_path` (and its parents).
     pub fn create(final_path: &Path) -> std::io::Result<Self> {
-        let (parent, name, missing) = Self::plan(final_path)?;
+        let (resolved, parent, name, missing) = Self::plan(final_path)?;
         let mut dir = OutputDir {
-            final_path: final_path.to_path_buf(),
+            given: final_path.to_path_buf(),
+            final_path: resolved,
             tmp: parent.join(format!(".{name}.tmp-{}", std::process::id())),
             made: Vec::new(),
             committed: false,
@@ -230,7 +286,7 @@ impl OutputDir {
         if let Some(trash) = old {
             std::fs::remove_dir_all(trash)?;
         }
-        Ok(self.final_path.clone())
+        Ok(self.given.clone())
     }
 }
 

@@ -23,6 +23,10 @@ pub const MAX_KEY_LEN: usize = 256;
 /// Integers (seeds, counts) are not bound here; their own fields check them.
 pub const MAX_MAGNITUDE: f64 = 1e6;
 
+/// Largest scenario file, bytes (the shipped ones have a few kB; large maps
+/// come from a `[generator]`).
+pub const MAX_FILE_BYTES: u64 = 1 << 24;
+
 /// Longest piece of user text an error message repeats, characters.
 pub const MAX_ECHO: usize = 80;
 

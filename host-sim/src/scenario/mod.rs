@@ -308,6 +308,8 @@ pub fn resolve(spec: &str) -> Result<PathBuf, ScenarioError> {
             line: None,
             message: if path.is_dir() {
                 "is a directory, not a scenario file".into()
+            } else if path.exists() {
+                "is not a regular file (a device, a FIFO or a socket), not a scenario file".into()
             } else if is_path {
                 "no such file".into()
             } else {
@@ -359,6 +361,20 @@ pub fn load(spec: &str, opts: &LoadOptions) -> Result<Scenario, ScenarioError> {
 /// Loads and validates the scenario file at `path`.
 pub fn load_path(path: &Path, opts: &LoadOptions) -> Result<Scenario, ScenarioError> {
     let file = path.display().to_string();
+    if let Ok(m) = std::fs::metadata(path)
+        && m.len() > limits::MAX_FILE_BYTES
+    {
+        return Err(ScenarioError {
+            file,
+            field: "(file)".into(),
+            line: None,
+            message: format!(
+                "is {} bytes, larger than the {} bytes a scenario file may have",
+                m.len(),
+                limits::MAX_FILE_BYTES
+            ),
+        });
+    }
     let text = std::fs::read_to_string(path).map_err(|e| ScenarioError {
         file: file.clone(),
         field: "(file)".into(),

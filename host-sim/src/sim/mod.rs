@@ -82,6 +82,8 @@ use crate::sense::Perception;
 use crate::world::Polygon;
 use crate::world::obstacle_index::{Candidates, ObstacleIndex};
 
+pub mod cancel;
+
 /// Horizon of [`RobotController`].
 pub const HORIZON: usize = 3;
 /// QP variables of [`RobotController`].
@@ -534,6 +536,8 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
     let mut best_tick = 0u64;
 
     let outcome = loop {
+        // SIGINT, SIGTERM or the caller's flag: end now (sim::cancel).
+        cancel::check().map_err(|c| SimError(c.to_string()))?;
         // 0. Push.
         if let Some(dv) = disturber.push_at(plant.tick, plant.heading) {
             plant.push(dv);
