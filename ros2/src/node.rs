@@ -132,6 +132,8 @@ pub fn input_of<'a>(
         time_in_step: gait.time_in_step,
         goal,
         obstacles,
+        // The known map is at rest.
+        obstacle_velocities: &[],
     }
 }
 

@@ -35,7 +35,6 @@ use ldcbf_controller::Side;
 use ldcbf_controller::nalgebra::Vector2;
 use serde_json::{Value, json};
 
-use super::{side_name, source_name};
 use crate::sim::{CycleRecord, SimResult};
 
 /// The world frame id.
@@ -244,10 +243,10 @@ fn diagnostics(c: &CycleRecord) -> Value {
         "timestamp": stamp(c.time),
         "cycle": c.index,
         "step": c.step,
-        "stance": side_name(c.stance_side),
+        "stance": c.stance_side.name(),
         "time_in_step": c.time_in_step,
         "status": o.status.name(),
-        "source": source_name(o.info.source),
+        "source": o.info.source.name(),
         "iterations": o.info.iterations,
         "active_set": o.info.active_set_size,
         "active_obstacles": o.info.active_obstacles,
