@@ -386,6 +386,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             heading,
             first_side,
             goal: input.goal,
+            time_to_p0: tau,
         };
 
         // 3. Active obstacles: within r_active of p_0, nearest first, at most NOBS.
@@ -433,6 +434,9 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             }
             side = side.opposite();
         }
+        // Step end k is at t_k = tau + k T from the input; a moving obstacle's
+        // half-plane is taken there (`HalfPlane::h_at`).
+        let step_times = |k: usize| (tau + k as f64 * t_step, tau + (k + 1) as f64 * t_step);
         for ob in &out.obstacles[..out.n_obstacles.min(NOBS)] {
             for k in 0..N {
                 let i = out.qp.m;
@@ -443,6 +447,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                     cfg.gamma,
                     self.barrier_margin,
                     k,
+                    step_times(k),
                     &p0,
                     &v0,
                 )
@@ -460,8 +465,17 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                 for k in 0..N {
                     let i = out.qp.m;
                     let df = cfg.foot_margin(&ob.half_plane.eta, heading.theta[k]);
-                    ok &= push_foot_row(&mut out.qp, &self.model, &ob.half_plane, df, k, &p0, &v0)
-                        .is_ok();
+                    ok &= push_foot_row(
+                        &mut out.qp,
+                        &self.model,
+                        &ob.half_plane,
+                        df,
+                        k,
+                        step_times(k),
+                        &p0,
+                        &v0,
+                    )
+                    .is_ok();
                     if let Some(slot) = out.rows.get_mut(i) {
                         *slot = RowId {
                             kind: RowKind::FootClearance(ob.index),
@@ -512,7 +526,10 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         let min_h0 = work
             .active_obstacles()
             .iter()
-            .map(|o| o.half_plane.h(&pred.p0, self.barrier_margin))
+            .map(|o| {
+                o.half_plane
+                    .h_at(&pred.p0, self.barrier_margin, pred.time_to_p0)
+            })
             .fold(f64::INFINITY, f64::min);
         let inside = work
             .active_obstacles()
