@@ -80,7 +80,11 @@ use crate::scenario::Scenario;
 use crate::sense::Lidar;
 use crate::sense::Perception;
 use crate::world::Polygon;
+use crate::world::moving::MovingMap;
 use crate::world::obstacle_index::{Candidates, ObstacleIndex};
+
+mod contacts;
+pub use contacts::{Contact, ContactCause, ContactPart, STANDING_SPEED, contact_counts};
 
 /// Horizon of [`RobotController`].
 pub const HORIZON: usize = 3;
@@ -348,6 +352,10 @@ pub struct SimResult {
     /// What the scenario's disturbances did (pushes applied, foot errors,
     /// estimation errors; empty when none is configured).
     pub disturbance: DisturbanceLog,
+    /// Contacts of the body and the stance foot with the true obstacles, at
+    /// 1 kHz, each with who moved into whom ([`ContactCause`]; empty unless
+    /// [`SimOptions::record_clearance`]).
+    pub contacts: Vec<Contact>,
 }
 
 impl SimResult {
@@ -472,12 +480,17 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         MpcRate::Hz(h) => Some(((1.0 / f64::from(h)) / PLANT_DT).round().max(1.0) as u64),
         MpcRate::PerStep => None,
     };
-    let obstacles = &scenario.obstacles;
-    // The true map's index: the controller's candidates with the known map
-    // (with LiDAR its few obstacles per scan are passed whole), and the
-    // clearances of the samples and footsteps (the linear scans' values).
-    let map_index = ObstacleIndex::new(obstacles).map_err(SimError)?;
-    let index = (scenario.perception == Perception::Known).then_some(&map_index);
+    // The true map at the plant's time (moving obstacles, crate::world::moving),
+    // with the index of its obstacles at rest: the controller's candidates with
+    // a known static map (with LiDAR its few obstacles per scan are passed
+    // whole, and so is a map with moving obstacles), and the clearances of the
+    // samples and footsteps (the linear scans' values).
+    let mut world = MovingMap::new(&scenario.obstacles, &scenario.velocities).map_err(SimError)?;
+    let control_index = (scenario.perception == Perception::Known && world.is_static())
+        .then(|| world.rest_index().clone());
+    let index = control_index.as_ref();
+    let mut contacts = contacts::ContactMonitor::default();
+    let mut landed_now = true;
     let mut candidates = Candidates::default();
     let robot = &scenario.robot;
     // Global planner: subgoals, the goal last.
@@ -487,7 +500,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         let res = crate::plan::plan(
             scenario.start,
             scenario.goal,
-            obstacles,
+            world.rest_obstacles(),
             &scenario.rrt,
             scenario.robot.body_radius,
             scenario.seed,
@@ -527,13 +540,16 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         side: plant.stance_side,
         time: 0.0,
         heading: plant.heading,
-        clearance: map_index.foot_clearance(robot, plant.stance_foot, plant.heading, obstacles),
+        clearance: world.foot_clearance(robot, plant.stance_foot, plant.heading),
     }];
     let mut samples = Vec::with_capacity(max_ticks.min(1 << 20) as usize + 1);
     let mut best_distance = f64::INFINITY;
     let mut best_tick = 0u64;
 
     let outcome = loop {
+        if !world.is_static() {
+            world.set_time(plant.time());
+        }
         // 0. Push.
         if let Some(dv) = disturber.push_at(plant.tick, plant.heading) {
             plant.push(dv);
@@ -553,8 +569,9 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                 side: plant.stance_side,
                 time: plant.time(),
                 heading: plant.heading,
-                clearance: map_index.foot_clearance(robot, foot, plant.heading, obstacles),
+                clearance: world.foot_clearance(robot, foot, plant.heading),
             });
+            landed_now = true;
         }
         // 2. Control.
         let due = match period {
@@ -572,7 +589,8 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
             }
             let cycle_obstacles: &[Polygon] = match lidar.as_mut() {
                 Some(l) => {
-                    let (points, polys) = l.perceive(plant.position, plant.heading, obstacles);
+                    let (points, polys) =
+                        l.perceive(plant.position, plant.heading, world.obstacles());
                     seen = polys;
                     if options.record_scans {
                         scans.push(ScanRecord {
@@ -584,7 +602,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                     }
                     &seen
                 }
-                None => obstacles,
+                None => world.obstacles(),
             };
             let input = CycleInput {
                 com_position: position,
@@ -662,12 +680,26 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
             turning_rate: plant.turning_rate,
             stance_side: plant.stance_side,
             clearance: if options.record_clearance {
-                map_index.clearance(&plant.position, obstacles)
+                world.clearance(&plant.position)
             } else {
                 f64::NAN
             },
         };
         samples.push(sample);
+        if options.record_clearance {
+            let stance = footsteps.last().expect("the initial stance foot");
+            contacts.observe(
+                &world,
+                robot,
+                plant.time(),
+                plant.position,
+                contacts::mean_velocity(&samples, plant.ticks_per_step() as usize),
+                stance.position,
+                stance.heading,
+                landed_now,
+            );
+        }
+        landed_now = false;
         let dist = (plant.position - scenario.goal).norm();
         if dist <= scenario.success_radius {
             navigation.reached_at.push(plant.time());
@@ -701,6 +733,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         scans,
         qps,
         disturbance: disturber.log,
+        contacts: contacts.contacts,
     })
 }
 
