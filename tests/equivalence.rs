@@ -188,6 +188,7 @@ fn check_case<const N: usize, const NV: usize, const NC: usize>(
             c.p.1 + c.goal_dist * c.goal_bearing.sin(),
         ),
         obstacles: &polys,
+        obstacle_velocities: &[],
     };
     let mut ctl =
         Controller::<N, NV, NC, 8>::new(cfg).map_err(|e| TestCaseError::fail(e.to_string()))?;

@@ -87,6 +87,7 @@ fn closed_loop<const N: usize, const NV: usize, const NC: usize>(
                 time_in_step: f64::from(tick_in_step) * ms,
                 goal: subgoals[current],
                 obstacles: &sc.obstacles,
+                obstacle_velocities: &[],
             };
             let t0 = Instant::now();
             let out = ctl.step(&input);

@@ -244,6 +244,7 @@ fn check_case(case: &Case, b: u32, time_limit: f64) -> (String, Vec<String>, usi
             time_in_step: c.time_in_step,
             goal: c.goal,
             obstacles,
+            obstacle_velocities: &[],
         };
         ctl.assemble(&input, &mut asm).expect("valid input");
         assert_eq!(

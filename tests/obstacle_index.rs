@@ -123,6 +123,7 @@ fn input<'a>(s: &State, obstacles: &'a [Polygon]) -> CycleInput<'a, 32> {
         time_in_step: s.time_in_step,
         goal: v(s.goal),
         obstacles,
+        obstacle_velocities: &[],
     }
 }
 

@@ -324,6 +324,7 @@ fn compare_with_spec<const N: usize, const NV: usize, const NC: usize>(
             time_in_step: c.t_in,
             goal: c.goal,
             obstacles: &polys,
+            obstacle_velocities: &[],
         };
         let mut ctl = Controller::<N, NV, NC, 8>::new(cfg).expect("valid configuration");
         let out = ctl.step(&input);

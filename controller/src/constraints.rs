@@ -451,23 +451,47 @@ pub fn push_gait_rows<const N: usize, const NV: usize, const NC: usize>(
     push_row(qp, &-lat, &wd, &d_const, b.l_max)
 }
 
-/// A linearised obstacle: the half-plane `h(p) = eta'(p - c) - delta >= 0`.
+/// A linearised obstacle: the half-plane `h(p) = eta'(p - c) - delta >= 0`,
+/// moving along its normal at `rate` (see [`HalfPlane::h_at`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HalfPlane {
-    /// `c`: closest boundary point to `p_0` (m, world).
+    /// `c`: closest boundary point to `p_0` of the obstacle where it is at
+    /// the time of the cycle's input (m, world).
     pub c: Vector2<f64>,
     /// `eta`: unit normal towards the safe side.
     pub eta: Vector2<f64>,
+    /// `eta'u`, m/s: the obstacle's velocity `u` (world frame) along the
+    /// normal; > 0 when it moves towards the safe side. 0 for an obstacle at
+    /// rest. The half-plane at time `t` from the input is the one through
+    /// `c + u t`, the same normal.
+    pub rate: f64,
 }
 
 impl HalfPlane {
-    /// `h(p) = eta'(p - c) - delta` (m).
+    /// `h(p) = eta'(p - c) - delta` (m): the half-plane at the input's time.
     pub fn h(&self, p: &Vector2<f64>, delta: f64) -> f64 {
         self.eta.dot(&(p - self.c)) - delta
     }
+
+    /// `h_t(p) = eta'(p - c - u t) - delta = h(p) - rate t` (m): the
+    /// half-plane of the obstacle moved for `t` seconds from the input's time.
+    /// Equal to [`HalfPlane::h`] bit for bit when `rate` is 0.
+    pub fn h_at(&self, p: &Vector2<f64>, delta: f64, t: f64) -> f64 {
+        self.h(p, delta) - self.shift(t)
+    }
+
+    /// `rate t` (m), exactly `+0` when `rate` is 0 (of either sign), so that
+    /// subtracting it changes no bit of a static row.
+    pub(crate) fn shift(&self, t: f64) -> f64 {
+        if self.rate == 0.0 { 0.0 } else { self.rate * t }
+    }
 }
 
-/// Appends the LDCBF row `h(p_{k+1}) >= (1 - gamma) h(p_k)` for step `k`.
+/// Appends the LDCBF row `h_{t1}(p_{k+1}) >= (1 - gamma) h_{t0}(p_k)` for
+/// step `k`, with `h_t` the half-plane moved to time `t` ([`HalfPlane::h_at`]);
+/// `(t0, t1)` are the times of step ends `k` and `k + 1` from the input, s
+/// (they do not matter for an obstacle at rest, whose row is the static one
+/// bit for bit).
 #[allow(clippy::result_unit_err, clippy::too_many_arguments)]
 pub fn push_ldcbf_row<const N: usize, const NV: usize, const NC: usize>(
     qp: &mut DenseQp<NV, NC>,
@@ -476,18 +500,30 @@ pub fn push_ldcbf_row<const N: usize, const NV: usize, const NC: usize>(
     gamma: f64,
     delta: f64,
     k: usize,
+    (t0, t1): (f64, f64),
     p0: &Vector2<f64>,
     v0: &Vector2<f64>,
 ) -> Result<(), ()> {
-    // Quantity Q = -p_{k+1} + (1 - gamma) p_k, bound -gamma (eta'c + delta).
+    // Quantity Q = -p_{k+1} + (1 - gamma) p_k, bound -gamma (eta'c + delta)
+    // - (rate t1 - (1 - gamma) rate t0).
     let (w1, c1) = model.position(k + 1, p0, v0);
     let (w0, c0) = model.position(k, p0, v0);
     let w = -w1 + w0 * (1.0 - gamma);
     let q0 = -c1 + c0 * (1.0 - gamma);
-    push_row(qp, &hp.eta, &w, &q0, -gamma * (hp.eta.dot(&hp.c) + delta))
+    let motion = hp.shift(t1) - (1.0 - gamma) * hp.shift(t0);
+    push_row(
+        qp,
+        &hp.eta,
+        &w,
+        &q0,
+        -gamma * (hp.eta.dot(&hp.c) + delta) - motion,
+    )
 }
 
-/// Appends the foot-clearance row `eta'(f_k - c) >= delta_foot` for step `k`.
+/// Appends the foot-clearance row `eta'(f_k - c) >= delta_foot + max(rate t0,
+/// rate t1)` for step `k`: the foot `f_k` stands from step end `k` to step end
+/// `k + 1` (times `t0`, `t1` from the input, s), and the moving half-plane is
+/// nearest to it at one of the two (the static row when `rate` is 0).
 #[allow(clippy::result_unit_err, clippy::too_many_arguments)]
 pub fn push_foot_row<const N: usize, const NV: usize, const NC: usize>(
     qp: &mut DenseQp<NV, NC>,
@@ -495,11 +531,19 @@ pub fn push_foot_row<const N: usize, const NV: usize, const NC: usize>(
     hp: &HalfPlane,
     delta_foot: f64,
     k: usize,
+    (t0, t1): (f64, f64),
     p0: &Vector2<f64>,
     v0: &Vector2<f64>,
 ) -> Result<(), ()> {
     let (w, f_const) = model.foot(k, p0, v0);
-    push_row(qp, &hp.eta, &-w, &-f_const, -hp.eta.dot(&hp.c) - delta_foot)
+    let motion = hp.shift(t0).max(hp.shift(t1));
+    push_row(
+        qp,
+        &hp.eta,
+        &-w,
+        &-f_const,
+        -hp.eta.dot(&hp.c) - delta_foot - motion,
+    )
 }
 
 #[cfg(test)]
@@ -701,11 +745,12 @@ mod tests {
         let hp = HalfPlane {
             c: Vector2::new(1.0, 1.0),
             eta: Vector2::new(-0.6, -0.8),
+            rate: 0.0,
         };
         let (gamma, delta) = (0.3, 0.2);
         let mut qp = DenseQp::<6, 16>::default();
         for k in 0..3 {
-            push_ldcbf_row(&mut qp, &m, &hp, gamma, delta, k, &p0, &v0).unwrap();
+            push_ldcbf_row(&mut qp, &m, &hp, gamma, delta, k, (0.0, 0.0), &p0, &v0).unwrap();
         }
         for k in 0..3 {
             // row value = -(h(p_{k+1}) - (1-gamma) h(p_k))
@@ -714,10 +759,10 @@ mod tests {
         }
         // gamma = 1: plain h(p_{k+1}) >= 0.
         let mut qp1 = DenseQp::<6, 16>::default();
-        push_ldcbf_row(&mut qp1, &m, &hp, 1.0, delta, 1, &p0, &v0).unwrap();
+        push_ldcbf_row(&mut qp1, &m, &hp, 1.0, delta, 1, (0.0, 0.0), &p0, &v0).unwrap();
         assert!((row_value(&qp1, 0, &u) + hp.h(&traj[2].0, delta)).abs() < 1e-13);
         let mut qpf = DenseQp::<6, 16>::default();
-        push_foot_row(&mut qpf, &m, &hp, 0.05, 2, &p0, &v0).unwrap();
+        push_foot_row(&mut qpf, &m, &hp, 0.05, 2, (0.0, 0.0), &p0, &v0).unwrap();
         let e = -(hp.eta.dot(&(f[2] - hp.c)) - 0.05);
         assert!((row_value(&qpf, 0, &u) - e).abs() < 1e-13);
     }

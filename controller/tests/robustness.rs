@@ -50,6 +50,7 @@ fn at_rest<'a>(p: Vector2<f64>, goal: Vector2<f64>, obstacles: &'a [Poly]) -> Cy
         time_in_step: 0.4,
         goal,
         obstacles,
+        obstacle_velocities: &[],
     }
 }
 
@@ -202,6 +203,7 @@ impl Walker {
             time_in_step: self.t_in,
             goal,
             obstacles,
+            obstacle_velocities: &[],
         }
     }
 

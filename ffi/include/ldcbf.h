@@ -13,7 +13,7 @@
  * Version of this C API; [`ldcbf_api_version`] returns it. Compare the two
  * to check that the header matches the library.
  */
-#define LDCBF_API_VERSION 1
+#define LDCBF_API_VERSION 2
 
 /**
  * Horizon `N`: footsteps planned per cycle (the length of the plan arrays of
@@ -217,6 +217,15 @@ enum LdcbfInputError
    * succeeded yet).
    */
   LDCBF_INPUT_ERROR_NOT_CONFIGURED = 5,
+  /**
+   * Obstacle velocities were given, but not one per obstacle.
+   */
+  LDCBF_INPUT_ERROR_OBSTACLE_VELOCITY_COUNT = 6,
+  /**
+   * The velocity of a selected obstacle is not finite or faster than
+   * 100 m/s.
+   */
+  LDCBF_INPUT_ERROR_OBSTACLE_VELOCITY = 7,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
@@ -740,6 +749,34 @@ LdcbfResult ldcbf_step(struct LdcbfController *ctl,
                        const uint32_t *point_counts,
                        uint32_t n_obstacles,
                        struct LdcbfOutput *out);
+
+/**
+ * [`ldcbf_step`] with moving obstacles: `velocities` holds `{vx0, vy0, vx1,
+ * vy1, ...}`, the velocity of each obstacle (m/s, world frame; `2 *
+ * n_obstacles` doubles), each taken as a constant translation over the
+ * horizon, the obstacle's points being where it is now. NULL (or
+ * `n_obstacles == 0`): every obstacle at rest, exactly [`ldcbf_step`]. A
+ * velocity that is not finite or faster than 100 m/s, for an obstacle the
+ * cycle selects, gives [`LdcbfCycleStatus::InvalidInput`] with
+ * [`LdcbfInputError::ObstacleVelocity`] and the hold command, as in Rust.
+ * Other results as [`ldcbf_step`], plus a pointer error for a misaligned
+ * or overlapping `velocities`.
+ *
+ * # Safety
+ * As [`ldcbf_configure`] for `ctl`; `input` and `out`, if non-NULL and
+ * aligned, must be valid for a read of an [`LdcbfInput`] and a write of an
+ * [`LdcbfOutput`]; `point_counts` must be valid for reads of `n_obstacles`
+ * `uint32_t` and `points` of `2 * sum(point_counts)` doubles (when
+ * non-NULL and aligned); `velocities`, when non-NULL and aligned, must be
+ * valid for reads of `2 * n_obstacles` doubles.
+ */
+LdcbfResult ldcbf_step_moving(struct LdcbfController *ctl,
+                              const struct LdcbfInput *input,
+                              const double *points,
+                              const uint32_t *point_counts,
+                              uint32_t n_obstacles,
+                              const double *velocities,
+                              struct LdcbfOutput *out);
 
 /**
  * The LIP's closed-form flow under the controller's model: from CoM position

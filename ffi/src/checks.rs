@@ -5,13 +5,14 @@
 use core::mem::size_of;
 use core::ptr::addr_of;
 
+use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_controller::{ConfigError, ConvexPolygon, GeometryError};
 
 use super::types::LdcbfResult;
 use super::{LDCBF_MAX_OBSTACLES, LDCBF_MAX_POINTS, LDCBF_MAX_VERTICES, LdcbfController, MAGIC};
 // Named in the doc comments only (intra-doc links).
 #[cfg(doc)]
-use super::{ldcbf_init, ldcbf_last_error, ldcbf_step};
+use super::{ldcbf_init, ldcbf_last_error, ldcbf_step, ldcbf_step_moving};
 
 /// The last error recorded in a controller, for [`ldcbf_last_error`].
 #[derive(Clone, Copy, Debug)]
@@ -173,6 +174,41 @@ pub(crate) unsafe fn obstacle_slices<'a>(
     // controller.
     let pts = unsafe { core::slice::from_raw_parts(pts, total) };
     Ok((counts, pts))
+}
+
+/// The caller's `n` obstacle velocities (`2 n` doubles at `velocities`, m/s)
+/// copied into `buf`: empty when `velocities` is NULL or `n` is 0 (every
+/// obstacle at rest), else checked for alignment and overlap with the
+/// controller.
+///
+/// # Safety
+/// As [`ldcbf_step_moving`] for `velocities`; `n <= LDCBF_MAX_OBSTACLES`.
+pub(crate) unsafe fn obstacle_velocities<'b>(
+    ctl: *const LdcbfController,
+    velocities: *const f64,
+    n: usize,
+    buf: &'b mut [Vector2<f64>; LDCBF_MAX_OBSTACLES],
+) -> Result<&'b [Vector2<f64>], LdcbfResult> {
+    if velocities.is_null() || n == 0 {
+        return Ok(&[]);
+    }
+    let v = velocities.cast::<[f64; 2]>();
+    check_ptr(v).and(check_disjoint(
+        v,
+        n.saturating_mul(size_of::<[f64; 2]>()),
+        ctl,
+    ))?;
+    let Some(buf) = buf.get_mut(..n) else {
+        return Err(LdcbfResult::TooManyObstacles);
+    };
+    // SAFETY: non-NULL, aligned (`[f64; 2]` has the alignment of `f64`),
+    // readable for `2 n` doubles by contract, at most
+    // `LDCBF_MAX_OBSTACLES * 16` bytes, outside the controller.
+    let given = unsafe { core::slice::from_raw_parts(v, n) };
+    for (dst, src) in buf.iter_mut().zip(given) {
+        *dst = Vector2::new(src[0], src[1]);
+    }
+    Ok(buf)
 }
 
 /// Validates the obstacles (convex hulls) into `buf`.

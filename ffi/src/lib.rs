@@ -72,6 +72,7 @@ use core::fmt::Write as _;
 use core::mem::{align_of, size_of};
 use core::ptr::addr_of_mut;
 
+use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_controller::{Config, ConvexPolygon, CycleInput, RobotController};
 
 mod checks;
@@ -79,7 +80,7 @@ mod types;
 
 use checks::{
     LastError, Truncating, check_controller, check_disjoint, check_ptr, load_obstacles,
-    obstacle_slices, overlaps,
+    obstacle_slices, obstacle_velocities, overlaps,
 };
 pub use types::{
     LdcbfCommandSource, LdcbfConfig, LdcbfCycleInfo, LdcbfCycleStatus, LdcbfInput, LdcbfInputError,
@@ -89,7 +90,7 @@ use types::{arr, side, xy};
 
 /// Version of this C API; [`ldcbf_api_version`] returns it. Compare the two
 /// to check that the header matches the library.
-pub const LDCBF_API_VERSION: u32 = 1;
+pub const LDCBF_API_VERSION: u32 = 2;
 
 /// Horizon `N`: footsteps planned per cycle (the length of the plan arrays of
 /// [`LdcbfPlan`]).
@@ -344,6 +345,48 @@ pub unsafe extern "C" fn ldcbf_step(
     n_obstacles: u32,
     out: *mut LdcbfOutput,
 ) -> LdcbfResult {
+    // SAFETY: the caller's contract, forwarded; NULL velocities = at rest.
+    unsafe {
+        ldcbf_step_moving(
+            ctl,
+            input,
+            points,
+            point_counts,
+            n_obstacles,
+            core::ptr::null(),
+            out,
+        )
+    }
+}
+
+/// [`ldcbf_step`] with moving obstacles: `velocities` holds `{vx0, vy0, vx1,
+/// vy1, ...}`, the velocity of each obstacle (m/s, world frame; `2 *
+/// n_obstacles` doubles), each taken as a constant translation over the
+/// horizon, the obstacle's points being where it is now. NULL (or
+/// `n_obstacles == 0`): every obstacle at rest, exactly [`ldcbf_step`]. A
+/// velocity that is not finite or faster than 100 m/s, for an obstacle the
+/// cycle selects, gives [`LdcbfCycleStatus::InvalidInput`] with
+/// [`LdcbfInputError::ObstacleVelocity`] and the hold command, as in Rust.
+/// Other results as [`ldcbf_step`], plus a pointer error for a misaligned
+/// or overlapping `velocities`.
+///
+/// # Safety
+/// As [`ldcbf_configure`] for `ctl`; `input` and `out`, if non-NULL and
+/// aligned, must be valid for a read of an [`LdcbfInput`] and a write of an
+/// [`LdcbfOutput`]; `point_counts` must be valid for reads of `n_obstacles`
+/// `uint32_t` and `points` of `2 * sum(point_counts)` doubles (when
+/// non-NULL and aligned); `velocities`, when non-NULL and aligned, must be
+/// valid for reads of `2 * n_obstacles` doubles.
+#[unsafe(no_mangle)]
+pub unsafe extern "C" fn ldcbf_step_moving(
+    ctl: *mut LdcbfController,
+    input: *const LdcbfInput,
+    points: *const f64,
+    point_counts: *const u32,
+    n_obstacles: u32,
+    velocities: *const f64,
+    out: *mut LdcbfOutput,
+) -> LdcbfResult {
     // SAFETY: the caller's contract on `ctl`.
     if let Err(e) = unsafe { check_controller(ctl) } {
         return e;
@@ -391,6 +434,17 @@ pub unsafe extern "C" fn ldcbf_step(
         handle.last_error = e;
         return LdcbfResult::InvalidObstacle;
     }
+    let mut moving = [Vector2::zeros(); LDCBF_MAX_OBSTACLES];
+    // SAFETY: forwarded contract on `velocities`; `counts` has the checked
+    // obstacle count.
+    let velocities =
+        match unsafe { obstacle_velocities(ctl, velocities, counts.len(), &mut moving) } {
+            Ok(v) => v,
+            Err(e) => {
+                handle.last_error = LastError::Pointer("velocities");
+                return e;
+            }
+        };
     let cycle = CycleInput {
         com_position: xy(input.com_position),
         com_velocity: xy(input.com_velocity),
@@ -401,6 +455,7 @@ pub unsafe extern "C" fn ldcbf_step(
         time_in_step: input.time_in_step,
         goal: xy(input.goal),
         obstacles: &handle.obstacles,
+        obstacle_velocities: velocities,
     };
     let result = handle.controller.step(&cycle);
     // SAFETY: non-NULL, aligned, writable by contract, outside the controller.

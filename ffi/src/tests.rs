@@ -539,6 +539,7 @@ fn sentinel_rust() -> CycleOutput<LDCBF_HORIZON> {
         time_in_step: 0.0,
         goal: Vector2::new(1.0, 0.0),
         obstacles: &obstacles,
+        obstacle_velocities: &[],
     })
 }
 
@@ -615,6 +616,20 @@ fn lip_propagate_is_the_controllers_model() {
 /// the same outputs (every field; the command bit for bit), also across a reset.
 #[test]
 fn robot_config_cycles_equal_the_rust_controller() {
+    robot_cycles_equal_rust(&[]);
+}
+
+/// As [`robot_config_cycles_equal_the_rust_controller`] with both obstacles
+/// moving (`ldcbf_step_moving`): the triangle towards the walk, the square
+/// across it.
+#[test]
+fn moving_obstacle_cycles_equal_the_rust_controller() {
+    robot_cycles_equal_rust(&[Vector2::new(-0.3, -0.2), Vector2::new(0.25, -0.1)]);
+}
+
+/// The walk of [`robot_config_cycles_equal_the_rust_controller`] with the
+/// obstacles' `velocities` (empty: `ldcbf_step`, at rest).
+fn robot_cycles_equal_rust(velocities: &[Vector2<f64>]) {
     let rust_cfg = Config {
         body_radius: 0.25,
         foot_length: 0.22,
@@ -633,7 +648,7 @@ fn robot_config_cycles_equal_the_rust_controller() {
         ConvexPolygon::hull(square).unwrap(),
     ];
     let mut out = sentinel();
-    let mut optimal = 0;
+    let (mut optimal, mut moving) = (0, 0);
     for i in 0..200u32 {
         let t = f64::from(i) * 0.05;
         let side = if (i / 8) % 2 == 0 {
@@ -651,6 +666,7 @@ fn robot_config_cycles_equal_the_rust_controller() {
             time_in_step: f64::from(i % 8) * 0.05,
             goal: Vector2::new(4.0, 5.0),
             obstacles: &polys,
+            obstacle_velocities: velocities,
         };
         if i == 100 {
             assert_eq!(unsafe { ldcbf_reset(ctl) }, LdcbfResult::Ok);
@@ -667,10 +683,23 @@ fn robot_config_cycles_equal_the_rust_controller() {
             time_in_step: input.time_in_step,
             goal: arr(&input.goal),
         };
-        assert_eq!(
-            step(ctl, &c_input, &points, &counts, &mut out),
-            LdcbfResult::Ok
-        );
+        let flat: Vec<f64> = velocities.iter().flat_map(|v| [v.x, v.y]).collect();
+        let result = if velocities.is_empty() {
+            step(ctl, &c_input, &points, &counts, &mut out)
+        } else {
+            unsafe {
+                ldcbf_step_moving(
+                    ctl,
+                    &c_input,
+                    points.as_ptr(),
+                    counts.as_ptr(),
+                    2,
+                    flat.as_ptr(),
+                    &mut out,
+                )
+            }
+        };
+        assert_eq!(result, LdcbfResult::Ok);
         assert_eq!(
             format!("{out:?}"),
             format!("{:?}", LdcbfOutput::from(&expected)),
@@ -681,6 +710,59 @@ fn robot_config_cycles_equal_the_rust_controller() {
             expected.foot_target.x.to_bits()
         );
         optimal += usize::from(out.status == LdcbfCycleStatus::Optimal);
+        let asm = rust.last_assembly();
+        moving += usize::from(
+            asm.obstacles[..asm.n_obstacles]
+                .iter()
+                .any(|o| o.half_plane.rate != 0.0),
+        );
     }
     assert!(optimal > 100, "{optimal} optimal cycles");
+    assert_eq!(moving > 100, !velocities.is_empty(), "{moving} cycles");
+}
+
+/// `ldcbf_step_moving`: NULL velocities are `ldcbf_step`; a misaligned or
+/// overlapping array is a pointer error that writes nothing; a NaN velocity
+/// is the controller's input error with the hold command.
+#[test]
+fn step_moving_checks_the_velocities() {
+    let mut s = storage();
+    let ctl = configured(&mut s, &default_config());
+    let (points, counts) = two_obstacles();
+    let mut input = input_at_rest();
+    input.goal = [3.0, 3.0];
+    input.com_position = [1.0, 1.5];
+    input.stance_foot = [1.0, 1.5];
+    let mut out = sentinel();
+    let untouched = format!("{:?}", sentinel());
+    let call = |v: *const f64, out: &mut LdcbfOutput| unsafe {
+        ldcbf_step_moving(ctl, &input, points.as_ptr(), counts.as_ptr(), 2, v, out)
+    };
+    let velocities = [0.1, 0.0, f64::NAN, 0.0, 0.0];
+    let misaligned = velocities
+        .as_ptr()
+        .cast::<u8>()
+        .wrapping_add(1)
+        .cast::<f64>();
+    assert_eq!(call(misaligned, &mut out), LdcbfResult::Misaligned);
+    assert_eq!(format!("{out:?}"), untouched);
+    assert!(
+        last_error(ctl).contains("`velocities`"),
+        "{}",
+        last_error(ctl)
+    );
+    assert_eq!(call(ctl.cast::<f64>(), &mut out), LdcbfResult::Overlap);
+    assert_eq!(format!("{out:?}"), untouched);
+    assert_eq!(call(velocities.as_ptr(), &mut out), LdcbfResult::Ok);
+    assert_eq!(out.status, LdcbfCycleStatus::InvalidInput);
+    assert_eq!(out.input_error, LdcbfInputError::ObstacleVelocity);
+    let mut at_rest = sentinel();
+    let mut null_v = sentinel();
+    assert_eq!(
+        step(ctl, &input, &points, &counts, &mut at_rest),
+        LdcbfResult::Ok
+    );
+    assert_eq!(unsafe { ldcbf_reset(ctl) }, LdcbfResult::Ok);
+    assert_eq!(call(null(), &mut null_v), LdcbfResult::Ok);
+    assert_eq!(format!("{at_rest:?}"), format!("{null_v:?}"));
 }

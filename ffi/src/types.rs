@@ -94,6 +94,11 @@ pub enum LdcbfInputError {
     /// The controller has no valid configuration ([`ldcbf_configure`] has not
     /// succeeded yet).
     NotConfigured = 5,
+    /// Obstacle velocities were given, but not one per obstacle.
+    ObstacleVelocityCount = 6,
+    /// The velocity of a selected obstacle is not finite or faster than
+    /// 100 m/s.
+    ObstacleVelocity = 7,
 }
 
 /// Where the command came from (the Rust controller's `CommandSource`).
@@ -439,6 +444,8 @@ impl From<&CycleOutput<LDCBF_HORIZON>> for LdcbfOutput {
                     InputError::TimeInStep => LdcbfInputError::TimeInStep,
                     InputError::Goal => LdcbfInputError::Goal,
                     InputError::NotConfigured => LdcbfInputError::NotConfigured,
+                    InputError::ObstacleVelocityCount => LdcbfInputError::ObstacleVelocityCount,
+                    InputError::ObstacleVelocity => LdcbfInputError::ObstacleVelocity,
                 },
             ),
         };

@@ -1,6 +1,8 @@
 //! Cortex-M7 firmware for QEMU's `mps2-an500`: replays the recorded control
 //! cycles of `recorded.rs` through the paper's controller ([`PaperController`])
-//! in order, as the host did, and prints over semihosting, per cycle, the
+//! in order, as the host did, then once more (after a reset) with the
+//! obstacles moving at the velocities of `moving.rs` (cycle indices `n ..
+//! 2n`), and prints over semihosting, per cycle, the
 //! command (exact `f64` bits in hex), the status, the solver iterations, the
 //! SysTick ticks the cycle took and its stack high-water mark. Exits QEMU
 //! through semihosting (status 0 on success, 1 on a panic, fault or a cycle too
@@ -32,6 +34,7 @@
 #![no_std]
 #![no_main]
 
+mod moving;
 mod recorded;
 
 use core::arch::asm;
@@ -118,7 +121,7 @@ fn main() -> ! {
 
     let mut line = Line::new();
     line.str("ldcbf-firmware cycles ")
-        .dec(recorded::CYCLES.len() as u32);
+        .dec(2 * recorded::CYCLES.len() as u32);
     line.flush(&mut out);
     line.str("calibration empty_ticks ").dec(empty);
     line.str(" nop256_ticks ").dec(nop256);
@@ -128,9 +131,16 @@ fn main() -> ! {
     line.flush(&mut out);
 
     let goal = Vector2::new(recorded::GOAL[0], recorded::GOAL[1]);
+    let velocities = moving::VELOCITIES.map(|[x, y]| Vector2::new(x, y));
     let (mut max_ticks, mut max_stack) = (0u32, 0usize);
-    for (i, rec) in recorded::CYCLES.iter().enumerate() {
-        let input = decode(black_box(rec), goal, state.obstacles);
+    let n = recorded::CYCLES.len();
+    for i in 0..2 * n {
+        let moving: &[Vector2<f64>] = if i < n { &[] } else { &velocities };
+        if i == n {
+            state.controller.reset();
+        }
+        let rec = &recorded::CYCLES[i % n];
+        let input = decode(black_box(rec), goal, state.obstacles, black_box(moving));
         let sp = cortex_m::register::msp::read() as usize;
         let bottom = paint_stack();
         let (cmd, ticks) = measure(&mut syst, || state.controller.step(black_box(&input)));
@@ -195,8 +205,14 @@ fn init_state() -> State {
 }
 
 /// Cycle input from a recorded row: `[p_x, p_y, v_x, v_y, heading, omega,
-/// foot_x, foot_y, time_in_step, side]`, `f64` bits, side 0 = left, 1 = right.
-fn decode<'a>(r: &[u64; 10], goal: Vector2<f64>, obstacles: &'a [Poly]) -> CycleInput<'a, 8> {
+/// foot_x, foot_y, time_in_step, side]`, `f64` bits, side 0 = left, 1 = right;
+/// the obstacles moving at `velocities` (m/s; empty: at rest).
+fn decode<'a>(
+    r: &[u64; 10],
+    goal: Vector2<f64>,
+    obstacles: &'a [Poly],
+    velocities: &'a [Vector2<f64>],
+) -> CycleInput<'a, 8> {
     let f = |i: usize| f64::from_bits(r[i]);
     CycleInput {
         com_position: Vector2::new(f(0), f(1)),
@@ -208,6 +224,7 @@ fn decode<'a>(r: &[u64; 10], goal: Vector2<f64>, obstacles: &'a [Poly]) -> Cycle
         time_in_step: f(8),
         goal,
         obstacles,
+        obstacle_velocities: velocities,
     }
 }
 

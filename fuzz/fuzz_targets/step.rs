@@ -78,6 +78,7 @@ fuzz_target!(|case: Case| {
             time_in_step: c.t_in,
             goal: Vector2::from(c.goal),
             obstacles: &polys,
+            obstacle_velocities: &[],
         };
         let out = ctl.step(&input);
         assert!(finite(&out), "non-finite output {out:?} for {c:?}");

@@ -35,7 +35,7 @@ mod ldcbf_ffi;
 use ldcbf_ffi::{
     LdcbfConfig, LdcbfController, LdcbfInput, LdcbfOutput, ldcbf_config_default, ldcbf_configure,
     ldcbf_cycle_status_name, ldcbf_init, ldcbf_last_error, ldcbf_lip_propagate, ldcbf_reset,
-    ldcbf_result_name, ldcbf_step,
+    ldcbf_result_name, ldcbf_step, ldcbf_step_moving,
 };
 
 /// Opaque words: pointer values, sizes, counts, scalars.
@@ -84,7 +84,9 @@ fn main() -> ! {
             res[0] = ldcbf_init(storage, w[11], handle_out) as usize;
             res[1] = ldcbf_config_default(config) as usize;
             res[2] = ldcbf_configure(ctl, config) as usize;
-            res[3] = ldcbf_step(ctl, input, points, counts, w[12] as u32, out) as usize;
+            res[3] = ldcbf_step(ctl, input, points, counts, w[12] as u32, out) as usize
+                ^ ldcbf_step_moving(ctl, input, points, counts, w[17] as u32, w[18] as *const f64, out)
+                    as usize;
             res[4] = ldcbf_lip_propagate(ctl, p, p, p, r[0], p_out, p_out) as usize;
             res[5] = ldcbf_last_error(ctl, buf, w[13]);
             if w[14] > 0 {

@@ -43,6 +43,9 @@ const LNC: usize = 32;
 static mut QPRAW: [f64; LNV * LNV + LNC * LNV + LNV + 2 * LNC + 2] =
     [0.0; LNV * LNV + LNC * LNV + LNV + 2 * LNC + 2];
 
+/// Opaque obstacle velocities (any bits, any count up to `NPOLY`).
+static mut VEL: [[f64; 2]; NPOLY] = [[0.0; 2]; NPOLY];
+
 /// Opaque candidate lists for `step_among` (any indices, in or out of range).
 static mut CAND: [u32; 16] = [0; 16];
 
@@ -108,7 +111,11 @@ fn config(r: &[f64; 64]) -> Config {
     }
 }
 
-fn input<'a>(r: &[f64; 64], obstacles: &'a [ConvexPolygon<V>]) -> CycleInput<'a, V> {
+fn input<'a>(
+    r: &[f64; 64],
+    obstacles: &'a [ConvexPolygon<V>],
+    velocities: &'a [Vector2<f64>],
+) -> CycleInput<'a, V> {
     CycleInput {
         com_position: Vector2::new(r[0], r[1]),
         com_velocity: Vector2::new(r[2], r[3]),
@@ -119,6 +126,7 @@ fn input<'a>(r: &[f64; 64], obstacles: &'a [ConvexPolygon<V>]) -> CycleInput<'a,
         time_in_step: r[9],
         goal: Vector2::new(r[10], r[11]),
         obstacles,
+        obstacle_velocities: velocities,
     }
 }
 
@@ -201,7 +209,9 @@ fn main() -> ! {
             foot = FootController::UNCONFIGURED;
             let _ = foot.configure(config(&r));
         }
-        let inp = input(&r, obstacles);
+        // SAFETY: plain volatile read of a static that is never referenced.
+        let vel = unsafe { read_volatile(addr_of!(VEL)) }.map(|[x, y]| Vector2::new(x, y));
+        let inp = input(&r, obstacles, &vel[..len(r[58], NPOLY)]);
         let a = paper.step(&inp);
         let b = foot.step(&inp);
         let mut out = summary(&a);

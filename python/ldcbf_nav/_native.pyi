@@ -124,8 +124,10 @@ class Controller:
         time_in_step: float,
         goal: _ArrayLike,
         obstacles: Optional[Sequence[_ArrayLike]] = None,
+        obstacle_velocities: Optional[_ArrayLike] = None,
     ) -> _StepOutput:
-        """One control cycle; ``obstacles`` are convex ``(k, 2)`` vertex arrays."""
+        """One control cycle; ``obstacles`` are convex ``(k, 2)`` vertex arrays,
+        ``obstacle_velocities`` their velocities ``(n, 2)`` in m/s (None: at rest)."""
 
 def default_config() -> Dict[str, Any]:
     """The controller's defaults (the paper's Table I, a point robot)."""

@@ -182,6 +182,29 @@ fn polygons(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<Polygon>> {
     Ok(out)
 }
 
+/// Obstacle velocities, `(n, 2)` (m/s); `None` or an empty array: none
+/// (every obstacle at rest).
+fn velocities(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<Vector2<f64>>> {
+    const FIELD: &str = "obstacle_velocities";
+    let Some(obj) = obj.filter(|o| !o.is_none()) else {
+        return Ok(Vec::new());
+    };
+    let (shape, d) = float_array(obj, FIELD)?;
+    if shape == [0] {
+        return Ok(Vec::new());
+    }
+    if shape.len() != 2 || shape[1] != 2 {
+        return Err(arg_err(
+            obj.py(),
+            FIELD,
+            format!("expected one (vx, vy) per obstacle, shape (n, 2), got shape {shape:?}"),
+        ));
+    }
+    Ok(d.chunks_exact(2)
+        .map(|c| Vector2::new(c[0], c[1]))
+        .collect())
+}
+
 // ------------------------------------------------------------------ arrays out
 
 fn arr1<'py>(py: Python<'py>, v: Vec<f64>) -> Bound<'py, PyArray1<f64>> {
@@ -228,6 +251,8 @@ fn input_error_name(e: InputError) -> &'static str {
         InputError::TimeInStep => "time_in_step",
         InputError::Goal => "goal",
         InputError::NotConfigured => "not_configured",
+        InputError::ObstacleVelocityCount => "obstacle_velocity_count",
+        InputError::ObstacleVelocity => "obstacle_velocity",
     }
 }
 
@@ -498,7 +523,12 @@ impl PyController {
     /// (N, 2), `first_side`) and `info` (the cycle's diagnostics). A NaN or
     /// out-of-range measurement is not an exception: the controller answers
     /// with status `"invalid_input"` and the hold command, as onboard.
-    #[pyo3(signature = (com_position, com_velocity, heading, turning_rate, stance_foot, stance_side, time_in_step, goal, obstacles=None))]
+    /// `obstacle_velocities` (`(n, 2)`, m/s, world frame, one per obstacle):
+    /// the obstacles' constant velocities over the horizon; `None` = all at
+    /// rest. A count other than the obstacles' or a non-finite or absurd
+    /// velocity is the controller's answer too (`input_error`
+    /// `"obstacle_velocity_count"`, `"obstacle_velocity"`).
+    #[pyo3(signature = (com_position, com_velocity, heading, turning_rate, stance_foot, stance_side, time_in_step, goal, obstacles=None, obstacle_velocities=None))]
     #[allow(clippy::too_many_arguments)]
     fn step<'py>(
         &mut self,
@@ -512,8 +542,10 @@ impl PyController {
         time_in_step: &Bound<'py, PyAny>,
         goal: &Bound<'py, PyAny>,
         obstacles: Option<&Bound<'py, PyAny>>,
+        obstacle_velocities: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let obstacles = polygons(obstacles)?;
+        let velocities = velocities(obstacle_velocities)?;
         let input = CycleInput {
             com_position: vec2(com_position, "com_position")?,
             com_velocity: vec2(com_velocity, "com_velocity")?,
@@ -524,6 +556,7 @@ impl PyController {
             time_in_step: float(time_in_step, "time_in_step")?,
             goal: vec2(goal, "goal")?,
             obstacles: &obstacles,
+            obstacle_velocities: &velocities,
         };
         with_controller!(&mut self.inner, c => output_dict(py, &c.step(&input)))
     }

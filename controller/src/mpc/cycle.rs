@@ -82,6 +82,21 @@ impl RecordedInput {
             time_in_step: self.time_in_step,
             goal: self.goal,
             obstacles,
+            obstacle_velocities: &[],
+        }
+    }
+
+    /// [`RecordedInput::input`] with moving obstacles: `velocities[i]` is the
+    /// velocity of `obstacles[i]` (m/s, world frame W; see
+    /// [`CycleInput::obstacle_velocities`]).
+    pub fn input_moving<'a, const V: usize>(
+        &self,
+        obstacles: &'a [ConvexPolygon<V>],
+        velocities: &'a [Vector2<f64>],
+    ) -> CycleInput<'a, V> {
+        CycleInput {
+            obstacle_velocities: velocities,
+            ..self.input(obstacles)
         }
     }
 }
@@ -105,12 +120,24 @@ pub struct CycleInput<'a, const V: usize> {
     pub time_in_step: f64,
     /// Goal or current subgoal, m.
     pub goal: Vector2<f64>,
-    /// Obstacles (validated convex polygons, world frame).
+    /// Obstacles (validated convex polygons, world frame), where they are at
+    /// the time of this input.
     pub obstacles: &'a [ConvexPolygon<V>],
+    /// Velocity of each obstacle, m/s, world frame W: `obstacle_velocities[i]`
+    /// translates `obstacles[i]`, rigidly and at constant velocity over the
+    /// whole horizon (no rotation). Empty: every obstacle is at rest (the
+    /// static controller, bit for bit). Otherwise its length must equal
+    /// `obstacles.len()` (else [`InputError::ObstacleVelocityCount`]), and the
+    /// velocity of every obstacle the cycle selects (within
+    /// [`Config::r_active`](super::Config::r_active)) must be finite with a
+    /// speed of at most [`MAX_RATE`] (else [`InputError::ObstacleVelocity`]);
+    /// the velocities of obstacles the cycle does not select are not read.
+    pub obstacle_velocities: &'a [Vector2<f64>],
 }
 
-/// Largest accepted CoM speed (m/s) and turning rate (rad/s): far beyond any
-/// walking robot; larger values are treated as corrupted measurements.
+/// Largest accepted CoM speed (m/s), turning rate (rad/s) and obstacle speed
+/// (m/s): far beyond any walking robot or person; larger values are treated
+/// as corrupted measurements.
 pub const MAX_RATE: f64 = 100.0;
 
 /// Which input was not finite or out of its physical range (positions within
@@ -126,6 +153,12 @@ pub enum InputError {
     TimeInStep,
     /// Goal.
     Goal,
+    /// [`CycleInput::obstacle_velocities`] is neither empty nor as long as
+    /// [`CycleInput::obstacles`].
+    ObstacleVelocityCount,
+    /// The velocity of a selected obstacle is not finite or its speed exceeds
+    /// [`MAX_RATE`].
+    ObstacleVelocity,
     /// Not a measurement: the controller has no valid configuration yet (it
     /// is [`Controller::UNCONFIGURED`] and no [`Controller::configure`] has
     /// succeeded).
@@ -139,6 +172,10 @@ impl core::fmt::Display for InputError {
             InputError::StanceFoot => "stance foot position is not finite or out of range",
             InputError::TimeInStep => "time in step is not finite",
             InputError::Goal => "goal is not finite or out of range",
+            InputError::ObstacleVelocityCount => {
+                "obstacle velocities are neither empty nor one per obstacle"
+            }
+            InputError::ObstacleVelocity => "an obstacle velocity is not finite or out of range",
             InputError::NotConfigured => "the controller is not configured",
         })
     }
@@ -268,6 +305,11 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         if !pos_ok(&input.goal) {
             return Err(InputError::Goal);
         }
+        if !(input.obstacle_velocities.is_empty()
+            || input.obstacle_velocities.len() == input.obstacles.len())
+        {
+            return Err(InputError::ObstacleVelocityCount);
+        }
         let t_step = cfg.step_duration;
         let t_in = crate::clamp(input.time_in_step, 0.0, t_step);
         *time_clamped = t_in != input.time_in_step;
@@ -318,10 +360,11 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             heading,
             first_side,
             goal: input.goal,
+            time_to_p0: tau,
         };
 
         // 3. Active obstacles: within r_active of p_0, nearest first, at most NOBS.
-        out.select_obstacles(&p0, cfg, obstacles);
+        out.select_obstacles(&p0, cfg, obstacles, input.obstacle_velocities)?;
 
         // 4-5. Cost and rows.
         out.qp.clear();
@@ -365,6 +408,9 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             }
             side = side.opposite();
         }
+        // Step end k is at t_k = tau + k T from the input; a moving obstacle's
+        // half-plane is taken there (`HalfPlane::h_at`).
+        let step_times = |k: usize| (tau + k as f64 * t_step, tau + (k + 1) as f64 * t_step);
         for ob in &out.obstacles[..out.n_obstacles.min(NOBS)] {
             for k in 0..N {
                 let i = out.qp.m;
@@ -375,6 +421,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                     cfg.gamma,
                     self.barrier_margin,
                     k,
+                    step_times(k),
                     &p0,
                     &v0,
                 )
@@ -392,8 +439,17 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                 for k in 0..N {
                     let i = out.qp.m;
                     let df = cfg.foot_margin(&ob.half_plane.eta, heading.theta[k]);
-                    ok &= push_foot_row(&mut out.qp, &self.model, &ob.half_plane, df, k, &p0, &v0)
-                        .is_ok();
+                    ok &= push_foot_row(
+                        &mut out.qp,
+                        &self.model,
+                        &ob.half_plane,
+                        df,
+                        k,
+                        step_times(k),
+                        &p0,
+                        &v0,
+                    )
+                    .is_ok();
                     if let Some(slot) = out.rows.get_mut(i) {
                         *slot = RowId {
                             kind: RowKind::FootClearance(ob.index),
@@ -444,7 +500,10 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         let min_h0 = work
             .active_obstacles()
             .iter()
-            .map(|o| o.half_plane.h(&pred.p0, self.barrier_margin))
+            .map(|o| {
+                o.half_plane
+                    .h_at(&pred.p0, self.barrier_margin, pred.time_to_p0)
+            })
             .fold(f64::INFINITY, f64::min);
         let inside = work
             .active_obstacles()

@@ -155,7 +155,8 @@ pub struct CycleInfo {
     /// `relax_safety`); NaN for `Hold`.
     pub max_violation: f64,
     /// Smallest `h_j(p_0)` over the active obstacles (m, with the margin
-    /// [`Config::barrier_margin`](super::Config::barrier_margin)), `+inf` if none.
+    /// [`Config::barrier_margin`](super::Config::barrier_margin); a moving
+    /// obstacle's half-plane taken at `p_0`'s time), `+inf` if none.
     pub min_h0: f64,
     /// Uniform relaxation of the gait rows in the returned plan, m/s of the
     /// bounded body-frame velocity component (0 if none).
@@ -197,6 +198,10 @@ pub struct Prediction<const N: usize> {
     pub first_side: Side,
     /// Goal used, m.
     pub goal: Vector2<f64>,
+    /// Time from the input to `p_0` (the rest of the current step), s: step
+    /// end `k` is at `time_to_p0 + k T` from the input, where a moving
+    /// obstacle's half-plane is taken ([`crate::HalfPlane::h_at`]).
+    pub time_to_p0: f64,
 }
 
 impl<const N: usize> Prediction<N> {
@@ -262,6 +267,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
             },
             first_side: Side::Left,
             goal: Vector2::new(0.0, 0.0),
+            time_to_p0: 0.0,
         },
         obstacles: [ActiveObstacle::ZERO; NOBS],
         n_obstacles: 0,
@@ -283,6 +289,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
         pred.heading.theta_end = 0.0;
         pred.first_side = Side::Left;
         pred.goal = Vector2::zeros();
+        pred.time_to_p0 = 0.0;
         self.obstacles.fill(ActiveObstacle::ZERO);
         self.n_obstacles = 0;
         self.obstacles_truncated = false;

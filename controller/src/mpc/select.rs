@@ -8,7 +8,7 @@
 
 use nalgebra::Vector2;
 
-use super::{Assembly, Config, Controller, CycleInput, InputError};
+use super::{Assembly, Config, Controller, CycleInput, InputError, MAX_RATE};
 use crate::constraints::HalfPlane;
 use crate::geometry::{ConvexPolygon, closest_point_point_polygon};
 
@@ -68,6 +68,7 @@ impl ActiveObstacle {
         half_plane: HalfPlane {
             c: Vector2::new(0.0, 0.0),
             eta: Vector2::new(0.0, 0.0),
+            rate: 0.0,
         },
     };
 }
@@ -114,13 +115,20 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
     /// those whose signed distance to `p0` (m, world) is at most
     /// [`Config::r_active`], nearest first (ties in the order seen), at most
     /// `NOBS` (the farthest drop out: [`Assembly::obstacles_truncated`]).
+    /// Each is linearised where it is now; its half-plane moves with the
+    /// obstacle's velocity `velocities[index]` (at rest when `velocities` is
+    /// empty), whose component along the normal is [`HalfPlane::rate`].
     /// Writes `obstacles`, `n_obstacles` and `obstacles_truncated`.
+    /// `Err(InputError::ObstacleVelocity)` when a selected obstacle's
+    /// velocity is missing, not finite or faster than [`MAX_RATE`] (the
+    /// selection is then incomplete and must not be used).
     pub(super) fn select_obstacles<'o, const V: usize>(
         &mut self,
         p0: &Vector2<f64>,
         cfg: &Config,
         obstacles: impl Iterator<Item = (usize, &'o ConvexPolygon<V>)>,
-    ) {
+        velocities: &[Vector2<f64>],
+    ) -> Result<(), InputError> {
         self.n_obstacles = 0;
         self.obstacles_truncated = false;
         for (idx, poly) in obstacles {
@@ -133,12 +141,25 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
             if cp.signed_distance.is_nan() || cp.signed_distance > cfg.r_active {
                 continue;
             }
+            let rate = if velocities.is_empty() {
+                0.0
+            } else {
+                let u = velocities.get(idx).ok_or(InputError::ObstacleVelocity)?;
+                // `!(x <= bound)` is also true for NaN.
+                if !(crate::float::sqrt(u.norm_squared()) <= MAX_RATE) {
+                    return Err(InputError::ObstacleVelocity);
+                }
+                // `+ 0.0` turns the -0 of a zero velocity into +0, so that an
+                // obstacle at rest is recorded as with an empty slice.
+                cp.normal.dot(u) + 0.0
+            };
             let cand = ActiveObstacle {
                 index,
                 distance: cp.signed_distance,
                 half_plane: HalfPlane {
                     c: cp.point,
                     eta: cp.normal,
+                    rate,
                 },
             };
             // Insertion into the sorted list (bounded by NOBS), after every kept
@@ -170,5 +191,6 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
             }
             self.n_obstacles = len;
         }
+        Ok(())
     }
 }

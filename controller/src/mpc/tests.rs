@@ -36,6 +36,7 @@ fn input<'a>(obstacles: &'a [Poly]) -> CycleInput<'a, 16> {
         time_in_step: 0.0,
         goal: Vector2::new(5.0, 0.0),
         obstacles,
+        obstacle_velocities: &[],
     }
 }
 

@@ -139,6 +139,7 @@ fn relaxations_are_minimal_in_priority_order() {
             time_in_step: rng.range(0.0, 0.4),
             goal: dir * 10.0,
             obstacles: &obstacles[..n_obs],
+            obstacle_velocities: &[],
         };
         ctl.assemble(&input, &mut asm).unwrap();
         let solver = ctl.solver();
@@ -313,6 +314,7 @@ fn pushed(capture_fraction: Option<f64>, forward: f64, lateral: f64) -> crate::C
         time_in_step: 0.4,
         goal: Vector2::new(20.0, 0.0),
         obstacles: &[],
+        obstacle_velocities: &[],
     };
     ctl.step(&input)
 }

@@ -614,6 +614,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                 time_in_step: plant.time_in_step(),
                 goal: subgoals[current],
                 obstacles: cycle_obstacles,
+                obstacle_velocities: &[],
             };
             let on_clones = time_on_clones(
                 &controller,
