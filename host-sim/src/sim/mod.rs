@@ -587,11 +587,19 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                 navigation.reached_at.push(plant.time());
                 current += 1;
             }
+            // Known velocities with the true map (none when every obstacle
+            // is at rest: the static controller, bit for bit).
+            let mut cycle_velocities: &[Vector2<f64>] = if world.is_static() {
+                &[]
+            } else {
+                world.velocities()
+            };
             let cycle_obstacles: &[Polygon] = match lidar.as_mut() {
                 Some(l) => {
                     let (points, polys) =
                         l.perceive(plant.position, plant.heading, world.obstacles());
                     seen = polys;
+                    cycle_velocities = &[];
                     if options.record_scans {
                         scans.push(ScanRecord {
                             cycle: cycles.len(),
@@ -614,7 +622,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                 time_in_step: plant.time_in_step(),
                 goal: subgoals[current],
                 obstacles: cycle_obstacles,
-                obstacle_velocities: &[],
+                obstacle_velocities: cycle_velocities,
             };
             let on_clones = time_on_clones(
                 &controller,
