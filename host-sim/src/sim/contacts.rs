@@ -188,3 +188,186 @@ pub fn contact_counts(contacts: &[Contact]) -> (usize, usize) {
         .count();
     (robot, contacts.len() - robot)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::world::Polygon;
+    use crate::world::random::regular_polygon;
+
+    fn person(x: f64, y: f64) -> Polygon {
+        Polygon::new(&regular_polygon([x, y], 0.25, 8, 0.0)).unwrap()
+    }
+
+    /// The monitor after one tick at time `t`, the body at `com` walking at
+    /// `walk`, the stance foot far away (so only the body can touch).
+    fn body_tick(
+        m: &mut ContactMonitor,
+        map: &mut MovingMap,
+        t: f64,
+        com: [f64; 2],
+        walk: [f64; 2],
+    ) {
+        map.set_time(t);
+        let robot = RobotParams::default();
+        m.observe(
+            map,
+            &robot,
+            t,
+            Vector2::new(com[0], com[1]),
+            Vector2::new(walk[0], walk[1]),
+            Vector2::new(-50.0, 0.0),
+            0.0,
+            false,
+        );
+    }
+
+    #[test]
+    fn a_person_walking_into_a_standing_robot_is_the_persons_contact() {
+        // The person starts 1 m to the right and walks left at 0.5 m/s.
+        let mut map = MovingMap::new(&[person(1.0, 0.0)], &[Vector2::new(-0.5, 0.0)]).unwrap();
+        let mut m = ContactMonitor::default();
+        for k in 0..2000 {
+            body_tick(&mut m, &mut map, k as f64 * 1e-3, [0.0, 0.0], [0.0, 0.0]);
+        }
+        assert_eq!(
+            m.contacts.len(),
+            1,
+            "one episode, however long: {:?}",
+            m.contacts
+        );
+        let c = m.contacts[0];
+        assert_eq!(
+            (c.part, c.cause),
+            (ContactPart::Body, ContactCause::Obstacle)
+        );
+        assert!((c.obstacle_approach - 0.5).abs() < 0.05, "{c:?}");
+        // Body 0.25 + person ~0.25 (the octagon's inradius 0.231): contact
+        // after about (1 - 0.48) / 0.5 = 1.04 s.
+        assert!((1.0..1.1).contains(&c.time), "{c:?}");
+        assert_eq!(contact_counts(&m.contacts), (0, 1));
+    }
+
+    #[test]
+    fn walking_toward_an_obstacle_is_the_robots_contact() {
+        // The same person, but the robot walks toward them at 0.3 m/s.
+        let mut map = MovingMap::new(&[person(1.0, 0.0)], &[Vector2::new(-0.5, 0.0)]).unwrap();
+        let mut m = ContactMonitor::default();
+        for k in 0..2000 {
+            let t = k as f64 * 1e-3;
+            body_tick(&mut m, &mut map, t, [0.3 * t, 0.0], [0.3, 0.0]);
+        }
+        assert_eq!(contact_counts(&m.contacts), (1, 0), "{:?}", m.contacts);
+        assert!((m.contacts[0].robot_approach - 0.3).abs() < 0.05);
+        // A wall at rest: the robot's, whatever its speed.
+        let mut map = MovingMap::new(&[person(0.4, 0.0)], &[]).unwrap();
+        let mut m = ContactMonitor::default();
+        body_tick(&mut m, &mut map, 0.0, [0.0, 0.0], [0.0, 0.0]);
+        assert_eq!(contact_counts(&m.contacts), (1, 0));
+    }
+
+    #[test]
+    fn a_robot_backing_away_from_a_faster_person_is_not_at_fault() {
+        let mut map = MovingMap::new(&[person(1.0, 0.0)], &[Vector2::new(-0.8, 0.0)]).unwrap();
+        let mut m = ContactMonitor::default();
+        for k in 0..3000 {
+            let t = k as f64 * 1e-3;
+            body_tick(&mut m, &mut map, t, [-0.1 * t, 0.0], [-0.1, 0.0]);
+        }
+        assert_eq!(contact_counts(&m.contacts), (0, 1), "{:?}", m.contacts);
+        assert!(m.contacts[0].robot_approach < 0.0);
+    }
+
+    #[test]
+    fn a_new_episode_after_the_contact_ends() {
+        // A person at rest, the robot steps in, out and in again.
+        let mut map = MovingMap::new(&[person(1.0, 0.0)], &[]).unwrap();
+        let mut m = ContactMonitor::default();
+        for (k, x) in [0.0, 0.6, 0.6, 0.0, 0.6].into_iter().enumerate() {
+            body_tick(&mut m, &mut map, k as f64, [x, 0.0], [0.2, 0.0]);
+        }
+        assert_eq!(m.contacts.len(), 2);
+        assert_eq!(m.contacts[1].time, 4.0);
+    }
+
+    #[test]
+    fn feet_landed_on_a_person_are_the_robots_planted_feet_stepped_on_are_not() {
+        let robot = RobotParams::default();
+        let far = Vector2::new(-50.0, 0.0);
+        // A person 1 m ahead of a planted foot, walking onto it.
+        let mut map = MovingMap::new(&[person(1.0, 0.0)], &[Vector2::new(-0.5, 0.0)]).unwrap();
+        let mut m = ContactMonitor::default();
+        for k in 0..2000 {
+            let t = k as f64 * 1e-3;
+            map.set_time(t);
+            m.observe(
+                &map,
+                &robot,
+                t,
+                far,
+                Vector2::zeros(),
+                Vector2::zeros(),
+                0.0,
+                k == 0,
+            );
+        }
+        let feet: Vec<_> = m
+            .contacts
+            .iter()
+            .filter(|c| c.part == ContactPart::Foot)
+            .collect();
+        assert_eq!(feet.len(), 1);
+        assert_eq!(feet[0].cause, ContactCause::Obstacle);
+        // A foot landing where the person is.
+        let mut map = MovingMap::new(&[person(1.0, 0.0)], &[Vector2::new(-0.5, 0.0)]).unwrap();
+        let mut m = ContactMonitor::default();
+        m.observe(
+            &map,
+            &robot,
+            0.0,
+            far,
+            Vector2::zeros(),
+            Vector2::zeros(),
+            0.0,
+            true,
+        );
+        assert!(m.contacts.is_empty());
+        map.set_time(0.001);
+        m.observe(
+            &map,
+            &robot,
+            0.001,
+            far,
+            Vector2::zeros(),
+            Vector2::new(1.0, 0.0),
+            0.0,
+            true,
+        );
+        assert_eq!(contact_counts(&m.contacts), (1, 0), "{:?}", m.contacts);
+    }
+
+    #[test]
+    fn mean_velocity_is_the_displacement_over_the_window() {
+        let samples: Vec<Sample> = (0..=1000)
+            .map(|k| {
+                let t = k as f64 * 1e-3;
+                Sample {
+                    time: t,
+                    // A sway of amplitude 0.05 m at 2.5 Hz over a walk at 0.4 m/s.
+                    position: Vector2::new(
+                        0.4 * t,
+                        0.05 * (core::f64::consts::TAU * 2.5 * t).sin(),
+                    ),
+                    velocity: Vector2::zeros(),
+                    heading: 0.0,
+                    turning_rate: 0.0,
+                    stance_side: ldcbf_controller::Side::Left,
+                    clearance: f64::INFINITY,
+                }
+            })
+            .collect();
+        let v = mean_velocity(&samples, 400);
+        assert!((v - Vector2::new(0.4, 0.0)).norm() < 1e-9, "{v}");
+        assert_eq!(mean_velocity(&samples[..1], 400), Vector2::zeros());
+    }
+}
