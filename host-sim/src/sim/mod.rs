@@ -10,6 +10,9 @@
 //!
 //! Each tick, in this order:
 //!
+//! Every tick first moves the moving obstacles to the plant's time
+//! ([`crate::world::moving`]: polygon at t = 0 plus velocity times time).
+//!
 //! 0. **Push.** A push of the scenario's `[disturbance]` due at this tick is
 //!    added to the plant's CoM velocity ([`crate::plant::disturbance`]), so everything
 //!    below sees the pushed state.
@@ -40,12 +43,16 @@
 //!    is advanced while the CoM is within `switch_radius` of it (never past the
 //!    goal), and the controller's goal is the current subgoal. With
 //!    `perception = "lidar"` the obstacle list is the one inferred from a LiDAR
-//!    scan taken at that moment from the CoM ([`crate::sense`]); otherwise
-//!    it is the true map. With state estimation noise (`disturbance.noise_*`)
+//!    scan taken at that moment from the CoM ([`crate::sense`]), with the
+//!    velocities of [`crate::sense::track`] when `lidar.track_moving` (else
+//!    at rest); otherwise it is the true map at that tick
+//!    ([`crate::world::moving`]) with the obstacles' true velocities. With state estimation noise (`disturbance.noise_*`)
 //!    the CoM position, velocity and heading in the input (and the position
 //!    used to advance the subgoal) are the true ones plus a seeded Gaussian
 //!    draw; the LiDAR scans from the true pose.
-//! 3. **Record** the 1 kHz sample (and its clearance to every TRUE obstacle,
+//! 3. **Record** the 1 kHz sample (and its clearance to every TRUE obstacle at
+//!    its position at that tick, and the contacts of the body and the stance
+//!    foot with who moved into whom, [`Contact`];
 //!    [`clearance`](crate::world::clearance) found through the map's index, unless
 //!    [`SimOptions::record_clearance`] is off), then
 //!    check the end conditions: goal reached (`|p - goal| <= success_radius`),
@@ -79,6 +86,7 @@ use crate::plant::{Plant, PlantParams};
 use crate::scenario::Scenario;
 use crate::sense::Lidar;
 use crate::sense::Perception;
+use crate::sense::track::{TrackParams, Tracker};
 use crate::world::Polygon;
 use crate::world::moving::MovingMap;
 use crate::world::obstacle_index::{Candidates, ObstacleIndex};
@@ -526,6 +534,10 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         }
         Perception::Known => None,
     };
+    let mut tracker = (scenario.perception == Perception::Lidar && scenario.lidar.track_moving)
+        .then(|| Tracker::new(TrackParams::default()));
+    // The velocities the tracker gave this cycle's inferred obstacles.
+    let mut seen_velocities: Vec<Vector2<f64>>;
     let mut scans: Vec<ScanRecord> = Vec::new();
     let mut qps = Vec::new();
     // The inferred obstacles of the current cycle (LiDAR), borrowed by its input.
@@ -600,6 +612,10 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                         l.perceive(plant.position, plant.heading, world.obstacles());
                     seen = polys;
                     cycle_velocities = &[];
+                    if let Some(tr) = tracker.as_mut() {
+                        seen_velocities = tr.update(plant.time(), &seen);
+                        cycle_velocities = &seen_velocities;
+                    }
                     if options.record_scans {
                         scans.push(ScanRecord {
                             cycle: cycles.len(),
