@@ -34,7 +34,7 @@
 use ldcbf_controller::nalgebra::{Matrix2, Matrix4, Vector2, Vector4};
 
 use crate::world::Polygon;
-use crate::world::moving::MAX_SPEED;
+use crate::world::moving::{MAX_SPEED, vertex_centre as centre};
 
 /// Tracker settings. Lengths in m, times in s.
 #[derive(Clone, Debug, PartialEq)]
@@ -148,11 +148,6 @@ impl Track {
         self.last_update = self.time;
         self.updates += 1;
     }
-}
-
-/// Centre of a polygon's vertices, m.
-fn centre(p: &Polygon) -> Vector2<f64> {
-    p.vertices().iter().sum::<Vector2<f64>>() / p.len().max(1) as f64
 }
 
 /// Tracks across scans (see the module docs).

@@ -60,6 +60,11 @@ pub fn translated(poly: &Polygon, d: Vector2<f64>) -> Polygon {
         .unwrap_or_else(|_| poly.clone())
 }
 
+/// The mean of a polygon's vertices, m (world frame).
+pub fn vertex_centre(p: &Polygon) -> Vector2<f64> {
+    p.vertices().iter().sum::<Vector2<f64>>() / p.len().max(1) as f64
+}
+
 /// One obstacle that overlaps a part of the robot, at the current time.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Overlap {
@@ -229,12 +234,10 @@ impl MovingMap {
             let o = &self.current[i];
             let clearance = signed_distance_convex(&foot, o);
             if clearance < -CONTACT_TOLERANCE {
-                let centroid =
-                    o.vertices().iter().sum::<Vector2<f64>>() / o.vertices().len().max(1) as f64;
                 out.push(Overlap {
                     obstacle: i,
                     clearance,
-                    normal: unit_or(center - centroid, -self.velocities[i]),
+                    normal: unit_or(center - vertex_centre(o), -self.velocities[i]),
                 });
             }
         }
