@@ -9,7 +9,13 @@ use ldcbf_sim::studies::batch::{Aggregate, BatchRequest, SeedRange, run_batch};
 
 fn batch(family: &str, perception: Perception, seeds: u64) -> Aggregate {
     let tmp = tempfile::tempdir().unwrap();
-    let mut req = BatchRequest::new(family, SeedRange { start: 0, end: seeds });
+    let mut req = BatchRequest::new(
+        family,
+        SeedRange {
+            start: 0,
+            end: seeds,
+        },
+    );
     req.perception = Some(perception);
     req.out = Some(tmp.path().join("b"));
     let a = run_batch(&req).unwrap().aggregate;
@@ -36,9 +42,16 @@ fn known_velocities_no_robot_caused_contact_on_crossing_and_headon() {
     for family in ["crossing", "headon"] {
         let a = batch(family, Perception::Known, 20);
         assert_eq!(a.runs, 20);
-        assert_eq!(a.contacts_robot, 0, "{family}: the robot moved into a person");
+        assert_eq!(
+            a.contacts_robot, 0,
+            "{family}: the robot moved into a person"
+        );
         // The robot walks through: a robot that stood still would pass the
         // check above trivially.
-        assert!(a.reached >= 18, "{family}: only {} of 20 reached", a.reached);
+        assert!(
+            a.reached >= 18,
+            "{family}: only {} of 20 reached",
+            a.reached
+        );
     }
 }
