@@ -8,7 +8,9 @@
 //! * `paper_config/*`: `PaperController` (N = 3, capacity 8) walking from (0, 0)
 //!   to (10, 10) among the six obstacles of the SPEC's `paper` scenario:
 //!   `step/warm` (in order, warm start as on the robot), `step/cold` (memory reset
-//!   before each cycle), `solve/cold` (the QP solve alone on the recorded QPs).
+//!   before each cycle), `solve/cold` (the QP solve alone on the recorded QPs),
+//!   `step/warm-moving` (the same cycles with the six obstacles moving at the
+//!   velocities of the firmware's second pass, `firmware/src/moving.rs`).
 //! * `horizon/N`: the same walk with horizon N in {3, 5, 10, 20} (capacity 8,
 //!   iteration budgets scaled by `Config::with_budgets_for_horizon`, i.e.
 //!   unchanged at N = 3). The QP is solved in the predicted positions (Hessian
@@ -25,6 +27,10 @@ use ldcbf_controller::{Assembly, Config, Controller, ConvexPolygon, constraint_c
 use ldcbf_nav::fixtures::{PAPER_GOAL, RecordedInput, paper_obstacles, walk};
 
 type Poly = ConvexPolygon<8>;
+
+mod moving {
+    include!("../firmware/src/moving.rs");
+}
 
 /// Posts of 0.2 m on a 1 m grid over [-3, 13]^2, leaving a clear corridor of
 /// half-width 0.5 m along the diagonal from (0, 0) to (10, 10).
@@ -94,6 +100,16 @@ fn paper(cr: &mut Criterion) {
             let c = &cycles[i % cycles.len()];
             i += 1;
             black_box(ctl.step(black_box(&c.input(&obs))))
+        })
+    });
+    let velocities = moving::VELOCITIES.map(Vector2::from);
+    group.bench_function("step/warm-moving", |b| {
+        let mut ctl = Paper::new(Config::default()).unwrap();
+        let mut i = 0;
+        b.iter(|| {
+            let c = &cycles[i % cycles.len()];
+            i += 1;
+            black_box(ctl.step(black_box(&c.input_moving(&obs, &velocities))))
         })
     });
     group.bench_function("step/cold", |b| {

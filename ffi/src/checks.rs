@@ -183,12 +183,12 @@ pub(crate) unsafe fn obstacle_slices<'a>(
 ///
 /// # Safety
 /// As [`ldcbf_step_moving`] for `velocities`; `n <= LDCBF_MAX_OBSTACLES`.
-pub(crate) unsafe fn obstacle_velocities<'b>(
+pub(crate) unsafe fn obstacle_velocities(
     ctl: *const LdcbfController,
     velocities: *const f64,
     n: usize,
-    buf: &'b mut [Vector2<f64>; LDCBF_MAX_OBSTACLES],
-) -> Result<&'b [Vector2<f64>], LdcbfResult> {
+    buf: &mut [Vector2<f64>; LDCBF_MAX_OBSTACLES],
+) -> Result<&[Vector2<f64>], LdcbfResult> {
     if velocities.is_null() || n == 0 {
         return Ok(&[]);
     }

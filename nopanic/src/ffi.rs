@@ -85,8 +85,15 @@ fn main() -> ! {
             res[1] = ldcbf_config_default(config) as usize;
             res[2] = ldcbf_configure(ctl, config) as usize;
             res[3] = ldcbf_step(ctl, input, points, counts, w[12] as u32, out) as usize
-                ^ ldcbf_step_moving(ctl, input, points, counts, w[17] as u32, w[18] as *const f64, out)
-                    as usize;
+                ^ ldcbf_step_moving(
+                    ctl,
+                    input,
+                    points,
+                    counts,
+                    w[17] as u32,
+                    w[18] as *const f64,
+                    out,
+                ) as usize;
             res[4] = ldcbf_lip_propagate(ctl, p, p, p, r[0], p_out, p_out) as usize;
             res[5] = ldcbf_last_error(ctl, buf, w[13]);
             if w[14] > 0 {

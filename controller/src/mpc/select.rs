@@ -145,8 +145,8 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
                 0.0
             } else {
                 let u = velocities.get(idx).ok_or(InputError::ObstacleVelocity)?;
-                // `!(x <= bound)` is also true for NaN.
-                if !(crate::float::sqrt(u.norm_squared()) <= MAX_RATE) {
+                let speed = crate::float::sqrt(u.norm_squared());
+                if speed.is_nan() || speed > MAX_RATE {
                     return Err(InputError::ObstacleVelocity);
                 }
                 // `+ 0.0` turns the -0 of a zero velocity into +0, so that an
