@@ -14,7 +14,9 @@
 //!    as a half-plane at the boundary point closest to `p_0` ([`geometry`]);
 //!    a caller with a large map passes only the candidates its spatial index
 //!    finds around [`Controller::obstacle_query`] ([`Controller::step_among`]),
-//!    with the same result;
+//!    with the same result; an obstacle may move
+//!    ([`CycleInput::obstacle_velocities`]): the half-plane at step end `k` is
+//!    then the one moved with it to that step end's time;
 //! 4. builds the condensed QP over the next `N` footsteps `f_0 .. f_{N-1}`
 //!    ([`constraints`]), solved in the equivalent, well-conditioned variables
 //!    `z = [p_1x, p_1y, ..., p_Nx, p_Ny]` (the predicted CoM positions, from which

@@ -34,8 +34,8 @@ pub struct Summary {
     pub solver: String,
     /// Controller rate, e.g. `20 Hz` or `once per step`.
     pub mpc_rate: String,
-    /// `collided` when the robot's body touched a true obstacle
-    /// (`collision`), else why the run ended: `goal_reached`, `time_limit`,
+    /// `collided` when the robot moved into a true obstacle
+    /// (`contacts_robot > 0`), else why the run ended: `goal_reached`, `time_limit`,
     /// `stuck` or `diverged` (`ended`).
     pub outcome: String,
     /// Why the run ended: `goal_reached`, `time_limit`, `stuck` or `diverged`.
@@ -49,9 +49,19 @@ pub struct Summary {
     /// Some footstep's footprint overlapped a true obstacle
     /// (`min_footstep_clearance < -`[`crate::world::robot::CONTACT_TOLERANCE`]).
     pub foot_collision: bool,
-    /// Success: `reached_goal && !collision && !foot_collision` (docs/maths.md §4, for a
-    /// robot with a body and feet).
+    /// Success: the goal reached and no contact where the robot moved into an
+    /// obstacle (`contacts_robot == 0`; docs/maths.md §4 for a robot with a body and
+    /// feet). On a map at rest every contact is the robot's, so this is
+    /// `reached_goal && !collision && !foot_collision`.
     pub success: bool,
+    /// Contacts (body or stance foot, [`crate::sim::Contact`]) where the robot
+    /// moved into an obstacle: controller failures.
+    pub contacts_robot: usize,
+    /// Contacts where a moving obstacle moved into a robot that was standing,
+    /// moving away or across ([`crate::sim::ContactCause::Obstacle`]).
+    pub contacts_person: usize,
+    /// Obstacles that move (non-zero velocity).
+    pub moving_obstacles: usize,
     /// Radius of the robot's body disk, m (`[robot]`, [`crate::world::robot`]).
     pub body_radius: f64,
     /// Footsteps landed (the initial stance foot not counted).
@@ -221,6 +231,7 @@ pub fn summarize(r: &SimResult) -> Summary {
     let tol = crate::world::robot::CONTACT_TOLERANCE;
     let collision = has_obs && min_body < -tol;
     let foot_collision = has_obs && min_foot < -tol;
+    let (contacts_robot, contacts_person) = crate::sim::contact_counts(&r.contacts);
     Summary {
         scenario: sc.name.clone(),
         source: sc.source.clone(),
@@ -230,7 +241,7 @@ pub fn summarize(r: &SimResult) -> Summary {
             crate::sim::Solver::Clarabel => "clarabel".into(),
         },
         mpc_rate: r.options.mpc_rate.to_string(),
-        outcome: if collision {
+        outcome: if contacts_robot > 0 {
             "collided".into()
         } else {
             r.outcome.name().into()
@@ -239,7 +250,10 @@ pub fn summarize(r: &SimResult) -> Summary {
         reached_goal: reached,
         collision,
         foot_collision,
-        success: reached && !collision && !foot_collision,
+        success: reached && contacts_robot == 0,
+        contacts_robot,
+        contacts_person,
+        moving_obstacles: sc.velocities.iter().filter(|v| v.norm() > 0.0).count(),
         body_radius: sc.robot.body_radius,
         steps: r.steps(),
         sim_time: r.sim_time(),
@@ -333,6 +347,14 @@ pub fn human_summary(s: &Summary) -> String {
         (o, true) => {
             format!("COLLIDED (the body touched an obstacle), goal NOT reached ({o}){feet}")
         }
+    };
+    let verdict = if s.moving_obstacles > 0 {
+        format!(
+            "{verdict}; contacts: {} robot moved into an obstacle, {} a person moved into the robot",
+            s.contacts_robot, s.contacts_person
+        )
+    } else {
+        verdict
     };
     let _ = writeln!(
         o,

@@ -43,6 +43,8 @@
 //!
 //! [[obstacles]]            # ... or a regular polygon (circle approximation)
 //! regular = { center = [4.0, 2.0], radius = 1.0, sides = 20, rotation = 0.0 }
+//! velocity = [0.0, -0.5]   # any obstacle: constant velocity, m/s, world frame
+//!                          # (default at rest; speed <= 5 m/s; crate::world::moving)
 //!
 //! [generator]              # optional: adds seeded random convex obstacles
 //! kind = "random_polygons" # or a family (crate::world::families: corridor, doorway,
@@ -80,8 +82,9 @@
 //! `perception = "lidar"` (planning on the perceived map is not implemented).
 //!
 //! A scenario the robot cannot stand in is an error: a start or goal inside an
-//! obstacle, or within `robot.body_radius` of one, names the field (`start`,
-//! `goal`) and the obstacle (`obstacles[i]`, or the generated one and the seed).
+//! obstacle, or within `robot.body_radius` of one (moving obstacles at their
+//! t = 0 positions), names the field (`start`, `goal`) and the obstacle
+//! (`obstacles[i]`, or the generated one and the seed).
 //!
 //! Without `hull = true` a vertex list must already be a convex polygon
 //! ([`ConvexPolygon::new`](ldcbf_controller::ConvexPolygon::new)); a non-convex list is an error naming the obstacle.
@@ -119,6 +122,8 @@ mod parse;
 #[cfg(test)]
 mod tests;
 mod validate;
+#[cfg(test)]
+mod velocity_tests;
 
 pub use limits::exact;
 pub use overrides::{
@@ -157,6 +162,7 @@ pub fn random_scenario(seed: u64) -> Scenario {
         lidar: LidarParams::default(),
         disturbance: DisturbanceParams::default(),
         robot: RobotParams::default(),
+        velocities: vec![Vector2::zeros(); obstacles.len()],
         obstacles,
     }
 }
@@ -211,8 +217,12 @@ pub struct Scenario {
     /// The robot's body and feet (the `[robot]` table, [`crate::world::robot`]);
     /// already applied to `config`.
     pub robot: RobotParams,
-    /// Obstacles, world frame: the file's, then the generated ones (the TRUE map).
+    /// Obstacles, world frame: the file's, then the generated ones (the TRUE map
+    /// at t = 0).
     pub obstacles: Vec<Polygon>,
+    /// Each obstacle's constant velocity, m/s, world frame (zero at rest), one
+    /// per obstacle ([`crate::world::moving`]).
+    pub velocities: Vec<Vector2<f64>>,
 }
 
 /// A scenario that cannot be used: which file, which field, which line, why.

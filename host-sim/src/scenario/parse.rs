@@ -88,6 +88,9 @@ pub(super) struct RawObstacle {
     pub(super) regular: Option<Spanned<RegularSpec>>,
     #[serde(default)]
     pub(super) hull: bool,
+    /// Constant velocity, m/s, world frame (at rest when absent).
+    #[serde(default)]
+    pub(super) velocity: Option<Spanned<Vec<f64>>>,
     /// Optional label, for humans.
     #[serde(default)]
     #[allow(dead_code)]

@@ -10,6 +10,7 @@ use super::parse::{RawScenario, line_of};
 use crate::plan::Planner;
 use crate::sense::Perception;
 use crate::world::families;
+use crate::world::moving::parse_velocity;
 use crate::world::random::{random_obstacles, regular_polygon};
 use crate::world::{MAX_VERTICES, Polygon};
 
@@ -175,6 +176,7 @@ pub(super) fn validate(
     let mut start_heading = st.heading;
     let mut goal = Vector2::new(g[0], g[1]);
     let mut obstacles = Vec::with_capacity(raw.obstacles.len());
+    let mut velocities = Vec::with_capacity(raw.obstacles.len());
     for (i, ob) in raw.obstacles.iter().enumerate() {
         let field = format!("obstacles[{i}]");
         let span = Some(ob.span());
@@ -233,6 +235,11 @@ pub(super) fn validate(
             err(&field, span.clone(), format!("{e}{hint}"))
         })?;
         obstacles.push(poly);
+        velocities.push(match &ob.get_ref().velocity {
+            None => Vector2::zeros(),
+            Some(v) => parse_velocity(v.get_ref())
+                .map_err(|m| err(&format!("obstacles[{i}].velocity"), Some(v.span()), m))?,
+        });
     }
     let seed = seed.unwrap_or(raw.seed);
     let generator = match &raw.generator {
@@ -245,6 +252,7 @@ pub(super) fn validate(
             if p.kind == "random_polygons" {
                 let extra = random_obstacles(seed, &p, start, goal)
                     .map_err(|m| err("generator", Some(gs.span()), m))?;
+                velocities.resize(obstacles.len() + extra.len(), Vector2::zeros());
                 obstacles.extend(extra);
             } else {
                 let layout = families::generate(&p.kind, seed, robot.body_radius)
@@ -252,6 +260,7 @@ pub(super) fn validate(
                 start = layout.start;
                 start_heading = layout.heading;
                 goal = layout.goal;
+                velocities.extend(layout.velocities_padded());
                 obstacles.extend(layout.obstacles);
             }
             Some(p)
@@ -312,6 +321,7 @@ pub(super) fn validate(
         disturbance: raw.disturbance.get_ref().clone(),
         robot,
         obstacles,
+        velocities,
     })
 }
 

@@ -100,6 +100,7 @@ mod dbscan;
 mod infer;
 #[cfg(test)]
 mod tests;
+pub mod track;
 
 pub use dbscan::{clusters, dbscan};
 pub use infer::{
@@ -167,6 +168,9 @@ pub struct LidarParams {
     /// Free-space margin, m: a ray is taken as seen free up to `3 noise_sigma
     /// + free_margin` short of its hit point; no piece reaches into that part.
     pub free_margin: f64,
+    /// Track the pieces across scans and give the controller their
+    /// velocities ([`track`]; off = every piece at rest).
+    pub track_moving: bool,
 }
 
 impl Default for LidarParams {
@@ -182,6 +186,7 @@ impl Default for LidarParams {
             breakpoint_angle: 10f64.to_radians(),
             line_tolerance: 0.05,
             free_margin: 0.005,
+            track_moving: false,
         }
     }
 }

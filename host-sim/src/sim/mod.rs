@@ -10,6 +10,9 @@
 //!
 //! Each tick, in this order:
 //!
+//! Every tick first moves the moving obstacles to the plant's time
+//! ([`crate::world::moving`]: polygon at t = 0 plus velocity times time).
+//!
 //! 0. **Push.** A push of the scenario's `[disturbance]` due at this tick is
 //!    added to the plant's CoM velocity ([`crate::plant::disturbance`]), so everything
 //!    below sees the pushed state.
@@ -40,12 +43,16 @@
 //!    is advanced while the CoM is within `switch_radius` of it (never past the
 //!    goal), and the controller's goal is the current subgoal. With
 //!    `perception = "lidar"` the obstacle list is the one inferred from a LiDAR
-//!    scan taken at that moment from the CoM ([`crate::sense`]); otherwise
-//!    it is the true map. With state estimation noise (`disturbance.noise_*`)
+//!    scan taken at that moment from the CoM ([`crate::sense`]), with the
+//!    velocities of [`crate::sense::track`] when `lidar.track_moving` (else
+//!    at rest); otherwise it is the true map at that tick
+//!    ([`crate::world::moving`]) with the obstacles' true velocities. With state estimation noise (`disturbance.noise_*`)
 //!    the CoM position, velocity and heading in the input (and the position
 //!    used to advance the subgoal) are the true ones plus a seeded Gaussian
 //!    draw; the LiDAR scans from the true pose.
-//! 3. **Record** the 1 kHz sample (and its clearance to every TRUE obstacle,
+//! 3. **Record** the 1 kHz sample (and its clearance to every TRUE obstacle at
+//!    its position at that tick, and the contacts of the body and the stance
+//!    foot with who moved into whom, [`Contact`];
 //!    [`clearance`](crate::world::clearance) found through the map's index, unless
 //!    [`SimOptions::record_clearance`] is off), then
 //!    check the end conditions: goal reached (`|p - goal| <= success_radius`),
@@ -79,10 +86,14 @@ use crate::plant::{Plant, PlantParams};
 use crate::scenario::Scenario;
 use crate::sense::Lidar;
 use crate::sense::Perception;
+use crate::sense::track::{TrackParams, Tracker};
 use crate::world::Polygon;
+use crate::world::moving::MovingMap;
 use crate::world::obstacle_index::{Candidates, ObstacleIndex};
 
 pub mod cancel;
+mod contacts;
+pub use contacts::{Contact, ContactCause, ContactPart, STANDING_SPEED, contact_counts};
 
 /// Horizon of [`RobotController`].
 pub const HORIZON: usize = 3;
@@ -350,6 +361,10 @@ pub struct SimResult {
     /// What the scenario's disturbances did (pushes applied, foot errors,
     /// estimation errors; empty when none is configured).
     pub disturbance: DisturbanceLog,
+    /// Contacts of the body and the stance foot with the true obstacles, at
+    /// 1 kHz, each with who moved into whom ([`ContactCause`]; empty unless
+    /// [`SimOptions::record_clearance`]).
+    pub contacts: Vec<Contact>,
 }
 
 impl SimResult {
@@ -474,12 +489,17 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         MpcRate::Hz(h) => Some(((1.0 / f64::from(h)) / PLANT_DT).round().max(1.0) as u64),
         MpcRate::PerStep => None,
     };
-    let obstacles = &scenario.obstacles;
-    // The true map's index: the controller's candidates with the known map
-    // (with LiDAR its few obstacles per scan are passed whole), and the
-    // clearances of the samples and footsteps (the linear scans' values).
-    let map_index = ObstacleIndex::new(obstacles).map_err(SimError)?;
-    let index = (scenario.perception == Perception::Known).then_some(&map_index);
+    // The true map at the plant's time (moving obstacles, crate::world::moving),
+    // with the index of its obstacles at rest: the controller's candidates with
+    // a known static map (with LiDAR its few obstacles per scan are passed
+    // whole, and so is a map with moving obstacles), and the clearances of the
+    // samples and footsteps (the linear scans' values).
+    let mut world = MovingMap::new(&scenario.obstacles, &scenario.velocities).map_err(SimError)?;
+    let control_index = (scenario.perception == Perception::Known && world.is_static())
+        .then(|| world.rest_index().clone());
+    let index = control_index.as_ref();
+    let mut contacts = contacts::ContactMonitor::default();
+    let mut landed_now = true;
     let mut candidates = Candidates::default();
     let robot = &scenario.robot;
     // Global planner: subgoals, the goal last.
@@ -489,7 +509,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         let res = crate::plan::plan(
             scenario.start,
             scenario.goal,
-            obstacles,
+            world.rest_obstacles(),
             &scenario.rrt,
             scenario.robot.body_radius,
             scenario.seed,
@@ -515,6 +535,10 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         }
         Perception::Known => None,
     };
+    let mut tracker = (scenario.perception == Perception::Lidar && scenario.lidar.track_moving)
+        .then(|| Tracker::new(TrackParams::default()));
+    // The velocities the tracker gave this cycle's inferred obstacles.
+    let mut seen_velocities: Vec<Vector2<f64>>;
     let mut scans: Vec<ScanRecord> = Vec::new();
     let mut qps = Vec::new();
     // The inferred obstacles of the current cycle (LiDAR), borrowed by its input.
@@ -529,7 +553,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         side: plant.stance_side,
         time: 0.0,
         heading: plant.heading,
-        clearance: map_index.foot_clearance(robot, plant.stance_foot, plant.heading, obstacles),
+        clearance: world.foot_clearance(robot, plant.stance_foot, plant.heading),
     }];
     let mut samples = Vec::with_capacity(max_ticks.min(1 << 20) as usize + 1);
     let mut best_distance = f64::INFINITY;
@@ -538,6 +562,9 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
     let outcome = loop {
         // SIGINT, SIGTERM or the caller's flag: end now (sim::cancel).
         cancel::check().map_err(|c| SimError(c.to_string()))?;
+        if !world.is_static() {
+            world.set_time(plant.time());
+        }
         // 0. Push.
         if let Some(dv) = disturber.push_at(plant.tick, plant.heading) {
             plant.push(dv);
@@ -557,8 +584,9 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                 side: plant.stance_side,
                 time: plant.time(),
                 heading: plant.heading,
-                clearance: map_index.foot_clearance(robot, foot, plant.heading, obstacles),
+                clearance: world.foot_clearance(robot, foot, plant.heading),
             });
+            landed_now = true;
         }
         // 2. Control.
         let due = match period {
@@ -574,10 +602,23 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                 navigation.reached_at.push(plant.time());
                 current += 1;
             }
+            // Known velocities with the true map (none when every obstacle
+            // is at rest: the static controller, bit for bit).
+            let mut cycle_velocities: &[Vector2<f64>] = if world.is_static() {
+                &[]
+            } else {
+                world.velocities()
+            };
             let cycle_obstacles: &[Polygon] = match lidar.as_mut() {
                 Some(l) => {
-                    let (points, polys) = l.perceive(plant.position, plant.heading, obstacles);
+                    let (points, polys) =
+                        l.perceive(plant.position, plant.heading, world.obstacles());
                     seen = polys;
+                    cycle_velocities = &[];
+                    if let Some(tr) = tracker.as_mut() {
+                        seen_velocities = tr.update(plant.time(), &seen);
+                        cycle_velocities = &seen_velocities;
+                    }
                     if options.record_scans {
                         scans.push(ScanRecord {
                             cycle: cycles.len(),
@@ -588,7 +629,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                     }
                     &seen
                 }
-                None => obstacles,
+                None => world.obstacles(),
             };
             let input = CycleInput {
                 com_position: position,
@@ -600,7 +641,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                 time_in_step: plant.time_in_step(),
                 goal: subgoals[current],
                 obstacles: cycle_obstacles,
-                obstacle_velocities: &[],
+                obstacle_velocities: cycle_velocities,
             };
             let on_clones = time_on_clones(
                 &controller,
@@ -667,12 +708,26 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
             turning_rate: plant.turning_rate,
             stance_side: plant.stance_side,
             clearance: if options.record_clearance {
-                map_index.clearance(&plant.position, obstacles)
+                world.clearance(&plant.position)
             } else {
                 f64::NAN
             },
         };
         samples.push(sample);
+        if options.record_clearance {
+            let stance = footsteps.last().expect("the initial stance foot");
+            contacts.observe(
+                &world,
+                robot,
+                plant.time(),
+                plant.position,
+                contacts::mean_velocity(&samples, plant.ticks_per_step() as usize),
+                stance.position,
+                stance.heading,
+                landed_now,
+            );
+        }
+        landed_now = false;
         let dist = (plant.position - scenario.goal).norm();
         if dist <= scenario.success_radius {
             navigation.reached_at.push(plant.time());
@@ -706,6 +761,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         scans,
         qps,
         disturbance: disturber.log,
+        contacts: contacts.contacts,
     })
 }
 

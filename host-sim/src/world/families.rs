@@ -1,7 +1,8 @@
 //! Seeded scenario families for a robot with a body: corridors, doorways,
 //! cups, starts facing a wall, clutter around the goal, thin walls and
 //! needles (the `[generator]` kinds `corridor`, `doorway`, `cup`,
-//! `wall_start`, `clutter`, `thin`).
+//! `wall_start`, `clutter`, `thin`), and the families with people who walk
+//! (`crossing`, `headon`, `crowd`, `room_crossing`: [`crate::world::people`]).
 //!
 //! Each family draws, from a ChaCha8 generator seeded by the scenario's seed,
 //! the start (position and heading), the goal and the obstacles (convex
@@ -11,6 +12,7 @@
 //!
 //! * the start and the goal are at least `r + 0.05` m from every obstacle;
 //! * the goal is reachable by the body: on an occupancy grid of the obstacles
+//!   at rest (people of [`crate::world::people`] move, and are not counted)
 //!   inflated by `r + 0.05` m (0.05 m cells), the start's and the goal's cells
 //!   are connected ([`crate::world::grid::connected`]), so a path of free cell
 //!   centres keeps more than `r` from every obstacle; the drawn passage widths
@@ -33,6 +35,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_chacha::rand_core::{Rng, SeedableRng};
 
 use crate::world::Polygon;
+use crate::world::people;
 
 /// The family names (`[generator] kind`).
 pub const FAMILIES: &[&str] = &[
@@ -42,6 +45,10 @@ pub const FAMILIES: &[&str] = &[
     "wall_start",
     "clutter",
     "thin",
+    "crossing",
+    "headon",
+    "crowd",
+    "room_crossing",
 ];
 
 /// Largest number of draws before a family gives up.
@@ -56,27 +63,39 @@ pub struct Layout {
     pub heading: f64,
     /// Goal, m.
     pub goal: Vector2<f64>,
-    /// Obstacles, world frame.
+    /// Obstacles, world frame (at t = 0 for the moving ones).
     pub obstacles: Vec<Polygon>,
+    /// The first obstacles' velocities, m/s, world frame; the obstacles past
+    /// the end of this list are at rest ([`crate::world::moving`]).
+    pub velocities: Vec<Vector2<f64>>,
 }
 
-struct Draw(ChaCha8Rng);
+impl Layout {
+    /// One velocity per obstacle (zero for those at rest), m/s.
+    pub fn velocities_padded(&self) -> Vec<Vector2<f64>> {
+        let mut v = self.velocities.clone();
+        v.resize(self.obstacles.len(), Vector2::zeros());
+        v
+    }
+}
+
+pub(super) struct Draw(ChaCha8Rng);
 
 impl Draw {
-    fn unif(&mut self, lo: f64, hi: f64) -> f64 {
+    pub(super) fn unif(&mut self, lo: f64, hi: f64) -> f64 {
         let u = (self.0.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
         lo + (hi - lo) * u
     }
-    fn coin(&mut self) -> bool {
+    pub(super) fn coin(&mut self) -> bool {
         self.unif(0.0, 1.0) < 0.5
     }
-    fn int(&mut self, lo: usize, hi: usize) -> usize {
+    pub(super) fn int(&mut self, lo: usize, hi: usize) -> usize {
         (self.unif(lo as f64, hi as f64 + 1.0).floor() as usize).min(hi)
     }
 }
 
 /// An axis-aligned rectangle `[x0, x1] x [y0, y1]` (corners in any order).
-fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Polygon {
+pub(super) fn rect(x0: f64, y0: f64, x1: f64, y1: f64) -> Polygon {
     let (xa, xb) = (x0.min(x1), x0.max(x1));
     let (ya, yb) = (y0.min(y1), y0.max(y1));
     Polygon::new(&[[xa, ya], [xb, ya], [xb, yb], [xa, yb]]).expect("a rectangle is convex")
@@ -141,10 +160,11 @@ fn corridor(d: &mut Draw) -> Layout {
         heading: 0.0,
         goal,
         obstacles,
+        velocities: Vec::new(),
     }
 }
 
-fn doorway(d: &mut Draw) -> Layout {
+pub(super) fn doorway(d: &mut Draw) -> Layout {
     let x = d.unif(3.0, 6.0);
     let t = d.unif(0.05, 0.3);
     let w = d.unif(0.7, 1.6);
@@ -167,6 +187,7 @@ fn doorway(d: &mut Draw) -> Layout {
         heading: 0.0,
         goal: Vector2::new(gx, gy),
         obstacles,
+        velocities: Vec::new(),
     }
 }
 
@@ -194,6 +215,7 @@ fn cup(d: &mut Draw) -> Layout {
         heading: 0.0,
         goal: Vector2::new(c + depth + t + d.unif(3.0, 6.0), d.unif(-1.0, 1.0)),
         obstacles,
+        velocities: Vec::new(),
     }
 }
 
@@ -219,6 +241,7 @@ fn wall_start(d: &mut Draw, r: f64) -> Layout {
         heading,
         goal: rot(goal_local, heading),
         obstacles: vec![rotated(&wall, heading)],
+        velocities: Vec::new(),
     }
 }
 
@@ -251,6 +274,7 @@ fn clutter(d: &mut Draw) -> Layout {
         heading: d.unif(-0.5, 0.5),
         goal,
         obstacles,
+        velocities: Vec::new(),
     }
 }
 
@@ -283,11 +307,22 @@ fn thin(d: &mut Draw) -> Layout {
         heading: d.unif(-0.5, 0.5),
         goal,
         obstacles,
+        velocities: Vec::new(),
     }
 }
 
-/// Whether `layout` is valid for a body of radius `r` (see the module docs).
+/// Whether `layout` is valid for a body of radius `r` (see the module docs;
+/// the passage is checked on the obstacles at rest, the clearances of the
+/// start and the goal on every obstacle at t = 0).
 pub fn is_valid(layout: &Layout, r: f64) -> bool {
+    let velocities = layout.velocities_padded();
+    let rest: Vec<Polygon> = layout
+        .obstacles
+        .iter()
+        .zip(&velocities)
+        .filter(|(_, v)| v.norm() == 0.0)
+        .map(|(o, _)| o.clone())
+        .collect();
     let clear = |p: &Vector2<f64>| {
         layout
             .obstacles
@@ -296,13 +331,7 @@ pub fn is_valid(layout: &Layout, r: f64) -> bool {
     };
     clear(&layout.start)
         && clear(&layout.goal)
-        && crate::world::grid::connected(
-            layout.start,
-            layout.goal,
-            &layout.obstacles,
-            r + 0.05,
-            0.05,
-        )
+        && crate::world::grid::connected(layout.start, layout.goal, &rest, r + 0.05, 0.05)
 }
 
 /// The layout of family `kind` for `seed` and a body of radius
@@ -317,6 +346,10 @@ pub fn generate(kind: &str, seed: u64, body_radius: f64) -> Result<Layout, Strin
             "wall_start" => wall_start(&mut d, body_radius),
             "clutter" => clutter(&mut d),
             "thin" => thin(&mut d),
+            "crossing" => people::crossing(&mut d),
+            "headon" => people::headon(&mut d),
+            "crowd" => people::crowd(&mut d, body_radius),
+            "room_crossing" => people::room_crossing(&mut d),
             _ => {
                 return Err(format!(
                     "unknown family {kind:?} (one of {})",
@@ -373,6 +406,7 @@ mod tests {
                 rect(-1.2, -5.2, -1.0, 5.2),
                 rect(6.0, -5.2, 6.2, 5.2),
             ],
+            velocities: Vec::new(),
         };
         assert!(!is_valid(&layout, 0.25));
         assert!(is_valid(&layout, 0.1), "a narrower body fits");

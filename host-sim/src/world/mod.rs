@@ -10,7 +10,10 @@
 //!   transform, and whether a body fits from one point to another;
 //! * [`random`]: the paper's seeded random convex obstacles and regular polygons;
 //! * [`families`]: seeded layout families for a robot with a body (corridors,
-//!   doorways, cups, wall starts, clutter, thin walls).
+//!   doorways, cups, wall starts, clutter, thin walls);
+//! * [`people`]: seeded families with people who walk (crossing, head-on,
+//!   crowd, a room crossed);
+//! * [`moving`]: obstacles with a constant velocity, the true map at any time.
 //!
 //! Frames and units: world frame W, metres, radians, as in the controller.
 
@@ -20,7 +23,9 @@ use ldcbf_controller::nalgebra::Vector2;
 
 pub mod families;
 pub mod grid;
+pub mod moving;
 pub mod obstacle_index;
+pub mod people;
 pub mod random;
 pub mod robot;
 

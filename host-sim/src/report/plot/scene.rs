@@ -3,6 +3,7 @@
 //! scan and subgoals.
 
 use super::*;
+use crate::world::moving::vertex_centre;
 
 /// Draws a map-like scene into `area`: title, axes, (half-planes of `cycle`),
 /// obstacles, path and footsteps up to `until` (s), robot, start and goal.
@@ -62,8 +63,26 @@ pub(super) fn draw_scene<DB: DrawingBackend>(
     }
 
     // Obstacles (the true map; faded when the controller only perceives it).
+    // A moving obstacle is drawn where it is at `until`, with the trace of its
+    // centre since t = 0.
     let fill = if lidar { 0.30 } else { 0.85 };
-    for (i, o) in sc.obstacles.iter().enumerate() {
+    let positions = obstacles_at(sc, until);
+    for (o, (v, now)) in sc
+        .obstacles
+        .iter()
+        .zip(sc.velocities.iter().zip(&positions))
+    {
+        if *v != Vector2::zeros() {
+            let (a, b) = (vertex_centre(o), vertex_centre(now));
+            chart
+                .draw_series(std::iter::once(PathElement::new(
+                    vec![(a.x, a.y), (b.x, b.y)],
+                    OBSTACLE_EDGE.mix(0.6).stroke_width(2),
+                )))
+                .map_err(e)?;
+        }
+    }
+    for (i, o) in positions.iter().enumerate() {
         let v: Vec<(f64, f64)> = o.vertices().iter().map(|p| (p.x, p.y)).collect();
         let mut closed = v.clone();
         closed.push(v[0]);
@@ -327,4 +346,20 @@ pub(super) fn outcome_text(r: &SimResult) -> String {
         s.min_com_clearance
             .map_or("n/a".into(), |c| format!("{c:.3} m"))
     )
+}
+
+/// Every obstacle of the scenario where it is at time `t` (s): the moving ones
+/// moved by their velocity times `t` ([`crate::world::moving`]).
+fn obstacles_at(sc: &crate::scenario::Scenario, t: f64) -> Vec<crate::world::Polygon> {
+    sc.obstacles
+        .iter()
+        .zip(&sc.velocities)
+        .map(|(o, v)| {
+            if *v == Vector2::zeros() {
+                o.clone()
+            } else {
+                crate::world::moving::translated(o, v * t)
+            }
+        })
+        .collect()
 }

@@ -17,6 +17,14 @@ pub struct Aggregate {
     pub collisions: usize,
     /// Runs with a footprint overlapping a true obstacle.
     pub foot_collisions: usize,
+    /// Contacts where the robot moved into an obstacle, over all runs
+    /// (`crate::sim::ContactCause::Robot`; controller failures).
+    #[serde(default)]
+    pub contacts_robot: u64,
+    /// Contacts where a moving obstacle moved into a robot that was not moving
+    /// toward it, over all runs (`crate::sim::ContactCause::Obstacle`).
+    #[serde(default)]
+    pub contacts_person: u64,
     /// Runs that ended stuck.
     pub stuck: usize,
     /// Runs that hit the time limit.
@@ -95,6 +103,8 @@ pub fn aggregate(rows: &[RunRow]) -> Aggregate {
         reached: count(&|r| r.outcome == "goal_reached"),
         collisions: count(&|r| r.collision),
         foot_collisions: count(&|r| r.foot_collision),
+        contacts_robot: rows.iter().map(|r| r.contacts_robot).sum(),
+        contacts_person: rows.iter().map(|r| r.contacts_person).sum(),
         stuck: count(&|r| r.outcome == "stuck"),
         timeouts: count(&|r| r.outcome == "time_limit"),
         diverged: count(&|r| r.outcome == "diverged"),
@@ -153,6 +163,14 @@ pub fn markdown_table(cols: &[(String, Aggregate)]) -> String {
         (
             "foot collisions (a footprint on a true obstacle)",
             Box::new(|a: &Aggregate| a.foot_collisions.to_string()),
+        ),
+        (
+            "contacts: the robot moved into an obstacle",
+            Box::new(|a: &Aggregate| a.contacts_robot.to_string()),
+        ),
+        (
+            "contacts: a person moved into the standing robot",
+            Box::new(|a: &Aggregate| a.contacts_person.to_string()),
         ),
         ("stuck", Box::new(|a: &Aggregate| a.stuck.to_string())),
         (

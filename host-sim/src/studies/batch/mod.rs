@@ -306,17 +306,23 @@ pub struct RunRow {
     pub foot_collision: bool,
     /// Minimum body clearance (CoM clearance minus the body radius), m.
     pub min_body_clearance: f64,
+    /// Contacts where the robot moved into an obstacle (the summary's
+    /// `contacts_robot`).
+    pub contacts_robot: u64,
+    /// Contacts where a person moved into the standing robot (the summary's
+    /// `contacts_person`).
+    pub contacts_person: u64,
 }
 
 const CSV_HEADER: &str = "seed,outcome,success,collision,steps,sim_time,final_distance,\
 min_com_clearance,min_footstep_clearance,max_violation,cycles,non_optimal_cycles,\
 compute_p50_ns,compute_p99_ns,compute_max_ns,planner_failed,subgoals,plan_time_ms,\
-obstacles_seen_mean,wall_ms,foot_collision,min_body_clearance";
+obstacles_seen_mean,wall_ms,foot_collision,min_body_clearance,contacts_robot,contacts_person";
 
 impl RunRow {
     fn csv(&self) -> String {
         format!(
-            "{},{},{},{},{},{},{},{},{},{:e},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{:e},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             self.seed,
             self.outcome,
             u8::from(self.success),
@@ -338,7 +344,9 @@ impl RunRow {
             self.obstacles_seen_mean,
             self.wall_ms,
             u8::from(self.foot_collision),
-            self.min_body_clearance
+            self.min_body_clearance,
+            self.contacts_robot,
+            self.contacts_person
         )
     }
 
@@ -382,6 +390,8 @@ impl RunRow {
             wall_ms: p(f[19], "wall_ms")?,
             foot_collision: b(f[20], "foot_collision")?,
             min_body_clearance: p(f[21], "min_body_clearance")?,
+            contacts_robot: p(f[22], "contacts_robot")?,
+            contacts_person: p(f[23], "contacts_person")?,
         })
     }
 }
@@ -603,6 +613,8 @@ pub fn run_batch(req: &BatchRequest) -> Result<BatchReport> {
                     wall_ms: t.elapsed().as_secs_f64() * 1e3,
                     foot_collision: s.foot_collision,
                     min_body_clearance: s.min_body_clearance.unwrap_or(f64::INFINITY),
+                    contacts_robot: s.contacts_robot as u64,
+                    contacts_person: s.contacts_person as u64,
                 };
                 if !row.success {
                     let n = failures.fetch_add(1, Ordering::Relaxed) + 1;

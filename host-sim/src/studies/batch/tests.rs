@@ -49,6 +49,8 @@ fn rows_round_trip_through_csv() {
         wall_ms: 12.5,
         foot_collision: true,
         min_body_clearance: 0.09,
+        contacts_robot: 1,
+        contacts_person: 2,
     };
     assert_eq!(RunRow::parse(&r.csv()).unwrap(), r);
 }
