@@ -684,3 +684,5 @@ fn robot_config_cycles_equal_the_rust_controller() {
     }
     assert!(optimal > 100, "{optimal} optimal cycles");
 }
+
+mod hostile;
