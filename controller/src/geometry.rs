@@ -49,7 +49,9 @@ impl core::fmt::Display for GeometryError {
             GeometryError::OutOfRange => "a vertex coordinate exceeds 1e6 m in absolute value",
             GeometryError::TooFewVertices => "fewer than 3 distinct vertices",
             GeometryError::ZeroArea => "all vertices are collinear (zero area)",
-            GeometryError::NotConvex => "the vertices do not form a convex polygon",
+            GeometryError::NotConvex => {
+                "the vertices do not form a convex polygon (not convex or self-intersecting)"
+            }
             GeometryError::TooManyVertices => "more vertices than the polygon capacity",
         })
     }
@@ -87,15 +89,28 @@ fn cross(a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
     a.x * b.y - a.y * b.x
 }
 
-/// The error for a degenerate (zero-area) point set: [`GeometryError::ZeroArea`]
-/// when it has three distinct points, [`GeometryError::TooFewVertices`] otherwise.
+/// The error for a degenerate (zero-area) point set: [`GeometryError::NotConvex`]
+/// when a point lies off the line of the first two distinct ones (the outline
+/// crosses itself, as a bow-tie), else [`GeometryError::ZeroArea`] when it has
+/// three distinct points, [`GeometryError::TooFewVertices`] otherwise.
 fn degenerate(mut pts: impl Iterator<Item = Vector2<f64>> + Clone) -> GeometryError {
     let far = |p: &Vector2<f64>, q: &Vector2<f64>| norm(&(p - q)) > DUPLICATE_TOL;
-    let three = pts.next().is_some_and(|a| {
-        pts.clone()
-            .find(|b| far(b, &a))
-            .is_some_and(|b| pts.any(|c| far(&c, &a) && far(&c, &b)))
-    });
+    let Some(a) = pts.next() else {
+        return GeometryError::TooFewVertices;
+    };
+    let Some(b) = pts.clone().find(|b| far(b, &a)) else {
+        return GeometryError::TooFewVertices;
+    };
+    let mut three = false;
+    for c in pts.filter(|c| far(c, &a) && far(c, &b)) {
+        three = true;
+        // A point off the line a-b: the outline has no net area because it
+        // crosses itself (a bow-tie), not because the points are collinear.
+        let (u, w) = (b - a, c - a);
+        if cross(&u, &w).abs() > 1e-9 * norm(&u) * norm(&w) {
+            return GeometryError::NotConvex;
+        }
+    }
     if three {
         GeometryError::ZeroArea
     } else {

@@ -206,6 +206,28 @@ impl Default for QpSettings {
     }
 }
 
+impl QpSettings {
+    /// Largest tolerance [`QpSettings::validate`] accepts: a row violated by
+    /// more than this (scaled to unit norm) is never taken as satisfied, and a
+    /// component of a normal above it never as dependent.
+    pub const MAX_TOL: f64 = 1e-3;
+
+    /// Checks the tolerances: each finite and in `(0, MAX_TOL)`. The error is
+    /// `(field, requirement)` for the first bad one. Every interface that takes
+    /// tolerances from a user (the controller's `Config`, the C API, Python's
+    /// `solve_qp`) checks them here.
+    pub fn validate(&self) -> Result<(), (&'static str, &'static str)> {
+        let ok = |t: f64| t.is_finite() && t > 0.0 && t < Self::MAX_TOL;
+        if !ok(self.tol_primal) {
+            return Err(("tol_primal", "must be in (0, 1e-3)"));
+        }
+        if !ok(self.tol_dependence) {
+            return Err(("tol_dependence", "must be in (0, 1e-3)"));
+        }
+        Ok(())
+    }
+}
+
 /// Result of one solve, for any dimension types (see [`QpSolution`] for the
 /// static sizes). `lambda` holds one multiplier per row (zero for inactive
 /// rows), so `H x + q + G' lambda = 0` at a solution.

@@ -285,7 +285,10 @@ pub unsafe extern "C" fn ldcbf_configure(
         .to_config()
         .and_then(|c| ctl.controller.configure(c).map_err(LastError::Config));
     match result {
-        Ok(()) => LdcbfResult::Ok,
+        Ok(()) => {
+            ctl.last_error = LastError::None;
+            LdcbfResult::Ok
+        }
         Err(e) => {
             ctl.last_error = e;
             LdcbfResult::InvalidConfig
@@ -462,6 +465,7 @@ pub unsafe extern "C" fn ldcbf_step_moving(
     let result = handle.controller.step(&cycle);
     // SAFETY: non-NULL, aligned, writable by contract, outside the controller.
     unsafe { out.write(LdcbfOutput::from(&result)) };
+    handle.last_error = LastError::None;
     LdcbfResult::Ok
 }
 
@@ -472,7 +476,9 @@ pub unsafe extern "C" fn ldcbf_step_moving(
 /// exactly as the controller predicts (the C example closes its loop with it).
 ///
 /// Returns `Ok`, [`LdcbfResult::NotConfigured`], [`LdcbfResult::InvalidArgument`]
-/// (`tau` not finite), or a pointer error.
+/// (`tau` or an input not finite, or a flow that overflows: `|tau|` of a few
+/// hundred seconds, where `cosh(beta tau)` is not finite; nothing is written),
+/// or a pointer error.
 ///
 /// # Safety
 /// As [`ldcbf_configure`] for `ctl` (read only); `p`, `v`, `foot` must be
@@ -515,6 +521,11 @@ pub unsafe extern "C" fn ldcbf_lip_propagate(
         .controller
         .lip()
         .propagate(&xy(p), &xy(v), &xy(foot), tau);
+    // cosh and sinh of beta tau overflow for |beta tau| above ~710 (|tau| of
+    // a few hundred seconds): an error, never OK with NaN or inf.
+    if !(p1.iter().chain(v1.iter()).all(|x| x.is_finite())) {
+        return LdcbfResult::InvalidArgument;
+    }
     let [p_out, v_out] = outs;
     // SAFETY: non-NULL, aligned, writable for 2 doubles by contract (outputs
     // may alias the inputs: these were copied out above).
@@ -526,7 +537,8 @@ pub unsafe extern "C" fn ldcbf_lip_propagate(
 }
 
 /// Writes a description of the controller's last error (from
-/// [`ldcbf_configure`] or [`ldcbf_step`]; "no error" if none), NUL-terminated
+/// [`ldcbf_configure`] or [`ldcbf_step`]; "no error" if none, or if the last
+/// call of either succeeded: a success clears it), NUL-terminated
 /// and truncated to fit, to `buf[0 .. buf_len]`, like `snprintf`. Returns the
 /// length of the whole message without the NUL (so a return value `>=
 /// buf_len` means it was truncated), or 0 if `ctl` is not a valid controller

@@ -766,3 +766,5 @@ fn step_moving_checks_the_velocities() {
     assert_eq!(call(null(), &mut null_v), LdcbfResult::Ok);
     assert_eq!(format!("{at_rest:?}"), format!("{null_v:?}"));
 }
+
+mod hostile;

@@ -152,7 +152,8 @@ def solve_qp(
     ``numerical_error``), ``iterations``, ``active_set`` and ``path``
     (``static`` when ``n`` and ``m`` fit one of the compiled sizes
     :data:`QP_SIZES`, ``dynamic`` otherwise: the run-time-sized instance of
-    the same solver, any size).
+    the same solver, any size). ``max_iter >= 1``; ``tol_primal`` and
+    ``tol_dependence`` each in ``(0, 1e-3)`` (else ``ArgumentError``).
     """
 
 def load_scenario(

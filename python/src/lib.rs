@@ -24,6 +24,7 @@ use ldcbf_controller::{
     QpAllocator, QpSettings, QpStatus, RobotController, Side,
 };
 use ldcbf_reference::DenseProblem;
+use ldcbf_sim::scenario::limits::{MAX_DEPTH, MAX_ECHO, shorten};
 use ldcbf_sim::scenario::{LoadOptions, Scenario};
 use ldcbf_sim::sim::{MpcRate, SimOptions, SimResult, Solver};
 use ldcbf_sim::world::robot::RobotParams;
@@ -31,7 +32,7 @@ use ldcbf_sim::world::{MAX_VERTICES, Polygon};
 use numpy::ndarray::Array2;
 use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyUntypedArrayMethods};
 use pyo3::create_exception;
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyException, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 
@@ -54,11 +55,60 @@ create_exception!(
     "A scenario that cannot be used: `field` (dotted path), `file` and `line` (or None) locate it."
 );
 
-/// An [`ArgumentError`] for `field`: the message starts with the field's name.
+/// An [`ArgumentError`] for `field`: the message starts with the field's name
+/// (a long one shortened, as the key of a hostile dict can be megabytes).
 fn arg_err(py: Python<'_>, field: &str, msg: impl core::fmt::Display) -> PyErr {
+    let field = shorten(field, MAX_ECHO);
     let e = ArgumentError::new_err(format!("{field}: {msg}"));
     let _ = e.value(py).setattr("field", field);
     e
+}
+
+/// A conversion's error replaced by an [`ArgumentError`] (or
+/// [`ConfigError`]) naming the field, except a `BaseException` that is not an
+/// `Exception` (KeyboardInterrupt, SystemExit), which passes through untouched.
+trait OrArg<T> {
+    fn or_arg(self, f: impl FnOnce(PyErr) -> PyErr) -> PyResult<T>;
+}
+
+impl<T> OrArg<T> for PyResult<T> {
+    fn or_arg(self, f: impl FnOnce(PyErr) -> PyErr) -> PyResult<T> {
+        self.map_err(|e| {
+            let plain = Python::attach(|py| e.is_instance_of::<PyException>(py));
+            if plain { f(e) } else { e }
+        })
+    }
+}
+
+/// A non-negative integer argument (an `int` or anything with `__index__`,
+/// numpy integers included; not a bool, not a float) at most `max`.
+fn int_arg(obj: &Bound<'_, PyAny>, field: &str, max: u64) -> PyResult<u64> {
+    let py = obj.py();
+    let bad = || {
+        arg_err(
+            py,
+            field,
+            format!("must be an integer in [0, {max}], got {}", repr(obj)),
+        )
+    };
+    if obj.is_instance_of::<PyBool>() {
+        return Err(bad());
+    }
+    let idx = obj.call_method0("__index__").or_arg(|_| bad())?;
+    idx.extract::<u64>()
+        .or_arg(|_| bad())
+        .and_then(|v| if v <= max { Ok(v) } else { Err(bad()) })
+}
+
+/// A string argument.
+fn str_arg(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<String> {
+    obj.extract::<String>().or_arg(|_| {
+        arg_err(
+            obj.py(),
+            field,
+            format!("expected a string, got {}", repr(obj)),
+        )
+    })
 }
 
 /// A [`ConfigError`] from the controller's error.
@@ -91,7 +141,7 @@ fn float_array(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<(Vec<usize>, Vec
     let np = py.import("numpy")?;
     let arr = np
         .call_method1("ascontiguousarray", (obj, np.getattr("float64")?))
-        .map_err(|e| arg_err(py, field, format!("not an array of numbers ({e})")))?;
+        .or_arg(|e| arg_err(py, field, format!("not an array of numbers ({e})")))?;
     let arr = arr
         .cast_into::<numpy::PyArrayDyn<f64>>()
         .map_err(|_| arg_err(py, field, "not an array of float64"))?;
@@ -120,7 +170,7 @@ fn float(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<f64> {
         return Err(arg_err(obj.py(), field, "expected a number"));
     }
     obj.extract::<f64>()
-        .map_err(|e| arg_err(obj.py(), field, format!("expected a number ({e})")))
+        .or_arg(|e| arg_err(obj.py(), field, format!("expected a number ({e})")))
 }
 
 /// An `n x 2` vertex array, as `[[x, y], ...]`.
@@ -149,9 +199,10 @@ fn side(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<Side> {
     }
 }
 
+/// `repr(obj)` for a message, shortened ([`shorten`]).
 fn repr(obj: &Bound<'_, PyAny>) -> String {
     obj.repr()
-        .map(|r| r.to_string())
+        .map(|r| shorten(&r.to_string(), MAX_ECHO))
         .unwrap_or_else(|_| "?".into())
 }
 
@@ -164,7 +215,7 @@ fn polygons(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<Polygon>> {
     let py = obj.py();
     let iter = obj
         .try_iter()
-        .map_err(|_| arg_err(py, "obstacles", "expected a sequence of vertex arrays"))?;
+        .or_arg(|_| arg_err(py, "obstacles", "expected a sequence of vertex arrays"))?;
     let mut out = Vec::new();
     for (i, item) in iter.enumerate() {
         let field = format!("obstacles[{i}]");
@@ -299,7 +350,7 @@ fn uint(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<u32> {
         return Err(config_err(obj.py(), field, "must be an integer"));
     }
     obj.extract::<u32>()
-        .map_err(|_| config_err(obj.py(), field, "must be an integer in [0, 2^32)"))
+        .or_arg(|_| config_err(obj.py(), field, "must be an integer in [0, 2^32)"))
 }
 
 /// `base` with the settings of the mapping `obj` (field name -> value); any
@@ -316,7 +367,7 @@ fn config_from(py: Python<'_>, obj: Option<&Bound<'_, PyAny>>, base: Config) -> 
         .cast::<PyDict>()
         .map_err(|_| arg_err(py, "config", "expected a dict of controller settings"))?;
     for (k, v) in map.iter() {
-        let key: String = k.extract().map_err(|_| {
+        let key: String = k.extract().or_arg(|_| {
             arg_err(
                 py,
                 "config",
@@ -329,7 +380,7 @@ fn config_from(py: Python<'_>, obj: Option<&Bound<'_, PyAny>>, base: Config) -> 
                 return Err(config_err(py, field, "must be a number"));
             }
             v.extract::<f64>()
-                .map_err(|_| config_err(py, field, "must be a number"))
+                .or_arg(|_| config_err(py, field, "must be a number"))
         };
         macro_rules! set_f64 {
             ($($f:ident),*) => {
@@ -432,11 +483,19 @@ struct PyController {
 #[pymethods]
 impl PyController {
     #[new]
-    #[pyo3(signature = (config=None, *, size="robot"))]
-    fn new(py: Python<'_>, config: Option<&Bound<'_, PyAny>>, size: &str) -> PyResult<Self> {
+    #[pyo3(signature = (config=None, *, size=None))]
+    fn new(
+        py: Python<'_>,
+        config: Option<&Bound<'_, PyAny>>,
+        size: Option<&Bound<'_, PyAny>>,
+    ) -> PyResult<Self> {
+        let size = match size.filter(|s| !s.is_none()) {
+            None => "robot".to_string(),
+            Some(s) => str_arg(s, "size")?,
+        };
         let cfg = config_from(py, config, Config::default())?;
         let map = |e: ldcbf_controller::ConfigError| config_err(py, e.field, e.requirement);
-        let (inner, size) = match size {
+        let (inner, size) = match size.as_str() {
             "robot" => (
                 AnyController::Robot(Box::new(RobotController::new(cfg).map_err(map)?)),
                 "robot",
@@ -449,7 +508,10 @@ impl PyController {
                 return Err(arg_err(
                     py,
                     "size",
-                    format!("expected \"robot\" or \"paper\", got {other:?}"),
+                    format!(
+                        "expected \"robot\" or \"paper\", got {:?}",
+                        shorten(other, MAX_ECHO)
+                    ),
                 ));
             }
         };
@@ -630,8 +692,18 @@ fn output_dict<'py, const N: usize>(
 
 /// A Python value as a TOML value (bool, int, float, str, sequences, dicts;
 /// numpy arrays and scalars through `tolist()`); `field` names it in errors.
-fn toml_value(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<toml::Value> {
+/// `depth` counts the enclosing dicts and lists: deeper than
+/// `ldcbf_sim::scenario::limits::MAX_DEPTH` (a cycle included) is refused
+/// before recursing.
+fn toml_value(obj: &Bound<'_, PyAny>, field: &str, depth: usize) -> PyResult<toml::Value> {
     let py = obj.py();
+    if depth > MAX_DEPTH {
+        return Err(arg_err(
+            py,
+            field,
+            format!("nested more than {MAX_DEPTH} dicts or lists deep (or contains itself)"),
+        ));
+    }
     if obj.is_instance_of::<PyBool>() {
         return Ok(toml::Value::Boolean(obj.is_truthy()?));
     }
@@ -639,10 +711,10 @@ fn toml_value(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<toml::Value> {
         return obj
             .extract::<i64>()
             .map(toml::Value::Integer)
-            .map_err(|_| arg_err(py, field, "integer out of range"));
+            .or_arg(|_| arg_err(py, field, "integer out of range"));
     }
     if obj.is_instance_of::<PyFloat>() {
-        return Ok(toml::Value::Float(obj.extract::<f64>()?));
+        return Ok(toml::Value::Float(float(obj, field)?));
     }
     if let Ok(s) = obj.cast::<PyString>() {
         return Ok(toml::Value::String(s.to_str()?.to_string()));
@@ -652,13 +724,13 @@ fn toml_value(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<toml::Value> {
         for (k, v) in d.iter() {
             let k: String = k
                 .extract()
-                .map_err(|_| arg_err(py, field, format!("keys are strings, got {}", repr(&k))))?;
+                .or_arg(|_| arg_err(py, field, format!("keys are strings, got {}", repr(&k))))?;
             let sub = if field.is_empty() {
                 k.clone()
             } else {
                 format!("{field}.{k}")
             };
-            t.insert(k, toml_value(&v, &sub)?);
+            t.insert(k, toml_value(&v, &sub, depth + 1)?);
         }
         return Ok(toml::Value::Table(t));
     }
@@ -671,12 +743,12 @@ fn toml_value(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<toml::Value> {
     }
     if obj.hasattr("tolist")? {
         let native = obj.call_method0("tolist")?;
-        return toml_value(&native, field);
+        return toml_value(&native, field, depth + 1);
     }
     if obj.is_instance_of::<PyList>() || obj.is_instance_of::<PyTuple>() {
         let mut a = Vec::new();
         for (i, v) in obj.try_iter()?.enumerate() {
-            a.push(toml_value(&v?, &format!("{field}[{i}]"))?);
+            a.push(toml_value(&v?, &format!("{field}[{i}]"), depth + 1)?);
         }
         return Ok(toml::Value::Array(a));
     }
@@ -692,30 +764,34 @@ fn toml_value(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<toml::Value> {
 fn load(
     py: Python<'_>,
     scenario: &Bound<'_, PyAny>,
-    seed: Option<u64>,
+    seed: Option<&Bound<'_, PyAny>>,
     sets: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Scenario> {
+    let seed = match seed.filter(|s| !s.is_none()) {
+        None => None,
+        Some(s) => Some(int_arg(s, "seed", u64::MAX)?),
+    };
     let mut opts = LoadOptions {
         seed,
         sets: Vec::new(),
     };
     if let Some(sets) = sets {
         for (k, v) in sets.iter() {
-            let key: String = k.extract().map_err(|_| {
+            let key: String = k.extract().or_arg(|_| {
                 arg_err(
                     py,
                     "overrides",
                     format!("keys are strings, got {}", repr(&k)),
                 )
             })?;
-            let value = toml_value(&v, &key)?;
+            let value = toml_value(&v, &key, 0)?;
             opts.sets.push((key, value.to_string()));
         }
     }
     let result = if let Ok(spec) = scenario.extract::<String>() {
         ldcbf_sim::scenario::load(&spec, &opts)
     } else if let Ok(d) = scenario.cast::<PyDict>() {
-        let toml::Value::Table(table) = toml_value(d.as_any(), "")? else {
+        let toml::Value::Table(table) = toml_value(d.as_any(), "", 0)? else {
             return Err(arg_err(py, "scenario", "expected a dict"));
         };
         let text = toml::to_string(&table).map_err(|e| arg_err(py, "scenario", e))?;
@@ -768,7 +844,7 @@ fn scenario_dict<'py>(py: Python<'py>, s: &Scenario) -> PyResult<Bound<'py, PyDi
 fn load_scenario<'py>(
     py: Python<'py>,
     scenario: &Bound<'py, PyAny>,
-    seed: Option<u64>,
+    seed: Option<&Bound<'py, PyAny>>,
     sets: Option<&Bound<'py, PyDict>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let s = load(py, scenario, seed, sets)?;
@@ -778,24 +854,35 @@ fn load_scenario<'py>(
 /// Runs a scenario in closed loop (`ldcbf_sim::run`, as `ldcbf-sim run`
 /// without the figures). See the Python wrapper `ldcbf_nav.simulate`.
 #[pyfunction]
-#[pyo3(signature = (scenario, seed=None, sets=None, solver="own", mpc_rate=None, trajectory_every=1))]
+#[pyo3(signature = (scenario, seed=None, sets=None, solver=None, mpc_rate=None, trajectory_every=None))]
 fn simulate<'py>(
     py: Python<'py>,
     scenario: &Bound<'py, PyAny>,
-    seed: Option<u64>,
+    seed: Option<&Bound<'py, PyAny>>,
     sets: Option<&Bound<'py, PyDict>>,
-    solver: &str,
+    solver: Option<&Bound<'py, PyAny>>,
     mpc_rate: Option<&Bound<'py, PyAny>>,
-    trajectory_every: usize,
+    trajectory_every: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let solver = match solver {
+    let solver = match solver.filter(|s| !s.is_none()) {
+        None => "own".to_string(),
+        Some(s) => str_arg(s, "solver")?,
+    };
+    let trajectory_every = match trajectory_every.filter(|t| !t.is_none()) {
+        None => 1,
+        Some(t) => int_arg(t, "trajectory_every", u32::MAX.into())? as usize,
+    };
+    let solver = match solver.as_str() {
         "own" => Solver::Own,
         "clarabel" => Solver::Clarabel,
         other => {
             return Err(arg_err(
                 py,
                 "solver",
-                format!("expected \"own\" or \"clarabel\", got {other:?}"),
+                format!(
+                    "expected \"own\" or \"clarabel\", got {:?}",
+                    shorten(other, MAX_ECHO)
+                ),
             ));
         }
     };
@@ -806,8 +893,8 @@ fn simulate<'py>(
                 String::new()
             } else if let Ok(s) = r.extract::<String>() {
                 s
-            } else if let Ok(h) = r.extract::<i64>() {
-                h.to_string()
+            } else if r.is_instance_of::<PyInt>() {
+                int_arg(r, "mpc_rate", u32::MAX.into())?.to_string()
             } else {
                 String::new()
             };
@@ -827,10 +914,39 @@ fn simulate<'py>(
         record_clearance: true,
         timing_repeats: 1,
     };
-    let result = py
-        .detach(|| ldcbf_sim::run(&sc, options))
-        .map_err(|e| arg_err(py, "scenario", e))?;
+    let result = run_interruptible(py, &sc, options)?.map_err(|e| arg_err(py, "scenario", e))?;
     result_dict(py, &result, trajectory_every)
+}
+
+/// `ldcbf_sim::run` on a worker thread, without the GIL, while this thread
+/// checks for Python signals every 50 ms: a signal handler's exception (Ctrl-C's
+/// KeyboardInterrupt) cancels the run (`ldcbf_sim::sim::cancel`, polled every
+/// tick) and is raised as it came.
+fn run_interruptible(
+    py: Python<'_>,
+    sc: &Scenario,
+    options: SimOptions,
+) -> PyResult<Result<SimResult, ldcbf_sim::sim::SimError>> {
+    use std::sync::Arc;
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let flag = Arc::new(AtomicBool::new(false));
+    std::thread::scope(|s| {
+        let worker = {
+            let flag = Arc::clone(&flag);
+            s.spawn(move || ldcbf_sim::sim::cancel::with_flag(flag, || ldcbf_sim::run(sc, options)))
+        };
+        while !worker.is_finished() {
+            py.detach(|| std::thread::sleep(std::time::Duration::from_millis(50)));
+            if let Err(e) = py.check_signals() {
+                flag.store(true, Ordering::Relaxed);
+                let _ = worker.join();
+                return Err(e);
+            }
+        }
+        worker
+            .join()
+            .map_err(|_| pyo3::exceptions::PyRuntimeError::new_err("the simulation panicked"))
+    })
 }
 
 /// A run's logs as dicts of numpy columns (see `ldcbf_nav.simulate`).
@@ -985,7 +1101,7 @@ const QP_SIZES: [(usize, usize); 7] = ldcbf_sim::studies::qpbench::SIZES;
 /// run-time-sized instance (the same code) for any other size. See the
 /// Python docs of `ldcbf_nav.solve_qp`.
 #[pyfunction]
-#[pyo3(signature = (P, q, G=None, h=None, *, max_iter=1000, tol_primal=1e-10, tol_dependence=1e-12))]
+#[pyo3(signature = (P, q, G=None, h=None, *, max_iter=None, tol_primal=None, tol_dependence=None))]
 #[allow(non_snake_case, clippy::too_many_arguments)]
 fn solve_qp<'py>(
     py: Python<'py>,
@@ -993,10 +1109,33 @@ fn solve_qp<'py>(
     q: &Bound<'py, PyAny>,
     G: Option<&Bound<'py, PyAny>>,
     h: Option<&Bound<'py, PyAny>>,
-    max_iter: u32,
-    tol_primal: f64,
-    tol_dependence: f64,
+    max_iter: Option<&Bound<'py, PyAny>>,
+    tol_primal: Option<&Bound<'py, PyAny>>,
+    tol_dependence: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let max_iter = match max_iter.filter(|m| !m.is_none()) {
+        None => 1000,
+        Some(m) => int_arg(m, "max_iter", u32::MAX.into())? as u32,
+    };
+    if max_iter == 0 {
+        return Err(arg_err(py, "max_iter", "must be >= 1"));
+    }
+    let defaults = QpSettings::default();
+    let tol = |obj: Option<&Bound<'py, PyAny>>, field: &str, default: f64| match obj
+        .filter(|t| !t.is_none())
+    {
+        None => Ok(default),
+        Some(t) => float(t, field),
+    };
+    let settings = QpSettings {
+        tol_primal: tol(tol_primal, "tol_primal", defaults.tol_primal)?,
+        tol_dependence: tol(tol_dependence, "tol_dependence", defaults.tol_dependence)?,
+        ..defaults
+    };
+    // The controller's one check of the tolerances.
+    if let Err((field, requirement)) = settings.validate() {
+        return Err(arg_err(py, field, requirement));
+    }
     let (ps, pd) = float_array(P, "P")?;
     if ps.len() != 2 || ps[0] != ps[1] || ps[0] == 0 {
         return Err(arg_err(
@@ -1049,17 +1188,6 @@ fn solve_qp<'py>(
             ));
         }
     }
-    if !(tol_primal.is_finite() && tol_primal > 0.0) {
-        return Err(arg_err(py, "tol_primal", "must be finite and > 0"));
-    }
-    if !(tol_dependence.is_finite() && tol_dependence > 0.0) {
-        return Err(arg_err(py, "tol_dependence", "must be finite and > 0"));
-    }
-    let settings = QpSettings {
-        tol_primal,
-        tol_dependence,
-        ..QpSettings::default()
-    };
     let data = DenseProblem::inequalities(n, pd, qd, gd, hd);
     macro_rules! dispatch {
         ($(($nv:literal, $nc:literal)),*) => {

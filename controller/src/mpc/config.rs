@@ -345,8 +345,12 @@ impl Config {
         {
             return err("capture_fraction", "must be in (0, 1] when set");
         }
-        if !(self.tol_primal.is_finite() && self.tol_primal > 0.0 && self.tol_primal < 1e-3) {
-            return err("tol_primal", "must be in (0, 1e-3)");
+        let settings = crate::qp::QpSettings {
+            tol_primal: self.tol_primal,
+            ..crate::qp::QpSettings::default()
+        };
+        if let Err((field, requirement)) = settings.validate() {
+            return err(field, requirement);
         }
         Ok(())
     }

@@ -40,6 +40,16 @@ pub fn shorten(s: &str, max: usize) -> String {
     }
 }
 
+/// A key as the `field` of an error: [`shorten`]ed, and `""` for the empty
+/// key (TOML's `"" = 1`, `--set =1`) so that the message shows one.
+pub fn field_name(key: &str) -> String {
+    if key.is_empty() {
+        "\"\"".into()
+    } else {
+        shorten(key, MAX_ECHO)
+    }
+}
+
 /// Checks a `--set` key before it is split: at most [`MAX_KEY_LEN`] bytes and
 /// [`MAX_KEY_PARTS`] dotted parts.
 pub fn check_key(key: &str) -> Result<(), String> {

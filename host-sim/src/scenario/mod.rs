@@ -414,7 +414,7 @@ pub fn parse_str(text: &str, file: &str, opts: &LoadOptions) -> Result<Scenario,
         for (k, v) in &opts.sets {
             apply_set(&mut table, k, v).map_err(|message| ScenarioError {
                 file: "--set".into(),
-                field: limits::shorten(k, limits::MAX_ECHO),
+                field: limits::field_name(k),
                 line: None,
                 message,
             })?;

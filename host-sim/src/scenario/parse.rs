@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use serde::Deserialize;
 use toml::Spanned;
 
-use super::limits::{MAX_ECHO, Xy, check_key, shorten};
+use super::limits::{MAX_ECHO, Xy, check_key, field_name, shorten};
 use super::{ControllerOverrides, ScenarioError, SideSpec, controller_fields};
 use crate::plan::{Planner, RrtParams};
 use crate::plant::disturbance::DisturbanceParams;
@@ -276,12 +276,13 @@ fn path_at(text: &str, offset: usize) -> Option<String> {
         best: &mut Option<(usize, String)>,
     ) {
         for (k, v) in t.iter() {
+            let (key_span, k) = (k.span(), field_name(k.get_ref()));
             let path = if prefix.is_empty() {
-                k.get_ref().to_string()
+                k
             } else {
-                format!("{prefix}.{}", k.get_ref())
+                format!("{prefix}.{k}")
             };
-            consider(k.span(), &path, offset, best);
+            consider(key_span, &path, offset, best);
             consider(v.span(), &path, offset, best);
             walk_value(v, &path, offset, best);
         }

@@ -318,8 +318,30 @@ pub struct SolveOptions {
     pub check: bool,
 }
 
-/// Reads and solves one file (see the module docs).
+/// Most timed repeats per file ([`SolveOptions::repeat`]).
+pub const MAX_REPEAT: usize = 1_000_000;
+
+impl SolveOptions {
+    /// Checks the limits: `repeat` in `1..=MAX_REPEAT`, `max_iter >= 1` (as
+    /// the controller's `Config::max_iter`).
+    pub fn validate(&self) -> Result<()> {
+        if !(1..=MAX_REPEAT).contains(&self.repeat) {
+            return Err(anyhow!(
+                "--repeat must be in 1..={MAX_REPEAT}, got {}",
+                self.repeat
+            ));
+        }
+        if self.max_iter == 0 {
+            return Err(anyhow!("--max-iter must be >= 1, got 0"));
+        }
+        Ok(())
+    }
+}
+
+/// Reads and solves one file (see the module docs), after
+/// [`SolveOptions::validate`].
 pub fn solve_file(file: &Path, opts: &SolveOptions) -> Result<QpRow> {
+    opts.validate()?;
     let p = DenseProblem::from_npz(file).map_err(|e| anyhow!("{e}"))?;
     // The solver's rows: `A` (equalities), `G` and the finite bounds.
     let rows = p.rows();
