@@ -519,12 +519,21 @@ where
             return w;
         };
         let ws = w.as_mut_slice();
-        for (k, (col, &gk)) in columns(self.Linv.as_slice(), n).zip(g).enumerate() {
-            if self.linv_diag {
-                if let (Some(wk), Some(&c)) = (ws.get_mut(k), col.get(k)) {
+        let linv = self.Linv.as_slice();
+        // The diagonal test outside the loops, and each column by `column`
+        // (whose length is visibly `n`): for the static sizes the axpys
+        // unroll with `w` in registers.
+        if self.linv_diag {
+            for (k, (wk, &gk)) in ws.iter_mut().zip(g).enumerate() {
+                if let Some(&c) = column(linv, n, k).and_then(|col| col.get(k)) {
                     *wk = c * gk;
                 }
-            } else {
+            }
+        } else {
+            for (k, &gk) in g.iter().enumerate() {
+                let Some(col) = column(linv, n, k) else {
+                    break;
+                };
                 // zeros above the diagonal included: fixed length, vectorised
                 for (wi, c) in ws.iter_mut().zip(col) {
                     *wi += c * gk;
@@ -748,7 +757,6 @@ where
         let mut J = self.Linv.transpose();
         let mut R = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
         let mut d = OVector::<f64, NV>::zeros_generic(nv, U1);
-        let mut z = OVector::<f64, NV>::zeros_generic(nv, U1);
         let mut factor = Orthogonal {
             solver: self,
             rows: &qp.gt,
@@ -760,7 +768,7 @@ where
             J: &mut J,
             R: &mut R,
             d: &mut d,
-            z: &mut z,
+            z: OVector::zeros_generic(nv, U1),
             dependent: false,
         };
         // Rows left out are never scanned: they start (and stay) blocked as if

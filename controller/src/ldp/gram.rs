@@ -72,10 +72,15 @@ where
 {
     #[inline(always)]
     fn violation(&mut self, i: usize, blocked: bool) -> Option<f64> {
-        let (Some(&si), Some(&thr)) = (self.s.get(i), self.ldp.thr.get(i)) else {
+        // Most rows hold with a positive slack: that test first, on a plain
+        // load (the scan runs `m` times per add; an `Option` per access
+        // costs it three times the instructions).
+        let (s, thr) = (self.s.as_slice(), self.ldp.thr.as_slice());
+        if i >= s.len() || i >= thr.len() {
             return None;
-        };
-        if blocked || slack_holds(si, thr) {
+        }
+        let si = s[i];
+        if si >= 0.0 || blocked || slack_holds(si, thr[i]) {
             return None;
         }
         Some(if si.is_finite() { si } else { f64::NAN })
@@ -157,16 +162,20 @@ where
         let (false, Some(kp)) = (self.dependent, column(K, nc, p)) else {
             return;
         };
-        let s = self.s.as_mut_slice();
+        // Slices of the row count (not `take(m)` on longer ones): the loops
+        // then vectorise.
+        let Some(s) = self.s.as_mut_slice().get_mut(..m) else {
+            return;
+        };
         // u moves by -t z: slack_i grows by t mhat_i . z
         // = t (K_ip - sum_j r_j K_i,A_j).
-        for (si, &k) in s.iter_mut().zip(kp).take(m) {
+        for (si, &k) in s.iter_mut().zip(kp) {
             *si += t * k;
         }
         for (&a, &rj) in act.iter().zip(r).take(nact) {
             if let Some(ka) = column(K, nc, usize::from(a)) {
                 let f = t * rj;
-                for (si, &k) in s.iter_mut().zip(ka).take(m) {
+                for (si, &k) in s.iter_mut().zip(ka) {
                     *si -= f * k;
                 }
             }

@@ -47,8 +47,10 @@ where
     /// `d = J' n_p` of the last direction (`n_p = -g_p`; the caller's
     /// local, as `J`).
     pub d: &'a mut OVector<f64, NV>,
-    /// The primal step direction of the last direction (the caller's local).
-    pub z: &'a mut OVector<f64, NV>,
+    /// The primal step direction of the last direction (held here, not
+    /// borrowed: the accumulation over the columns of `J` then stays in
+    /// registers for the static sizes).
+    pub z: OVector<f64, NV>,
     /// The last row `p` was linearly dependent on the active rows.
     pub dependent: bool,
 }
