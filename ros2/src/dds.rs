@@ -2,7 +2,7 @@
 //! (`rt/<name>`, `<pkg>::msg::dds_::<Type>_`), the QoS, and the loop that
 //! hands messages to [`NavNode`] and publishes what it returns.
 //!
-//! QoS (docs/ros2.md): `/odom` is sensor data, best effort, keep last 5 (a
+//! QoS (docs/ros2.md): `/odom` and `/scan` are sensor data, best effort, keep last 5 (a
 //! lost sample is replaced by the next); `/goal_pose`, `/gait_state` and every
 //! output are reliable, keep last 10, volatile.
 
@@ -17,7 +17,8 @@ use ros2_client::{
 };
 
 use crate::msgs::{
-    DiagnosticArray, FootstepCommand, GaitState, MarkerArray, Odometry, Path, PoseStamped,
+    DiagnosticArray, FootstepCommand, GaitState, LaserScan, MarkerArray, Odometry, Path,
+    PoseStamped,
 };
 use crate::node::{CycleMessages, NavNode};
 use crate::params::{NODE_NAME, Params};
@@ -26,6 +27,7 @@ macro_rules! messages {
     ($($t:ty),*) => { $(impl ros2_client::Message for $t {})* };
 }
 messages!(
+    LaserScan,
     Odometry,
     GaitState,
     PoseStamped,
@@ -174,6 +176,17 @@ pub fn spin(params: &Params, mut nav: NavNode, idle: Option<Duration>) -> Result
         "GaitState",
         reliable_qos(),
     )?;
+    let scan: Option<Subscription<LaserScan>> = if params.lidar {
+        Some(subscribe(
+            &mut node,
+            &t.scan,
+            "sensor_msgs",
+            "LaserScan",
+            sensor_qos(),
+        )?)
+    } else {
+        None
+    };
     let out = Outputs {
         command: advertise(
             &mut node,
@@ -209,7 +222,18 @@ pub fn spin(params: &Params, mut nav: NavNode, idle: Option<Duration>) -> Result
                 cycles += 1;
             }
         }
-        // Odometry before gait states: a gait state waits for its odometry.
+        // Scans and odometry before gait states: a gait state waits for them.
+        for s in scan.as_ref().map(drain).unwrap_or_default() {
+            any = true;
+            match nav.on_scan(s) {
+                Ok(Some(m)) => {
+                    out.publish(m)?;
+                    cycles += 1;
+                }
+                Ok(None) => {}
+                Err(e) => eprintln!("ldcbf-ros2: scan refused: {e:#}"),
+            }
+        }
         for o in drain(&odom) {
             any = true;
             if let Some(m) = nav.on_odom(o) {
@@ -235,7 +259,7 @@ pub fn spin(params: &Params, mut nav: NavNode, idle: Option<Duration>) -> Result
 }
 
 /// The robot stand-in on DDS ([`crate::robot`]): publishes `/goal_pose`,
-/// `/odom` and `/gait_state` with the node's topic names and QoS, waits for
+/// `/odom`, `/scan` (LiDAR scenarios) and `/gait_state` with the node's topic names and QoS, waits for
 /// each cycle's command (re-sending the cycle's messages every `retry` until
 /// it comes; the node ignores a repeated gait state) and applies it, until
 /// the walk ends. Fails when no command comes for `timeout`.
@@ -271,9 +295,11 @@ pub fn run_robot(
         "FootstepCommand",
         reliable_qos(),
     )?;
+    let scan: Publisher<LaserScan> =
+        advertise(&mut node, &t.scan, "sensor_msgs", "LaserScan", sensor_qos())?;
     let mut cycles = 0;
     loop {
-        let (o, g) = robot.sense();
+        let (o, g, sc) = robot.sense();
         let stamp = g.header.stamp;
         let started = Instant::now();
         let mut sent = None::<Instant>;
@@ -286,6 +312,11 @@ pub fn run_robot(
                 odom.publish(o.clone())
                     .ok()
                     .with_context(|| e("the odometry"))?;
+                if let Some(sc) = &sc {
+                    scan.publish(sc.clone())
+                        .ok()
+                        .with_context(|| e("the scan"))?;
+                }
                 gait.publish(g.clone())
                     .ok()
                     .with_context(|| e("the gait state"))?;

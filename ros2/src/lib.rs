@@ -7,6 +7,7 @@
 //! * [`params`]: the YAML parameter file (ROS 2 layout);
 //! * [`record`]: the inputs of an `ldcbf-sim` run as messages, with the
 //!   commands the node must answer (the DDS test's data);
+//! * [`scan`]: `/scan` through the project's perception;
 //! * [`robot`]: the robot stand-in (the simulator's plant) without DDS;
 //! * [`dds`]: topics, QoS and the node's loop on DDS.
 
@@ -16,6 +17,7 @@ pub mod node;
 pub mod params;
 pub mod record;
 pub mod robot;
+pub mod scan;
 
 use anyhow::{Context, Result};
 use ldcbf_controller::RobotController;
@@ -25,7 +27,8 @@ use crate::node::NavNode;
 use crate::params::Params;
 
 /// The node of `params`: the controller configured by the map scenario, its
-/// obstacles as the known map.
+/// obstacles as the known map (or, with `perception: lidar`, its `[lidar]`
+/// settings for the perception of `/scan`).
 pub fn nav_node(params: &Params) -> Result<NavNode> {
     let sc = load(
         &params.map,
@@ -37,5 +40,10 @@ pub fn nav_node(params: &Params) -> Result<NavNode> {
     .with_context(|| format!("map {}", params.map))?;
     let ctl = RobotController::new(sc.config)
         .map_err(|e| anyhow::anyhow!("map {}: controller: {e}", params.map))?;
-    Ok(NavNode::new(ctl, sc.obstacles, &params.frame_id))
+    let nav = NavNode::new(ctl, sc.obstacles, &params.frame_id);
+    Ok(if params.lidar {
+        nav.with_lidar(sc.lidar)
+    } else {
+        nav
+    })
 }

@@ -189,6 +189,32 @@ pub struct Odometry {
     pub twist: TwistWithCovariance,
 }
 
+/// `sensor_msgs/msg/LaserScan`: ranges in the frame `header.frame_id`,
+/// angles from its x axis (rad), ranges m (`+inf`: no return).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct LaserScan {
+    /// Stamp and sensor frame.
+    pub header: Header,
+    /// Angle of the first ray, rad.
+    pub angle_min: f32,
+    /// Angle of the last ray, rad.
+    pub angle_max: f32,
+    /// Angle between rays, rad.
+    pub angle_increment: f32,
+    /// Time between rays, s.
+    pub time_increment: f32,
+    /// Time between scans, s.
+    pub scan_time: f32,
+    /// Smallest valid range, m.
+    pub range_min: f32,
+    /// Largest valid range, m.
+    pub range_max: f32,
+    /// Ranges, m.
+    pub ranges: Vec<f32>,
+    /// Intensities.
+    pub intensities: Vec<f32>,
+}
+
 /// `nav_msgs/msg/Path`.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
 pub struct Path {

@@ -15,11 +15,12 @@ use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_controller::{
     CommandSource, CycleInput, CycleOutput, CycleStatus, RobotController, Side,
 };
+use ldcbf_sim::sense::LidarParams;
 use ldcbf_sim::world::Polygon;
 
 use crate::msgs::{
     ColorRgba, DiagnosticArray, DiagnosticStatus, FootstepCommand, GaitState, Header, KeyValue,
-    Marker, MarkerArray, Odometry, Path, Point, Pose, PoseStamped, Quaternion, Time,
+    LaserScan, Marker, MarkerArray, Odometry, Path, Point, Pose, PoseStamped, Quaternion, Time,
 };
 
 /// The controller's horizon.
@@ -41,7 +42,10 @@ pub struct CycleMessages {
 /// The node's state between messages.
 pub struct NavNode {
     controller: RobotController,
+    /// The known map, or the obstacles perceived in the last cycle's scan.
     obstacles: Vec<Polygon>,
+    /// With LiDAR perception: its settings and the newest scan.
+    lidar: Option<(LidarParams, Option<LaserScan>)>,
     frame_id: String,
     goal: Option<Vector2<f64>>,
     odom: Option<Odometry>,
@@ -148,12 +152,33 @@ impl NavNode {
         NavNode {
             controller,
             obstacles,
+            lidar: None,
             frame_id: frame_id.into(),
             goal: None,
             odom: None,
             pending: None,
             last: None,
         }
+    }
+
+    /// The same node planning among the obstacles perceived in `/scan`
+    /// ([`crate::scan`]) instead of a known map: a gait state then also waits
+    /// for a scan at least as recent.
+    pub fn with_lidar(mut self, params: LidarParams) -> Self {
+        self.obstacles.clear();
+        self.lidar = Some((params, None));
+        self
+    }
+
+    /// A new scan (`/scan`; ignored without LiDAR perception). A scan the
+    /// perception cannot read (not a full turn) is refused, with the reason.
+    pub fn on_scan(&mut self, scan: LaserScan) -> anyhow::Result<Option<CycleMessages>> {
+        let Some((_, newest)) = &mut self.lidar else {
+            return Ok(None);
+        };
+        crate::scan::rays(&scan, Vector2::zeros(), 0.0)?;
+        *newest = Some(scan);
+        Ok(self.try_cycle())
     }
 
     /// A new goal (`/goal_pose`): its position; runs a gait state's cycle
@@ -187,10 +212,20 @@ impl NavNode {
         if odom.header.stamp < gait.header.stamp {
             return None;
         }
+        let start = std::time::Instant::now();
+        if let Some((params, scan)) = &self.lidar {
+            let scan = scan
+                .as_ref()
+                .filter(|s| s.header.stamp >= gait.header.stamp)?;
+            let p = &odom.pose.pose;
+            let origin = Vector2::new(p.position.x, p.position.y);
+            // Checked on arrival: a full turn.
+            self.obstacles = crate::scan::obstacles(scan, origin, yaw(&p.orientation), params)
+                .unwrap_or_default();
+        }
         let gait = self.pending.take()?;
         let odom = self.odom.clone()?;
         self.last = Some(gait.header.stamp);
-        let start = std::time::Instant::now();
         let out = self
             .controller
             .step(&input_of(&odom, &gait, goal, &self.obstacles));

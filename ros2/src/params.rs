@@ -20,6 +20,8 @@ pub struct Topics {
     pub odom: String,
     /// In: `ldcbf_msgs/GaitState`.
     pub gait_state: String,
+    /// In (with `perception: lidar`): `sensor_msgs/LaserScan`.
+    pub scan: String,
     /// Out: `ldcbf_msgs/FootstepCommand`.
     pub command: String,
     /// Out: `nav_msgs/Path`.
@@ -40,6 +42,10 @@ pub struct Params {
     /// `--set key=value` overrides of the scenario (e.g.
     /// `controller.max_iterations=50`), as `ldcbf-sim run --set`.
     pub sets: Vec<(String, String)>,
+    /// Plan among the obstacles perceived in `/scan` (`perception: lidar`,
+    /// with the map scenario's `[lidar]` settings) instead of the map's
+    /// (`perception: map`).
+    pub lidar: bool,
     /// World frame id of the inputs and outputs.
     pub frame_id: String,
     /// DDS domain id (`ROS_DOMAIN_ID`).
@@ -55,6 +61,7 @@ impl Default for Params {
         Params {
             map: "simple".into(),
             sets: Vec::new(),
+            lidar: false,
             frame_id: "map".into(),
             domain_id: 0,
             localhost_only: false,
@@ -62,6 +69,7 @@ impl Default for Params {
                 goal: "/goal_pose".into(),
                 odom: "/odom".into(),
                 gait_state: "/gait_state".into(),
+                scan: "/scan".into(),
                 command: "/footstep_command".into(),
                 footsteps: "/footsteps".into(),
                 markers: "/markers".into(),
@@ -104,6 +112,13 @@ impl Params {
             match key {
                 "map" => out.map = string(file, v, &name)?,
                 "frame_id" => out.frame_id = string(file, v, &name)?,
+                "perception" => {
+                    out.lidar = match string(file, v, &name)?.as_str() {
+                        "map" => false,
+                        "lidar" => true,
+                        other => bail!("{file}: {name}: expected map or lidar, got {other}"),
+                    }
+                }
                 "domain_id" => {
                     out.domain_id = v
                         .as_i64()
@@ -139,6 +154,7 @@ impl Params {
                             "goal" => &mut out.topics.goal,
                             "odom" => &mut out.topics.odom,
                             "gait_state" => &mut out.topics.gait_state,
+                            "scan" => &mut out.topics.scan,
                             "command" => &mut out.topics.command,
                             "footsteps" => &mut out.topics.footsteps,
                             "markers" => &mut out.topics.markers,

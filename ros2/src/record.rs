@@ -45,7 +45,7 @@ pub struct Played {
     pub goal: PoseStamped,
     /// The cycles in order.
     pub cycles: Vec<PlayedCycle>,
-    /// Cycles whose command equals the run's, bit for bit.
+    /// Cycles whose foot target and turning rate equal the run's, bit for bit.
     pub same_as_run: usize,
 }
 

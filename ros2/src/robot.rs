@@ -5,16 +5,20 @@
 //! back: at a step end the swing foot lands at the newest command's
 //! `foot_target` and its `turning_rate` takes effect. `ldcbf-ros2 robot`
 //! runs it against the node over DDS (two processes, the closed loop).
-//! No disturbances, no LiDAR: the scenario's known map is the node's.
+//! No disturbances. In a LiDAR scenario (`perception = "lidar"`) it also
+//! publishes a scan of the true map per cycle (the simulator's LiDAR, from the
+//! CoM, zero angle along the heading) for a node with `perception: lidar`.
 
 use anyhow::Result;
 use ldcbf_controller::Side;
 use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_sim::scenario::Scenario;
+use ldcbf_sim::sense::{Lidar, Perception};
 use ldcbf_sim::sim::PLANT_DT;
+use ldcbf_sim::world::Polygon;
 use ldcbf_sim::{Plant, PlantParams};
 
-use crate::msgs::{FootstepCommand, GaitState, Header, Point, Pose, PoseStamped, Time};
+use crate::msgs::{FootstepCommand, GaitState, Header, LaserScan, Point, Pose, PoseStamped, Time};
 use crate::record::odometry;
 
 /// Plant ticks between two control cycles (20 Hz).
@@ -28,6 +32,7 @@ pub struct Robot {
     success_radius: f64,
     time_limit: f64,
     command: Option<(Vector2<f64>, f64)>,
+    lidar: Option<(Lidar, Vec<Polygon>)>,
 }
 
 /// How a walk of the stand-in ended.
@@ -50,6 +55,14 @@ impl Robot {
         };
         let plant = Plant::new(params, sc.start, sc.start_heading, sc.stance)
             .map_err(|e| anyhow::anyhow!("{}: plant: {}", sc.name, e.0))?;
+        let lidar = match sc.perception {
+            Perception::Lidar => Some((
+                Lidar::new(sc.lidar.clone(), sc.seed)
+                    .map_err(|e| anyhow::anyhow!("{}: {e}", sc.name))?,
+                sc.obstacles.clone(),
+            )),
+            _ => None,
+        };
         Ok(Robot {
             plant,
             frame_id: frame_id.into(),
@@ -57,6 +70,7 @@ impl Robot {
             success_radius: sc.success_radius,
             time_limit: sc.time_limit,
             command: None,
+            lidar,
         })
     }
 
@@ -97,8 +111,9 @@ impl Robot {
         }
     }
 
-    /// The odometry and gait state of this instant (the inputs of a cycle).
-    pub fn sense(&self) -> (crate::msgs::Odometry, GaitState) {
+    /// The odometry, gait state and (LiDAR scenarios) scan of this instant
+    /// (the inputs of a cycle).
+    pub fn sense(&mut self) -> (crate::msgs::Odometry, GaitState, Option<LaserScan>) {
         let p = &self.plant;
         let odom = odometry(
             Time::from_secs(p.time()),
@@ -122,7 +137,11 @@ impl Robot {
             time_in_step: p.time_in_step(),
             turning_rate: p.turning_rate,
         };
-        (odom, gait)
+        let scan = self.lidar.as_mut().map(|(l, map)| {
+            let hits = l.scan_rays(p.position, p.heading, map);
+            crate::scan::laser_scan(gait.header.stamp, p.position, &hits, l.params().range)
+        });
+        (odom, gait, scan)
     }
 
     /// Takes this cycle's command (an invalid-input answer holds the last).

@@ -147,6 +147,16 @@ fn parameter_file() {
     let p = Params::parse("ldcbf_nav.yaml", &text).unwrap();
     assert_eq!((p.map.as_str(), p.frame_id.as_str()), ("circles", "map"));
     assert_eq!(p.topics.command, "/footstep_command");
+    assert!(!p.lidar && p.topics.scan == "/scan");
+    let e = Params::parse(
+        "f.yaml",
+        "ldcbf_nav:\n  ros__parameters:\n    perception: sonar\n",
+    )
+    .unwrap_err();
+    assert!(
+        format!("{e:#}").contains("perception: expected map or lidar"),
+        "{e:#}"
+    );
     let e = Params::parse("f.yaml", "ldcbf_nav:\n  ros__parameters:\n    mapp: x\n").unwrap_err();
     assert!(
         format!("{e:#}").contains("f.yaml: ldcbf_nav.ros__parameters.mapp: unknown"),
@@ -200,29 +210,88 @@ fn recorded_run_as_messages() {
 /// `ldcbf-sim run circles`, to the goal in about as many cycles.
 #[test]
 fn stand_in_closes_the_loop() {
-    use ldcbf_ros2::robot::{End, Robot};
     let sc = load("circles", &LoadOptions::default()).unwrap();
     let (ctl, obs) = circles();
-    let mut nav = NavNode::new(ctl, obs, "map");
-    let mut robot = Robot::new(&sc, "map").unwrap();
-    let _ = nav.on_goal(&robot.goal());
-    let mut cycles = 0usize;
-    let end = loop {
-        let (o, g) = robot.sense();
-        assert!(nav.on_odom(o).is_none());
-        let m = nav.on_gait(g).expect("one cycle per gait state");
-        robot.apply(&m.command);
-        cycles += 1;
-        if let Some(end) = robot.advance() {
-            break end;
-        }
-    };
-    assert_eq!(end, End::GoalReached);
+    let (end, cycles) = closed_loop(&sc, NavNode::new(ctl, obs, "map"));
+    assert_eq!(end, ldcbf_ros2::robot::End::GoalReached);
     let sim = ldcbf_sim::run(&sc, ldcbf_sim::SimOptions::default()).unwrap();
     let n = sim.cycles.len();
     assert!(
         cycles.abs_diff(n) <= n / 50,
         "{cycles} cycles, ldcbf-sim {n}"
     );
-    assert!(robot.steps() > 10 && (robot.position() - sc.goal).norm() <= sc.success_radius);
+}
+
+/// The node and the stand-in, one cycle after the other; (end, cycles).
+fn closed_loop(sc: &ldcbf_sim::Scenario, mut nav: NavNode) -> (ldcbf_ros2::robot::End, usize) {
+    let mut robot = ldcbf_ros2::robot::Robot::new(sc, "map").unwrap();
+    let _ = nav.on_goal(&robot.goal());
+    let mut cycles = 0usize;
+    loop {
+        let (o, g, scan) = robot.sense();
+        assert!(nav.on_odom(o).is_none());
+        if let Some(s) = scan {
+            assert!(
+                nav.on_scan(s).unwrap().is_none(),
+                "the gait state comes last"
+            );
+        }
+        let m = nav.on_gait(g).expect("one cycle per gait state");
+        robot.apply(&m.command);
+        cycles += 1;
+        if let Some(end) = robot.advance() {
+            if end == ldcbf_ros2::robot::End::GoalReached {
+                assert!((robot.position() - sc.goal).norm() <= sc.success_radius);
+                assert!(robot.steps() > 10);
+            }
+            return (end, cycles);
+        }
+    }
+}
+
+/// `/scan` through the project's perception: the LiDAR scenario `crowded`
+/// walked to its goal by the node on the stand-in's scans alone.
+#[test]
+fn lidar_node_walks_crowded_on_scans() {
+    let sc = load("crowded", &LoadOptions::default()).unwrap();
+    assert_eq!(sc.perception, ldcbf_sim::sense::Perception::Lidar);
+    let ctl = RobotController::new(sc.config).unwrap();
+    let nav = NavNode::new(ctl, sc.obstacles.clone(), "map").with_lidar(sc.lidar.clone());
+    let (end, _) = closed_loop(&sc, nav);
+    assert_eq!(end, ldcbf_ros2::robot::End::GoalReached);
+}
+
+/// A scan's hit points are where the LiDAR saw them (to f32 ranges), and the
+/// perception refuses a scan that is not a full turn.
+#[test]
+fn scan_rays_and_refusal() {
+    use ldcbf_ros2::scan::{laser_scan, rays};
+    use ldcbf_sim::sense::Lidar;
+    let sc = load("crowded", &LoadOptions::default()).unwrap();
+    // Without noise: a range carries no error across the ray.
+    let params = ldcbf_sim::sense::LidarParams {
+        noise_sigma: 0.0,
+        ..sc.lidar.clone()
+    };
+    let mut lidar = Lidar::new(params, 1).unwrap();
+    let (origin, heading) = (sc.start, 0.7);
+    let hits = lidar.scan_rays(origin, heading, &sc.obstacles);
+    let scan = laser_scan(stamp(0.0), origin, &hits, sc.lidar.range);
+    let back = rays(&scan, origin, heading).unwrap();
+    assert_eq!(back.len(), hits.len());
+    assert!(hits.iter().any(Option::is_some) && hits.iter().any(Option::is_none));
+    for (a, b) in hits.iter().zip(&back) {
+        match (a, b) {
+            (Some(a), Some(b)) => assert!((a - b).norm() < 1e-5, "{a} vs {b}"),
+            (None, None) => {}
+            _ => panic!("a hit lost or made up"),
+        }
+    }
+    let mut half = scan.clone();
+    half.ranges.truncate(scan.ranges.len() / 2);
+    let e = rays(&half, origin, heading).unwrap_err();
+    assert!(format!("{e}").contains("not a full turn"), "{e}");
+    let ctl = RobotController::new(sc.config).unwrap();
+    let mut nav = NavNode::new(ctl, Vec::new(), "map").with_lidar(sc.lidar.clone());
+    assert!(nav.on_scan(half).is_err());
 }

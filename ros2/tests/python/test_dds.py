@@ -9,7 +9,8 @@ field for field, bit for bit, cycle for cycle, and that `/footsteps`
 (`nav_msgs/Path`), `/markers` (`visualization_msgs/MarkerArray`) and
 `/diagnostics` (`diagnostic_msgs/DiagnosticArray`) arrive with every cycle.
 The second closes the loop with the stand-in: `ldcbf-ros2 robot` and the node,
-two processes, walk the scenario to its goal.
+two processes, walk `circles` (known map) and `crowded` (LiDAR: the node
+plans on the stand-in's `/scan`) to their goals.
 Loopback only (Cyclone on 127.0.0.1 without multicast, the node with
 `localhost_only`), on a domain id of its own, bounded in time.
 
@@ -116,10 +117,17 @@ def test_node_commands_equal_the_controllers(played):
         print(err)
 
 
-def test_stand_in_closes_the_loop_over_dds(played):
+@pytest.mark.parametrize("scenario,perception", [("circles", "map"), ("crowded", "lidar")])
+def test_stand_in_closes_the_loop_over_dds(tmp_path, scenario, perception):
     """Two processes, the node and `ldcbf-ros2 robot` (the simulator's plant),
-    walk the scenario to its goal over DDS."""
-    params, _ = played
+    walk the scenario to its goal over DDS; with LiDAR the node plans on the
+    stand-in's `/scan` only."""
+    params = tmp_path / "params.yaml"
+    params.write_text(
+        "ldcbf_nav:\n  ros__parameters:\n"
+        f"    map: {scenario}\n    perception: {perception}\n"
+        f"    domain_id: {DOMAIN}\n    localhost_only: true\n"
+    )
     node = subprocess.Popen(
         [NODE, "--params", str(params), "--idle-exit", "10"],
         cwd=ROOT,
@@ -132,7 +140,7 @@ def test_stand_in_closes_the_loop_over_dds(played):
             cwd=ROOT,
             capture_output=True,
             text=True,
-            timeout=120,
+            timeout=400,
         )
     finally:
         node.terminate()
