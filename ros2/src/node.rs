@@ -176,7 +176,7 @@ impl NavNode {
         let Some((_, newest)) = &mut self.lidar else {
             return Ok(None);
         };
-        crate::scan::rays(&scan, Vector2::zeros(), 0.0)?;
+        crate::scan::check(&scan)?;
         *newest = Some(scan);
         Ok(self.try_cycle())
     }
