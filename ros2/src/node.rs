@@ -9,7 +9,10 @@
 //! orientation; CoM velocity = its `twist.linear` (the body frame,
 //! `child_frame_id`) turned by that yaw into the world frame; the goal is the
 //! position of the newest `/goal_pose`; stance side, stance foot, time in step
-//! and turning rate come from the gait state.
+//! and turning rate come from the gait state. The obstacles are the known map,
+//! or with LiDAR perception ([`NavNode::with_lidar`]) the ones inferred from
+//! the newest `/scan` taken at the odometry's pose ([`crate::scan`]); the gait
+//! state then also waits for a scan at least as recent.
 
 use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_controller::{
@@ -176,7 +179,7 @@ impl NavNode {
         let Some((_, newest)) = &mut self.lidar else {
             return Ok(None);
         };
-        crate::scan::rays(&scan, Vector2::zeros(), 0.0)?;
+        crate::scan::check(&scan)?;
         *newest = Some(scan);
         Ok(self.try_cycle())
     }

@@ -18,14 +18,9 @@ use ldcbf_sim::world::Polygon;
 
 use crate::msgs::{Header, LaserScan, Time};
 
-/// The rays of `scan` as hit points (world frame, m) from `origin` with the
-/// sensor's zero angle at `heading + angle_min` (rad). Fails on a scan that is
-/// not a full turn of evenly spaced rays.
-pub fn rays(
-    scan: &LaserScan,
-    origin: Vector2<f64>,
-    heading: f64,
-) -> Result<Vec<Option<Vector2<f64>>>> {
+/// Fails on a scan the perception cannot read: fewer than 3 rays, or not a
+/// full turn of evenly spaced rays.
+pub fn check(scan: &LaserScan) -> Result<()> {
     let n = scan.ranges.len();
     ensure!(n >= 3, "/scan: {n} rays (at least 3)");
     let turn = f64::from(scan.angle_increment) * n as f64;
@@ -33,6 +28,18 @@ pub fn rays(
         (turn - core::f64::consts::TAU).abs() <= 1e-4,
         "/scan: angle_increment x {n} rays = {turn} rad, not a full turn (2 pi)"
     );
+    Ok(())
+}
+
+/// The rays of `scan` as hit points (world frame, m) from `origin` with the
+/// sensor's zero angle at `heading + angle_min` (rad). Fails as [`check`].
+pub fn rays(
+    scan: &LaserScan,
+    origin: Vector2<f64>,
+    heading: f64,
+) -> Result<Vec<Option<Vector2<f64>>>> {
+    check(scan)?;
+    let n = scan.ranges.len();
     let zero = heading + f64::from(scan.angle_min);
     let (lo, hi) = (f64::from(scan.range_min), f64::from(scan.range_max));
     Ok(scan
