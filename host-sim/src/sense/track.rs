@@ -271,7 +271,7 @@ mod tests {
             .map(|k| {
                 let t = 0.05 * k as f64;
                 let p = translated(&person, v * t);
-                let map = [p.clone(), pillar.clone(), wall.clone()];
+                let map = [p, pillar, wall];
                 let (_, pieces) = lidar.perceive(Vector2::zeros(), 0.0, &map);
                 let vel = tracker.update(t, &pieces);
                 (t, pieces, vel, centre(&p))

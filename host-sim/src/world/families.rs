@@ -321,7 +321,7 @@ pub fn is_valid(layout: &Layout, r: f64) -> bool {
         .iter()
         .zip(&velocities)
         .filter(|(_, v)| v.norm() == 0.0)
-        .map(|(o, _)| o.clone())
+        .map(|(o, _)| *o)
         .collect();
     let clear = |p: &Vector2<f64>| {
         layout

@@ -57,7 +57,7 @@ pub fn translated(poly: &Polygon, d: Vector2<f64>) -> Polygon {
         .collect();
     Polygon::new(&v)
         .or_else(|_| Polygon::hull(&v))
-        .unwrap_or_else(|_| poly.clone())
+        .unwrap_or(*poly)
 }
 
 /// The mean of a polygon's vertices, m (world frame).
@@ -107,7 +107,7 @@ impl MovingMap {
         let rest_ids: Vec<usize> = (0..obstacles.len())
             .filter(|&i| velocities[i] == Vector2::zeros())
             .collect();
-        let rest: Vec<Polygon> = rest_ids.iter().map(|&i| obstacles[i].clone()).collect();
+        let rest: Vec<Polygon> = rest_ids.iter().map(|&i| obstacles[i]).collect();
         Ok(MovingMap {
             rest_index: ObstacleIndex::new(&rest)?,
             initial: obstacles.to_vec(),

@@ -356,7 +356,7 @@ fn obstacles_at(sc: &crate::scenario::Scenario, t: f64) -> Vec<crate::world::Pol
         .zip(&sc.velocities)
         .map(|(o, v)| {
             if *v == Vector2::zeros() {
-                o.clone()
+                *o
             } else {
                 crate::world::moving::translated(o, v * t)
             }

@@ -67,7 +67,9 @@ pub const DEFAULT_CLOCK_MHZ: f64 = 400.0;
 /// The shipped closed loops a deadline study runs by default (and the CI
 /// check): every shipped scenario except the seeded families (`random`, which
 /// is `--random N`, and `corridor`, `doorway`, `cup`, `wall-start`, `clutter`,
-/// `thin`, which `batch` and `tests/sim_body.rs` run), `maze` and `trap` both without and with RRT* subgoals
+/// `thin`, which `batch` and `tests/sim_body.rs` run, and the people families
+/// `crossing`, `headon`, `crowd`, `room-crossing`, which `tests/sim_people.rs`
+/// runs), `maze` and `trap` both without and with RRT* subgoals
 /// (`maze` ships with them, `maze+none` is the MPC alone),
 /// `crowded` with its seed 0, the LiDAR regressions `cup-mouth` and
 /// `corner-start`.
