@@ -10,8 +10,8 @@ use serde::{Deserialize, Deserializer};
 /// converted to scenario values (cycles included).
 pub const MAX_DEPTH: usize = 16;
 
-/// Most dotted parts of a `--set` key (the longest real key has 3:
-/// `generator.area_min` or `rrt_star.iterations` with a table prefix).
+/// Most dotted parts of a `--set` key (real keys have one or two:
+/// `delta`, `controller.delta`, `disturbance.push_time`).
 pub const MAX_KEY_PARTS: usize = 8;
 
 /// Longest `--set` key, bytes.
@@ -69,9 +69,9 @@ pub fn check_key(key: &str) -> Result<(), String> {
 }
 
 /// Checks every value of `table` without recursion: nesting depth at most
-/// [`MAX_DEPTH`], every float finite or not, of magnitude at most
-/// [`MAX_MAGNITUDE`] (non-finite values are left to the fields' own checks,
-/// which name them). The error is `(dotted path, message)`.
+/// [`MAX_DEPTH`], every finite float of magnitude at most [`MAX_MAGNITUDE`]
+/// (NaN and infinities are left to the fields' own checks, which say what the
+/// field needs). The error is `(dotted path, message)`.
 pub fn check_table(table: &toml::Table) -> Result<(), (String, String)> {
     let mut stack: Vec<(String, usize, &toml::Value)> =
         table.iter().map(|(k, v)| (k.clone(), 1, v)).collect();
