@@ -5,6 +5,8 @@
 
 use serde::{Deserialize, Deserializer};
 
+use crate::world::exact::exact;
+
 /// Deepest nesting of tables and arrays in a scenario value (a file has at
 /// most 5: `obstacles[i].vertices[j][k]`). Also the bound on Python objects
 /// converted to scenario values (cycles included).
@@ -101,20 +103,6 @@ pub fn check_table(table: &toml::Table) -> Result<(), (String, String)> {
         }
     }
     Ok(())
-}
-
-/// Deserializes exactly `N` values (a list of another length is an error,
-/// not cut or padded).
-pub fn exact<'de, D, T, const N: usize>(d: D) -> Result<[T; N], D::Error>
-where
-    D: Deserializer<'de>,
-    T: Deserialize<'de>,
-{
-    let v: Vec<T> = Vec::deserialize(d)?;
-    let got = v.len();
-    v.try_into().map_err(|_| {
-        serde::de::Error::custom(format!("expected a list of exactly {N} numbers, got {got}"))
-    })
 }
 
 /// A point `[x, y]` as written in a file: exactly two numbers.

@@ -120,7 +120,6 @@ mod parse;
 mod tests;
 mod validate;
 
-pub use limits::exact;
 pub use overrides::{
     ControllerOverrides, ROBOT_FIELDS, SideSpec, config_map, controller_fields, overrides_map,
 };
