@@ -786,7 +786,9 @@ LdcbfResult ldcbf_step_moving(struct LdcbfController *ctl,
  * exactly as the controller predicts (the C example closes its loop with it).
  *
  * Returns `Ok`, [`LdcbfResult::NotConfigured`], [`LdcbfResult::InvalidArgument`]
- * (`tau` not finite), or a pointer error.
+ * (`tau` or an input not finite, or a flow that overflows: `|tau|` of a few
+ * hundred seconds, where `cosh(beta tau)` is not finite; nothing is written),
+ * or a pointer error.
  *
  * # Safety
  * As [`ldcbf_configure`] for `ctl` (read only); `p`, `v`, `foot` must be
@@ -803,7 +805,8 @@ LdcbfResult ldcbf_lip_propagate(const struct LdcbfController *ctl,
 
 /**
  * Writes a description of the controller's last error (from
- * [`ldcbf_configure`] or [`ldcbf_step`]; "no error" if none), NUL-terminated
+ * [`ldcbf_configure`] or [`ldcbf_step`]; "no error" if none, or if the last
+ * call of either succeeded: a success clears it), NUL-terminated
  * and truncated to fit, to `buf[0 .. buf_len]`, like `snprintf`. Returns the
  * length of the whole message without the NUL (so a return value `>=
  * buf_len` means it was truncated), or 0 if `ctl` is not a valid controller

@@ -41,7 +41,7 @@ fn run_fails(from: &str, to: &str, args: &[&str], needles: &[&str]) -> String {
 fn recursion_and_size_limits() {
     let parts = vec!["a"; 20_000].join(".");
     run_fails("", "", &["--set", &format!("{parts}=1")], &["too long"]);
-    let nine = vec!["a"; 9].join(".");
+    let nine = ["a"; 9].join(".");
     run_fails("", "", &["--set", &format!("{nine}=1")], &["dotted parts"]);
     let deep = format!("goal={}{}", "[".repeat(20_000), "]".repeat(20_000));
     run_fails("", "", &["--set", &deep], &["not a TOML list or table"]);

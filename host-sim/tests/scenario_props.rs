@@ -140,10 +140,10 @@ proptest! {
         }
         // A value TOML cannot write (e.g. a table inside an array after a
         // plain value) is not a document: nothing to parse.
-        if let Ok(text) = toml::to_string(&doc) {
-            if let Err(e) = parse_str(&text, "p.toml", &LoadOptions::default()) {
-                check_error(&e);
-            }
+        if let Ok(text) = toml::to_string(&doc)
+            && let Err(e) = parse_str(&text, "p.toml", &LoadOptions::default())
+        {
+            check_error(&e);
         }
     }
 

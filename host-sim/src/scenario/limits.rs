@@ -5,13 +5,15 @@
 
 use serde::{Deserialize, Deserializer};
 
+use crate::world::exact::exact;
+
 /// Deepest nesting of tables and arrays in a scenario value (a file has at
 /// most 5: `obstacles[i].vertices[j][k]`). Also the bound on Python objects
 /// converted to scenario values (cycles included).
 pub const MAX_DEPTH: usize = 16;
 
-/// Most dotted parts of a `--set` key (the longest real key has 3:
-/// `generator.area_min` or `rrt_star.iterations` with a table prefix).
+/// Most dotted parts of a `--set` key (real keys have one or two:
+/// `delta`, `controller.delta`, `disturbance.push_time`).
 pub const MAX_KEY_PARTS: usize = 8;
 
 /// Longest `--set` key, bytes.
@@ -69,9 +71,9 @@ pub fn check_key(key: &str) -> Result<(), String> {
 }
 
 /// Checks every value of `table` without recursion: nesting depth at most
-/// [`MAX_DEPTH`], every float finite or not, of magnitude at most
-/// [`MAX_MAGNITUDE`] (non-finite values are left to the fields' own checks,
-/// which name them). The error is `(dotted path, message)`.
+/// [`MAX_DEPTH`], every finite float of magnitude at most [`MAX_MAGNITUDE`]
+/// (NaN and infinities are left to the fields' own checks, which say what the
+/// field needs). The error is `(dotted path, message)`.
 pub fn check_table(table: &toml::Table) -> Result<(), (String, String)> {
     let mut stack: Vec<(String, usize, &toml::Value)> =
         table.iter().map(|(k, v)| (k.clone(), 1, v)).collect();
@@ -101,20 +103,6 @@ pub fn check_table(table: &toml::Table) -> Result<(), (String, String)> {
         }
     }
     Ok(())
-}
-
-/// Deserializes exactly `N` values (a list of another length is an error,
-/// not cut or padded).
-pub fn exact<'de, D, T, const N: usize>(d: D) -> Result<[T; N], D::Error>
-where
-    D: Deserializer<'de>,
-    T: Deserialize<'de>,
-{
-    let v: Vec<T> = Vec::deserialize(d)?;
-    let got = v.len();
-    v.try_into().map_err(|_| {
-        serde::de::Error::custom(format!("expected a list of exactly {N} numbers, got {got}"))
-    })
 }
 
 /// A point `[x, y]` as written in a file: exactly two numbers.

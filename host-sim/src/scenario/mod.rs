@@ -125,7 +125,6 @@ mod validate;
 #[cfg(test)]
 mod velocity_tests;
 
-pub use limits::exact;
 pub use overrides::{
     ControllerOverrides, ROBOT_FIELDS, SideSpec, config_map, controller_fields, overrides_map,
 };

@@ -21,6 +21,7 @@ use ldcbf_controller::ConvexPolygon;
 use ldcbf_controller::geometry::closest_point_point_polygon;
 use ldcbf_controller::nalgebra::Vector2;
 
+pub mod exact;
 pub mod families;
 pub mod grid;
 pub mod moving;

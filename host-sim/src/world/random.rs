@@ -33,25 +33,25 @@ pub struct RandomParams {
     /// Lower-left corner of the area where centres are drawn, m.
     #[serde(
         default = "default_area_min",
-        deserialize_with = "crate::scenario::exact"
+        deserialize_with = "crate::world::exact::exact"
     )]
     pub area_min: [f64; 2],
     /// Upper-right corner of that area, m.
     #[serde(
         default = "default_area_max",
-        deserialize_with = "crate::scenario::exact"
+        deserialize_with = "crate::world::exact::exact"
     )]
     pub area_max: [f64; 2],
     /// Range of the circumradius `[min, max]`, m.
     #[serde(
         default = "default_radius",
-        deserialize_with = "crate::scenario::exact"
+        deserialize_with = "crate::world::exact::exact"
     )]
     pub radius: [f64; 2],
     /// Range of the number of sampled points `[min, max]` (the polygon is their hull).
     #[serde(
         default = "default_points",
-        deserialize_with = "crate::scenario::exact"
+        deserialize_with = "crate::world::exact::exact"
     )]
     pub points: [u32; 2],
     /// Minimum distance from the start and from the goal to every polygon, m.
