@@ -29,11 +29,11 @@
 use std::hint::black_box;
 use std::path::{Path, PathBuf};
 
-use ldcbf_controller::nalgebra::{Const, Dyn, Vector2};
+use ldcbf_controller::nalgebra::{Const, DefaultAllocator, Dim, Dyn, Vector2};
 use ldcbf_controller::qp::QpSettings;
 use ldcbf_controller::{
     Config, Controller, CycleInput, DenseQpOf, DualActiveSetOf, LdpLoadedOf, LdpSolverOf,
-    constraint_capacity,
+    QpAllocator, constraint_capacity,
 };
 use ldcbf_nav::fixtures::{PAPER_GOAL, paper_obstacles, walk};
 use ldcbf_reference::{DenseProblem, QpKind, random_problem};
@@ -55,6 +55,11 @@ const WORKLOADS: [&str; 7] = [
     "n50_solve",
     "n50_ldp",
 ];
+
+/// A solver with the QP it solves.
+type Solver<V, C> = (DualActiveSetOf<V, C>, DenseQpOf<V, C>);
+/// An LDP path with its loaded `(q, h)`.
+type Ldp<V, C> = (LdpSolverOf<V, C>, LdpLoadedOf<V, C>);
 
 type Obstacles = Vec<ldcbf_controller::ConvexPolygon<8>>;
 
@@ -92,34 +97,37 @@ enum Work<'a> {
 /// a checksum (iterations and statuses) so that nothing is optimised away.
 #[inline(never)]
 fn counted(work: &mut Work<'_>) -> u64 {
-    let prefer: &[bool] = &[];
-    let mut sum = 0u64;
     match work {
-        Work::LipSolve(v) => {
-            for (s, qp) in v.iter() {
-                sum += u64::from(s.solve(black_box(qp), prefer, MAX_ITER).iterations);
-            }
-        }
-        Work::LipLdp(v) => {
-            for (s, l) in v.iter() {
-                sum += u64::from(s.solve(black_box(l), prefer, MAX_ITER).iterations);
-            }
-        }
-        Work::Step3(c, inputs) => sum += steps(c, inputs),
-        Work::Step10(c, inputs) => sum += steps(c, inputs),
-        Work::Step20(c, inputs) => sum += steps(c, inputs),
-        Work::DynSolve(v) => {
-            for (s, qp) in v.iter() {
-                sum += u64::from(s.solve(black_box(qp), prefer, MAX_ITER).iterations);
-            }
-        }
-        Work::DynLdp(v) => {
-            for (s, l) in v.iter() {
-                sum += u64::from(s.solve(black_box(l), prefer, MAX_ITER).iterations);
-            }
-        }
+        Work::LipSolve(v) => solves(v),
+        Work::LipLdp(v) => ldp_solves(v),
+        Work::Step3(c, inputs) => steps(c, inputs),
+        Work::Step10(c, inputs) => steps(c, inputs),
+        Work::Step20(c, inputs) => steps(c, inputs),
+        Work::DynSolve(v) => solves(v),
+        Work::DynLdp(v) => ldp_solves(v),
     }
-    sum
+}
+
+/// `solve` (cold) on each QP; the sum of the iterations.
+#[inline(always)]
+fn solves<V: Dim, C: Dim>(v: &[Solver<V, C>]) -> u64
+where
+    DefaultAllocator: QpAllocator<V, C>,
+{
+    v.iter()
+        .map(|(s, qp)| u64::from(s.solve(black_box(qp), &[], MAX_ITER).iterations))
+        .sum()
+}
+
+/// The LDP `solve` (cold) on each loaded QP; the sum of the iterations.
+#[inline(always)]
+fn ldp_solves<V: Dim, C: Dim>(v: &[Ldp<V, C>]) -> u64
+where
+    DefaultAllocator: QpAllocator<V, C>,
+{
+    v.iter()
+        .map(|(s, l)| u64::from(s.solve(black_box(l), &[], MAX_ITER).iterations))
+        .sum()
 }
 
 /// Runs `step` over `inputs` in order; the sum of the solver iterations.
@@ -172,6 +180,20 @@ fn n50() -> Vec<(DualActiveSetOf<Dyn, Dyn>, DenseQpOf<Dyn, Dyn>)> {
         .collect()
 }
 
+/// The LDP path of each QP, prepared and loaded.
+fn ldp_of<V: Dim, C: Dim>(v: &[Solver<V, C>]) -> Vec<Ldp<V, C>>
+where
+    DefaultAllocator: QpAllocator<V, C>,
+{
+    v.iter()
+        .map(|(s, qp)| {
+            let l = LdpSolverOf::prepare(s, qp);
+            let loaded = l.load(&qp.q, &qp.h);
+            (l, loaded)
+        })
+        .collect()
+}
+
 fn prepare<'a>(name: &str, dir: &Path, obs: &'a Obstacles) -> Work<'a> {
     let lip = || {
         lipmwalk(dir)
@@ -187,16 +209,7 @@ fn prepare<'a>(name: &str, dir: &Path, obs: &'a Obstacles) -> Work<'a> {
     };
     match name {
         "lipmwalk_solve" => Work::LipSolve(lip()),
-        "lipmwalk_ldp" => Work::LipLdp(
-            lip()
-                .iter()
-                .map(|(s, qp)| {
-                    let l = LdpSolverOf::prepare(s, qp);
-                    let loaded = l.load(&qp.q, &qp.h);
-                    (l, loaded)
-                })
-                .collect(),
-        ),
+        "lipmwalk_ldp" => Work::LipLdp(ldp_of(&lip())),
         "step_n3" => {
             let (c, i) = walk_inputs::<3, 6, { constraint_capacity(3, 8, false) }>(obs);
             Work::Step3(c, i)
@@ -210,16 +223,7 @@ fn prepare<'a>(name: &str, dir: &Path, obs: &'a Obstacles) -> Work<'a> {
             Work::Step20(c, i)
         }
         "n50_solve" => Work::DynSolve(n50()),
-        "n50_ldp" => Work::DynLdp(
-            n50()
-                .iter()
-                .map(|(s, qp)| {
-                    let l = LdpSolverOf::prepare(s, qp);
-                    let loaded = l.load(&qp.q, &qp.h);
-                    (l, loaded)
-                })
-                .collect(),
-        ),
+        "n50_ldp" => Work::DynLdp(ldp_of(&n50())),
         other => {
             eprintln!(
                 "icount: unknown workload `{other}` (known: {})",

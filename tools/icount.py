@@ -77,15 +77,22 @@ def own_instructions(path, binary):
 
 
 def count(exe, workload, lipmwalk):
+    """Own instructions of one workload. Run from the workspace root with
+    paths relative to it and a minimal environment: the heap buffers of the
+    `Dyn` workloads land at addresses that depend on both, and a few loops
+    take a different number of steps with the alignment (the `n50_*` counts
+    move by up to a few thousand, < 0.01 %, between checkouts)."""
+    rel = lambda p: os.path.relpath(os.path.abspath(p), ROOT)
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "callgrind.out")
         subprocess.run(
             ["valgrind", "--tool=callgrind", "--callgrind-out-file=" + out,
              "--collect-atstart=no", "--toggle-collect=*icount::counted*",
              "--compress-strings=no", "--compress-pos=no", "--dump-instr=no",
-             exe, workload, lipmwalk],
+             rel(exe), workload, rel(lipmwalk)],
+            cwd=ROOT, env={"PATH": os.environ.get("PATH", "/usr/bin:/bin")},
             check=True, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-        return own_instructions(out, exe)
+        return own_instructions(out, os.path.join(ROOT, rel(exe)))
 
 
 def read_baseline():

@@ -239,12 +239,11 @@ where
     // all rows would choose among them alone: each choice scans the marked
     // rows first, and all rows only when none of those is violated (the same
     // choice, without the other rows' slacks).
-    // (A fold without an early exit: one branch-free pass.)
     let any_marked = prefer
         .iter()
         .zip(blocked_s.iter())
         .take(m)
-        .fold(false, |any, (&p, &b)| any | (p & !b));
+        .any(|(&p, &b)| p && !b);
     if stop.is_none() && hot && factor.hot_start_capable() {
         let mut start = Start {
             blocked: &mut *blocked_s,
