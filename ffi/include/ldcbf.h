@@ -827,7 +827,8 @@ const char *ldcbf_result_name(uint32_t result);
 /**
  * Name of an [`LdcbfCycleStatus`] value as a static NUL-terminated string
  * (`"optimal"`, `"infeasible"`, `"budget_exhausted"`, `"numerical_failure"`,
- * `"invalid_input"`, the Rust controller's names; `"unknown"` otherwise).
+ * `"invalid_input"`, the Rust controller's `CycleStatus::name`; `"unknown"`
+ * otherwise).
  */
 const char *ldcbf_cycle_status_name(uint32_t status);
 
