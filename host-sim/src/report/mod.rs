@@ -33,12 +33,14 @@
 //! loop ([`crate::sim`]) recorded; the studies and the command line use it.
 
 mod logs;
+mod mapping;
 pub mod plot;
 mod summary;
 #[cfg(test)]
 mod tests;
 
 pub use logs::{OutputDir, write_logs};
+pub use mapping::{MappingSummary, mapping_line, summarize_mapping};
 use summary::side_name;
 pub use summary::{
     ComputeStats, Summary, compute_stats, human_summary, nearest_rank, percentile, source_name,

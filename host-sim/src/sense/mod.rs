@@ -98,6 +98,7 @@ use crate::world::{MAX_VERTICES, Polygon};
 
 mod dbscan;
 mod infer;
+mod map;
 #[cfg(test)]
 mod tests;
 
@@ -105,6 +106,7 @@ pub use dbscan::{clusters, dbscan};
 pub use infer::{
     cluster_polygon, free_tolerance, infer_obstacles, simplify_outer, split_and_merge,
 };
+pub use map::{CellState, MapParams, OccupancyMap};
 
 /// Obstacle perception (SPEC 6).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize, clap::ValueEnum)]
@@ -167,6 +169,9 @@ pub struct LidarParams {
     /// Free-space margin, m: a ray is taken as seen free up to `3 noise_sigma
     /// + free_margin` short of its hit point; no piece reaches into that part.
     pub free_margin: f64,
+    /// The occupancy map built from the scans (the `[lidar.map]` table,
+    /// [`MapParams`]); its pieces are the controller's obstacles.
+    pub map: MapParams,
 }
 
 impl Default for LidarParams {
@@ -182,6 +187,7 @@ impl Default for LidarParams {
             breakpoint_angle: 10f64.to_radians(),
             line_tolerance: 0.05,
             free_margin: 0.005,
+            map: MapParams::default(),
         }
     }
 }
@@ -230,7 +236,7 @@ impl LidarParams {
         if !(self.free_margin.is_finite() && self.free_margin >= 0.0) {
             return Err(("free_margin", "must be finite and >= 0".into()));
         }
-        Ok(())
+        self.map.validate()
     }
 }
 

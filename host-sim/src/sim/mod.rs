@@ -77,7 +77,6 @@ use crate::plan::{Plan, remaining_length};
 use crate::plant::disturbance::{DisturbanceLog, Disturber};
 use crate::plant::{Plant, PlantParams};
 use crate::scenario::Scenario;
-use crate::sense::Lidar;
 use crate::sense::Perception;
 use crate::world::Polygon;
 use crate::world::obstacle_index::{Candidates, ObstacleIndex};
@@ -348,6 +347,9 @@ pub struct SimResult {
     /// What the scenario's disturbances did (pushes applied, foot errors,
     /// estimation errors; empty when none is configured).
     pub disturbance: DisturbanceLog,
+    /// The occupancy map, its update times and the plans made on it (with
+    /// `perception = "lidar"`; [`mapping`]).
+    pub mapping: Option<MappingLog>,
 }
 
 impl SimResult {
@@ -482,7 +484,8 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
     let robot = &scenario.robot;
     // Global planner: subgoals, the goal last.
     let mut navigation = Navigation::default();
-    if scenario.planner == Planner::RrtStar {
+    let on_map = scenario.planner == Planner::RrtStar && scenario.perception == Perception::Lidar;
+    if scenario.planner == Planner::RrtStar && !on_map {
         let t0 = Instant::now();
         let res = crate::plan::plan(
             scenario.start,
@@ -504,13 +507,11 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
     if navigation.subgoals.is_empty() {
         navigation.subgoals.push(scenario.goal);
     }
-    let subgoals = navigation.subgoals.clone();
+    let mut subgoals = navigation.subgoals.clone();
     let switch_radius = scenario.rrt.switch_radius;
     let mut current = 0usize;
-    let mut lidar = match scenario.perception {
-        Perception::Lidar => {
-            Some(Lidar::new(scenario.lidar.clone(), scenario.seed).map_err(SimError)?)
-        }
+    let mut mapper = match scenario.perception {
+        Perception::Lidar => Some(mapping::Mapper::new(scenario, on_map).map_err(SimError)?),
         Perception::Known => None,
     };
     let mut scans: Vec<ScanRecord> = Vec::new();
@@ -570,10 +571,42 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                 navigation.reached_at.push(plant.time());
                 current += 1;
             }
-            let cycle_obstacles: &[Polygon] = match lidar.as_mut() {
-                Some(l) => {
-                    let (points, polys) = l.perceive(plant.position, plant.heading, obstacles);
-                    seen = polys;
+            let cycle_obstacles: &[Polygon] = match mapper.as_mut() {
+                Some(m) => {
+                    let points = m.sense(plant.position, plant.heading, plant.time(), obstacles);
+                    let stalled = 2 * (plant.tick - best_tick) >= stuck_ticks && stuck_ticks > 0;
+                    if let Some((reason, new)) = m.plan(
+                        scenario,
+                        plant.time(),
+                        position,
+                        &subgoals[current..],
+                        stalled,
+                    ) {
+                        subgoals = new;
+                        current = 0;
+                        navigation.plan_time_ns += m.log.plans.last().map_or(0, |p| p.ns);
+                        // The progress measure follows the new path; a stall
+                        // replan does not restart the stuck clock.
+                        best_distance = remaining_length(plant.position, &subgoals, 0);
+                        if reason != ReplanReason::Stalled {
+                            best_tick = plant.tick;
+                        }
+                    }
+                    let q = controller.obstacle_query(&CycleInput::<'_, 4> {
+                        com_position: position,
+                        com_velocity: velocity,
+                        heading,
+                        turning_rate: plant.turning_rate,
+                        stance_foot: plant.stance_foot,
+                        stance_side: plant.stance_side,
+                        time_in_step: plant.time_in_step(),
+                        goal: subgoals[current],
+                        obstacles: &[],
+                    });
+                    seen = match q {
+                        Ok(q) => m.obstacles(&q),
+                        Err(_) => Vec::new(),
+                    };
                     if options.record_scans {
                         scans.push(ScanRecord {
                             cycle: cycles.len(),
@@ -701,8 +734,12 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         scans,
         qps,
         disturbance: disturber.log,
+        mapping: mapper.map(|m| m.log),
     })
 }
 
 #[cfg(test)]
 mod tests;
+
+mod mapping;
+pub use mapping::{MappingLog, ReplanReason, ReplanRecord};
