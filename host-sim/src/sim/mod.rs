@@ -723,6 +723,9 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         // 4. Integrate.
         plant.tick();
     };
+    if on_map {
+        navigation.subgoals = subgoals;
+    }
     Ok(SimResult {
         scenario: scenario.clone(),
         options,

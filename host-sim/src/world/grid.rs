@@ -319,7 +319,11 @@ pub fn grid_search_with(
             grid.origin.y + ((k / w) as f64 + 0.5) * grid.resolution,
         ]
     };
-    let weight = |k: usize| (-grid.clearance[k].min(cap)).exp() * factor(k).max(1.0);
+    // Each cell's weight once (an exp per cell, not one per relaxation).
+    let weights: Vec<f64> = (0..grid.clearance.len())
+        .map(|k| (-grid.clearance[k].min(cap)).exp() * factor(k).max(1.0))
+        .collect();
+    let weight = |k: usize| weights[k];
     let h_scale = (-cap).exp();
     let goal = idx(gi, gj);
     let heur = |k: usize| dist(centre(k), centre(goal)) * h_scale;
