@@ -3,8 +3,8 @@
 //! perception and the planner; the report and the studies read what it
 //! records ([`SimResult`]).
 //!
-//! Before the first tick, with `planner = "rrt_star"`, [`crate::plan::plan`]
-//! turns the known map into subgoals (the goal last; without a planner the goal
+//! Before the first tick, with `planner = "rrt_star"` and the known map,
+//! [`crate::plan::plan`] turns the map into subgoals (the goal last; without a planner the goal
 //! is the only subgoal). If planning fails the run goes on towards the goal
 //! directly and the error is kept in [`Navigation::error`].
 //!
@@ -39,9 +39,10 @@
 //!    so the closed loop does not depend on `K`. Before the call, the current subgoal
 //!    is advanced while the CoM is within `switch_radius` of it (never past the
 //!    goal), and the controller's goal is the current subgoal. With
-//!    `perception = "lidar"` the obstacle list is the one inferred from a LiDAR
-//!    scan taken at that moment from the CoM ([`crate::sense`]); otherwise
-//!    it is the true map. With state estimation noise (`disturbance.noise_*`)
+//!    `perception = "lidar"` a LiDAR scan taken at that moment from the CoM
+//!    updates the occupancy map and the obstacle list is the map's pieces
+//!    near the robot; with `planner = "rrt_star"` the subgoals are planned and
+//!    replanned on that map ([`mapping`]); otherwise it is the true map. With state estimation noise (`disturbance.noise_*`)
 //!    the CoM position, velocity and heading in the input (and the position
 //!    used to advance the subgoal) are the true ones plus a seeded Gaussian
 //!    draw; the LiDAR scans from the true pose.
