@@ -42,7 +42,7 @@
 //!    `perception = "lidar"` a LiDAR scan taken at that moment from the CoM
 //!    updates the occupancy map and the obstacle list is the map's pieces
 //!    near the robot; with `planner = "rrt_star"` the subgoals are planned and
-//!    replanned on that map ([`mapping`]); otherwise it is the true map. With state estimation noise (`disturbance.noise_*`)
+//!    replanned on that map ([`MappingLog`]); otherwise it is the true map. With state estimation noise (`disturbance.noise_*`)
 //!    the CoM position, velocity and heading in the input (and the position
 //!    used to advance the subgoal) are the true ones plus a seeded Gaussian
 //!    draw; the LiDAR scans from the true pose.
