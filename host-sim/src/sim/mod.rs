@@ -349,7 +349,7 @@ pub struct SimResult {
     /// estimation errors; empty when none is configured).
     pub disturbance: DisturbanceLog,
     /// The occupancy map, its update times and the plans made on it (with
-    /// `perception = "lidar"`; [`mapping`]).
+    /// `perception = "lidar"`; [`MappingLog`]).
     pub mapping: Option<MappingLog>,
 }
 
