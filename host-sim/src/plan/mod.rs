@@ -65,6 +65,8 @@ use rand_chacha::ChaCha8Rng;
 use rand_chacha::rand_core::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
 
+pub mod on_map;
+
 use crate::world::Polygon;
 use crate::world::grid::{GridTooLarge, MAX_CELLS, OccupancyGrid, dist, grid_search};
 
@@ -121,6 +123,15 @@ pub struct RrtParams {
     pub shortcut: bool,
     /// The next subgoal is taken when the CoM is within this of the current one, m.
     pub switch_radius: f64,
+    /// Planning on the perceived map ([`on_map`]): the cost of a step into an
+    /// unknown cell is this many times that of a step into a cell seen free
+    /// (>= 1; optimistic planning: unknown space is traversable, but paths
+    /// through space already seen are preferred).
+    pub unknown_cost: f64,
+    /// Planning on the perceived map: the path is checked against the map
+    /// every this many seconds of simulated time (and replanned when it crosses
+    /// an inflated occupied cell), s.
+    pub replan_period: f64,
 }
 
 impl Default for RrtParams {
@@ -136,6 +147,8 @@ impl Default for RrtParams {
             clearance_cap: 0.5,
             shortcut: true,
             switch_radius: 0.4,
+            unknown_cost: 2.0,
+            replan_period: 0.25,
         }
     }
 }
@@ -170,6 +183,12 @@ impl RrtParams {
         }
         if !pos(self.switch_radius) {
             return Err(("switch_radius", "must be finite and > 0".into()));
+        }
+        if !(self.unknown_cost.is_finite() && self.unknown_cost >= 1.0) {
+            return Err(("unknown_cost", "must be finite and >= 1".into()));
+        }
+        if !(pos(self.replan_period) && self.replan_period <= 60.0) {
+            return Err(("replan_period", "must be in (0, 60] s".into()));
         }
         Ok(())
     }
@@ -348,6 +367,28 @@ pub fn plan(
         }
     }
     Err(last)
+}
+
+/// The subgoals of `path` (start first): `path[1..=first]` as they are, then,
+/// with `enabled`, a greedy pass that keeps, from each kept node, the farthest
+/// later node the straight segment reaches through free cells of `grid`
+/// (without, every later node).
+fn shortcut(grid: &OccupancyGrid, path: &[[f64; 2]], first: usize, enabled: bool) -> Vec<[f64; 2]> {
+    let mut kept: Vec<[f64; 2]> = path[1..=first].to_vec();
+    if enabled {
+        let mut i = first;
+        while i + 1 < path.len() {
+            let mut j = path.len() - 1;
+            while j > i + 1 && !grid.segment_free(path[i], path[j]) {
+                j -= 1;
+            }
+            kept.push(path[j]);
+            i = j;
+        }
+    } else {
+        kept.extend_from_slice(&path[first + 1..]);
+    }
+    kept
 }
 
 /// The nearest free cell centre to `p` within `reach` (m), if any.
@@ -555,20 +596,7 @@ fn plan_once(
     // From an entry point the first leg (start -> entry) is kept as is: the
     // start is in the inflated zone, so no shortcut may begin there.
     let first = usize::from(entry.is_some());
-    let mut kept: Vec<[f64; 2]> = path[1..=first].to_vec();
-    if params.shortcut {
-        let mut i = first;
-        while i + 1 < path.len() {
-            let mut j = path.len() - 1;
-            while j > i + 1 && !grid.segment_free(path[i], path[j]) {
-                j -= 1;
-            }
-            kept.push(path[j]);
-            i = j;
-        }
-    } else {
-        kept.extend_from_slice(&path[first + 1..]);
-    }
+    let mut kept = shortcut(&grid, &path, first, params.shortcut);
     if goal_leg {
         path.push(goal_in);
         kept.push(goal_in);

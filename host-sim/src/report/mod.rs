@@ -35,12 +35,14 @@
 
 mod logs;
 pub mod mcap;
+mod mapping;
 pub mod plot;
 mod summary;
 #[cfg(test)]
 mod tests;
 
 pub use logs::{OutputDir, write_logs};
+pub use mapping::{MappingSummary, mapping_line, summarize_mapping};
 pub use summary::{
     ComputeStats, Summary, compute_stats, human_summary, nearest_rank, percentile, summarize,
 };

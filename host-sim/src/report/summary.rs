@@ -156,6 +156,9 @@ pub struct Summary {
     /// velocity change, foot and estimation error sizes); null when the
     /// scenario has none ([`crate::plant::disturbance`]).
     pub disturbance: Option<crate::plant::disturbance::DisturbanceLog>,
+    /// Map updates and plans on the perceived map (null with the known map;
+    /// [`super::MappingSummary`]).
+    pub mapping: Option<super::MappingSummary>,
 }
 
 /// Nearest-rank percentile `p` (0..=100) of `sorted` (ascending), 0 if empty.
@@ -322,6 +325,7 @@ pub fn summarize(r: &SimResult) -> Summary {
             .disturbance
             .is_active(sc.config.com_height)
             .then(|| r.disturbance.clone()),
+        mapping: r.mapping.as_ref().map(super::summarize_mapping),
     }
 }
 
@@ -361,7 +365,10 @@ pub fn human_summary(s: &Summary) -> String {
         "  {verdict}: t = {:.2} s, {} steps, final distance {:.3} m",
         s.sim_time, s.steps, s.final_distance
     );
-    if s.planner != "none" {
+    if let Some(m) = &s.mapping {
+        o.push_str(&super::mapping_line(m));
+    }
+    if s.planner != "none" && s.mapping.as_ref().is_none_or(|m| m.plans == 0) {
         match &s.planner_error {
             Some(err) => {
                 let _ = writeln!(

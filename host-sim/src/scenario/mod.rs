@@ -78,8 +78,9 @@
 //! `--set disturbance.<field>=value` sets one of them (e.g.
 //! `--set disturbance.push_time=2.0 --set disturbance.push_lateral=0.3`).
 //!
-//! `planner = "rrt_star"` needs a known map: it is refused together with
-//! `perception = "lidar"` (planning on the perceived map is not implemented).
+//! `planner = "rrt_star"` with `perception = "lidar"` plans with A* on the
+//! map seen so far and replans as it grows (`crate::plan::on_map`); the map's
+//! settings are the `[lidar.map]` table (`crate::sense::MapParams`).
 //!
 //! A scenario the robot cannot stand in is an error: a start or goal inside an
 //! obstacle, or within `robot.body_radius` of one (moving obstacles at their

@@ -7,8 +7,6 @@ use ldcbf_controller::{Config, closest_point_point_polygon};
 use super::Scenario;
 use super::ScenarioError;
 use super::parse::{RawScenario, line_of};
-use crate::plan::Planner;
-use crate::sense::Perception;
 use crate::world::families;
 use crate::world::moving::parse_velocity;
 use crate::world::random::{random_obstacles, regular_polygon};
@@ -87,16 +85,6 @@ pub(super) fn validate(
             "stuck_window",
             Some(raw.stuck_window.span()),
             "must be finite and >= 0 (0 disables)".into(),
-        ));
-    }
-    if *raw.planner.get_ref() == Planner::RrtStar && *raw.perception.get_ref() == Perception::Lidar
-    {
-        return Err(err(
-            "planner",
-            Some(raw.planner.span()),
-            "planner = \"rrt_star\" plans on the known map and cannot be combined with \
-             perception = \"lidar\" (planning on the perceived map is not implemented)"
-                .into(),
         ));
     }
     if let Err((f, m)) = raw.rrt_star.get_ref().validate() {

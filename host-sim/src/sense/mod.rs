@@ -98,6 +98,7 @@ use crate::world::{MAX_VERTICES, Polygon};
 
 mod dbscan;
 mod infer;
+mod map;
 #[cfg(test)]
 mod tests;
 pub mod track;
@@ -106,6 +107,7 @@ pub use dbscan::{clusters, dbscan};
 pub use infer::{
     cluster_polygon, free_tolerance, infer_obstacles, simplify_outer, split_and_merge,
 };
+pub use map::{CellState, MapParams, OccupancyMap};
 
 /// Obstacle perception (docs/maths.md §6).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize, clap::ValueEnum)]
@@ -171,6 +173,9 @@ pub struct LidarParams {
     /// Track the pieces across scans and give the controller their
     /// velocities ([`track`]; off = every piece at rest).
     pub track_moving: bool,
+    /// The occupancy map built from the scans (the `[lidar.map]` table,
+    /// [`MapParams`]); its pieces are the controller's obstacles.
+    pub map: MapParams,
 }
 
 impl Default for LidarParams {
@@ -187,6 +192,7 @@ impl Default for LidarParams {
             line_tolerance: 0.05,
             free_margin: 0.005,
             track_moving: false,
+            map: MapParams::default(),
         }
     }
 }
@@ -235,7 +241,7 @@ impl LidarParams {
         if !(self.free_margin.is_finite() && self.free_margin >= 0.0) {
             return Err(("free_margin", "must be finite and >= 0".into()));
         }
-        Ok(())
+        self.map.validate()
     }
 }
 

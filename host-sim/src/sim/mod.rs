@@ -3,8 +3,8 @@
 //! perception and the planner; the report and the studies read what it
 //! records ([`SimResult`]).
 //!
-//! Before the first tick, with `planner = "rrt_star"`, [`crate::plan::plan`]
-//! turns the known map into subgoals (the goal last; without a planner the goal
+//! Before the first tick, with `planner = "rrt_star"` and the known map,
+//! [`crate::plan::plan`] turns the map into subgoals (the goal last; without a planner the goal
 //! is the only subgoal). If planning fails the run goes on towards the goal
 //! directly and the error is kept in [`Navigation::error`].
 //!
@@ -42,11 +42,13 @@
 //!    so the closed loop does not depend on `K`. Before the call, the current subgoal
 //!    is advanced while the CoM is within `switch_radius` of it (never past the
 //!    goal), and the controller's goal is the current subgoal. With
-//!    `perception = "lidar"` the obstacle list is the one inferred from a LiDAR
-//!    scan taken at that moment from the CoM ([`crate::sense`]), with the
-//!    velocities of [`crate::sense::track`] when `lidar.track_moving` (else
-//!    at rest); otherwise it is the true map at that tick
-//!    ([`crate::world::moving`]) with the obstacles' true velocities. With state estimation noise (`disturbance.noise_*`)
+//!    `perception = "lidar"` a LiDAR scan taken at that moment from the CoM
+//!    updates the occupancy map and the obstacle list is the map's pieces
+//!    near the robot, with the velocities of [`crate::sense::track`] when
+//!    `lidar.track_moving` (else at rest); with `planner = "rrt_star"` the
+//!    subgoals are planned and replanned on that map ([`MappingLog`]);
+//!    otherwise it is the true map at that tick ([`crate::world::moving`])
+//!    with the obstacles' true velocities. With state estimation noise (`disturbance.noise_*`)
 //!    the CoM position, velocity and heading in the input (and the position
 //!    used to advance the subgoal) are the true ones plus a seeded Gaussian
 //!    draw; the LiDAR scans from the true pose.
@@ -84,7 +86,6 @@ use crate::plan::{Plan, remaining_length};
 use crate::plant::disturbance::{DisturbanceLog, Disturber};
 use crate::plant::{Plant, PlantParams};
 use crate::scenario::Scenario;
-use crate::sense::Lidar;
 use crate::sense::Perception;
 use crate::sense::track::{TrackParams, Tracker};
 use crate::world::Polygon;
@@ -365,6 +366,9 @@ pub struct SimResult {
     /// 1 kHz, each with who moved into whom ([`ContactCause`]; empty unless
     /// [`SimOptions::record_clearance`]).
     pub contacts: Vec<Contact>,
+    /// The occupancy map, its update times and the plans made on it (with
+    /// `perception = "lidar"`; [`MappingLog`]).
+    pub mapping: Option<MappingLog>,
 }
 
 impl SimResult {
@@ -504,7 +508,8 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
     let robot = &scenario.robot;
     // Global planner: subgoals, the goal last.
     let mut navigation = Navigation::default();
-    if scenario.planner == Planner::RrtStar {
+    let on_map = scenario.planner == Planner::RrtStar && scenario.perception == Perception::Lidar;
+    if scenario.planner == Planner::RrtStar && !on_map {
         let t0 = Instant::now();
         let res = crate::plan::plan(
             scenario.start,
@@ -526,13 +531,11 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
     if navigation.subgoals.is_empty() {
         navigation.subgoals.push(scenario.goal);
     }
-    let subgoals = navigation.subgoals.clone();
+    let mut subgoals = navigation.subgoals.clone();
     let switch_radius = scenario.rrt.switch_radius;
     let mut current = 0usize;
-    let mut lidar = match scenario.perception {
-        Perception::Lidar => {
-            Some(Lidar::new(scenario.lidar.clone(), scenario.seed).map_err(SimError)?)
-        }
+    let mut mapper = match scenario.perception {
+        Perception::Lidar => Some(mapping::Mapper::new(scenario, on_map).map_err(SimError)?),
         Perception::Known => None,
     };
     let mut tracker = (scenario.perception == Perception::Lidar && scenario.lidar.track_moving)
@@ -609,11 +612,44 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
             } else {
                 world.velocities()
             };
-            let cycle_obstacles: &[Polygon] = match lidar.as_mut() {
-                Some(l) => {
-                    let (points, polys) =
-                        l.perceive(plant.position, plant.heading, world.obstacles());
-                    seen = polys;
+            let cycle_obstacles: &[Polygon] = match mapper.as_mut() {
+                Some(m) => {
+                    let points =
+                        m.sense(plant.position, plant.heading, plant.time(), world.obstacles());
+                    let stalled = 2 * (plant.tick - best_tick) >= stuck_ticks && stuck_ticks > 0;
+                    if let Some((reason, new)) = m.plan(
+                        scenario,
+                        plant.time(),
+                        position,
+                        &subgoals[current..],
+                        stalled,
+                    ) {
+                        subgoals = new;
+                        current = 0;
+                        navigation.plan_time_ns += m.log.plans.last().map_or(0, |p| p.ns);
+                        // The progress measure follows the new path; a stall
+                        // replan does not restart the stuck clock.
+                        best_distance = remaining_length(plant.position, &subgoals, 0);
+                        if reason != ReplanReason::Stalled {
+                            best_tick = plant.tick;
+                        }
+                    }
+                    let q = controller.obstacle_query(&CycleInput::<'_, 4> {
+                        com_position: position,
+                        com_velocity: velocity,
+                        heading,
+                        turning_rate: plant.turning_rate,
+                        stance_foot: plant.stance_foot,
+                        stance_side: plant.stance_side,
+                        time_in_step: plant.time_in_step(),
+                        goal: subgoals[current],
+                        obstacles: &[],
+                        obstacle_velocities: &[],
+                    });
+                    seen = match q {
+                        Ok(q) => m.obstacles(&q),
+                        Err(_) => Vec::new(),
+                    };
                     cycle_velocities = &[];
                     if let Some(tr) = tracker.as_mut() {
                         seen_velocities = tr.update(plant.time(), &seen);
@@ -750,6 +786,9 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         // 4. Integrate.
         plant.tick();
     };
+    if on_map {
+        navigation.subgoals = subgoals;
+    }
     Ok(SimResult {
         scenario: scenario.clone(),
         options,
@@ -762,8 +801,12 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         qps,
         disturbance: disturber.log,
         contacts: contacts.contacts,
+        mapping: mapper.map(|m| m.log),
     })
 }
 
 #[cfg(test)]
 mod tests;
+
+mod mapping;
+pub use mapping::{MappingLog, ReplanReason, ReplanRecord};

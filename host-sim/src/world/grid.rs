@@ -102,6 +102,33 @@ impl OccupancyGrid {
         })
     }
 
+    /// The grid of `width x height` cells of side `resolution` (m) whose
+    /// lower-left corner is `origin` (m), with the cells whose centre is
+    /// within `inflation` (m) of the centre of a `cells` cell (row by row,
+    /// `j * width + i`) occupied: a map's occupied cells inflated by the
+    /// body (the distance transform of `cells` gives both the inflation and
+    /// the clearance beyond it). `cells.len()` must be `width * height`.
+    pub fn from_cells(
+        origin: Vector2<f64>,
+        resolution: f64,
+        width: usize,
+        height: usize,
+        cells: &[bool],
+        inflation: f64,
+    ) -> Self {
+        assert_eq!(cells.len(), width * height, "one flag per cell");
+        let d = distance_transform(cells, width, height, resolution);
+        let tol = 1e-9 * resolution;
+        OccupancyGrid {
+            origin,
+            resolution,
+            width,
+            height,
+            occupied: d.iter().map(|&x| x <= inflation + tol).collect(),
+            clearance: d.iter().map(|&x| (x - inflation).max(0.0)).collect(),
+        }
+    }
+
     /// The cell containing `p`, if inside the grid.
     pub fn cell_of(&self, p: [f64; 2]) -> Option<(usize, usize)> {
         let i = ((p[0] - self.origin.x) / self.resolution).floor();
@@ -267,6 +294,19 @@ pub fn grid_search(
     g: [f64; 2],
     cap: f64,
 ) -> Option<(Vec<[f64; 2]>, f64)> {
+    grid_search_with(grid, s, g, cap, |_| 1.0)
+}
+
+/// [`grid_search`] with the cost of entering cell `k` (`j * width + i`)
+/// multiplied by `factor(k) >= 1` (the heuristic stays admissible): e.g.
+/// unknown cells made costlier than cells seen free.
+pub fn grid_search_with(
+    grid: &OccupancyGrid,
+    s: [f64; 2],
+    g: [f64; 2],
+    cap: f64,
+    factor: impl Fn(usize) -> f64,
+) -> Option<(Vec<[f64; 2]>, f64)> {
     use std::cmp::Reverse;
     use std::collections::BinaryHeap;
     let (si, sj) = grid.cell_of(s)?;
@@ -279,7 +319,11 @@ pub fn grid_search(
             grid.origin.y + ((k / w) as f64 + 0.5) * grid.resolution,
         ]
     };
-    let weight = |k: usize| (-grid.clearance[k].min(cap)).exp();
+    // Each cell's weight once (an exp per cell, not one per relaxation).
+    let weights: Vec<f64> = (0..grid.clearance.len())
+        .map(|k| (-grid.clearance[k].min(cap)).exp() * factor(k).max(1.0))
+        .collect();
+    let weight = |k: usize| weights[k];
     let h_scale = (-cap).exp();
     let goal = idx(gi, gj);
     let heur = |k: usize| dist(centre(k), centre(goal)) * h_scale;

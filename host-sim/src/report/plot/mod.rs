@@ -25,6 +25,9 @@
 //!   report's figure 12: six frames with the LiDAR hit points (green), the
 //!   sensor range (red circle), the inferred polygons (blue) and the true map
 //!   (faded).
+//! * `mapping.png` ([`mapping_png`], runs with `perception = "lidar"`): the
+//!   true map and the walk next to the perceived occupancy map (occupied,
+//!   free, unknown cells) and the plans made on it.
 //!
 //! With subgoals, the map-like figures also draw the subgoal polyline and the
 //! subgoals (orange; in a frame the current one is ringed). With LiDAR, the
@@ -45,9 +48,11 @@ use crate::sense::Perception;
 use crate::sim::{CycleRecord, ScanRecord, SimResult};
 
 mod figures;
+mod mapping;
 mod scene;
 
 pub use figures::{frames_png, map_png, perception_png, planner_png, states_png, walk_gif};
+pub use mapping::mapping_png;
 
 /// Figure options.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -115,6 +120,10 @@ pub fn render_all(r: &SimResult, dir: &Path, opts: &PlotOptions) -> Result<Vec<S
     if r.scenario.perception == Perception::Lidar && !r.scans.is_empty() {
         perception_png(&scene, &dir.join("perception.png"))?;
         files.push("perception.png".into());
+    }
+    if r.mapping.is_some() {
+        mapping_png(&scene, &dir.join("mapping.png"))?;
+        files.push("mapping.png".into());
     }
     if opts.gif {
         walk_gif(&scene, &dir.join("walk.gif"), opts)?;

@@ -72,8 +72,9 @@ pub const DEFAULT_CLOCK_MHZ: f64 = 400.0;
 /// runs), `maze` and `trap` both without and with RRT* subgoals
 /// (`maze` ships with them, `maze+none` is the MPC alone),
 /// `crowded` with its seed 0, the LiDAR regressions `cup-mouth` and
-/// `corner-start`.
-pub const SHIPPED_CASES: [&str; 10] = [
+/// `corner-start`, and the unknown-map regressions `occluded`, `needle`,
+/// `cup-arm` and `cup-front` (LiDAR, the map and planning on it).
+pub const SHIPPED_CASES: [&str; 14] = [
     "simple",
     "circles",
     "paper",
@@ -84,6 +85,10 @@ pub const SHIPPED_CASES: [&str; 10] = [
     "crowded@0",
     "cup-mouth",
     "corner-start",
+    "occluded",
+    "needle",
+    "cup-arm",
+    "cup-front",
 ];
 
 /// The large maps a deadline study runs by default besides [`SHIPPED_CASES`]

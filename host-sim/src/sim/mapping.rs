@@ -1,0 +1,279 @@
+//! The unknown-map part of the closed loop (`perception = "lidar"`): each
+//! control cycle, a LiDAR scan updates the occupancy map
+//! ([`crate::sense::OccupancyMap`]), the controller's obstacles are the map's
+//! pieces near the robot, and, with `planner = "rrt_star"`, the path is planned
+//! on the map seen so far ([`crate::plan::on_map`]) and replanned when needed.
+//!
+//! **Pieces handed to the controller** ([`Mapper::obstacles`]): the map's
+//! pieces within `r_active` of the cycle's `p_0`
+//! ([`ldcbf_controller::Controller::obstacle_query`]), nearest first, without
+//! the pieces that lie wholly beyond the LDCBF half-plane of a nearer piece
+//! kept (the half-plane the controller itself takes at that piece's point
+//! nearest `p_0`): such a piece adds no row the nearer one does not already
+//! enforce, and a wall seen as a staircase of cell rectangles would otherwise
+//! fill the controller's few obstacle slots with one side of a corridor.
+//!
+//! **Replanning** ([`Mapper::plan`]): a path is planned at the first cycle;
+//! then, every `replan_period` s, the rest of the path (from the robot through
+//! the remaining subgoals) is checked against the map's occupied cells inflated
+//! by the plan's inflation and replanned when it crosses one ("blocked"), and
+//! it is replanned when the robot has made no progress for half the stuck
+//! window ("stalled", at most once per half window). A failed plan keeps the
+//! goal as the only subgoal and counts as a failure.
+
+use std::time::Instant;
+
+use ldcbf_controller::nalgebra::Vector2;
+use ldcbf_controller::{ObstacleQuery, closest_point_point_polygon};
+
+use crate::plan::on_map::{CellMap, plan_on_map};
+use crate::scenario::Scenario;
+use crate::sense::{CellState, Lidar, OccupancyMap, free_tolerance};
+use crate::world::Polygon;
+use crate::world::grid::OccupancyGrid;
+
+/// Why a path was (re)planned.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ReplanReason {
+    /// The first plan of the run.
+    Initial,
+    /// The path crossed a cell newly seen occupied (inflated).
+    Blocked,
+    /// No progress for half the stuck window.
+    Stalled,
+}
+
+/// One plan on the perceived map.
+#[derive(Clone, Debug)]
+pub struct ReplanRecord {
+    /// Simulated time, s.
+    pub time: f64,
+    /// Why.
+    pub reason: ReplanReason,
+    /// Wall-clock planning time, ns.
+    pub ns: u64,
+    /// The subgoals it gave (empty when it failed), m.
+    pub subgoals: Vec<Vector2<f64>>,
+}
+
+/// What the mapping did in a run.
+#[derive(Clone, Debug)]
+pub struct MappingLog {
+    /// The map at the end of the run.
+    pub map: OccupancyMap,
+    /// Wall-clock time of each scan's map update, ns.
+    pub update_ns: Vec<u64>,
+    /// Every plan on the perceived map, in order.
+    pub plans: Vec<ReplanRecord>,
+}
+
+impl MappingLog {
+    /// Plans after the first.
+    pub fn replans(&self) -> usize {
+        self.plans.len().saturating_sub(1)
+    }
+
+    /// Plans that found no path.
+    pub fn failures(&self) -> usize {
+        self.plans.iter().filter(|p| p.subgoals.is_empty()).count()
+    }
+}
+
+/// The mapping state of a run.
+pub(super) struct Mapper {
+    lidar: Lidar,
+    pub(super) log: MappingLog,
+    planning: bool,
+    /// The next time the path is checked, s.
+    next_check: f64,
+    last_stall_replan: f64,
+    last_update: Option<f64>,
+}
+
+impl Mapper {
+    /// A mapper for `scenario` (its `[lidar]` and `[lidar.map]` tables), with
+    /// planning when `planning`.
+    pub(super) fn new(scenario: &Scenario, planning: bool) -> Result<Self, String> {
+        let lidar = Lidar::new(scenario.lidar.clone(), scenario.seed)?;
+        let map = OccupancyMap::new(scenario.lidar.map.clone(), scenario.start, scenario.goal)
+            .map_err(|e| format!("lidar.{e}"))?;
+        Ok(Mapper {
+            lidar,
+            log: MappingLog {
+                map,
+                update_ns: Vec::new(),
+                plans: Vec::new(),
+            },
+            planning,
+            next_check: 0.0,
+            last_stall_replan: f64::NEG_INFINITY,
+            last_update: None,
+        })
+    }
+
+    /// Scans from `origin` (m) along `heading` (rad) at time `time` (s)
+    /// against the true `obstacles` and updates the map; returns the hit
+    /// points (m).
+    pub(super) fn sense(
+        &mut self,
+        origin: Vector2<f64>,
+        heading: f64,
+        time: f64,
+        obstacles: &[Polygon],
+    ) -> Vec<Vector2<f64>> {
+        let rays = self.lidar.scan_rays(origin, heading, obstacles);
+        let p = self.lidar.params();
+        let (range, tol) = (p.range, free_tolerance(p));
+        let dt = self.last_update.map_or(0.0, |t| time - t);
+        self.last_update = Some(time);
+        let t0 = Instant::now();
+        self.log.map.update(origin, heading, &rays, range, tol, dt);
+        self.log
+            .update_ns
+            .push(u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX));
+        rays.into_iter().flatten().collect()
+    }
+
+    /// The controller's obstacles for a cycle whose selection disk is `q`
+    /// (module docs), world frame.
+    pub(super) fn obstacles(&self, q: &ObstacleQuery) -> Vec<Polygon> {
+        let mut pieces: Vec<(f64, Polygon)> = self
+            .log
+            .map
+            .pieces(q.center, q.padded_radius())
+            .into_iter()
+            .map(|p| {
+                (
+                    closest_point_point_polygon(&q.center, &p).signed_distance,
+                    p,
+                )
+            })
+            .collect();
+        pieces.sort_by(|a, b| a.0.total_cmp(&b.0));
+        // Kept half-planes: point c and unit outward normal eta (from p_0).
+        let mut planes: Vec<(Vector2<f64>, Vector2<f64>)> = Vec::new();
+        let mut out = Vec::with_capacity(pieces.len());
+        for (d, p) in pieces {
+            let beyond = planes
+                .iter()
+                .any(|(c, eta)| p.vertices().iter().all(|v| eta.dot(&(v - c)) >= -1e-12));
+            if beyond {
+                continue;
+            }
+            if d > 1e-9 {
+                let cp = closest_point_point_polygon(&q.center, &p);
+                planes.push((cp.point, (cp.point - q.center) / d));
+            }
+            out.push(p);
+        }
+        out
+    }
+
+    /// With planning: the new subgoals when the path is (re)planned this
+    /// cycle (module docs), else `None`. `position` is the robot's (m),
+    /// `subgoals[current..]` the rest of the path, `stalled` whether the
+    /// robot has made no progress for half the stuck window.
+    pub(super) fn plan(
+        &mut self,
+        scenario: &Scenario,
+        time: f64,
+        position: Vector2<f64>,
+        subgoals: &[Vector2<f64>],
+        stalled: bool,
+    ) -> Option<(ReplanReason, Vec<Vector2<f64>>)> {
+        if !self.planning {
+            return None;
+        }
+        let half_window = 0.5 * scenario.stuck_window;
+        let reason = if self.log.plans.is_empty() {
+            ReplanReason::Initial
+        } else if stalled && time - self.last_stall_replan >= half_window {
+            self.last_stall_replan = time;
+            ReplanReason::Stalled
+        } else if time + 1e-9 >= self.next_check {
+            self.next_check = time + scenario.rrt.replan_period;
+            let (occupied, _) = self.flags();
+            let m = &self.log.map;
+            let grid = OccupancyGrid::from_cells(
+                m.origin,
+                m.resolution,
+                m.width,
+                m.height,
+                &occupied,
+                scenario.robot.body_radius,
+            );
+            if !path_blocked(&grid, position, subgoals) {
+                return None;
+            }
+            ReplanReason::Blocked
+        } else {
+            return None;
+        };
+        self.next_check = time + scenario.rrt.replan_period;
+        let (occupied, unknown) = self.flags();
+        let map = &self.log.map;
+        let cells = CellMap {
+            origin: map.origin,
+            resolution: map.resolution,
+            width: map.width,
+            height: map.height,
+            occupied: &occupied,
+            unknown: &unknown,
+        };
+        let t0 = Instant::now();
+        let res = plan_on_map(
+            &cells,
+            position,
+            scenario.goal,
+            &scenario.rrt,
+            scenario.robot.body_radius,
+        );
+        let ns = u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX);
+        let subgoals = match res {
+            Ok(p) => p.subgoals,
+            Err(_) => Vec::new(),
+        };
+        self.log.plans.push(ReplanRecord {
+            time,
+            reason,
+            ns,
+            subgoals: subgoals.clone(),
+        });
+        Some((
+            reason,
+            if subgoals.is_empty() {
+                vec![scenario.goal]
+            } else {
+                subgoals
+            },
+        ))
+    }
+
+    /// The map's occupied and unknown cells, row by row.
+    fn flags(&self) -> (Vec<bool>, Vec<bool>) {
+        let states = self.log.map.states();
+        (
+            states.iter().map(|s| *s == CellState::Occupied).collect(),
+            states.iter().map(|s| *s == CellState::Unknown).collect(),
+        )
+    }
+}
+
+/// Whether the rest of the path (from `position`, m, through `subgoals`)
+/// crosses an occupied cell of `grid`: a subgoal before the last in an
+/// occupied cell, or a leg between two free cells that leaves the free cells.
+/// A leg from or to a point inside the inflation (the robot near a wall, a
+/// goal near a wall) is the plan's way out or in and is not checked.
+fn path_blocked(grid: &OccupancyGrid, position: Vector2<f64>, subgoals: &[Vector2<f64>]) -> bool {
+    let mut prev = [position.x, position.y];
+    for (k, s) in subgoals.iter().enumerate() {
+        let q = [s.x, s.y];
+        let (a, b) = (grid.is_free(prev), grid.is_free(q));
+        if (k + 1 < subgoals.len() && !b) || (a && b && !grid.segment_free(prev, q)) {
+            return true;
+        }
+        prev = q;
+    }
+    false
+}
