@@ -34,8 +34,8 @@
 //! loop ([`crate::sim`]) recorded; the studies and the command line use it.
 
 mod logs;
-pub mod mcap;
 mod mapping;
+pub mod mcap;
 pub mod plot;
 mod summary;
 #[cfg(test)]

@@ -614,8 +614,12 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
             };
             let cycle_obstacles: &[Polygon] = match mapper.as_mut() {
                 Some(m) => {
-                    let points =
-                        m.sense(plant.position, plant.heading, plant.time(), world.obstacles());
+                    let points = m.sense(
+                        plant.position,
+                        plant.heading,
+                        plant.time(),
+                        world.obstacles(),
+                    );
                     let stalled = 2 * (plant.tick - best_tick) >= stuck_ticks && stuck_ticks > 0;
                     if let Some((reason, new)) = m.plan(
                         scenario,
