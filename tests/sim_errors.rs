@@ -112,18 +112,6 @@ fn unknown_planner_is_rejected_clearly() {
 }
 
 #[test]
-fn rrt_star_with_lidar_is_rejected_clearly() {
-    let msg = run_bad(&GOOD.replace(
-        "time_limit = 5.0",
-        "time_limit = 5.0\nplanner = \"rrt_star\"\nperception = \"lidar\"",
-    ));
-    assert!(
-        msg.contains("planner") && msg.contains(":5:") && msg.contains("lidar"),
-        "{msg}"
-    );
-}
-
-#[test]
 fn bad_planner_and_lidar_settings_are_named() {
     let msg = run_bad(&GOOD.replace(
         "time_limit = 5.0",
