@@ -171,8 +171,6 @@ fn bad_deadline_arguments_fail_cleanly() {
         &["deadline", "simple", "--instructions", "missing.csv"],
         "missing.csv",
     );
-    // A planner with LiDAR is refused by the scenario's validation.
-    fails(&["deadline", "crowded+rrt_star"], "rrt_star");
 }
 
 #[test]
