@@ -605,6 +605,20 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                 navigation.reached_at.push(plant.time());
                 current += 1;
             }
+            // This cycle's measured state toward `goal`, before its obstacles
+            // (one construction for the map's obstacle query and the cycle).
+            let measured = |goal| CycleInput {
+                com_position: position,
+                com_velocity: velocity,
+                heading,
+                turning_rate: plant.turning_rate,
+                stance_foot: plant.stance_foot,
+                stance_side: plant.stance_side,
+                time_in_step: plant.time_in_step(),
+                goal,
+                obstacles: &[],
+                obstacle_velocities: &[],
+            };
             // Known velocities with the true map (none when every obstacle
             // is at rest: the static controller, bit for bit).
             let mut cycle_velocities: &[Vector2<f64>] = if world.is_static() {
@@ -638,18 +652,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                             best_tick = plant.tick;
                         }
                     }
-                    let q = controller.obstacle_query(&CycleInput::<'_, 4> {
-                        com_position: position,
-                        com_velocity: velocity,
-                        heading,
-                        turning_rate: plant.turning_rate,
-                        stance_foot: plant.stance_foot,
-                        stance_side: plant.stance_side,
-                        time_in_step: plant.time_in_step(),
-                        goal: subgoals[current],
-                        obstacles: &[],
-                        obstacle_velocities: &[],
-                    });
+                    let q = controller.obstacle_query(&measured(subgoals[current]));
                     seen = match q {
                         Ok(q) => m.obstacles(&q),
                         Err(_) => Vec::new(),
@@ -672,16 +675,9 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                 None => world.obstacles(),
             };
             let input = CycleInput {
-                com_position: position,
-                com_velocity: velocity,
-                heading,
-                turning_rate: plant.turning_rate,
-                stance_foot: plant.stance_foot,
-                stance_side: plant.stance_side,
-                time_in_step: plant.time_in_step(),
-                goal: subgoals[current],
                 obstacles: cycle_obstacles,
                 obstacle_velocities: cycle_velocities,
+                ..measured(subgoals[current])
             };
             let on_clones = time_on_clones(
                 &controller,
