@@ -295,4 +295,3 @@ pub(crate) fn capped_jobs(j: usize) -> usize {
     }
     n
 }
-

@@ -61,4 +61,3 @@ pub(crate) fn fail(err: anyhow::Error) -> ExitCode {
     let _ = writeln!(std::io::stderr().lock(), "error: {}", one_line.join("; "));
     ExitCode::FAILURE
 }
-

@@ -61,6 +61,9 @@ pub(crate) fn robustness(args: RobustnessArgs) -> Result<()> {
     }
     req.out = out;
     req.progress = !quiet;
-    out!("{}", robustness::markdown(&robustness::run_robustness(&req)?));
+    out!(
+        "{}",
+        robustness::markdown(&robustness::run_robustness(&req)?)
+    );
     Ok(())
 }
