@@ -58,13 +58,12 @@ fn nan_max(a: f64, b: f64) -> f64 {
 pub fn kkt_stacked(p: &DenseProblem, x: &[f64], y: &[f64]) -> Result<StackedKkt, ProblemError> {
     let st = p.stacked();
     if x.len() != p.n || y.len() != st.m {
-        return Err(ProblemError(format!(
-            "x has {} entries and y {}; the problem has n = {} and {} stacked rows",
-            x.len(),
-            y.len(),
-            p.n,
-            st.m
-        )));
+        return Err(ProblemError::KktLengths {
+            x: x.len(),
+            y: y.len(),
+            n: p.n,
+            rows: st.m,
+        });
     }
     Ok(kkt_rows(p, &st, x, y))
 }

@@ -18,8 +18,8 @@ pub fn solve_own<const NV: usize, const NC: usize>(
     max_iter: u32,
 ) -> Result<QpSolution<NV, NC>, ProblemError> {
     let (H, qp) = p.to_fixed::<NV, NC>()?;
-    let solver = DualActiveSet::<NV, NC>::new(&H, QpSettings::default())
-        .map_err(|e| ProblemError(format!("Hessian rejected: {e}")))?;
+    let solver =
+        DualActiveSet::<NV, NC>::new(&H, QpSettings::default()).map_err(ProblemError::Hessian)?;
     Ok(solver.solve(&qp, &[false; NC], max_iter))
 }
 
@@ -27,8 +27,7 @@ pub fn solve_own<const NV: usize, const NC: usize>(
 /// number of rows, equality rows held as equalities), cold start.
 pub fn solve_own_dyn(p: &DenseProblem, max_iter: u32) -> Result<QpSolutionDyn, ProblemError> {
     let (H, qp) = p.to_dyn()?;
-    let solver = DualActiveSetDyn::new(&H, QpSettings::default())
-        .map_err(|e| ProblemError(format!("Hessian rejected: {e}")))?;
+    let solver = DualActiveSetDyn::new(&H, QpSettings::default()).map_err(ProblemError::Hessian)?;
     Ok(solver.solve(&qp, &[], max_iter))
 }
 

@@ -19,7 +19,10 @@ impl DenseProblem {
     /// another dtype, a wrong shape, a bad value.
     pub fn from_npz(path: &Path) -> Result<Self, ProblemError> {
         let name = path.display().to_string();
-        let fail = |m: String| ProblemError(format!("{name}: {m}"));
+        let fail = |reason: String| ProblemError::File {
+            file: name.clone(),
+            reason,
+        };
         if path.is_dir() {
             return Err(fail("is a directory, not an npz file".into()));
         }
@@ -130,7 +133,10 @@ impl DenseProblem {
             lb,
             ub,
         };
-        p.check("key").map_err(|e| fail(e.0))?;
+        p.check("key").map_err(|e| ProblemError::InFile {
+            file: name.clone(),
+            error: Box::new(e),
+        })?;
         Ok(p)
     }
 
@@ -144,7 +150,10 @@ impl DenseProblem {
     pub fn write_npz(&self, path: &Path) -> Result<(), ProblemError> {
         use npyz::WriterBuilder;
         let name = path.display().to_string();
-        let err = |e: std::io::Error| ProblemError(format!("{name}: cannot write npz: {e}"));
+        let err = |e: std::io::Error| ProblemError::File {
+            file: name.clone(),
+            reason: format!("cannot write npz: {e}"),
+        };
         let mut npz = npyz::npz::NpzWriter::create(path).map_err(err)?;
         let (n, m, me) = (self.n as u64, self.m as u64, self.me as u64);
         let arrays: [(&str, Vec<u64>, &[f64], bool); 8] = [

@@ -1,12 +1,12 @@
 //! The dense QP [`DenseProblem`]: built from the controller's assembly or
 //! storage types and shaped back into them (the npz layout is in `npz.rs`).
 
-use core::fmt;
-
 use ldcbf_controller::nalgebra::{
     Const, DMatrix, DefaultAllocator, Dim, Dyn, OMatrix, OVector, SMatrix, U1,
 };
-use ldcbf_controller::{Assembly, DenseQp, DenseQpDyn, DenseQpOf, DualActiveSet, QpAllocator};
+use ldcbf_controller::{
+    Assembly, DenseQp, DenseQpDyn, DenseQpOf, DualActiveSet, HessianError, QpAllocator,
+};
 
 /// A dense QP in the layout of the qpbenchmark npz files,
 ///
@@ -46,17 +46,118 @@ pub struct DenseProblem {
     pub ub: Vec<f64>,
 }
 
-/// Error reading or shaping a problem.
-#[derive(Debug)]
-pub struct ProblemError(pub String);
-
-impl fmt::Display for ProblemError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
-    }
+/// Error reading or shaping a problem. Each names the member (`P`, `q`, `G`,
+/// `h`, `A`, `b`, `lb`, `ub`), the file or the sizes concerned. No variant has
+/// a `source`: the message already holds the inner one.
+#[derive(Debug, thiserror::Error)]
+pub enum ProblemError {
+    /// A member has the wrong number of entries for `n`, `m`, `me`.
+    #[error("{naming} `{key}` has {len} entries, expected {shape} (n = {n}, m = {m}, me = {me})")]
+    MemberLength {
+        /// How members are named: `field` (of the problem) or `key` (of an npz file).
+        naming: &'static str,
+        /// The member.
+        key: &'static str,
+        /// Its number of entries.
+        len: usize,
+        /// The expected shape (`rows x columns` or `rows`).
+        shape: String,
+        /// Variables.
+        n: usize,
+        /// Inequality rows.
+        m: usize,
+        /// Equality rows.
+        me: usize,
+    },
+    /// An entry of a member is NaN, or an infinity where none may be.
+    #[error("{naming} `{key}`: entry {at} is {bad}")]
+    MemberValue {
+        /// `field` or `key`, as for [`ProblemError::MemberLength`].
+        naming: &'static str,
+        /// The member.
+        key: &'static str,
+        /// The entry, `[i]` or `[i, j]`.
+        at: String,
+        /// What is wrong with it.
+        bad: &'static str,
+    },
+    /// A lower bound above its upper bound.
+    #[error("{naming} `lb`: lb[{index}] = {lower} is above ub[{index}] = {upper}")]
+    Bounds {
+        /// `field` or `key`, as for [`ProblemError::MemberLength`].
+        naming: &'static str,
+        /// The variable.
+        index: usize,
+        /// `lb[index]`.
+        lower: f64,
+        /// `ub[index]`.
+        upper: f64,
+    },
+    /// The problem does not fit the solver's sizes.
+    #[error(
+        "problem has n = {n}, m = {rows} (equality, inequality and bound rows); the \
+         solver size is NV = {nv}, NC = {nc}"
+    )]
+    SolverSize {
+        /// The problem's variables.
+        n: usize,
+        /// Its stacked rows.
+        rows: usize,
+        /// The solver's variables.
+        nv: usize,
+        /// The solver's row capacity.
+        nc: usize,
+    },
+    /// `P` or `q` does not have `n` (a problem not validated).
+    #[error("field `P` or `q` does not have n = {n} (run `validate`)")]
+    NotValidated {
+        /// Variables.
+        n: usize,
+    },
+    /// The solver's row storage is full.
+    #[error("row capacity exceeded")]
+    RowCapacity,
+    /// The solver refused the Hessian `P`.
+    #[error("Hessian rejected: {0}")]
+    Hessian(HessianError),
+    /// Multipliers of the wrong length.
+    #[error("{given} multipliers for {rows} stacked rows")]
+    Multipliers {
+        /// Multipliers given.
+        given: usize,
+        /// Stacked rows.
+        rows: usize,
+    },
+    /// A point `(x, y)` of the wrong lengths for the KKT residuals.
+    #[error("x has {x} entries and y {y}; the problem has n = {n} and {rows} stacked rows")]
+    KktLengths {
+        /// Entries of `x`.
+        x: usize,
+        /// Entries of `y`.
+        y: usize,
+        /// Variables.
+        n: usize,
+        /// Stacked rows.
+        rows: usize,
+    },
+    /// An npz file that cannot be read or written: `reason` says why (and
+    /// which key).
+    #[error("{file}: {reason}")]
+    File {
+        /// The file, as given.
+        file: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// An npz file whose members are wrong.
+    #[error("{file}: {error}")]
+    InFile {
+        /// The file, as given.
+        file: String,
+        /// What is wrong with its members.
+        error: Box<ProblemError>,
+    },
 }
-
-impl core::error::Error for ProblemError {}
 
 /// A problem in the solver's types: the Hessian and the QP (stacked rows).
 pub type SizedQp<V, C> = (OMatrix<f64, V, V>, DenseQpOf<V, C>);
@@ -126,7 +227,7 @@ impl DenseProblem {
     }
 
     /// [`DenseProblem::validate`] with `what` (`field`, `key`) naming the members.
-    pub(crate) fn check(&self, what: &str) -> Result<(), ProblemError> {
+    pub(crate) fn check(&self, what: &'static str) -> Result<(), ProblemError> {
         let (n, m, me) = (self.n, self.m, self.me);
         let vector = |v: &[f64]| if v.is_empty() { 0 } else { n };
         // (key, values, rows, columns of a matrix)
@@ -146,10 +247,15 @@ impl DenseProblem {
                     Some(c) => format!("{rows} x {c}"),
                     None => format!("{rows}"),
                 };
-                return Err(ProblemError(format!(
-                    "{what} `{key}` has {} entries, expected {shape} (n = {n}, m = {m}, me = {me})",
-                    v.len()
-                )));
+                return Err(ProblemError::MemberLength {
+                    naming: what,
+                    key,
+                    len: v.len(),
+                    shape,
+                    n,
+                    m,
+                    me,
+                });
             }
             for (k, &x) in v.iter().enumerate() {
                 let bad = match (key, x) {
@@ -164,15 +270,23 @@ impl DenseProblem {
                     Some(c) => format!("[{}, {}]", k / c, k % c),
                     None => format!("[{k}]"),
                 };
-                return Err(ProblemError(format!("{what} `{key}`: entry {at} is {bad}")));
+                return Err(ProblemError::MemberValue {
+                    naming: what,
+                    key,
+                    at,
+                    bad,
+                });
             }
         }
         if !self.lb.is_empty() && !self.ub.is_empty() {
             for (j, (l, u)) in self.lb.iter().zip(&self.ub).enumerate() {
                 if l > u {
-                    return Err(ProblemError(format!(
-                        "{what} `lb`: lb[{j}] = {l} is above ub[{j}] = {u}"
-                    )));
+                    return Err(ProblemError::Bounds {
+                        naming: what,
+                        index: j,
+                        lower: *l,
+                        upper: *u,
+                    });
                 }
             }
         }
@@ -249,17 +363,15 @@ impl DenseProblem {
         let n = nv.value();
         let rows = self.rows();
         if self.n != n || rows > nc.value() {
-            return Err(ProblemError(format!(
-                "problem has n = {}, m = {rows} (equality, inequality and bound rows); the \
-                 solver size is NV = {n}, NC = {}",
-                self.n,
-                nc.value()
-            )));
+            return Err(ProblemError::SolverSize {
+                n: self.n,
+                rows,
+                nv: n,
+                nc: nc.value(),
+            });
         }
         if Some(self.P.len()) != n.checked_mul(n) || self.q.len() != n {
-            return Err(ProblemError(format!(
-                "field `P` or `q` does not have n = {n} (run `validate`)"
-            )));
+            return Err(ProblemError::NotValidated { n });
         }
         let st = self.stacked();
         let H = OMatrix::<f64, V, V>::from_fn_generic(nv, nv, |i, j| self.P[i * n + j]);
@@ -274,7 +386,7 @@ impl DenseProblem {
             } else {
                 qp.push_row(&g, st.h[i])
             };
-            pushed.map_err(|_| ProblemError("row capacity exceeded".into()))?;
+            pushed.map_err(|_| ProblemError::RowCapacity)?;
         }
         Ok((H, qp))
     }

@@ -134,11 +134,10 @@ impl Stacked {
     /// row). Errors when `y` does not have length `m`.
     pub fn split_multipliers(&self, y: &[f64]) -> Result<Multipliers, ProblemError> {
         if y.len() != self.m || self.origin.len() != self.m {
-            return Err(ProblemError(format!(
-                "{} multipliers for {} stacked rows",
-                y.len(),
-                self.m
-            )));
+            return Err(ProblemError::Multipliers {
+                given: y.len(),
+                rows: self.m,
+            });
         }
         let ineq = self
             .origin

@@ -127,7 +127,7 @@ fn wrong_size_is_an_error() {
     assert!(
         DenseProblem::from_npz(Path::new("/nonexistent.npz"))
             .unwrap_err()
-            .0
+            .to_string()
             .contains("/nonexistent.npz")
     );
 }
@@ -259,7 +259,7 @@ fn numpy_files_with_absent_and_empty_members_are_read() {
             "object.npz: key `lb`: dtype '|O' is not float64",
         ),
     ] {
-        let e = DenseProblem::from_npz(&fixture(name)).unwrap_err().0;
+        let e = DenseProblem::from_npz(&fixture(name)).unwrap_err().to_string();
         assert!(e.contains(msg), "{e}");
     }
 }
@@ -330,7 +330,7 @@ fn bad_members_are_rejected_naming_the_key() {
         let mut members: Members = vec![("P", &[3, 3], p), ("q", &[3], q)];
         members.extend(extra);
         write_members(&path, &members);
-        let e = DenseProblem::from_npz(&path).unwrap_err().0;
+        let e = DenseProblem::from_npz(&path).unwrap_err().to_string();
         assert!(
             e.starts_with(&path.display().to_string()) && e.contains(msg),
             "{e}\nwanted {msg}"
@@ -339,13 +339,13 @@ fn bad_members_are_rejected_naming_the_key() {
     std::fs::remove_file(&path).unwrap();
     // The same checks on a problem in memory name the field.
     let mut bad = two_var(vec![], vec![], vec![0.0, 0.0], vec![1.0, -1.0]);
-    let e = bad.validate().unwrap_err().0;
+    let e = bad.validate().unwrap_err().to_string();
     assert_eq!(e, "field `lb`: lb[1] = 0 is above ub[1] = -1");
     bad.ub = vec![1.0];
     assert!(
         bad.validate()
             .unwrap_err()
-            .0
+            .to_string()
             .contains("field `ub` has 1 entries, expected 2")
     );
     assert_eq!(solve_clarabel(&bad).status, RefStatus::Failed);
