@@ -5,8 +5,12 @@
 use super::*;
 use crate::world::moving::vertex_centre;
 
+/// A map chart in metres ([`map_chart`]).
+type MapChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
 /// Draws a map-like scene into `area`: title, axes, (half-planes of `cycle`),
 /// obstacles, path and footsteps up to `until` (s), robot, start and goal.
+/// Layers are drawn bottom first, in the order of the legend.
 pub(super) fn draw_scene<DB: DrawingBackend>(
     area: &DrawingArea<DB, Shift>,
     scene: &Scene<'_>,
@@ -17,54 +21,97 @@ pub(super) fn draw_scene<DB: DrawingBackend>(
 ) -> Result<()> {
     let Moment { until, cycle, scan } = moment;
     let r = scene.r;
-    let lidar = sc_perception(r) == Perception::Lidar;
     let sc = &r.scenario;
-    let (x0, x1, y0, y1) = scene.bounds;
     let (title_area, chart_area) = area.split_vertically(layout.title_h);
     let mut chart = map_chart(
         &title_area,
         &chart_area,
         &layout,
         (title, 1.2),
-        (x0, x1, y0, y1),
+        scene.bounds,
         RGBColor(210, 210, 210),
     )?;
-
-    // LDCBF half-planes of the cycle: each safe side light, intersection dark.
     if let Some(c) = cycle {
-        let delta = sc.config.delta;
-        let rect = vec![(x0, y0), (x1, y0), (x1, y1), (x0, y1)];
-        let mut inter = rect.clone();
-        for hp in &c.half_planes {
-            let p = clip(&rect, &hp.half_plane, delta);
-            if p.len() >= 3 {
-                chart
-                    .draw_series(std::iter::once(Polygon::new(p, SAFE.mix(0.10).filled())))
-                    .map_err(e)?;
-            }
-            inter = clip(&inter, &hp.half_plane, delta);
-        }
-        if !c.half_planes.is_empty() && inter.len() >= 3 {
-            let mut closed = inter.clone();
-            closed.push(inter[0]);
-            chart
-                .draw_series(std::iter::once(Polygon::new(
-                    inter,
-                    SAFE.mix(0.30).filled(),
-                )))
-                .map_err(e)?;
-            chart
-                .draw_series(std::iter::once(PathElement::new(
-                    closed,
-                    SAFE.stroke_width(1),
-                )))
-                .map_err(e)?;
-        }
+        draw_half_planes(&mut chart, c, sc.config.delta, scene.bounds)?;
     }
+    draw_obstacles(&mut chart, r, until, legend)?;
+    if let Some(rec) = scan {
+        draw_scan(&mut chart, rec, sc.lidar.range)?;
+    }
+    if r.navigation.plan.is_some() {
+        draw_subgoals(&mut chart, r, cycle, legend)?;
+    }
+    if let Some(c) = cycle {
+        draw_normals(&mut chart, c, 0.08 * (scene.bounds.1 - scene.bounds.0))?;
+    }
+    draw_path(&mut chart, scene, until, legend)?;
+    draw_footsteps(&mut chart, scene, until, legend)?;
+    draw_start_goal(&mut chart, sc, legend)?;
+    if cycle.is_some() || !legend {
+        draw_robot(&mut chart, scene, until)?;
+    }
+    if legend {
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperLeft)
+            .label_font((FONT, layout.font))
+            .background_style(WHITE.mix(0.85))
+            .border_style(BLACK)
+            .draw()
+            .map_err(e)?;
+    }
+    Ok(())
+}
 
-    // Obstacles (the true map; faded when the controller only perceives it).
-    // A moving obstacle is drawn where it is at `until`, with the trace of its
-    // centre since t = 0.
+/// The cycle's LDCBF half-planes (shifted by `delta`, m) clipped to the view
+/// `bounds`: each safe side light, their intersection dark.
+fn draw_half_planes<DB: DrawingBackend>(
+    chart: &mut MapChart<'_, DB>,
+    c: &CycleRecord,
+    delta: f64,
+    (x0, x1, y0, y1): (f64, f64, f64, f64),
+) -> Result<()> {
+    let rect = vec![(x0, y0), (x1, y0), (x1, y1), (x0, y1)];
+    let mut inter = rect.clone();
+    for hp in &c.half_planes {
+        let p = clip(&rect, &hp.half_plane, delta);
+        if p.len() >= 3 {
+            chart
+                .draw_series(std::iter::once(Polygon::new(p, SAFE.mix(0.10).filled())))
+                .map_err(e)?;
+        }
+        inter = clip(&inter, &hp.half_plane, delta);
+    }
+    if !c.half_planes.is_empty() && inter.len() >= 3 {
+        let mut closed = inter.clone();
+        closed.push(inter[0]);
+        chart
+            .draw_series(std::iter::once(Polygon::new(
+                inter,
+                SAFE.mix(0.30).filled(),
+            )))
+            .map_err(e)?;
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                closed,
+                SAFE.stroke_width(1),
+            )))
+            .map_err(e)?;
+    }
+    Ok(())
+}
+
+/// The obstacles of the true map (faded when the controller only perceives
+/// it). A moving obstacle is drawn where it is at `until` (s), with the trace
+/// of its centre since t = 0.
+fn draw_obstacles<DB: DrawingBackend>(
+    chart: &mut MapChart<'_, DB>,
+    r: &SimResult,
+    until: f64,
+    legend: bool,
+) -> Result<()> {
+    let sc = &r.scenario;
+    let lidar = sc_perception(r) == Perception::Lidar;
     let fill = if lidar { 0.30 } else { 0.85 };
     let positions = obstacles_at(sc, until);
     for (o, (v, now)) in sc
@@ -109,119 +156,144 @@ pub(super) fn draw_scene<DB: DrawingBackend>(
             .draw_series(std::iter::once(PathElement::new(closed, OBSTACLE_EDGE)))
             .map_err(e)?;
     }
+    Ok(())
+}
 
-    // LiDAR scan: range, inferred polygons, hit points.
-    if let Some(sc_rec) = scan {
-        let rng = sc.lidar.range;
-        let ring: Vec<(f64, f64)> = (0..=96)
-            .map(|i| {
-                let a = core::f64::consts::TAU * f64::from(i) / 96.0;
-                (
-                    sc_rec.origin.x + rng * a.cos(),
-                    sc_rec.origin.y + rng * a.sin(),
-                )
-            })
-            .collect();
+/// A LiDAR scan: its range circle (`range`, m), the inferred polygons and the
+/// hit points.
+fn draw_scan<DB: DrawingBackend>(
+    chart: &mut MapChart<'_, DB>,
+    rec: &ScanRecord,
+    range: f64,
+) -> Result<()> {
+    let ring: Vec<(f64, f64)> = (0..=96)
+        .map(|i| {
+            let a = core::f64::consts::TAU * f64::from(i) / 96.0;
+            (
+                rec.origin.x + range * a.cos(),
+                rec.origin.y + range * a.sin(),
+            )
+        })
+        .collect();
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            ring,
+            GOAL.stroke_width(1),
+        )))
+        .map_err(e)?;
+    for o in &rec.obstacles {
+        let v: Vec<(f64, f64)> = o.vertices().iter().map(|p| (p.x, p.y)).collect();
+        let mut closed = v.clone();
+        closed.push(v[0]);
         chart
-            .draw_series(std::iter::once(PathElement::new(
-                ring,
-                GOAL.stroke_width(1),
+            .draw_series(std::iter::once(Polygon::new(
+                v,
+                INFERRED.mix(0.45).filled(),
             )))
             .map_err(e)?;
-        for o in &sc_rec.obstacles {
-            let v: Vec<(f64, f64)> = o.vertices().iter().map(|p| (p.x, p.y)).collect();
-            let mut closed = v.clone();
-            closed.push(v[0]);
-            chart
-                .draw_series(std::iter::once(Polygon::new(
-                    v,
-                    INFERRED.mix(0.45).filled(),
-                )))
-                .map_err(e)?;
-            chart
-                .draw_series(std::iter::once(PathElement::new(
-                    closed,
-                    INFERRED.stroke_width(2),
-                )))
-                .map_err(e)?;
-        }
-        chart
-            .draw_series(
-                sc_rec
-                    .points
-                    .iter()
-                    .map(|p| Circle::new((p.x, p.y), 1, SCAN.filled())),
-            )
-            .map_err(e)?;
-    }
-
-    // Subgoals: the polyline from the start and the points.
-    if r.navigation.plan.is_some() {
-        let mut line = vec![(sc.start.x, sc.start.y)];
-        line.extend(r.navigation.subgoals.iter().map(|p| (p.x, p.y)));
         chart
             .draw_series(std::iter::once(PathElement::new(
-                line,
-                SUBGOAL.mix(0.8).stroke_width(2),
+                closed,
+                INFERRED.stroke_width(2),
             )))
             .map_err(e)?;
-        let s = chart
-            .draw_series(
-                r.navigation
-                    .subgoals
-                    .iter()
-                    .map(|p| Circle::new((p.x, p.y), 5, SUBGOAL.filled())),
-            )
+    }
+    chart
+        .draw_series(
+            rec.points
+                .iter()
+                .map(|p| Circle::new((p.x, p.y), 1, SCAN.filled())),
+        )
+        .map_err(e)?;
+    Ok(())
+}
+
+/// The subgoals: the polyline from the start and the points, the `cycle`'s
+/// current one ringed.
+fn draw_subgoals<DB: DrawingBackend>(
+    chart: &mut MapChart<'_, DB>,
+    r: &SimResult,
+    cycle: Option<&CycleRecord>,
+    legend: bool,
+) -> Result<()> {
+    let sc = &r.scenario;
+    let mut line = vec![(sc.start.x, sc.start.y)];
+    line.extend(r.navigation.subgoals.iter().map(|p| (p.x, p.y)));
+    chart
+        .draw_series(std::iter::once(PathElement::new(
+            line,
+            SUBGOAL.mix(0.8).stroke_width(2),
+        )))
+        .map_err(e)?;
+    let s = chart
+        .draw_series(
+            r.navigation
+                .subgoals
+                .iter()
+                .map(|p| Circle::new((p.x, p.y), 5, SUBGOAL.filled())),
+        )
+        .map_err(e)?;
+    if legend {
+        s.label("subgoals (RRT*)")
+            .legend(|(x, y)| Circle::new((x, y), 5, SUBGOAL.filled()));
+    }
+    if let Some(c) = cycle
+        && let Some(p) = r.navigation.subgoals.get(c.subgoal)
+    {
+        chart
+            .draw_series(std::iter::once(Circle::new(
+                (p.x, p.y),
+                9,
+                SUBGOAL.stroke_width(2),
+            )))
             .map_err(e)?;
-        if legend {
-            s.label("subgoals (RRT*)")
-                .legend(|(x, y)| Circle::new((x, y), 5, SUBGOAL.filled()));
-        }
-        if let Some(c) = cycle
-            && let Some(p) = r.navigation.subgoals.get(c.subgoal)
-        {
-            chart
-                .draw_series(std::iter::once(Circle::new(
-                    (p.x, p.y),
-                    9,
-                    SUBGOAL.stroke_width(2),
-                )))
-                .map_err(e)?;
-        }
     }
+    Ok(())
+}
 
-    // c_j and eta_j on top of the obstacles.
-    if let Some(c) = cycle {
-        let len = 0.08 * (x1 - x0);
-        for hp in &c.half_planes {
-            let (cp, eta) = (hp.half_plane.c, hp.half_plane.eta);
-            let tip = cp + eta * len;
-            chart
-                .draw_series(std::iter::once(PathElement::new(
-                    vec![(cp.x, cp.y), (tip.x, tip.y)],
-                    GOAL.stroke_width(2),
-                )))
-                .map_err(e)?;
-            let head = |ang: f64| {
-                let d = Vector2::new(
-                    -eta.x * ang.cos() + eta.y * ang.sin(),
-                    -eta.x * ang.sin() - eta.y * ang.cos(),
-                ) * (0.3 * len);
-                (tip.x + d.x, tip.y + d.y)
-            };
-            chart
-                .draw_series(std::iter::once(PathElement::new(
-                    vec![head(0.4), (tip.x, tip.y), head(-0.4)],
-                    GOAL.stroke_width(2),
-                )))
-                .map_err(e)?;
-            chart
-                .draw_series(std::iter::once(Circle::new((cp.x, cp.y), 3, GOAL.filled())))
-                .map_err(e)?;
-        }
+/// The cycle's closest points `c_j` and normals `eta_j` (arrows `len` m long),
+/// on top of the obstacles.
+fn draw_normals<DB: DrawingBackend>(
+    chart: &mut MapChart<'_, DB>,
+    c: &CycleRecord,
+    len: f64,
+) -> Result<()> {
+    for hp in &c.half_planes {
+        let (cp, eta) = (hp.half_plane.c, hp.half_plane.eta);
+        let tip = cp + eta * len;
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                vec![(cp.x, cp.y), (tip.x, tip.y)],
+                GOAL.stroke_width(2),
+            )))
+            .map_err(e)?;
+        let head = |ang: f64| {
+            let d = Vector2::new(
+                -eta.x * ang.cos() + eta.y * ang.sin(),
+                -eta.x * ang.sin() - eta.y * ang.cos(),
+            ) * (0.3 * len);
+            (tip.x + d.x, tip.y + d.y)
+        };
+        chart
+            .draw_series(std::iter::once(PathElement::new(
+                vec![head(0.4), (tip.x, tip.y), head(-0.4)],
+                GOAL.stroke_width(2),
+            )))
+            .map_err(e)?;
+        chart
+            .draw_series(std::iter::once(Circle::new((cp.x, cp.y), 3, GOAL.filled())))
+            .map_err(e)?;
     }
+    Ok(())
+}
 
-    // Path so far.
+/// The CoM path up to `until`, s.
+fn draw_path<DB: DrawingBackend>(
+    chart: &mut MapChart<'_, DB>,
+    scene: &Scene<'_>,
+    until: f64,
+    legend: bool,
+) -> Result<()> {
     let path: Vec<(f64, f64)> = scene
         .path
         .iter()
@@ -235,8 +307,17 @@ pub(super) fn draw_scene<DB: DrawingBackend>(
         s.label("CoM path")
             .legend(|(x, y)| PathElement::new(vec![(x - 8, y), (x + 8, y)], PATH.stroke_width(2)));
     }
+    Ok(())
+}
 
-    // Footsteps: oriented rectangles 0.16 m x 0.08 m along the heading at landing.
+/// The footsteps landed by `until` (s): oriented rectangles 0.16 m x 0.08 m
+/// along the heading at landing.
+fn draw_footsteps<DB: DrawingBackend>(
+    chart: &mut MapChart<'_, DB>,
+    scene: &Scene<'_>,
+    until: f64,
+    legend: bool,
+) -> Result<()> {
     let foot = |p: Vector2<f64>, th: f64| {
         let (c, s) = (th.cos(), th.sin());
         [(0.08, 0.04), (-0.08, 0.04), (-0.08, -0.04), (0.08, -0.04)]
@@ -248,7 +329,8 @@ pub(super) fn draw_scene<DB: DrawingBackend>(
         (Side::Left, LEFT, "left foot"),
         (Side::Right, RIGHT, "right foot"),
     ] {
-        let feet: Vec<_> = r
+        let feet: Vec<_> = scene
+            .r
             .footsteps
             .iter()
             .filter(|f| f.side == side && f.time <= until + 1e-9)
@@ -261,8 +343,15 @@ pub(super) fn draw_scene<DB: DrawingBackend>(
             });
         }
     }
+    Ok(())
+}
 
-    // Start, goal (with the success radius).
+/// The start, and the goal with its success radius.
+fn draw_start_goal<DB: DrawingBackend>(
+    chart: &mut MapChart<'_, DB>,
+    sc: &crate::scenario::Scenario,
+    legend: bool,
+) -> Result<()> {
     let s = chart
         .draw_series(std::iter::once(Circle::new(
             (sc.start.x, sc.start.y),
@@ -300,34 +389,29 @@ pub(super) fn draw_scene<DB: DrawingBackend>(
         s.label("goal")
             .legend(|(x, y)| Cross::new((x, y), 6, GOAL.stroke_width(3)));
     }
+    Ok(())
+}
 
-    // Robot: isosceles triangle along the heading.
-    if cycle.is_some() || !legend {
-        let (p, th) = scene.pose_at(until);
-        let d = Vector2::new(th.cos(), th.sin());
-        let n = Vector2::new(-d.y, d.x);
-        let sz = 0.025 * (x1 - x0);
-        let tip = p + d * (1.6 * sz);
-        let b1 = p - d * sz + n * sz;
-        let b2 = p - d * sz - n * sz;
-        chart
-            .draw_series(std::iter::once(Polygon::new(
-                vec![(tip.x, tip.y), (b1.x, b1.y), (b2.x, b2.y)],
-                RGBColor(120, 40, 160).filled(),
-            )))
-            .map_err(e)?;
-    }
-
-    if legend {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .label_font((FONT, layout.font))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(e)?;
-    }
+/// The robot at `until` (s): an isosceles triangle along the heading, sized
+/// to the view.
+fn draw_robot<DB: DrawingBackend>(
+    chart: &mut MapChart<'_, DB>,
+    scene: &Scene<'_>,
+    until: f64,
+) -> Result<()> {
+    let (p, th) = scene.pose_at(until);
+    let d = Vector2::new(th.cos(), th.sin());
+    let n = Vector2::new(-d.y, d.x);
+    let sz = 0.025 * (scene.bounds.1 - scene.bounds.0);
+    let tip = p + d * (1.6 * sz);
+    let b1 = p - d * sz + n * sz;
+    let b2 = p - d * sz - n * sz;
+    chart
+        .draw_series(std::iter::once(Polygon::new(
+            vec![(tip.x, tip.y), (b1.x, b1.y), (b2.x, b2.y)],
+            RGBColor(120, 40, 160).filled(),
+        )))
+        .map_err(e)?;
     Ok(())
 }
 
