@@ -54,7 +54,7 @@ impl Robot {
             dt: PLANT_DT,
         };
         let plant = Plant::new(params, sc.start, sc.start_heading, sc.stance)
-            .map_err(|e| anyhow::anyhow!("{}: plant: {}", sc.name, e.0))?;
+            .map_err(|e| anyhow::anyhow!("{}: plant: {e}", sc.name))?;
         let lidar = match sc.perception {
             Perception::Lidar => Some((
                 Lidar::new(sc.lidar.clone(), sc.seed)

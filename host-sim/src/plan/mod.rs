@@ -69,6 +69,7 @@ pub mod on_map;
 
 use crate::world::Polygon;
 use crate::world::grid::{GridTooLarge, MAX_CELLS, OccupancyGrid, dist, grid_search};
+use crate::world::setting::SettingError;
 
 /// Global planner (docs/maths.md §5).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize, clap::ValueEnum)]
@@ -155,40 +156,46 @@ impl Default for RrtParams {
 
 impl RrtParams {
     /// Checks every field; the error names the bad one and says why.
-    pub fn validate(&self) -> Result<(), (&'static str, String)> {
+    pub fn validate(&self) -> Result<(), SettingError> {
         let pos = |v: f64| v.is_finite() && v > 0.0;
         if !(pos(self.resolution) && self.resolution <= 10.0) {
-            return Err(("resolution", "must be in (0, 10] m".into()));
+            return Err(SettingError::new("resolution", "must be in (0, 10] m"));
         }
         if !(self.margin.is_finite() && self.margin >= 0.0) {
-            return Err(("margin", "must be finite and >= 0".into()));
+            return Err(SettingError::new("margin", "must be finite and >= 0"));
         }
         if !(self.padding.is_finite() && self.padding >= 0.0) {
-            return Err(("padding", "must be finite and >= 0".into()));
+            return Err(SettingError::new("padding", "must be finite and >= 0"));
         }
         if !(1..=1_000_000).contains(&self.iterations) {
-            return Err(("iterations", "must be in 1..=1000000".into()));
+            return Err(SettingError::new("iterations", "must be in 1..=1000000"));
         }
         if !pos(self.step) {
-            return Err(("step", "must be finite and > 0".into()));
+            return Err(SettingError::new("step", "must be finite and > 0"));
         }
         if !(pos(self.neighbor_radius) && self.neighbor_radius >= self.step) {
-            return Err(("neighbor_radius", "must be finite and >= step".into()));
+            return Err(SettingError::new(
+                "neighbor_radius",
+                "must be finite and >= step",
+            ));
         }
         if !(self.goal_bias >= 0.0 && self.goal_bias < 1.0) {
-            return Err(("goal_bias", "must be in [0, 1)".into()));
+            return Err(SettingError::new("goal_bias", "must be in [0, 1)"));
         }
         if self.clearance_cap.is_nan() || self.clearance_cap < 0.0 {
-            return Err(("clearance_cap", "must be >= 0 (inf allowed)".into()));
+            return Err(SettingError::new(
+                "clearance_cap",
+                "must be >= 0 (inf allowed)",
+            ));
         }
         if !pos(self.switch_radius) {
-            return Err(("switch_radius", "must be finite and > 0".into()));
+            return Err(SettingError::new("switch_radius", "must be finite and > 0"));
         }
         if !(self.unknown_cost.is_finite() && self.unknown_cost >= 1.0) {
-            return Err(("unknown_cost", "must be finite and >= 1".into()));
+            return Err(SettingError::new("unknown_cost", "must be finite and >= 1"));
         }
         if !(pos(self.replan_period) && self.replan_period <= 60.0) {
-            return Err(("replan_period", "must be in (0, 60] s".into()));
+            return Err(SettingError::new("replan_period", "must be in (0, 60] s"));
         }
         Ok(())
     }
@@ -267,8 +274,8 @@ pub fn remaining_length(p: Vector2<f64>, subgoals: &[Vector2<f64>], current: usi
 /// Why no plan was made.
 #[derive(Clone, Debug, PartialEq)]
 pub enum PlanError {
-    /// The settings are invalid (field, reason).
-    Settings(&'static str, String),
+    /// The settings are invalid (the field of `[rrt_star]`, and why).
+    Settings(SettingError),
     /// The grid would have more than [`MAX_CELLS`] cells.
     GridTooLarge {
         /// Cells requested.
@@ -288,7 +295,7 @@ pub enum PlanError {
 impl core::fmt::Display for PlanError {
     fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
         match self {
-            PlanError::Settings(field, m) => write!(f, "rrt_star.{field}: {m}"),
+            PlanError::Settings(e) => write!(f, "rrt_star.{e}"),
             PlanError::GridTooLarge { cells } => write!(
                 f,
                 "the occupancy grid would have {cells:.0} cells (max {MAX_CELLS}); raise rrt_star.resolution"
@@ -345,14 +352,12 @@ pub fn plan(
     body_radius: f64,
     seed: u64,
 ) -> Result<Route, PlanError> {
-    params
-        .validate()
-        .map_err(|(f, m)| PlanError::Settings(f, m))?;
+    params.validate().map_err(PlanError::Settings)?;
     if !(body_radius.is_finite() && body_radius >= 0.0) {
-        return Err(PlanError::Settings(
+        return Err(PlanError::Settings(SettingError::new(
             "margin",
             format!("the body radius must be finite and >= 0, got {body_radius}"),
-        ));
+        )));
     }
     let margins = attempt_margins(params.margin);
     let mut last = PlanError::NoPath { nodes: 0 };
@@ -422,7 +427,9 @@ fn nearest_free(grid: &OccupancyGrid, p: [f64; 2], reach: f64) -> Option<[f64; 2
 }
 
 /// One RRT* attempt on a grid of obstacles inflated by `inflation` (m) with
-/// cells of `resolution` (m).
+/// cells of `resolution` (m): the grid, its free start and goal, the tree,
+/// the path to the goal (the grid search when the tree misses it) and the
+/// subgoals.
 fn plan_once(
     start: Vector2<f64>,
     goal: Vector2<f64>,
@@ -432,17 +439,7 @@ fn plan_once(
     resolution: f64,
     seed: u64,
 ) -> Result<Route, PlanError> {
-    // Planning box.
-    let mut lo = start.inf(&goal);
-    let mut hi = start.sup(&goal);
-    for o in obstacles {
-        for v in o.vertices() {
-            lo = lo.inf(v);
-            hi = hi.sup(v);
-        }
-    }
-    let pad = Vector2::repeat(params.padding + inflation);
-    let grid = OccupancyGrid::build(obstacles, inflation, lo - pad, hi + pad, resolution)?;
+    let grid = planning_grid(start, goal, obstacles, params, inflation, resolution)?;
     let reach = inflation + 2.0 * resolution;
     let goal_in = [goal.x, goal.y];
     let mut entry = None;
@@ -458,132 +455,20 @@ fn plan_once(
     } else {
         nearest_free(&grid, goal_in, reach).ok_or(PlanError::GoalBlocked)?
     };
-    let weight = |p: [f64; 2]| (-grid.clearance(p).min(params.clearance_cap)).exp();
-
-    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5252_545f_5354_4152); // "RRT_STAR"
-    let mut unif = move || (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
-    let (bx0, by0) = (grid.origin.x, grid.origin.y);
-    let (bw, bh) = (
-        grid.width as f64 * grid.resolution,
-        grid.height as f64 * grid.resolution,
-    );
-
-    let mut nodes: Vec<[f64; 2]> = vec![s];
-    let mut parent: Vec<Option<usize>> = vec![None];
-    let mut cost: Vec<f64> = vec![0.0];
-    let mut children: Vec<Vec<usize>> = vec![Vec::new()];
-    let r2 = params.neighbor_radius * params.neighbor_radius;
-    let mut near: Vec<usize> = Vec::new();
-
-    for _ in 0..params.iterations {
-        let sample = if unif() < params.goal_bias {
-            g
-        } else {
-            [bx0 + unif() * bw, by0 + unif() * bh]
-        };
-        // Nearest node (linear scan; trees have a few thousand nodes).
-        let mut best = 0usize;
-        let mut best_d2 = f64::INFINITY;
-        for (k, n) in nodes.iter().enumerate() {
-            let d2 = (n[0] - sample[0]).powi(2) + (n[1] - sample[1]).powi(2);
-            if d2 < best_d2 {
-                best_d2 = d2;
-                best = k;
-            }
-        }
-        let d = best_d2.sqrt();
-        if d < 1e-9 {
-            continue;
-        }
-        let from = nodes[best];
-        let t = (params.step / d).min(1.0);
-        let new = [
-            from[0] + t * (sample[0] - from[0]),
-            from[1] + t * (sample[1] - from[1]),
-        ];
-        if !grid.is_free(new) || !grid.segment_free(from, new) {
-            continue;
-        }
-        let w_new = weight(new);
-        // Neighbourhood.
-        near.clear();
-        for (k, n) in nodes.iter().enumerate() {
-            if (n[0] - new[0]).powi(2) + (n[1] - new[1]).powi(2) <= r2 {
-                near.push(k);
-            }
-        }
-        // Choose the parent.
-        let mut par = best;
-        let mut c_new = cost[best] + dist(from, new) * w_new;
-        for &k in &near {
-            let c = cost[k] + dist(nodes[k], new) * w_new;
-            if c < c_new && grid.segment_free(nodes[k], new) {
-                par = k;
-                c_new = c;
-            }
-        }
-        let j = nodes.len();
-        nodes.push(new);
-        parent.push(Some(par));
-        cost.push(c_new);
-        children.push(Vec::new());
-        children[par].push(j);
-        // Rewire.
-        for &k in &near {
-            if k == par || k == 0 {
-                continue;
-            }
-            let c = c_new + dist(new, nodes[k]) * weight(nodes[k]);
-            if c + 1e-12 < cost[k] && grid.segment_free(new, nodes[k]) {
-                let old = parent[k].expect("only the root has no parent");
-                children[old].retain(|&x| x != k);
-                children[j].push(k);
-                parent[k] = Some(j);
-                let delta = c - cost[k];
-                let mut stack = vec![k];
-                while let Some(x) = stack.pop() {
-                    cost[x] += delta;
-                    stack.extend(children[x].iter().copied());
-                }
-            }
-        }
-    }
-
-    // Join the goal to the cheapest node that reaches it.
-    let w_goal = weight(g);
-    let mut best: Option<(usize, f64)> = None;
-    for (k, n) in nodes.iter().enumerate() {
-        let d = dist(*n, g);
-        if d > params.neighbor_radius {
-            continue;
-        }
-        let c = cost[k] + d * w_goal;
-        if best.is_none_or(|(_, bc)| c < bc) && grid.segment_free(*n, g) {
-            best = Some((k, c));
-        }
-    }
+    let tree = grow_tree(&grid, params, s, g, seed);
     let to_v = |p: [f64; 2]| Vector2::new(p[0], p[1]);
-    let tree = Tree {
-        nodes: nodes.iter().map(|&p| to_v(p)).collect(),
-        parent: parent.clone(),
-        cost: cost.clone(),
-    };
-    let (mut path, total, searched) = match best {
-        Some((last, total)) => {
-            let mut idx = vec![last];
-            while let Some(p) = parent[*idx.last().expect("non-empty")] {
-                idx.push(p);
-            }
-            idx.reverse();
-            let path: Vec<[f64; 2]> = idx.iter().map(|&k| nodes[k]).collect();
-            (path, total, false)
-        }
+    let (mut path, total, searched) = match tree.join(&grid, params, g) {
+        Some((last, total)) => (tree.path_to(last), total, false),
         // Sampling misses narrow passages (a door 0.1 m wider than the body
         // leaves a free band of a few cells): the grid search is complete on
         // the grid, so a passage with free cells through it is found.
         None => match grid_search(&grid, s, g, params.clearance_cap) {
             Some((path, cost)) => (path, cost, true),
-            None => return Err(PlanError::NoPath { nodes: nodes.len() }),
+            None => {
+                return Err(PlanError::NoPath {
+                    nodes: tree.nodes.len(),
+                });
+            }
         },
     };
     if dist(*path.last().expect("non-empty"), g) > 1e-12 {
@@ -604,8 +489,12 @@ fn plan_once(
         kept.push(goal_in);
     }
     Ok(Route {
+        tree: Tree {
+            nodes: tree.nodes.iter().map(|&p| to_v(p)).collect(),
+            parent: tree.parent,
+            cost: tree.cost,
+        },
         grid,
-        tree,
         path: path.iter().map(|&p| to_v(p)).collect(),
         cost: total,
         subgoals: kept.iter().map(|&p| to_v(p)).collect(),
@@ -615,6 +504,201 @@ fn plan_once(
         entry,
         grid_searched: searched,
     })
+}
+
+/// The occupancy grid of one attempt: the box of start, goal and obstacles,
+/// padded by `params.padding + inflation` (m), obstacles inflated by
+/// `inflation`, cells of `resolution` (m).
+fn planning_grid(
+    start: Vector2<f64>,
+    goal: Vector2<f64>,
+    obstacles: &[Polygon],
+    params: &RrtParams,
+    inflation: f64,
+    resolution: f64,
+) -> Result<OccupancyGrid, PlanError> {
+    let mut lo = start.inf(&goal);
+    let mut hi = start.sup(&goal);
+    for o in obstacles {
+        for v in o.vertices() {
+            lo = lo.inf(v);
+            hi = hi.sup(v);
+        }
+    }
+    let pad = Vector2::repeat(params.padding + inflation);
+    OccupancyGrid::build(obstacles, inflation, lo - pad, hi + pad, resolution)
+        .map_err(PlanError::from)
+}
+
+/// The edge weight at `p`: `exp(-min(clearance, cap))`, so edges near
+/// obstacles cost more (the report's edge cost).
+fn weight(grid: &OccupancyGrid, cap: f64, p: [f64; 2]) -> f64 {
+    (-grid.clearance(p).min(cap)).exp()
+}
+
+/// The RRT* tree while it grows, node 0 the root: positions (m), parents,
+/// path costs from the root (m, weighted) and children.
+struct Growing {
+    nodes: Vec<[f64; 2]>,
+    parent: Vec<Option<usize>>,
+    cost: Vec<f64>,
+    children: Vec<Vec<usize>>,
+}
+
+/// `params.iterations` RRT* samples from root `s` (goal `g` sampled with
+/// probability `params.goal_bias`), on the free cells of `grid`, seeded.
+fn grow_tree(
+    grid: &OccupancyGrid,
+    params: &RrtParams,
+    s: [f64; 2],
+    g: [f64; 2],
+    seed: u64,
+) -> Growing {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5252_545f_5354_4152); // "RRT_STAR"
+    let mut unif = move || (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
+    let (bx0, by0) = (grid.origin.x, grid.origin.y);
+    let (bw, bh) = (
+        grid.width as f64 * grid.resolution,
+        grid.height as f64 * grid.resolution,
+    );
+    let mut tree = Growing {
+        nodes: vec![s],
+        parent: vec![None],
+        cost: vec![0.0],
+        children: vec![Vec::new()],
+    };
+    let mut near: Vec<usize> = Vec::new();
+    for _ in 0..params.iterations {
+        let sample = if unif() < params.goal_bias {
+            g
+        } else {
+            [bx0 + unif() * bw, by0 + unif() * bh]
+        };
+        tree.extend(grid, params, sample, &mut near);
+    }
+    tree
+}
+
+impl Growing {
+    /// One RRT* extension towards `sample`: steer from the nearest node by at
+    /// most `params.step`, choose the cheapest parent among the nodes within
+    /// `params.neighbor_radius`, and rewire those neighbours through the new
+    /// node where that is cheaper. `near` is scratch space.
+    fn extend(
+        &mut self,
+        grid: &OccupancyGrid,
+        params: &RrtParams,
+        sample: [f64; 2],
+        near: &mut Vec<usize>,
+    ) {
+        let (best, best_d2) = self.nearest(sample);
+        let d = best_d2.sqrt();
+        if d < 1e-9 {
+            return;
+        }
+        let from = self.nodes[best];
+        let t = (params.step / d).min(1.0);
+        let new = [
+            from[0] + t * (sample[0] - from[0]),
+            from[1] + t * (sample[1] - from[1]),
+        ];
+        if !grid.is_free(new) || !grid.segment_free(from, new) {
+            return;
+        }
+        let w_new = weight(grid, params.clearance_cap, new);
+        let r2 = params.neighbor_radius * params.neighbor_radius;
+        near.clear();
+        for (k, n) in self.nodes.iter().enumerate() {
+            if (n[0] - new[0]).powi(2) + (n[1] - new[1]).powi(2) <= r2 {
+                near.push(k);
+            }
+        }
+        // Choose the parent.
+        let mut par = best;
+        let mut c_new = self.cost[best] + dist(from, new) * w_new;
+        for &k in near.iter() {
+            let c = self.cost[k] + dist(self.nodes[k], new) * w_new;
+            if c < c_new && grid.segment_free(self.nodes[k], new) {
+                par = k;
+                c_new = c;
+            }
+        }
+        let j = self.nodes.len();
+        self.nodes.push(new);
+        self.parent.push(Some(par));
+        self.cost.push(c_new);
+        self.children.push(Vec::new());
+        self.children[par].push(j);
+        // Rewire.
+        for &k in near.iter() {
+            if k == par || k == 0 {
+                continue;
+            }
+            let c = c_new
+                + dist(new, self.nodes[k]) * weight(grid, params.clearance_cap, self.nodes[k]);
+            if c + 1e-12 < self.cost[k] && grid.segment_free(new, self.nodes[k]) {
+                self.reparent(k, j, c);
+            }
+        }
+    }
+
+    /// The node nearest `p` and its squared distance, m^2 (linear scan; trees
+    /// have a few thousand nodes).
+    fn nearest(&self, p: [f64; 2]) -> (usize, f64) {
+        let mut best = 0usize;
+        let mut best_d2 = f64::INFINITY;
+        for (k, n) in self.nodes.iter().enumerate() {
+            let d2 = (n[0] - p[0]).powi(2) + (n[1] - p[1]).powi(2);
+            if d2 < best_d2 {
+                best_d2 = d2;
+                best = k;
+            }
+        }
+        (best, best_d2)
+    }
+
+    /// Moves node `k` under node `j` with the new path cost `c`; the cost
+    /// change goes down `k`'s subtree.
+    fn reparent(&mut self, k: usize, j: usize, c: f64) {
+        let old = self.parent[k].expect("only the root has no parent");
+        self.children[old].retain(|&x| x != k);
+        self.children[j].push(k);
+        self.parent[k] = Some(j);
+        let delta = c - self.cost[k];
+        let mut stack = vec![k];
+        while let Some(x) = stack.pop() {
+            self.cost[x] += delta;
+            stack.extend(self.children[x].iter().copied());
+        }
+    }
+
+    /// The node that joins goal `g` most cheaply (within
+    /// `params.neighbor_radius`, by a free segment), and the path cost.
+    fn join(&self, grid: &OccupancyGrid, params: &RrtParams, g: [f64; 2]) -> Option<(usize, f64)> {
+        let w_goal = weight(grid, params.clearance_cap, g);
+        let mut best: Option<(usize, f64)> = None;
+        for (k, n) in self.nodes.iter().enumerate() {
+            let d = dist(*n, g);
+            if d > params.neighbor_radius {
+                continue;
+            }
+            let c = self.cost[k] + d * w_goal;
+            if best.is_none_or(|(_, bc)| c < bc) && grid.segment_free(*n, g) {
+                best = Some((k, c));
+            }
+        }
+        best
+    }
+
+    /// The node positions from the root to `last`.
+    fn path_to(&self, last: usize) -> Vec<[f64; 2]> {
+        let mut idx = vec![last];
+        while let Some(p) = self.parent[*idx.last().expect("non-empty")] {
+            idx.push(p);
+        }
+        idx.reverse();
+        idx.iter().map(|&k| self.nodes[k]).collect()
+    }
 }
 
 #[cfg(test)]

@@ -36,6 +36,8 @@ use rand_chacha::rand_core::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
+use crate::world::setting::SettingError;
+
 /// Settings of the disturbances (the `[disturbance]` table; all off by default).
 /// Frames and units in the module docs.
 #[derive(Clone, Debug, Default, PartialEq, Deserialize, Serialize)]
@@ -96,37 +98,40 @@ pub const MIN_PUSH_PERIOD: f64 = 0.01;
 
 impl DisturbanceParams {
     /// Checks every field; the error names the bad one and says why.
-    pub fn validate(&self) -> Result<(), (&'static str, String)> {
+    pub fn validate(&self) -> Result<(), SettingError> {
         if let Some(t) = self.push_time
             && !(t.is_finite() && t >= 0.0)
         {
-            return Err(("push_time", "must be finite and >= 0 s".into()));
+            return Err(SettingError::new("push_time", "must be finite and >= 0 s"));
         }
         let p = self.push_period;
         if !(p.is_finite() && (p == 0.0 || p >= MIN_PUSH_PERIOD)) {
-            return Err((
+            return Err(SettingError::new(
                 "push_period",
                 format!("must be 0 (one push) or finite and >= {MIN_PUSH_PERIOD} s"),
             ));
         }
         if !self.push_forward.is_finite() {
-            return Err(("push_forward", "must be finite (m/s)".into()));
+            return Err(SettingError::new("push_forward", "must be finite (m/s)"));
         }
         if !self.push_lateral.is_finite() {
-            return Err(("push_lateral", "must be finite (m/s)".into()));
+            return Err(SettingError::new("push_lateral", "must be finite (m/s)"));
         }
         if self.push_time.is_none()
             && (self.push_forward != 0.0 || self.push_lateral != 0.0 || self.push_period != 0.0)
         {
-            return Err((
+            return Err(SettingError::new(
                 "push_time",
-                "a push (push_forward, push_lateral or push_period) needs push_time".into(),
+                "a push (push_forward, push_lateral or push_period) needs push_time",
             ));
         }
         if let Some(h) = self.plant_com_height
             && !(h.is_finite() && h > 0.0)
         {
-            return Err(("plant_com_height", "must be finite and > 0 m".into()));
+            return Err(SettingError::new(
+                "plant_com_height",
+                "must be finite and > 0 m",
+            ));
         }
         let sigma = |v: f64| v.is_finite() && v >= 0.0;
         for (name, v) in [
@@ -136,7 +141,10 @@ impl DisturbanceParams {
             ("noise_heading", self.noise_heading),
         ] {
             if !sigma(v) {
-                return Err((name, "a standard deviation must be finite and >= 0".into()));
+                return Err(SettingError::new(
+                    name,
+                    "a standard deviation must be finite and >= 0",
+                ));
             }
         }
         Ok(())
@@ -357,7 +365,7 @@ mod tests {
         let bad = |f: &dyn Fn(&mut DisturbanceParams)| {
             let mut p = DisturbanceParams::default();
             f(&mut p);
-            p.validate().unwrap_err().0
+            p.validate().unwrap_err().field
         };
         assert_eq!(bad(&|p| p.foot_sigma = -0.01), "foot_sigma");
         assert_eq!(bad(&|p| p.noise_velocity = f64::NAN), "noise_velocity");

@@ -44,16 +44,31 @@ pub struct PlantParams {
 }
 
 /// Why [`PlantParams`] are not usable.
-#[derive(Clone, Debug, PartialEq)]
-pub struct PlantError(pub String);
-
-impl core::fmt::Display for PlantError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.write_str(&self.0)
-    }
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum PlantError {
+    /// A parameter is not finite or not positive (m/s^2, m, s, s).
+    #[error(
+        "plant parameters must be finite and > 0 (g = {gravity}, H = {com_height}, T = {step_duration}, dt = {dt})"
+    )]
+    NotPositive {
+        /// `gravity`, m/s^2.
+        gravity: f64,
+        /// `com_height`, m.
+        com_height: f64,
+        /// `step_duration`, s.
+        step_duration: f64,
+        /// `dt`, s.
+        dt: f64,
+    },
+    /// `step_duration` is not a whole number of ticks `dt` (both s).
+    #[error("step duration {step_duration} s is not a whole number of plant ticks of {dt} s")]
+    StepNotWholeTicks {
+        /// `step_duration`, s.
+        step_duration: f64,
+        /// `dt`, s.
+        dt: f64,
+    },
 }
-
-impl std::error::Error for PlantError {}
 
 /// The LIP plant (see the module docs).
 #[derive(Clone, Debug)]
@@ -101,16 +116,17 @@ impl Plant {
         } = params;
         let ok = |v: f64| v.is_finite() && v > 0.0;
         if !(ok(gravity) && ok(com_height) && ok(step_duration) && ok(dt)) {
-            return Err(PlantError(format!(
-                "plant parameters must be finite and > 0 (g = {gravity}, H = {com_height}, T = {step_duration}, dt = {dt})"
-            )));
+            return Err(PlantError::NotPositive {
+                gravity,
+                com_height,
+                step_duration,
+                dt,
+            });
         }
         let ratio = step_duration / dt;
         let ticks = ratio.round();
         if (ratio - ticks).abs() > 1e-6 || ticks < 1.0 || ticks > f64::from(u32::MAX) {
-            return Err(PlantError(format!(
-                "step duration {step_duration} s is not a whole number of plant ticks of {dt} s"
-            )));
+            return Err(PlantError::StepNotWholeTicks { step_duration, dt });
         }
         let beta = (gravity / com_height).sqrt();
         Ok(Plant {

@@ -1,250 +1,98 @@
 //! Semantic validation of a parsed scenario file: ranges, combinations, the
 //! obstacles, the generator, and a start and goal the robot can stand at.
 
+use core::ops::Range;
+
 use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_controller::{Config, closest_point_point_polygon};
+use toml::Spanned;
 
-use super::Scenario;
-use super::ScenarioError;
-use super::parse::{RawScenario, line_of};
+use super::parse::{RawObstacle, RawScenario, line_of};
+use super::{ControllerOverrides, Scenario, ScenarioError};
 use crate::world::families;
 use crate::world::moving::parse_velocity;
 use crate::world::random::{random_obstacles, regular_polygon};
+use crate::world::robot::RobotParams;
+use crate::world::setting::SettingError;
 use crate::world::{MAX_VERTICES, Polygon};
 
+/// Where a scenario's text came from, for the line and file of its errors.
+#[derive(Clone, Copy)]
+struct Source<'a> {
+    /// The file's text (lines of spans); `None` for re-serialised `--set`
+    /// text, whose spans do not match the file.
+    text: Option<&'a str>,
+    /// The file's name as the user gave it.
+    file: &'a str,
+}
+
+impl Source<'_> {
+    /// An error at `field`, on the line of `span` when the text is the file's.
+    fn err(&self, field: &str, span: Option<Range<usize>>, message: String) -> ScenarioError {
+        let line = match (self.text, span) {
+            (Some(t), Some(s)) if s.end > s.start => Some(line_of(t, s.start)),
+            _ => None,
+        };
+        ScenarioError {
+            file: self.file.into(),
+            field: field.into(),
+            line,
+            message,
+        }
+    }
+
+    /// An error at `table.key`, on the line of that key (found by a text scan).
+    fn table_err(&self, table: &str, key: &str, message: String) -> ScenarioError {
+        ScenarioError {
+            file: self.file.into(),
+            field: format!("{table}.{key}"),
+            line: self.text.and_then(|t| find_key_line(t, table, key)),
+            message,
+        }
+    }
+}
+
 /// Semantic validation. `text` (the file's text) gives lines to spans; `None`
-/// for re-serialised `--set` text, whose spans do not match the file.
+/// for re-serialised `--set` text, whose spans do not match the file. The
+/// checks run in the order of the file's sections; the first failure is the
+/// error.
 pub(super) fn validate(
     raw: RawScenario,
     text: Option<&str>,
     file: &str,
     seed: Option<u64>,
 ) -> Result<Scenario, ScenarioError> {
-    let err = |field: &str, span: Option<core::ops::Range<usize>>, message: String| {
-        let line = match (text, span) {
-            (Some(t), Some(s)) if s.end > s.start => Some(line_of(t, s.start)),
-            _ => None,
-        };
-        ScenarioError {
-            file: file.into(),
-            field: field.into(),
-            line,
-            message,
-        }
-    };
-    let finite = |v: f64| v.is_finite();
-    if raw.name.is_empty()
-        || !raw
-            .name
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
-    {
-        return Err(ScenarioError {
-            file: file.into(),
-            field: "name".into(),
-            line: text.and_then(|t| {
-                t.lines()
-                    .position(|l| l.trim_start().starts_with("name"))
-                    .map(|i| i + 1)
-            }),
-            message: "must be non-empty and use only ASCII letters, digits, `-` and `_` \
-                      (it names the output directory)"
-                .into(),
-        });
-    }
+    let src = Source { text, file };
+    check_name(&raw, src)?;
+    check_scalars(&raw, src)?;
+    check_settings(&raw, src)?;
+    let (config, overrides, robot) = controller_config(&raw, src)?;
     let st = raw.start.get_ref();
-    if !(finite(st.x) && finite(st.y) && finite(st.heading)) {
-        return Err(err(
-            "start",
-            Some(raw.start.span()),
-            "x, y and heading must be finite".into(),
-        ));
-    }
     let g = raw.goal.get_ref().0;
-    if !(finite(g[0]) && finite(g[1])) {
-        return Err(err("goal", Some(raw.goal.span()), "must be finite".into()));
-    }
-    let pos = |v: f64| v.is_finite() && v > 0.0;
-    if !pos(*raw.time_limit.get_ref()) || *raw.time_limit.get_ref() > 1e5 {
-        return Err(err(
-            "time_limit",
-            Some(raw.time_limit.span()),
-            "must be in (0, 1e5] s".into(),
-        ));
-    }
-    if !pos(*raw.success_radius.get_ref()) {
-        return Err(err(
-            "success_radius",
-            Some(raw.success_radius.span()),
-            "must be finite and > 0".into(),
-        ));
-    }
-    let sw = *raw.stuck_window.get_ref();
-    if !(sw.is_finite() && sw >= 0.0) {
-        return Err(err(
-            "stuck_window",
-            Some(raw.stuck_window.span()),
-            "must be finite and >= 0 (0 disables)".into(),
-        ));
-    }
-    if let Err((f, m)) = raw.rrt_star.get_ref().validate() {
-        let line = text.and_then(|t| find_key_line(t, "rrt_star", f));
-        return Err(ScenarioError {
-            file: file.into(),
-            field: format!("rrt_star.{f}"),
-            line,
-            message: m,
-        });
-    }
-    if let Err((f, m)) = raw.lidar.get_ref().validate() {
-        let line = text.and_then(|t| find_key_line(t, "lidar", f));
-        return Err(ScenarioError {
-            file: file.into(),
-            field: format!("lidar.{f}"),
-            line,
-            message: m,
-        });
-    }
-    if let Err((f, m)) = raw.disturbance.get_ref().validate() {
-        let line = text.and_then(|t| find_key_line(t, "disturbance", f));
-        return Err(ScenarioError {
-            file: file.into(),
-            field: format!("disturbance.{f}"),
-            line,
-            message: m,
-        });
-    }
-    if let Err((f, m)) = raw.robot.get_ref().validate() {
-        let line = text.and_then(|t| find_key_line(t, "robot", f));
-        return Err(ScenarioError {
-            file: file.into(),
-            field: format!("robot.{f}"),
-            line,
-            message: m,
-        });
-    }
-    let robot = raw.robot.get_ref().clone();
-    let overrides = raw.controller.get_ref().clone();
-    let config = robot.apply(overrides.apply(Config::default()));
-    if let Err(e) = config.validate() {
-        let field = format!("controller.{}", e.field);
-        // The span of the `[controller]` table; the field line is found by key.
-        let line = text.and_then(|t| find_key_line(t, "controller", e.field));
-        return Err(ScenarioError {
-            file: file.into(),
-            field,
-            line,
-            message: e.requirement.into(),
-        });
-    }
-    // The controller's own checks of the combination (e.g. the step map of
-    // gravity, com_height and step_duration), at load time, not mid-run.
-    if let Err(e) = ldcbf_controller::RobotController::new(config) {
-        let line = text.and_then(|t| find_key_line(t, "controller", e.field));
-        let beta_t = (config.gravity / config.com_height).sqrt() * config.step_duration;
-        return Err(ScenarioError {
-            file: file.into(),
-            field: format!("controller.{}", e.field),
-            line,
-            message: format!(
-                "{} (with gravity {} m/s^2, com_height {} m, step_duration {} s: beta T = {beta_t:.3e})",
-                e.requirement, config.gravity, config.com_height, config.step_duration
-            ),
-        });
-    }
-    if overrides.foot_clearance.is_some() && !robot.keep_feet_clear {
-        return Err(err(
-            "controller.foot_clearance",
-            Some(raw.controller.span()),
-            "sets the feet's extra clearance, but robot.keep_feet_clear = false turns the foot rows off"
-                .into(),
-        ));
-    }
     let mut start = Vector2::new(st.x, st.y);
     let mut start_heading = st.heading;
     let mut goal = Vector2::new(g[0], g[1]);
-    let mut obstacles = Vec::with_capacity(raw.obstacles.len());
-    let mut velocities = Vec::with_capacity(raw.obstacles.len());
-    for (i, ob) in raw.obstacles.iter().enumerate() {
-        let field = format!("obstacles[{i}]");
-        let span = Some(ob.span());
-        let o = ob.get_ref();
-        let (poly, field, span) = match (&o.vertices, &o.regular) {
-            (Some(_), Some(_)) => {
-                return Err(err(
-                    &field,
-                    span,
-                    "give `vertices` or `regular`, not both".into(),
-                ));
-            }
-            (None, None) => {
-                return Err(err(&field, span, "needs `vertices` or `regular`".into()));
-            }
-            (Some(v), None) => {
-                let pts: Vec<[f64; 2]> = v.get_ref().iter().map(|p| p.0).collect();
-                let poly = if o.hull {
-                    Polygon::hull(&pts)
-                } else {
-                    Polygon::new(&pts)
-                };
-                (poly, format!("{field}.vertices"), Some(v.span()))
-            }
-            (None, Some(rs)) => {
-                let r = rs.get_ref();
-                let f = format!("{field}.regular");
-                if !(r.sides >= 3 && r.sides as usize <= MAX_VERTICES) {
-                    return Err(err(
-                        &format!("{f}.sides"),
-                        Some(rs.span()),
-                        format!("must be in 3..={MAX_VERTICES}"),
-                    ));
-                }
-                if !(pos(r.radius)
-                    && r.center.0.iter().all(|c| c.is_finite())
-                    && r.rotation.is_finite())
-                {
-                    return Err(err(
-                        &f,
-                        Some(rs.span()),
-                        "center and rotation must be finite, radius > 0".into(),
-                    ));
-                }
-                let poly =
-                    Polygon::new(&regular_polygon(r.center.0, r.radius, r.sides, r.rotation));
-                (poly, f, Some(rs.span()))
-            }
-        };
-        let poly = poly.map_err(|e| {
-            let hint = if matches!(e, ldcbf_controller::GeometryError::NotConvex) {
-                " (set `hull = true` to use the convex hull of the points)"
-            } else {
-                ""
-            };
-            err(&field, span.clone(), format!("{e}{hint}"))
-        })?;
-        obstacles.push(poly);
-        velocities.push(match &ob.get_ref().velocity {
-            None => Vector2::zeros(),
-            Some(v) => parse_velocity(v.get_ref())
-                .map_err(|m| err(&format!("obstacles[{i}].velocity"), Some(v.span()), m))?,
-        });
-    }
+    let (mut obstacles, mut velocities) = file_obstacles(&raw, src)?;
     let seed = seed.unwrap_or(raw.seed);
     let generator = match &raw.generator {
         None => None,
         Some(gs) => {
             let p = gs.get_ref().clone();
-            if let Err((f, m)) = p.validate() {
-                return Err(err(&format!("generator.{f}"), Some(gs.span()), m));
+            if let Err(e) = p.validate() {
+                return Err(src.err(
+                    &format!("generator.{}", e.field),
+                    Some(gs.span()),
+                    e.requirement,
+                ));
             }
             if p.kind == "random_polygons" {
                 let extra = random_obstacles(seed, &p, start, goal)
-                    .map_err(|m| err("generator", Some(gs.span()), m))?;
+                    .map_err(|m| src.err("generator", Some(gs.span()), m))?;
                 velocities.resize(obstacles.len() + extra.len(), Vector2::zeros());
                 obstacles.extend(extra);
             } else {
                 let layout = families::generate(&p.kind, seed, robot.body_radius)
-                    .map_err(|m| err("generator", Some(gs.span()), m))?;
+                    .map_err(|m| src.err("generator", Some(gs.span()), m))?;
                 start = layout.start;
                 start_heading = layout.heading;
                 goal = layout.goal;
@@ -254,16 +102,262 @@ pub(super) fn validate(
             Some(p)
         }
     };
-    // Impossible scenarios: the body must fit at the start and at the goal.
-    let n_file = raw.obstacles.len();
-    for (what, p, span) in [
+    let ends = [
         ("start", start, raw.start.span()),
         ("goal", goal, raw.goal.span()),
-    ] {
+    ];
+    check_room_to_stand(&ends, &obstacles, raw.obstacles.len(), &robot, seed, src)?;
+    Ok(Scenario {
+        name: raw.name,
+        description: raw.description,
+        note: raw.note,
+        source: file.into(),
+        start,
+        start_heading,
+        stance: raw.stance.into(),
+        goal,
+        time_limit: *raw.time_limit.get_ref(),
+        success_radius: *raw.success_radius.get_ref(),
+        stuck_window: *raw.stuck_window.get_ref(),
+        planner: *raw.planner.get_ref(),
+        perception: *raw.perception.get_ref(),
+        seed,
+        generator,
+        controller: overrides,
+        config,
+        rrt: raw.rrt_star.get_ref().clone(),
+        lidar: raw.lidar.get_ref().clone(),
+        disturbance: raw.disturbance.get_ref().clone(),
+        robot,
+        obstacles,
+        velocities,
+    })
+}
+
+/// `name`: it names the output directory.
+fn check_name(raw: &RawScenario, src: Source<'_>) -> Result<(), ScenarioError> {
+    if raw.name.is_empty()
+        || !raw
+            .name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+    {
+        return Err(ScenarioError {
+            file: src.file.into(),
+            field: "name".into(),
+            line: src.text.and_then(|t| {
+                t.lines()
+                    .position(|l| l.trim_start().starts_with("name"))
+                    .map(|i| i + 1)
+            }),
+            message: "must be non-empty and use only ASCII letters, digits, `-` and `_` \
+                      (it names the output directory)"
+                .into(),
+        });
+    }
+    Ok(())
+}
+
+/// `start`, `goal`, `time_limit`, `success_radius` and `stuck_window`.
+fn check_scalars(raw: &RawScenario, src: Source<'_>) -> Result<(), ScenarioError> {
+    let finite = |v: f64| v.is_finite();
+    let st = raw.start.get_ref();
+    if !(finite(st.x) && finite(st.y) && finite(st.heading)) {
+        return Err(src.err(
+            "start",
+            Some(raw.start.span()),
+            "x, y and heading must be finite".into(),
+        ));
+    }
+    let g = raw.goal.get_ref().0;
+    if !(finite(g[0]) && finite(g[1])) {
+        return Err(src.err("goal", Some(raw.goal.span()), "must be finite".into()));
+    }
+    if !positive(*raw.time_limit.get_ref()) || *raw.time_limit.get_ref() > 1e5 {
+        return Err(src.err(
+            "time_limit",
+            Some(raw.time_limit.span()),
+            "must be in (0, 1e5] s".into(),
+        ));
+    }
+    if !positive(*raw.success_radius.get_ref()) {
+        return Err(src.err(
+            "success_radius",
+            Some(raw.success_radius.span()),
+            "must be finite and > 0".into(),
+        ));
+    }
+    let sw = *raw.stuck_window.get_ref();
+    if !(sw.is_finite() && sw >= 0.0) {
+        return Err(src.err(
+            "stuck_window",
+            Some(raw.stuck_window.span()),
+            "must be finite and >= 0 (0 disables)".into(),
+        ));
+    }
+    Ok(())
+}
+
+/// Finite and > 0.
+fn positive(v: f64) -> bool {
+    v.is_finite() && v > 0.0
+}
+
+/// The settings tables of the rooms below: `[rrt_star]`, `[lidar]`,
+/// `[disturbance]`, `[robot]`.
+fn check_settings(raw: &RawScenario, src: Source<'_>) -> Result<(), ScenarioError> {
+    // `[lidar]` still reports `(field, requirement)`.
+    let lidar = raw.lidar.get_ref().validate();
+    let checks = [
+        ("rrt_star", raw.rrt_star.get_ref().validate()),
+        ("lidar", lidar.map_err(|(f, m)| SettingError::new(f, m))),
+        ("disturbance", raw.disturbance.get_ref().validate()),
+        ("robot", raw.robot.get_ref().validate()),
+    ];
+    for (table, check) in checks {
+        if let Err(e) = check {
+            return Err(src.table_err(table, e.field, e.requirement));
+        }
+    }
+    Ok(())
+}
+
+/// The controller's configuration: the defaults, the `[controller]` table's
+/// overrides, then the robot's; checked field by field and as a whole (the
+/// controller's own checks, at load time rather than mid-run). Returns the
+/// configuration, the overrides and the robot.
+fn controller_config(
+    raw: &RawScenario,
+    src: Source<'_>,
+) -> Result<(Config, ControllerOverrides, RobotParams), ScenarioError> {
+    let robot = raw.robot.get_ref().clone();
+    let overrides = raw.controller.get_ref().clone();
+    let config = robot.apply(overrides.apply(Config::default()));
+    if let Err(e) = config.validate() {
+        return Err(src.table_err("controller", e.field, e.requirement.into()));
+    }
+    // The controller's own checks of the combination (e.g. the step map of
+    // gravity, com_height and step_duration).
+    if let Err(e) = ldcbf_controller::RobotController::new(config) {
+        let beta_t = (config.gravity / config.com_height).sqrt() * config.step_duration;
+        return Err(src.table_err(
+            "controller",
+            e.field,
+            format!(
+                "{} (with gravity {} m/s^2, com_height {} m, step_duration {} s: beta T = {beta_t:.3e})",
+                e.requirement, config.gravity, config.com_height, config.step_duration
+            ),
+        ));
+    }
+    if overrides.foot_clearance.is_some() && !robot.keep_feet_clear {
+        return Err(src.err(
+            "controller.foot_clearance",
+            Some(raw.controller.span()),
+            "sets the feet's extra clearance, but robot.keep_feet_clear = false turns the foot rows off"
+                .into(),
+        ));
+    }
+    Ok((config, overrides, robot))
+}
+
+/// The file's `[[obstacles]]`: their polygons and velocities, m and m/s.
+fn file_obstacles(
+    raw: &RawScenario,
+    src: Source<'_>,
+) -> Result<(Vec<Polygon>, Vec<Vector2<f64>>), ScenarioError> {
+    let mut obstacles = Vec::with_capacity(raw.obstacles.len());
+    let mut velocities = Vec::with_capacity(raw.obstacles.len());
+    for (i, ob) in raw.obstacles.iter().enumerate() {
+        obstacles.push(obstacle_polygon(i, ob, src)?);
+        velocities.push(match &ob.get_ref().velocity {
+            None => Vector2::zeros(),
+            Some(v) => parse_velocity(v.get_ref())
+                .map_err(|m| src.err(&format!("obstacles[{i}].velocity"), Some(v.span()), m))?,
+        });
+    }
+    Ok((obstacles, velocities))
+}
+
+/// The polygon of `obstacles[i]`: its `vertices` (or their hull) or a
+/// `regular` polygon, convex.
+fn obstacle_polygon(
+    i: usize,
+    ob: &Spanned<RawObstacle>,
+    src: Source<'_>,
+) -> Result<Polygon, ScenarioError> {
+    let field = format!("obstacles[{i}]");
+    let span = Some(ob.span());
+    let o = ob.get_ref();
+    let (poly, field, span) = match (&o.vertices, &o.regular) {
+        (Some(_), Some(_)) => {
+            return Err(src.err(
+                &field,
+                span,
+                "give `vertices` or `regular`, not both".into(),
+            ));
+        }
+        (None, None) => {
+            return Err(src.err(&field, span, "needs `vertices` or `regular`".into()));
+        }
+        (Some(v), None) => {
+            let pts: Vec<[f64; 2]> = v.get_ref().iter().map(|p| p.0).collect();
+            let poly = if o.hull {
+                Polygon::hull(&pts)
+            } else {
+                Polygon::new(&pts)
+            };
+            (poly, format!("{field}.vertices"), Some(v.span()))
+        }
+        (None, Some(rs)) => {
+            let r = rs.get_ref();
+            let f = format!("{field}.regular");
+            if !(r.sides >= 3 && r.sides as usize <= MAX_VERTICES) {
+                return Err(src.err(
+                    &format!("{f}.sides"),
+                    Some(rs.span()),
+                    format!("must be in 3..={MAX_VERTICES}"),
+                ));
+            }
+            if !(positive(r.radius)
+                && r.center.0.iter().all(|c| c.is_finite())
+                && r.rotation.is_finite())
+            {
+                return Err(src.err(
+                    &f,
+                    Some(rs.span()),
+                    "center and rotation must be finite, radius > 0".into(),
+                ));
+            }
+            let poly = Polygon::new(&regular_polygon(r.center.0, r.radius, r.sides, r.rotation));
+            (poly, f, Some(rs.span()))
+        }
+    };
+    poly.map_err(|e| {
+        let hint = if matches!(e, ldcbf_controller::GeometryError::NotConvex) {
+            " (set `hull = true` to use the convex hull of the points)"
+        } else {
+            ""
+        };
+        src.err(&field, span, format!("{e}{hint}"))
+    })
+}
+
+/// Impossible scenarios: the body (`robot.body_radius`) must fit at the start
+/// and at the goal. `ends` are `(field, position, span)`; the first `n_file`
+/// obstacles are the file's, the rest generated with `seed`.
+fn check_room_to_stand(
+    ends: &[(&str, Vector2<f64>, Range<usize>)],
+    obstacles: &[Polygon],
+    n_file: usize,
+    robot: &RobotParams,
+    seed: u64,
+    src: Source<'_>,
+) -> Result<(), ScenarioError> {
+    for (what, p, span) in ends {
         if let Some((i, d)) = obstacles
             .iter()
             .enumerate()
-            .map(|(i, o)| (i, closest_point_point_polygon(&p, o).signed_distance))
+            .map(|(i, o)| (i, closest_point_point_polygon(p, o).signed_distance))
             .find(|&(_, d)| d <= robot.body_radius)
         {
             let name = if i < n_file {
@@ -279,38 +373,14 @@ pub(super) fn validate(
                     robot.body_radius
                 )
             };
-            return Err(err(
+            return Err(src.err(
                 what,
-                Some(span),
+                Some(span.clone()),
                 format!("{how}: the robot cannot stand there"),
             ));
         }
     }
-    Ok(Scenario {
-        name: raw.name,
-        description: raw.description,
-        note: raw.note,
-        source: file.into(),
-        start,
-        start_heading,
-        stance: raw.stance.into(),
-        goal,
-        time_limit: *raw.time_limit.get_ref(),
-        success_radius: *raw.success_radius.get_ref(),
-        stuck_window: sw,
-        planner: *raw.planner.get_ref(),
-        perception: *raw.perception.get_ref(),
-        seed,
-        generator,
-        controller: overrides,
-        config,
-        rrt: raw.rrt_star.get_ref().clone(),
-        lidar: raw.lidar.get_ref().clone(),
-        disturbance: raw.disturbance.get_ref().clone(),
-        robot,
-        obstacles,
-        velocities,
-    })
+    Ok(())
 }
 
 /// Line of `key = ...` inside `[table]` (or `table.key = ...`, or an inline

@@ -84,7 +84,7 @@ use ldcbf_reference::ClarabelBackend;
 use crate::plan::Planner;
 use crate::plan::{Route, remaining_length};
 use crate::plant::disturbance::{DisturbanceLog, Disturber};
-use crate::plant::{Plant, PlantParams};
+use crate::plant::{Plant, PlantError, PlantParams};
 use crate::scenario::Scenario;
 use crate::sense::Perception;
 use crate::sense::track::{TrackParams, Tracker};
@@ -390,24 +390,37 @@ impl SimResult {
     }
 }
 
-/// Why a run could not start.
-#[derive(Clone, Debug, PartialEq)]
-pub struct SimError(pub String);
-
-impl core::fmt::Display for SimError {
-    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
-        f.write_str(&self.0)
-    }
+/// Why a run could not start, or why it stopped early. The messages are the
+/// ones the CLI prints; no variant has a `source` (the CLI prints the chain,
+/// which would repeat the inner message).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum SimError {
+    /// [`SimOptions::timing_repeats`] is 0.
+    #[error("timing repeats must be >= 1, got 0")]
+    NoTimingRepeats,
+    /// The controller refused the scenario's configuration.
+    #[error("controller: {0}")]
+    Controller(ldcbf_controller::ConfigError),
+    /// The plant refused its parameters.
+    #[error("plant: {0}")]
+    Plant(PlantError),
+    /// The true map's obstacles could not be indexed.
+    #[error("{0}")]
+    Map(String),
+    /// The LiDAR mapping could not start.
+    #[error("{0}")]
+    Mapping(String),
+    /// Cancelled by a signal or the caller's flag, mid-run.
+    #[error("{0}")]
+    Cancelled(cancel::Cancelled),
 }
-
-impl std::error::Error for SimError {}
 
 /// Runs the scenario to its end (see the module docs). Fails before the first
 /// tick on an invalid controller configuration or LiDAR, or
 /// [`SimOptions::timing_repeats`] = 0.
 pub fn run(scenario: &Scenario, options: SimOptions) -> Result<SimResult, SimError> {
     if options.timing_repeats == 0 {
-        return Err(SimError("timing repeats must be >= 1, got 0".into()));
+        return Err(SimError::NoTimingRepeats);
     }
     match options.solver {
         Solver::Own => run_with(scenario, options, &mut OwnSolver),
@@ -469,8 +482,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
     backend: &mut B,
 ) -> Result<SimResult, SimError> {
     let cfg = scenario.config;
-    let mut controller =
-        RobotController::new(cfg).map_err(|e| SimError(format!("controller: {e}")))?;
+    let mut controller = RobotController::new(cfg).map_err(SimError::Controller)?;
     let mut disturber = Disturber::new(
         &scenario.disturbance,
         scenario.seed,
@@ -488,7 +500,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         scenario.start_heading,
         scenario.stance,
     )
-    .map_err(|e| SimError(format!("plant: {e}")))?;
+    .map_err(SimError::Plant)?;
     let period = match options.mpc_rate {
         MpcRate::Hz(h) => Some(((1.0 / f64::from(h)) / PLANT_DT).round().max(1.0) as u64),
         MpcRate::PerStep => None,
@@ -498,7 +510,8 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
     // a known static map (with LiDAR its few obstacles per scan are passed
     // whole, and so is a map with moving obstacles), and the clearances of the
     // samples and footsteps (the linear scans' values).
-    let mut world = MovingMap::new(&scenario.obstacles, &scenario.velocities).map_err(SimError)?;
+    let mut world =
+        MovingMap::new(&scenario.obstacles, &scenario.velocities).map_err(SimError::Map)?;
     let control_index = (scenario.perception == Perception::Known && world.is_static())
         .then(|| world.rest_index().clone());
     let index = control_index.as_ref();
@@ -535,7 +548,9 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
     let switch_radius = scenario.rrt.switch_radius;
     let mut current = 0usize;
     let mut mapper = match scenario.perception {
-        Perception::Lidar => Some(mapping::Mapper::new(scenario, on_map).map_err(SimError)?),
+        Perception::Lidar => {
+            Some(mapping::Mapper::new(scenario, on_map).map_err(SimError::Mapping)?)
+        }
         Perception::Known => None,
     };
     let mut tracker = (scenario.perception == Perception::Lidar && scenario.lidar.track_moving)
@@ -564,7 +579,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
 
     let outcome = loop {
         // SIGINT, SIGTERM or the caller's flag: end now (sim::cancel).
-        cancel::check().map_err(|c| SimError(c.to_string()))?;
+        cancel::check().map_err(SimError::Cancelled)?;
         if !world.is_static() {
             world.set_time(plant.time());
         }

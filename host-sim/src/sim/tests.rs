@@ -57,7 +57,9 @@ fn timing_repeats_leave_the_run_unchanged() {
             "{solver:?}"
         );
         assert!(b.cycles.iter().all(|c| c.compute_ns > 0));
-        assert!(matches!(&run(&sc, opts(0)), Err(SimError(e)) if e.contains(">= 1")));
+        let err = run(&sc, opts(0)).map(|_| ()).unwrap_err();
+        assert_eq!(err, SimError::NoTimingRepeats);
+        assert!(err.to_string().contains(">= 1"), "{err}");
     }
     assert!(same_walk(
         &once,

@@ -29,6 +29,7 @@ pub mod obstacle_index;
 pub mod people;
 pub mod random;
 pub mod robot;
+pub mod setting;
 
 /// Vertex capacity of scenario polygons.
 pub const MAX_VERTICES: usize = 32;

@@ -11,6 +11,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_chacha::rand_core::{Rng, SeedableRng};
 use serde::{Deserialize, Serialize};
 
+use crate::world::setting::SettingError;
 use crate::world::{MAX_VERTICES, Polygon};
 
 /// Parameters of the seeded random-obstacle generator (the `[generator]` table;
@@ -110,11 +111,11 @@ impl Default for RandomParams {
 
 impl RandomParams {
     /// Checks the ranges; the error names the bad field.
-    pub fn validate(&self) -> Result<(), (&'static str, String)> {
+    pub fn validate(&self) -> Result<(), SettingError> {
         if self.kind != "random_polygons"
             && !crate::world::families::FAMILIES.contains(&self.kind.as_str())
         {
-            return Err((
+            return Err(SettingError::new(
                 "kind",
                 format!(
                     "unknown generator kind {:?} (\"random_polygons\" or a family: {})",
@@ -129,37 +130,43 @@ impl RandomParams {
             && self.area_min[0] < self.area_max[0]
             && self.area_min[1] < self.area_max[1])
         {
-            return Err((
+            return Err(SettingError::new(
                 "area_max",
-                "area_min and area_max must be finite with area_min < area_max".into(),
+                "area_min and area_max must be finite with area_min < area_max",
             ));
         }
         if !(fin(&self.radius) && self.radius[0] > 0.0 && self.radius[0] <= self.radius[1]) {
-            return Err(("radius", "must be [min, max] with 0 < min <= max".into()));
+            return Err(SettingError::new(
+                "radius",
+                "must be [min, max] with 0 < min <= max",
+            ));
         }
         if !(self.points[0] >= 3
             && self.points[0] <= self.points[1]
             && self.points[1] as usize <= MAX_VERTICES)
         {
-            return Err((
+            return Err(SettingError::new(
                 "points",
                 format!("must be [min, max] with 3 <= min <= max <= {MAX_VERTICES}"),
             ));
         }
         if !(self.clearance.is_finite() && self.clearance >= 0.0) {
-            return Err(("clearance", "must be finite and >= 0".into()));
+            return Err(SettingError::new("clearance", "must be finite and >= 0"));
         }
         if !(self.min_gap.is_finite() && self.min_gap >= 0.0) {
-            return Err(("min_gap", "must be finite and >= 0".into()));
+            return Err(SettingError::new("min_gap", "must be finite and >= 0"));
         }
         if self.min_gap > 0.0 && self.count > MAX_COUNT_WITH_GAP {
-            return Err((
+            return Err(SettingError::new(
                 "count",
                 format!("must be <= {MAX_COUNT_WITH_GAP} with min_gap > 0"),
             ));
         }
         if self.count > MAX_COUNT {
-            return Err(("count", format!("must be <= {MAX_COUNT}")));
+            return Err(SettingError::new(
+                "count",
+                format!("must be <= {MAX_COUNT}"),
+            ));
         }
         Ok(())
     }
@@ -176,7 +183,7 @@ pub fn random_obstacles(
     start: Vector2<f64>,
     goal: Vector2<f64>,
 ) -> Result<Vec<Polygon>, String> {
-    params.validate().map_err(|(f, m)| format!("{f}: {m}"))?;
+    params.validate().map_err(|e| e.to_string())?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut unif = |lo: f64, hi: f64| {
         let u = (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64);

@@ -26,6 +26,7 @@ use ldcbf_controller::nalgebra::Vector2;
 use serde::{Deserialize, Serialize};
 
 use crate::world::Polygon;
+use crate::world::setting::SettingError;
 
 /// Contact tolerance, m: a clearance below `-CONTACT_TOLERANCE` is a collision.
 /// A barrier or foot row that is active holds to rounding (`1e-14` m), so a
@@ -71,16 +72,16 @@ impl RobotParams {
     };
 
     /// Checks every field: the error names it and says what it must satisfy.
-    pub fn validate(&self) -> Result<(), (&'static str, String)> {
+    pub fn validate(&self) -> Result<(), SettingError> {
         let ok = |v: f64, hi: f64| v.is_finite() && (0.0..=hi).contains(&v);
         if !ok(self.body_radius, 5.0) {
-            return Err(("body_radius", "must be in [0, 5] m".into()));
+            return Err(SettingError::new("body_radius", "must be in [0, 5] m"));
         }
         if !ok(self.foot_length, 1.0) {
-            return Err(("foot_length", "must be in [0, 1] m".into()));
+            return Err(SettingError::new("foot_length", "must be in [0, 1] m"));
         }
         if !ok(self.foot_width, 1.0) {
-            return Err(("foot_width", "must be in [0, 1] m".into()));
+            return Err(SettingError::new("foot_width", "must be in [0, 1] m"));
         }
         Ok(())
     }
@@ -253,11 +254,11 @@ mod tests {
             foot_width: -0.1,
             ..RobotParams::default()
         };
-        assert_eq!(bad.validate().unwrap_err().0, "foot_width");
+        assert_eq!(bad.validate().unwrap_err().field, "foot_width");
         let bad = RobotParams {
             body_radius: f64::NAN,
             ..RobotParams::default()
         };
-        assert_eq!(bad.validate().unwrap_err().0, "body_radius");
+        assert_eq!(bad.validate().unwrap_err().field, "body_radius");
     }
 }
