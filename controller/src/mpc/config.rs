@@ -180,7 +180,7 @@ impl Config {
     /// `n`. The defaults are sized for the paper's `N = 3`; the rows and the
     /// active sets grow linearly with the horizon (closed loops on the shipped
     /// layouts needed at most 112 iterations per cycle at `N = 10` and 326 at
-    /// `N = 20`, `tests/horizon.rs`). Saturates instead of overflowing.
+    /// `N = 20`, `host-sim/tests/horizon.rs`). Saturates instead of overflowing.
     pub fn with_budgets_for_horizon(self, n: usize) -> Config {
         let scale = u32::try_from(n.div_ceil(3)).unwrap_or(u32::MAX).max(1);
         Config {

@@ -12,7 +12,7 @@ use ldcbf_reference::{DenseProblem, compare, kkt, solve_clarabel, solve_own};
 
 /// `tests/data/lipmwalk` of the repository (source and license in its README).
 fn data_dir() -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/lipmwalk");
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/data/lipmwalk");
     assert!(
         dir.is_dir(),
         "test data missing: expected the external QP set at {}",
