@@ -259,7 +259,9 @@ fn numpy_files_with_absent_and_empty_members_are_read() {
             "object.npz: key `lb`: dtype '|O' is not float64",
         ),
     ] {
-        let e = DenseProblem::from_npz(&fixture(name)).unwrap_err().to_string();
+        let e = DenseProblem::from_npz(&fixture(name))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains(msg), "{e}");
     }
 }
