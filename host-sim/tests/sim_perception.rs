@@ -527,7 +527,7 @@ fn check_layout(l: &Layout) -> Result<(), TestCaseError> {
 /// the breakpoints on both sides (0.23 m and 0.16 m away); no piece of the
 /// result comes within 0.12 m of it, so a thin edge seen by one ray is lost.
 /// Known, not fixed yet: ignored until perception keeps such a hit
-/// (`cargo test --test sim_perception -- --ignored` shows it).
+/// (`cargo test -p ldcbf-sim --test sim_perception -- --ignored` shows it).
 #[test]
 #[ignore = "known perception gap: an isolated clustered hit ends outside every piece"]
 fn a_wall_across_a_cup_arm_keeps_its_points_covered() {
