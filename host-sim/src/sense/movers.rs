@@ -17,8 +17,9 @@
 //! 2. **Tracking** ([`super::track::Tracker::classify`]): global nearest
 //!    neighbour association of the hulls' vertex centres with a distance gate,
 //!    a constant-velocity Kalman filter per track, confirmation after
-//!    [`TrackParams::confirm`] updates, coasting for up to
-//!    [`TrackParams::max_age`] s without a measurement. A hull is
+//!    [`TrackParams::confirm`] updates, dropped after [`TrackParams::max_age`]
+//!    s without a measurement ([`TrackParams::max_coast`] for a moving
+//!    track). A hull is
 //!    *person-sized* when every vertex is within [`TrackParams::max_extent`]
 //!    of its centre.
 //! 3. **Split**: a cluster that is not person-sized, or whose confirmed track
@@ -36,7 +37,6 @@
 //!    behind another) is handed over as its last hull moved with the track's
 //!    prediction, at its velocity, until the tracker drops it
 //!    ([`TrackParams::max_coast`]).
-//!
 //! 5. **Clearing**: the occupied cells under (within a cell of) each hull kept
 //!    out are cleared ([`super::OccupancyMap::clear_polygon`]): the hits a
 //!    person left before they were known to move (a few hits at the edge of
