@@ -52,6 +52,11 @@
 //! an add whose pivot `|z|` is below [`PIVOT_FALLBACK`] restarts the solve with
 //! [`DualActiveSet::solve_prepared`] (orthogonal factor) on the same data.
 //!
+//! A solver built for a positive semidefinite `H` (proximal-point
+//! iterations, `qp/proximal.rs`) is answered by the same fallback every
+//! time: the least-distance form of `H + eps I` alone would solve another
+//! QP.
+//!
 //! Memory: an [`LdpSolver`] holds `NC x NV` scaled rows and the `NC x NC` Gram
 //! matrix (8 KiB for `NC = 32`, 113 KiB for `NC = 120`), so it is meant for
 //! hosts or for small `NC`; the controller (whose `G` changes every cycle)
@@ -300,6 +305,11 @@ where
             return active_set::zero_row_infeasible(nv, nc, i, hi);
         }
         let me = self.qp.me;
+        if self.solver.proximal() {
+            // A semidefinite Hessian: the proximal iterations of the
+            // orthogonal path (`qp/proximal.rs`).
+            return self.fallback(loaded, prefer);
+        }
         if me > 0 && !self.solver.equalities_capable() {
             // Not compiled in at this size: the fallback's answer (a
             // numerical error, as `solve`'s).

@@ -99,11 +99,14 @@ pub use crate::solution::{QpAllocator, QpSolution, QpSolutionOf, QpStatus};
 mod backend;
 mod dense;
 mod orthogonal;
+mod proximal;
 pub use backend::{OwnSolver, QpBackend};
 #[cfg(feature = "alloc")]
 pub use dense::DenseQpDyn;
 pub use dense::{DenseQp, DenseQpOf};
 use orthogonal::Orthogonal;
+use proximal::proximal_capable;
+pub use proximal::{PROX_EPS, PROX_MAX_OUTER, PROX_TOL};
 
 /// Rows whose squared Euclidean norm is not above this (it is 0 for an exactly
 /// zero row or one whose squares underflow, `|g| < ~1e-162`) are treated as zero
@@ -125,7 +128,9 @@ pub enum HessianError {
     NotFinite,
     /// `H` is not symmetric to a relative 1e-12.
     NotSymmetric,
-    /// The Cholesky factorisation failed: `H` is not positive definite.
+    /// The Cholesky factorisation failed: `H` is not positive definite (nor,
+    /// where the proximal iterations are compiled in, positive semidefinite
+    /// to [`PROX_EPS`]).
     NotPositiveDefinite,
     /// `H` has no rows, or more than 65535 (only possible with run-time
     /// sizes; the static sizes are checked at compile time).
@@ -275,6 +280,10 @@ where
     /// instead of `NV^2`.
     linv_diag: bool,
     settings: QpSettings,
+    /// The proximal weight `eps` when `H` is only positive semidefinite
+    /// (`L L' = H + eps I`, solved by proximal-point iterations,
+    /// `qp/proximal.rs`); 0 for a positive definite `H`.
+    prox: f64,
     /// The row capacity is a parameter of the QPs solved, not of the solver's
     /// data.
     _nc: PhantomData<NC>,
@@ -308,6 +317,7 @@ impl<const NV: usize, const NC: usize> DualActiveSetOf<Const<NV>, Const<NC>> {
             hot_start: false,
             max_iter: 0,
         },
+        prox: 0.0,
         _nc: PhantomData,
     };
 }
@@ -316,7 +326,13 @@ impl<NV: Dim, NC: Dim> DualActiveSetOf<NV, NC>
 where
     DefaultAllocator: QpAllocator<NV, NC>,
 {
-    /// Factors `H` (symmetric positive definite) once.
+    /// Factors `H` (symmetric positive definite) once. A symmetric `H`
+    /// that is only positive semidefinite (Cholesky fails, but not on
+    /// `H + eps I` with [`PROX_EPS`] relative to its largest entry) is
+    /// accepted where the proximal-point iterations are compiled in (from
+    /// [`HOT_START_MIN_NV`] variables on for the static sizes, always for
+    /// `Dyn`; see `qp/proximal.rs`); below that it is
+    /// [`HessianError::NotPositiveDefinite`].
     pub fn new(H: &OMatrix<f64, NV, NV>, settings: QpSettings) -> Result<Self, HessianError> {
         if let (Some(nv), Some(nc)) = (NV::try_to_usize(), NC::try_to_usize()) {
             // Static sizes: a compile-time constant test.
@@ -347,8 +363,11 @@ where
                 }
             }
         }
-        let chol =
-            nalgebra::linalg::Cholesky::new(H.clone()).ok_or(HessianError::NotPositiveDefinite)?;
+        let (chol, prox) = match nalgebra::linalg::Cholesky::new(H.clone()) {
+            Some(chol) => (chol, 0.0),
+            None if proximal_capable::<NV>() => proximal::regularised(H)?,
+            None => return Err(HessianError::NotPositiveDefinite),
+        };
         let L = chol.l();
         let (nv, _) = H.shape_generic();
         let mut J0 = OMatrix::<f64, NV, NV>::identity_generic(nv, nv);
@@ -372,6 +391,7 @@ where
             Linv,
             linv_diag,
             settings,
+            prox,
             _nc: PhantomData,
         })
     }
@@ -390,6 +410,20 @@ where
         let mut s = self.clone();
         s.settings.max_iter = max_iter;
         s
+    }
+
+    /// The proximal weight `eps` of a positive semidefinite `H` (the solves
+    /// run proximal-point iterations on `H + eps I`, `qp/proximal.rs`); 0
+    /// for a positive definite `H` (one solve, as always).
+    pub fn proximal_weight(&self) -> f64 {
+        self.prox
+    }
+
+    /// Whether solves run the proximal-point iterations: a constant `false`
+    /// for the static sizes where they are not compiled in.
+    #[inline(always)]
+    pub(crate) fn proximal(&self) -> bool {
+        proximal_capable::<NV>() && self.prox > 0.0
     }
 
     /// The Hessian this solver was built for.
@@ -528,14 +562,11 @@ where
         let mut rows = RowNormsOf::euclidean(qp);
         let nc = qp.h.shape_generic().0;
         let excluded = OVector::<bool, NC>::from_element_generic(nc, U1, false);
-        self.solve_with(
-            qp,
-            &qp.h,
-            excluded,
-            &mut rows,
-            prefer,
-            self.settings.max_iter,
-        )
+        let max_iter = self.settings.max_iter;
+        if self.proximal() {
+            return self.solve_proximal(qp, &qp.h, excluded, &mut rows, prefer, max_iter);
+        }
+        self.solve_with(qp, &qp.q, &qp.h, excluded, &mut rows, prefer, max_iter)
     }
 
     /// [`DualActiveSetOf::solve`] on a selection of `qp`'s rows with other
@@ -565,7 +596,10 @@ where
         }
         let mut rows = RowNormsOf::euclidean(qp);
         let max_iter = budget.min(self.settings.max_iter);
-        self.solve_with(qp, h, excluded, &mut rows, prefer, max_iter)
+        if self.proximal() {
+            return self.solve_proximal(qp, h, excluded, &mut rows, prefer, max_iter);
+        }
+        self.solve_with(qp, &qp.q, h, excluded, &mut rows, prefer, max_iter)
     }
 
     /// The per-row data of `qp`'s constraint matrix that [`DualActiveSetOf::solve`]
@@ -604,14 +638,11 @@ where
             rows.finite = false;
         }
         let excluded = OVector::<bool, NC>::from_element_generic(nc, U1, false);
-        self.solve_with(
-            qp,
-            &qp.h,
-            excluded,
-            &mut rows,
-            prefer,
-            self.settings.max_iter,
-        )
+        let max_iter = self.settings.max_iter;
+        if self.proximal() {
+            return self.solve_proximal(qp, &qp.h, excluded, &mut rows, prefer, max_iter);
+        }
+        self.solve_with(qp, &qp.q, &qp.h, excluded, &mut rows, prefer, max_iter)
     }
 
     /// `1 / |L^-1 g|` for a row with `|g|^2 = n2 > 0`.
@@ -630,12 +661,16 @@ where
         }
     }
 
-    /// The solve proper, with the right-hand side `h` (`qp.h` or another), the
-    /// rows `excluded[i]` left out, the Euclidean row norms in `rows` and the
-    /// H^-1 norms there or computed on demand (0 = not yet).
+    /// The solve proper, with the linear term `q` (`qp.q`, or the proximal
+    /// iteration's; the objective is the one of `qp.q`), the right-hand side
+    /// `h` (`qp.h` or another), the rows `excluded[i]` left out, the
+    /// Euclidean row norms in `rows` and the H^-1 norms there or computed on
+    /// demand (0 = not yet).
+    #[allow(clippy::too_many_arguments)]
     fn solve_with(
         &self,
         qp: &DenseQpOf<NV, NC>,
+        qv: &OVector<f64, NV>,
         hv: &OVector<f64, NC>,
         excluded: OVector<bool, NC>,
         norms: &mut RowNormsOf<NC>,
@@ -646,7 +681,7 @@ where
         let n = nv.value();
         let nc = qp.h.shape_generic().0;
         let m = qp.m.min(nc.value());
-        let q = qp.q.as_slice();
+        let q = qv.as_slice();
         let (h, norm2) = (hv.as_slice(), norms.norm2.as_slice());
         if h.len() != nc.value() || norm2.len() != nc.value() || norms.inv_hnorm.len() != nc.value()
         {

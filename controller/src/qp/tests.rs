@@ -5,6 +5,7 @@ use nalgebra::{Matrix2, SVector, Vector2};
 
 mod equalities;
 mod hot_start;
+mod proximal;
 
 fn solver2() -> DualActiveSet<2, 4> {
     DualActiveSet::new(&Matrix2::new(2.0, 0.0, 0.0, 2.0), QpSettings::default()).unwrap()

@@ -265,6 +265,24 @@ impl OccupancyMap {
         tol: f64,
         dt: f64,
     ) {
+        self.update_keeping_out(origin, heading, rays, range, tol, dt, &[]);
+    }
+
+    /// [`OccupancyMap::update`] with the hits of the rays flagged in
+    /// `kept_out` (one flag per ray; missing flags are `false`) left out:
+    /// those rays still clear the cells in front of their hits, but give no
+    /// hit (a tracked person, [`crate::sense::movers`], is not a wall).
+    #[allow(clippy::too_many_arguments)]
+    pub fn update_keeping_out(
+        &mut self,
+        origin: Vector2<f64>,
+        heading: f64,
+        rays: &[Option<Vector2<f64>>],
+        range: f64,
+        tol: f64,
+        dt: f64,
+        kept_out: &[bool],
+    ) {
         if self.params.decay > 0.0 && dt > 0.0 {
             let f = (-self.params.decay * dt).exp() as f32;
             for l in &mut self.log_odds {
@@ -274,7 +292,11 @@ impl OccupancyMap {
         self.scans = self.scans.wrapping_add(1).max(1);
         let scan = self.scans;
         // Hits first: they win over this scan's misses.
-        for p in rays.iter().flatten() {
+        for (k, p) in rays.iter().enumerate() {
+            let Some(p) = p else { continue };
+            if kept_out.get(k).copied().unwrap_or(false) {
+                continue;
+            }
             if let Some((i, j)) = self.cell_of(*p) {
                 let k = j * self.width + i;
                 if self.stamp[k] != scan {
@@ -297,6 +319,49 @@ impl OccupancyMap {
                         map.log_odds[c] = (map.log_odds[c] + map.miss).clamp(map.lo, map.hi);
                     }
                 });
+            }
+        }
+    }
+
+    /// Clears the occupied cells whose centre is within `margin` (m) of
+    /// `poly` (world frame): their log-odds become one miss's (free, not
+    /// sure). For the cells of something that moves and was mapped before it
+    /// was known to ([`crate::sense::movers`]: a person at the edge of the
+    /// range, or seen in one cluster with a wall).
+    pub fn clear_polygon(&mut self, poly: &Polygon, margin: f64) {
+        let v = poly.vertices();
+        let lo = v
+            .iter()
+            .fold(Vector2::repeat(f64::INFINITY), |a, p| a.inf(p));
+        let hi = v
+            .iter()
+            .fold(Vector2::repeat(f64::NEG_INFINITY), |a, p| a.sup(p));
+        let r = self.resolution;
+        let idx =
+            |x: f64, o: f64, n: usize| (((x - o) / r).floor().clamp(0.0, n as f64 - 1.0)) as usize;
+        let m = Vector2::repeat(margin);
+        let (lo, hi) = (lo - m, hi + m);
+        if hi.x < self.origin.x || hi.y < self.origin.y {
+            return;
+        }
+        let (i0, i1) = (
+            idx(lo.x, self.origin.x, self.width),
+            idx(hi.x, self.origin.x, self.width),
+        );
+        let (j0, j1) = (
+            idx(lo.y, self.origin.y, self.height),
+            idx(hi.y, self.origin.y, self.height),
+        );
+        for j in j0..=j1 {
+            for i in i0..=i1 {
+                let k = j * self.width + i;
+                if self.log_odds[k] > 0.0
+                    && ldcbf_controller::closest_point_point_polygon(&self.centre(i, j), poly)
+                        .signed_distance
+                        <= margin
+                {
+                    self.log_odds[k] = self.miss;
+                }
             }
         }
     }

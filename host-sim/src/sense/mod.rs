@@ -99,6 +99,7 @@ use crate::world::{MAX_VERTICES, Polygon};
 mod dbscan;
 mod infer;
 mod map;
+pub mod movers;
 #[cfg(test)]
 mod tests;
 pub mod track;
@@ -170,8 +171,10 @@ pub struct LidarParams {
     /// Free-space margin, m: a ray is taken as seen free up to `3 noise_sigma
     /// + free_margin` short of its hit point; no piece reaches into that part.
     pub free_margin: f64,
-    /// Track the pieces across scans and give the controller their
-    /// velocities ([`track`]; off = every piece at rest).
+    /// Track the person-sized clusters of each scan, keep those that may
+    /// move out of the map and give them to the controller with their
+    /// velocities ([`movers`], [`track`]; off = every hit goes to the map,
+    /// every obstacle at rest).
     pub track_moving: bool,
     /// The occupancy map built from the scans (the `[lidar.map]` table,
     /// [`MapParams`]); its pieces are the controller's obstacles.

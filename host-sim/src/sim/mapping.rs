@@ -28,6 +28,8 @@ use ldcbf_controller::{ObstacleQuery, closest_point_point_polygon};
 
 use crate::plan::on_map::{CellMap, plan_on_map};
 use crate::scenario::Scenario;
+use crate::sense::movers::{MoverScan, Movers};
+use crate::sense::track::TrackParams;
 use crate::sense::{CellState, Lidar, OccupancyMap, free_tolerance};
 use crate::world::Polygon;
 use crate::world::grid::OccupancyGrid;
@@ -89,6 +91,9 @@ pub(super) struct Mapper {
     next_check: f64,
     last_stall_replan: f64,
     last_update: Option<f64>,
+    /// With `lidar.track_moving`: the people kept out of the map
+    /// ([`crate::sense::movers`]) and what the last scan showed of them.
+    movers: Option<(Movers, MoverScan)>,
 }
 
 impl Mapper {
@@ -109,6 +114,12 @@ impl Mapper {
             next_check: 0.0,
             last_stall_replan: f64::NEG_INFINITY,
             last_update: None,
+            movers: scenario.lidar.track_moving.then(|| {
+                (
+                    Movers::new(&scenario.lidar, TrackParams::default()),
+                    MoverScan::default(),
+                )
+            }),
         })
     }
 
@@ -127,12 +138,36 @@ impl Mapper {
         let (range, tol) = (p.range, free_tolerance(p));
         let dt = self.last_update.map_or(0.0, |t| time - t);
         self.last_update = Some(time);
+        let kept_out: &[bool] = match self.movers.as_mut() {
+            Some((movers, scan)) => {
+                *scan = movers.observe(time, &rays);
+                &scan.kept_out
+            }
+            None => &[],
+        };
         let t0 = Instant::now();
-        self.log.map.update(origin, heading, &rays, range, tol, dt);
+        self.log
+            .map
+            .update_keeping_out(origin, heading, &rays, range, tol, dt, kept_out);
+        if let Some((_, scan)) = &self.movers {
+            let r = self.log.map.resolution;
+            for hull in &scan.obstacles {
+                self.log.map.clear_polygon(hull, r);
+            }
+        }
         self.log
             .update_ns
             .push(u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX));
         rays.into_iter().flatten().collect()
+    }
+
+    /// With `lidar.track_moving`, the last scan's people (hulls, world frame)
+    /// and their velocities (m/s), kept out of the map; empty otherwise.
+    pub(super) fn people(&self) -> (&[Polygon], &[Vector2<f64>]) {
+        match &self.movers {
+            Some((_, scan)) => (&scan.obstacles, &scan.velocities),
+            None => (&[], &[]),
+        }
     }
 
     /// The controller's obstacles for a cycle whose selection disk is `q`

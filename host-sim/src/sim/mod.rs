@@ -44,8 +44,9 @@
 //!    goal), and the controller's goal is the current subgoal. With
 //!    `perception = "lidar"` a LiDAR scan taken at that moment from the CoM
 //!    updates the occupancy map and the obstacle list is the map's pieces
-//!    near the robot, with the velocities of [`crate::sense::track`] when
-//!    `lidar.track_moving` (else at rest); with `planner = "rrt_star"` the
+//!    near the robot, at rest; with `lidar.track_moving` the scan's people
+//!    ([`crate::sense::movers`]: person-sized clusters not confirmed at rest,
+//!    kept out of the map) follow, with their tracked velocities; with `planner = "rrt_star"` the
 //!    subgoals are planned and replanned on that map ([`MappingLog`]);
 //!    otherwise it is the true map at that tick ([`crate::world::moving`])
 //!    with the obstacles' true velocities. With state estimation noise (`disturbance.noise_*`)
@@ -87,7 +88,6 @@ use crate::plant::disturbance::{DisturbanceLog, Disturber};
 use crate::plant::{Plant, PlantParams};
 use crate::scenario::Scenario;
 use crate::sense::Perception;
-use crate::sense::track::{TrackParams, Tracker};
 use crate::world::Polygon;
 use crate::world::moving::MovingMap;
 use crate::world::obstacle_index::{Candidates, ObstacleIndex};
@@ -442,9 +442,8 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         }
         Perception::Known => None,
     };
-    let mut tracker = (scenario.perception == Perception::Lidar && scenario.lidar.track_moving)
-        .then(|| Tracker::new(TrackParams::default()));
-    // The velocities the tracker gave this cycle's inferred obstacles.
+    // The velocities of this cycle's obstacles with LiDAR tracking (the map's
+    // pieces at rest, the tracked people's estimates).
     let mut seen_velocities: Vec<Vector2<f64>>;
     let mut scans: Vec<ScanRecord> = Vec::new();
     let mut qps = Vec::new();
@@ -562,8 +561,13 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                         Err(_) => Vec::new(),
                     };
                     cycle_velocities = &[];
-                    if let Some(tr) = tracker.as_mut() {
-                        seen_velocities = tr.update(plant.time(), &seen);
+                    if scenario.lidar.track_moving {
+                        // The map's pieces at rest, then the people kept out
+                        // of the map with their tracked velocities.
+                        let (people, v) = m.people();
+                        seen_velocities = vec![Vector2::zeros(); seen.len()];
+                        seen.extend_from_slice(people);
+                        seen_velocities.extend_from_slice(v);
                         cycle_velocities = &seen_velocities;
                     }
                     if options.record_scans {

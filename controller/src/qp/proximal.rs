@@ -1,0 +1,152 @@
+//! Positive semidefinite Hessians: proximal-point iterations around the dual
+//! active-set solve, as in DAQP (Arnström, Bemporad, Axehill, "A dual
+//! active-set solver for embedded quadratic programming using recursive LDL'
+//! updates", IEEE TAC 2022, and its proximal-point extension for
+//! semidefinite and linear programs).
+//!
+//! When `H` has no Cholesky factor but `H + eps I` has one
+//! (`eps` = [`PROX_EPS`] times the largest entry of `H`, or [`PROX_EPS`] for
+//! `H = 0`), the solver factors `H + eps I` once and each solve runs
+//!
+//! ```text
+//! x_{k+1} = argmin 1/2 x'(H + eps I)x + (q - eps x_k)'x  s.t. the rows of qp
+//!         = argmin 1/2 x'Hx + q'x + eps/2 |x - x_k|^2   s.t. the rows of qp
+//! ```
+//!
+//! from `x_0 = 0`, each a strictly convex QP solved by the same dual
+//! active-set iteration, hot-started from the active set of the one before
+//! (its rows marked; the caller's marks for the first). The proximal point
+//! method converges to a minimiser of the QP whenever one exists
+//! (Rockafellar 1976). After each solve `H x + q + G' lambda =
+//! eps (x_k - x_{k+1})`: the multipliers of the solve are the QP's up to
+//! that residual, so the iterations stop when it is small,
+//! `eps |x_{k+1} - x_k|_inf <= PROX_TOL max(1, |q|_inf)` (two solves when
+//! the first finds the active set: the first moves `x` from 0 to within
+//! about `eps / lambda` of the minimiser, `lambda` the smallest curvature of
+//! the objective on the active rows, the second by that much); the
+//! objective reported is the QP's (`1/2 x'Hx + q'x`).
+//!
+//! Budget: [`QpSettings::max_iter`](super::QpSettings::max_iter) covers the
+//! adds plus drops of all the proximal solves together (each re-enters its
+//! active set, one iteration per row, the equality rows included), and at
+//! most [`PROX_MAX_OUTER`] proximal solves run; when either runs out the
+//! status is [`QpStatus::IterationLimit`] with the last iterate (as for a QP
+//! whose objective is unbounded below on the feasible set, where the
+//! iterates do not converge). An empty feasible set is found by the first
+//! solve, as for a definite `H` (the certificate does not involve `H`).
+//!
+//! Compiled in where the equality rows are (from
+//! [`HOT_START_MIN_NV`](super::HOT_START_MIN_NV) variables on for the static
+//! sizes, always for `Dyn`), so the small static instances of the firmware
+//! keep their code; a positive definite `H` never enters this module.
+
+use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector, U1};
+
+use super::{DenseQpOf, DualActiveSetOf, HOT_START_MIN_NV, HessianError, QpAllocator, RowNormsOf};
+use crate::active_set;
+use crate::linalg::{column_mut, copy};
+use crate::solution::{QpSolutionOf, QpStatus};
+
+/// The proximal weight relative to the largest entry of `H` (DAQP's default
+/// `eps_prox` is `1e-6`).
+pub const PROX_EPS: f64 = 1e-6;
+
+/// The proximal iterations stop when the stationarity residual they leave,
+/// `eps |x_{k+1} - x_k|_inf`, is at most this times `max(1, |q|_inf)`.
+pub const PROX_TOL: f64 = 1e-10;
+
+/// At most this many proximal solves per solve.
+pub const PROX_MAX_OUTER: u32 = 100;
+
+/// Whether the proximal iterations are compiled in for `NV` variables (a
+/// constant for the static sizes).
+#[inline(always)]
+pub(super) fn proximal_capable<NV: Dim>() -> bool {
+    NV::try_to_usize().is_none_or(|n| n >= HOT_START_MIN_NV)
+}
+
+/// The Cholesky factor of `H + eps I` and `eps`, for an `H` without one of
+/// its own (symmetric and finite, checked by the caller).
+pub(super) fn regularised<NV: Dim>(
+    H: &OMatrix<f64, NV, NV>,
+) -> Result<(nalgebra::linalg::Cholesky<f64, NV>, f64), HessianError>
+where
+    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
+{
+    let amax = H.amax();
+    let eps = PROX_EPS * if amax > 0.0 { amax } else { 1.0 };
+    let n = H.nrows();
+    let mut Hr = H.clone();
+    for j in 0..n {
+        if let Some(d) = column_mut(Hr.as_mut_slice(), n, j).and_then(|c| c.get_mut(j)) {
+            *d += eps;
+        }
+    }
+    let chol = nalgebra::linalg::Cholesky::new(Hr).ok_or(HessianError::NotPositiveDefinite)?;
+    Ok((chol, eps))
+}
+
+impl<NV: Dim, NC: Dim> DualActiveSetOf<NV, NC>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
+    /// The proximal-point iterations (module docs) on `qp` with the
+    /// right-hand side `hv`, the rows `excluded` left out and at most
+    /// `max_iter` adds plus drops in all.
+    pub(super) fn solve_proximal(
+        &self,
+        qp: &DenseQpOf<NV, NC>,
+        hv: &OVector<f64, NC>,
+        excluded: OVector<bool, NC>,
+        norms: &mut RowNormsOf<NC>,
+        prefer: &[bool],
+        max_iter: u32,
+    ) -> QpSolutionOf<NV, NC> {
+        let nv = self.nv();
+        let nc = qp.h.shape_generic().0;
+        let eps = self.prox;
+        let mut marks = active_set::marks(nc, prefer);
+        let mut xk = OVector::<f64, NV>::zeros_generic(nv, U1);
+        let mut qk = qp.q.clone();
+        let qmax = qp.q.as_slice().iter().fold(1.0f64, |a, v| a.max(v.abs()));
+        let mut used: u32 = 0;
+        let mut last = active_set::stopped(nv, nc, QpStatus::IterationLimit);
+        for _ in 0..PROX_MAX_OUTER {
+            for ((qi, &q0), &xi) in qk
+                .as_mut_slice()
+                .iter_mut()
+                .zip(qp.q.as_slice())
+                .zip(xk.as_slice())
+            {
+                *qi = q0 - eps * xi;
+            }
+            let left = max_iter.saturating_sub(used);
+            let mut sol =
+                self.solve_with(qp, &qk, hv, excluded.clone(), norms, marks.as_slice(), left);
+            used = used.saturating_add(sol.iterations);
+            sol.iterations = used;
+            if sol.status != QpStatus::Solved {
+                return sol;
+            }
+            let dx = sol
+                .x
+                .as_slice()
+                .iter()
+                .zip(xk.as_slice())
+                .fold(0.0f64, |a, (&u, &v)| a.max((u - v).abs()));
+            if eps * dx <= PROX_TOL * qmax {
+                return sol;
+            }
+            copy(xk.as_mut_slice(), sol.x.as_slice());
+            marks.as_mut_slice().fill(false);
+            for &a in sol.active_set() {
+                if let Some(mk) = marks.as_mut_slice().get_mut(usize::from(a)) {
+                    *mk = true;
+                }
+            }
+            last = sol;
+        }
+        last.status = QpStatus::IterationLimit;
+        last
+    }
+}
