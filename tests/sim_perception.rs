@@ -517,9 +517,13 @@ fn layout_scene(l: &Layout) -> (Vector2<f64>, Vec<Polygon>) {
     (o, obstacles)
 }
 
-/// A layout's sensor position, scan, LiDAR settings and the sensor's
-/// clearance to the obstacles (m); `None` when that is below 5 cm.
-fn layout_scan(l: &Layout) -> Option<(Vector2<f64>, Vec<Option<Vector2<f64>>>, LidarParams, f64)> {
+/// A layout's sensor position (m), scan (hit per ray), LiDAR settings and
+/// the sensor's clearance to the obstacles (m).
+type LayoutScan = (Vector2<f64>, Vec<Option<Vector2<f64>>>, LidarParams, f64);
+
+/// The scan of a layout; `None` when the sensor is within 5 cm of an
+/// obstacle.
+fn layout_scan(l: &Layout) -> Option<LayoutScan> {
     let (o, obstacles) = layout_scene(l);
     let clear = obstacles
         .iter()
