@@ -136,7 +136,7 @@ fn paper(cr: &mut Criterion) {
         b.iter(|| {
             let a = &qps[i % qps.len()];
             i += 1;
-            black_box(ctl.solver().solve(black_box(&a.qp), &[false; NC], 64))
+            black_box(ctl.solver().solve(black_box(&a.qp), &[false; NC]))
         })
     });
     group.finish();

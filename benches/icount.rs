@@ -40,6 +40,14 @@ use ldcbf_reference::{DenseProblem, QpKind, random_problem};
 
 /// Iteration budget of every solve (above every workload's need).
 const MAX_ITER: u32 = 400;
+
+/// The solver's settings: the defaults with [`MAX_ITER`].
+const SETTINGS: QpSettings = QpSettings {
+    tol_primal: 1e-10,
+    tol_dependence: 1e-12,
+    hot_start: true,
+    max_iter: MAX_ITER,
+};
 /// Steps of the recorded walks.
 const WALK_STEPS: usize = 40;
 /// Seeds of the `n = 50` set.
@@ -115,7 +123,7 @@ where
     DefaultAllocator: QpAllocator<V, C>,
 {
     v.iter()
-        .map(|(s, qp)| u64::from(s.solve(black_box(qp), &[], MAX_ITER).iterations))
+        .map(|(s, qp)| u64::from(s.solve(black_box(qp), &[]).iterations))
         .sum()
 }
 
@@ -126,7 +134,7 @@ where
     DefaultAllocator: QpAllocator<V, C>,
 {
     v.iter()
-        .map(|(s, l)| u64::from(s.solve(black_box(l), &[], MAX_ITER).iterations))
+        .map(|(s, l)| u64::from(s.solve(black_box(l), &[]).iterations))
         .sum()
 }
 
@@ -174,7 +182,7 @@ fn n50() -> Vec<(DualActiveSetOf<Dyn, Dyn>, DenseQpOf<Dyn, Dyn>)> {
         .map(|seed| {
             let p = random_problem(seed, 50, 100, 0, false, QpKind::Feasible);
             let (h, qp) = p.to_qp(Dyn(p.n), Dyn(p.rows())).expect("sized QP");
-            let s = DualActiveSetOf::new(&h, QpSettings::default()).expect("definite P");
+            let s = DualActiveSetOf::new(&h, SETTINGS).expect("definite P");
             (s, qp)
         })
         .collect()
@@ -202,7 +210,7 @@ fn prepare<'a>(name: &str, dir: &Path, obs: &'a Obstacles) -> Work<'a> {
                 let (h, qp) = p
                     .to_qp(Const::<16>, Const::<32>)
                     .expect("LIPMWALK is (16, 32)");
-                let s = DualActiveSetOf::new(&h, QpSettings::default()).expect("definite P");
+                let s = DualActiveSetOf::new(&h, SETTINGS).expect("definite P");
                 (s, qp)
             })
             .collect::<Vec<_>>()

@@ -92,12 +92,11 @@ impl QpBackend<NV, NC> for Capture {
         solver: &DualActiveSet<NV, NC>,
         qp: &DenseQp<NV, NC>,
         prefer: &[bool; NC],
-        max_iter: u32,
     ) -> QpSolution<NV, NC> {
         if self.first.is_none() {
             self.first = Some((qp.clone(), *prefer));
         }
-        solver.solve(qp, prefer, max_iter)
+        solver.solve(qp, prefer)
     }
 }
 
@@ -142,11 +141,10 @@ impl Workspace {
 struct Set {
     name: &'static str,
     runs: Vec<Recording>,
-    /// One controller per run, with the run's configuration.
+    /// One controller per run, with the run's configuration (its solver
+    /// holds the run's `max_iter`).
     controllers: Vec<RobotController>,
     qps: Vec<Qp>,
-    /// `max_iter` of each run's configuration.
-    max_iter: Vec<u32>,
 }
 
 impl Set {
@@ -180,13 +178,11 @@ impl Set {
                 }
             }
         }
-        let max_iter = runs.iter().map(|r| r.config.max_iter).collect();
         Set {
             name,
             runs,
             controllers,
             qps,
-            max_iter,
         }
     }
 
@@ -269,7 +265,7 @@ fn timed_pass(set: &Set, mode: Mode, ctls: &mut [RobotController]) -> Vec<(usize
                     ws.load(q, mode == Mode::SolveWarm);
                     let solver = set.controllers[q.run].solver();
                     let t0 = Instant::now();
-                    let sol = solver.solve(black_box(&ws.qp), &ws.prefer, set.max_iter[q.run]);
+                    let sol = solver.solve(black_box(&ws.qp), &ws.prefer);
                     let ns = t0.elapsed().as_nanos();
                     black_box(sol);
                     (q.run, q.cycle, u64::try_from(ns).unwrap_or(u64::MAX))
@@ -428,7 +424,7 @@ fn bench_set(cr: &mut Criterion, set: &Set) {
                     ws.load(q, mode == Mode::SolveWarm);
                     let solver = set.controllers[q.run].solver();
                     let t0 = Instant::now();
-                    let sol = solver.solve(black_box(&ws.qp), &ws.prefer, set.max_iter[q.run]);
+                    let sol = solver.solve(black_box(&ws.qp), &ws.prefer);
                     total += t0.elapsed();
                     black_box(sol);
                 }

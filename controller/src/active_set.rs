@@ -30,7 +30,7 @@
 use nalgebra::allocator::Allocator;
 use nalgebra::{DefaultAllocator, Dim, OVector, U1};
 
-use crate::qp::{QpAllocator, QpSolutionOf, QpStatus};
+use crate::solution::{QpAllocator, QpSolutionOf, QpStatus};
 
 mod start;
 use start::{EqStop, Start, equalities, hot_start};
@@ -493,15 +493,6 @@ where
     }
 }
 
-/// `dst[k] = src[k]` over the shorter length (`copy_from_slice` without its
-/// length assertion).
-#[inline(always)]
-pub(crate) fn copy(dst: &mut [f64], src: &[f64]) {
-    for (a, &b) in dst.iter_mut().zip(src) {
-        *a = b;
-    }
-}
-
 /// Removes entry `l` of the first `n` of `s` (the entries after it move up
 /// one place; entry `n - 1` is left as it was).
 #[inline(always)]
@@ -568,57 +559,4 @@ where
         *d = s;
     }
     out
-}
-
-/// `a . b` over the shorter length, with two partial sums (independent add
-/// chains; for the static sizes the lengths are constants, so the loop
-/// unrolls and vectorises without bounds checks).
-#[inline(always)]
-pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
-    let mut acc = [0.0f64; 2];
-    for (k, (x, y)) in a.iter().zip(b).enumerate() {
-        acc[k % 2] += x * y;
-    }
-    acc[0] + acc[1]
-}
-
-/// [`dot`] for vectors of the dimension `D`: the same operations in the same
-/// order (the even and the odd products each summed in order, then added),
-/// so the same bits; for run-time sizes (`Dyn`) written as pairs, so that the
-/// two chains stay in registers (13 % off `solve` at n = 50), for the static
-/// sizes [`dot`] itself (whose fully unrolled form the Cortex-M7 runs
-/// fastest).
-#[inline(always)]
-pub(crate) fn dot_d<D: Dim>(a: &[f64], b: &[f64]) -> f64 {
-    if D::try_to_usize().is_some() {
-        return dot(a, b);
-    }
-    let (mut even, mut odd) = (0.0f64, 0.0f64);
-    let (mut pa, mut pb) = (a.chunks_exact(2), b.chunks_exact(2));
-    for (x, y) in pa.by_ref().zip(pb.by_ref()) {
-        if let ([x0, x1], [y0, y1]) = (x, y) {
-            even += x0 * y0;
-            odd += x1 * y1;
-        }
-    }
-    if let (Some(x), Some(y)) = (pa.remainder().first(), pb.remainder().first()) {
-        even += x * y;
-    }
-    even + odd
-}
-
-/// Givens rotation `(c, s, r)` with `c a + s b = r`, `-s a + c b = 0`.
-pub(crate) fn givens(a: f64, b: f64) -> (f64, f64, f64) {
-    // sqrt(a^2 + b^2) is within an ulp or two of hypot; hypot (slower, no
-    // overflow or underflow) only when the squares leave the normal range.
-    let r2 = a * a + b * b;
-    let r = if (1e-280..=1e280).contains(&r2) {
-        crate::float::sqrt(r2)
-    } else {
-        libm::hypot(a, b)
-    };
-    if r == 0.0 {
-        return (1.0, 0.0, 0.0);
-    }
-    (a / r, b / r, r)
 }

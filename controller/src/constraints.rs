@@ -11,7 +11,7 @@
 //! QP of docs/maths.md §2.4 (whose variables are the footsteps `f_0 .. f_{N-1}`):
 //! both QPs have the same feasible set and cost under the map below, so they
 //! have the same optimal footsteps, which the controller recovers exactly
-//! (`tests/reparam.rs` checks this against the foot-variable QP built from the
+//! (`reference/tests/reparam.rs` checks this against the foot-variable QP built from the
 //! spec's formulas and solved by Clarabel).
 //!
 //! ## The map (per axis, both axes share it)
@@ -39,7 +39,7 @@
 //! With the footsteps as variables the CoM depends on `f_j` through
 //! `A_d^(k-1-j) B_d`, whose entries grow like `e^{beta T k}` (`e^{beta T} = 3.50`
 //! for the paper's `T = 0.4 s`, `H = 1 m`), so the Hessian `2 S_p' S_p` of the
-//! cost is ill-conditioned. Measured (`cargo test --release --test reparam --
+//! cost is ill-conditioned. Measured (`cargo test --release -p ldcbf-reference --test reparam --
 //! --nocapture`, 2-norm condition number of the per-axis Hessian):
 //!
 //! | N | foot variables | these variables |

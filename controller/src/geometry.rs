@@ -79,10 +79,10 @@ fn check_points(points: &[[f64; 2]]) -> Result<(), GeometryError> {
 }
 
 /// Euclidean length `|v|` (m): `sqrt(|v|^2)`, as nalgebra's `norm`, with the
-/// controller's square root ([`crate::float::sqrt`]; one instruction on the
+/// controller's square root ([`crate::linalg::sqrt`]; one instruction on the
 /// Cortex-M7).
 fn norm(v: &Vector2<f64>) -> f64 {
-    crate::float::sqrt(v.norm_squared())
+    crate::linalg::sqrt(v.norm_squared())
 }
 
 fn cross(a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
@@ -374,7 +374,7 @@ pub fn closest_point_point_polygon<const V: usize>(
         a = b;
     }
     edge(n - 1, a, first); // the closing edge
-    let dist = crate::float::sqrt(best_d2);
+    let dist = crate::linalg::sqrt(best_d2);
     // Edge `i` runs from vertex `i` to vertex `i + 1` (indices modulo `n >= 1`;
     // both always exist, the zero vector is never used).
     let edge_normal = |i: usize| {

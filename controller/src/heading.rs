@@ -91,7 +91,7 @@ pub fn plan_heading<const N: usize>(
         0.0
     } else {
         let d = wrap_angle(libm::atan2(dy, dx) - theta0);
-        crate::clamp(d / (N as f64 * step_duration), -omega_max, omega_max)
+        crate::linalg::clamp(d / (N as f64 * step_duration), -omega_max, omega_max)
     };
     let mut theta = [0.0; N];
     let mut th = theta0;

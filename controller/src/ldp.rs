@@ -60,12 +60,12 @@
 
 use nalgebra::{Const, DefaultAllocator, Dim, OMatrix, OVector, U1};
 
-use crate::active_set::{self, dot};
+use crate::active_set;
+use crate::linalg::{column, column_mut, columns, dot};
 
 mod gram;
 use crate::qp::{
-    DenseQpOf, DualActiveSetOf, QpAllocator, QpSolutionOf, QpStatus, RowNormsOf, ZERO_ROW2, column,
-    column_mut, columns,
+    DenseQpOf, DualActiveSetOf, QpAllocator, QpSolutionOf, QpStatus, RowNormsOf, ZERO_ROW2,
 };
 #[cfg(doc)]
 use crate::qp::{DualActiveSet, QpSettings};
@@ -278,26 +278,18 @@ where
 
     /// [`LdpSolverOf::load`] and [`LdpSolverOf::solve`] with `qp.q` and `qp.h`
     /// (`qp`'s rows must be the prepared ones; they are not read).
-    pub fn solve_qp(
-        &self,
-        qp: &DenseQpOf<NV, NC>,
-        prefer: &[bool],
-        max_iter: u32,
-    ) -> QpSolutionOf<NV, NC> {
+    pub fn solve_qp(&self, qp: &DenseQpOf<NV, NC>, prefer: &[bool]) -> QpSolutionOf<NV, NC> {
         let ld = self.load(&qp.q, &qp.h);
-        self.solve(&ld, prefer, max_iter)
+        self.solve(&ld, prefer)
     }
 
-    /// Solves the loaded QP with at most `max_iter` adds plus drops; `prefer[i]`
+    /// Solves the loaded QP with at most [`QpSettings::max_iter`] (of the
+    /// solver it was prepared with) adds plus drops; `prefer[i]`
     /// marks row `i` as expected active (warm start). Same contract as
     /// [`DualActiveSetOf::solve`]. A `loaded` from a solver with another row count
     /// gives [`QpStatus::NumericalError`].
-    pub fn solve(
-        &self,
-        loaded: &LdpLoadedOf<NV, NC>,
-        prefer: &[bool],
-        max_iter: u32,
-    ) -> QpSolutionOf<NV, NC> {
+    pub fn solve(&self, loaded: &LdpLoadedOf<NV, NC>, prefer: &[bool]) -> QpSolutionOf<NV, NC> {
+        let max_iter = self.solver.settings().max_iter;
         let nv = self.solver.nv();
         let nc = self.inv_mnorm.shape_generic().0;
         if !self.finite || !loaded.finite || loaded.m != self.m {
@@ -311,7 +303,7 @@ where
         if me > 0 && !self.solver.equalities_capable() {
             // Not compiled in at this size: the fallback's answer (a
             // numerical error, as `solve`'s).
-            return self.fallback(loaded, prefer, max_iter);
+            return self.fallback(loaded, prefer);
         }
         if me == 0
             && let Some(sol) = self.unconstrained(loaded)
@@ -352,7 +344,7 @@ where
             false,
         ) else {
             // The normal equations would lose too much accuracy.
-            return self.fallback(loaded, prefer, max_iter);
+            return self.fallback(loaded, prefer);
         };
         // u = -M_A' lambda_A - u_new m_p (scaled rows, scaled multipliers).
         let mut u = OVector::<f64, NV>::zeros_generic(nv, U1);
@@ -431,17 +423,11 @@ where
     /// active set too ill-conditioned for the normal equations of the LDP,
     /// and for QPs with equality rows.
     #[cold]
-    fn fallback(
-        &self,
-        loaded: &LdpLoadedOf<NV, NC>,
-        prefer: &[bool],
-        max_iter: u32,
-    ) -> QpSolutionOf<NV, NC> {
+    fn fallback(&self, loaded: &LdpLoadedOf<NV, NC>, prefer: &[bool]) -> QpSolutionOf<NV, NC> {
         let mut qp = self.qp.clone();
         qp.q = loaded.q.clone();
         qp.h = loaded.h.clone();
-        self.solver
-            .solve_prepared(&qp, &self.norms, prefer, max_iter)
+        self.solver.solve_prepared(&qp, &self.norms, prefer)
     }
 }
 

@@ -56,34 +56,18 @@ extern crate alloc;
 
 mod active_set;
 pub mod constraints;
-mod float;
 pub mod geometry;
 pub mod heading;
 pub mod ldp;
+mod linalg;
 pub mod lip;
 pub mod mpc;
 mod names;
 pub mod qp;
 pub mod relax;
+mod solution;
 
 pub use nalgebra;
-
-/// `x` limited to `[lo, hi]`: `f64::clamp` without its `lo <= hi` assertion.
-///
-/// The controller's bounds come from a validated [`Config`], which the optimiser
-/// cannot see, so `f64::clamp` would keep a panicking branch in `step` (see
-/// `nopanic/`). Same steps as `f64::clamp`, so the same result whenever
-/// `lo <= hi`; a NaN `x` stays NaN; with `lo > hi` the result is `hi`.
-pub(crate) fn clamp(x: f64, lo: f64, hi: f64) -> f64 {
-    let mut x = x;
-    if x < lo {
-        x = lo;
-    }
-    if x > hi {
-        x = hi;
-    }
-    x
-}
 
 pub use constraints::{Condensed, HalfPlane, RowId, RowKind};
 pub use geometry::{

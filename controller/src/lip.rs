@@ -43,7 +43,7 @@ impl Lip {
     /// Builds the model for gravity `g` (m/s^2), CoM height `H` (m) and step
     /// duration `T` (s). The caller validates that all three are positive and finite.
     pub fn new(gravity: f64, com_height: f64, step_duration: f64) -> Self {
-        let beta = crate::float::sqrt(gravity / com_height);
+        let beta = crate::linalg::sqrt(gravity / com_height);
         Lip {
             beta,
             step_duration,

@@ -54,8 +54,10 @@
 //! sizes, always for `Dyn`; a static instance below that answers a QP with
 //! equality rows with [`QpStatus::NumericalError`].
 //!
-//! Iteration count = number of adds plus drops; it never exceeds the budget passed
-//! to `solve`. Every loop is bounded by `NV`, `NC` or the budget.
+//! Iteration count = number of adds plus drops; it never exceeds the budget,
+//! [`QpSettings::max_iter`] (with the tolerances; `solve_selected` also takes
+//! a caller's remaining budget). Every loop is bounded by `NV`, `NC` or the
+//! budget.
 //!
 //! Warm start: the caller may mark rows it expects to be active (for example the
 //! previous cycle's active set, shifted). Among the violated rows the solver adds
@@ -88,7 +90,11 @@ use nalgebra::Dyn;
 use nalgebra::allocator::Allocator;
 use nalgebra::{ArrayStorage, Const, DefaultAllocator, Dim, OMatrix, OVector, SMatrix, U1};
 
-use crate::active_set::{self, dot, dot_d};
+use crate::active_set;
+use crate::linalg::{column, columns, columns_mut, dot, dot_d};
+#[cfg(feature = "alloc")]
+pub use crate::solution::QpSolutionDyn;
+pub use crate::solution::{QpAllocator, QpSolution, QpSolutionOf, QpStatus};
 
 mod backend;
 mod dense;
@@ -97,7 +103,6 @@ pub use backend::{OwnSolver, QpBackend};
 #[cfg(feature = "alloc")]
 pub use dense::DenseQpDyn;
 pub use dense::{DenseQp, DenseQpOf};
-pub(crate) use dense::{column, column_mut, columns, columns_in, columns_in_mut, columns_mut};
 use orthogonal::Orthogonal;
 
 /// Rows whose squared Euclidean norm is not above this (it is 0 for an exactly
@@ -112,46 +117,6 @@ pub(crate) const ZERO_ROW2: f64 = 0.0;
 /// hot start's code (3.8 KiB of Thumb at `NV = 6`) would not fit the
 /// firmware's 64 KiB of flash (`docs/horizon.md`).
 pub const HOT_START_MIN_NV: usize = 16;
-
-/// The allocations the solver needs for `NV` variables and `NC` rows: every
-/// `DefaultAllocator` over `Const` sizes has them (no heap), and so has the
-/// one over `Dyn` with nalgebra's `alloc` feature.
-pub trait QpAllocator<NV: Dim, NC: Dim>:
-    Allocator<NV> + Allocator<NC> + Allocator<NV, NV> + Allocator<NV, NC> + Allocator<NC, NC>
-{
-}
-
-impl<NV: Dim, NC: Dim, A> QpAllocator<NV, NC> for A where
-    A: Allocator<NV> + Allocator<NC> + Allocator<NV, NV> + Allocator<NV, NC> + Allocator<NC, NC>
-{
-}
-
-/// What one solve did. `Copy`, so it can travel in every cycle's diagnostics.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum QpStatus {
-    /// All rows hold to the primal tolerance and all multipliers are >= 0: `x` is the
-    /// unique minimiser.
-    Solved,
-    /// The constraint set is empty (certified by the dual method, see module docs).
-    Infeasible,
-    /// The iteration budget ran out before optimality; `x` is the last iterate
-    /// (dual feasible, primal infeasible).
-    IterationLimit,
-    /// A non-finite number appeared in the data or the iterates, or the Hessian
-    /// was not positive definite.
-    NumericalError,
-}
-
-impl QpStatus {
-    /// True for [`QpStatus::Solved`].
-    pub fn is_solved(self) -> bool {
-        matches!(self, QpStatus::Solved)
-    }
-    /// True for [`QpStatus::Infeasible`].
-    pub fn is_infeasible(self) -> bool {
-        matches!(self, QpStatus::Infeasible)
-    }
-}
 
 /// Error from [`DualActiveSetOf::new`]: the Hessian cannot be used.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -180,8 +145,8 @@ impl core::fmt::Display for HessianError {
 
 impl core::error::Error for HessianError {}
 
-/// Tolerances and options of the solver. The tolerances are absolute, applied to
-/// rows scaled to unit norm.
+/// Tolerances, the iteration limit and options of the solver. The tolerances
+/// are absolute, applied to rows scaled to unit norm.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct QpSettings {
     /// A row counts as violated when `(h_i - g_i x) / |g_i| < -tol_primal`.
@@ -194,6 +159,10 @@ pub struct QpSettings {
     /// [`HOT_START_MIN_NV`] variables on). Off, the marks only decide which
     /// violated row is added first.
     pub hot_start: bool,
+    /// Iteration limit of one solve: at most this many adds plus drops
+    /// (>= 1); a solve that needs more stops with
+    /// [`QpStatus::IterationLimit`].
+    pub max_iter: u32,
 }
 
 impl Default for QpSettings {
@@ -202,6 +171,7 @@ impl Default for QpSettings {
             tol_primal: 1e-10,
             tol_dependence: 1e-12,
             hot_start: true,
+            max_iter: 1000,
         }
     }
 }
@@ -212,10 +182,11 @@ impl QpSettings {
     /// component of a normal above it never as dependent.
     pub const MAX_TOL: f64 = 1e-3;
 
-    /// Checks the tolerances: each finite and in `(0, MAX_TOL)`. The error is
-    /// `(field, requirement)` for the first bad one. Every interface that takes
-    /// tolerances from a user (the controller's `Config`, the C API, Python's
-    /// `solve_qp`) checks them here.
+    /// Checks the settings: each tolerance finite and in `(0, MAX_TOL)`,
+    /// `max_iter >= 1`. The error is `(field, requirement)` for the first bad
+    /// one. Every interface that takes settings from a user (the
+    /// controller's `Config`, the C API, Python's `solve_qp`) checks them
+    /// here.
     pub fn validate(&self) -> Result<(), (&'static str, &'static str)> {
         let ok = |t: f64| t.is_finite() && t > 0.0 && t < Self::MAX_TOL;
         if !ok(self.tol_primal) {
@@ -224,54 +195,10 @@ impl QpSettings {
         if !ok(self.tol_dependence) {
             return Err(("tol_dependence", "must be in (0, 1e-3)"));
         }
+        if self.max_iter == 0 {
+            return Err(("max_iter", "must be >= 1"));
+        }
         Ok(())
-    }
-}
-
-/// Result of one solve, for any dimension types (see [`QpSolution`] for the
-/// static sizes). `lambda` holds one multiplier per row (zero for inactive
-/// rows), so `H x + q + G' lambda = 0` at a solution.
-#[derive(Clone, Debug)]
-pub struct QpSolutionOf<NV: Dim, NC: Dim>
-where
-    DefaultAllocator: Allocator<NV> + Allocator<NC>,
-{
-    /// Primal solution (or last iterate when not solved).
-    pub x: OVector<f64, NV>,
-    /// Lagrange multipliers, one per row, in the order of the rows of `G`
-    /// (`>= 0` for inequality rows, either sign for equality rows).
-    /// When the status is [`QpStatus::Infeasible`] it holds instead a Farkas
-    /// certificate of infeasibility: `y` with `G'y = 0` and `h'y < 0` (up
-    /// to rounding), `>= 0` on inequality rows, scaled so that the entry of
-    /// the row that could not be added is 1 (or -1 for an equality row
-    /// violated from below).
-    pub lambda: OVector<f64, NC>,
-    /// Objective `1/2 x'Hx + q'x` at `x`.
-    pub objective: f64,
-    /// Outcome.
-    pub status: QpStatus,
-    /// Adds plus drops performed.
-    pub iterations: u32,
-    /// Indices of the active rows (first `n_active` entries valid; the
-    /// equality rows first).
-    pub active: OVector<u16, NV>,
-    /// Number of active rows.
-    pub n_active: usize,
-}
-
-/// [`QpSolutionOf`] with the sizes as constants (stack only, `Copy`).
-pub type QpSolution<const NV: usize, const NC: usize> = QpSolutionOf<Const<NV>, Const<NC>>;
-
-impl<const NV: usize, const NC: usize> Copy for QpSolutionOf<Const<NV>, Const<NC>> {}
-
-impl<NV: Dim, NC: Dim> QpSolutionOf<NV, NC>
-where
-    DefaultAllocator: Allocator<NV> + Allocator<NC>,
-{
-    /// The active rows as a slice.
-    pub fn active_set(&self) -> &[u16] {
-        let a = self.active.as_slice();
-        a.get(..self.n_active.min(a.len())).unwrap_or(&[])
     }
 }
 
@@ -361,9 +288,6 @@ pub type DualActiveSet<const NV: usize, const NC: usize> = DualActiveSetOf<Const
 /// and rows, heap storage, the same code as the static ones.
 #[cfg(feature = "alloc")]
 pub type DualActiveSetDyn = DualActiveSetOf<Dyn, Dyn>;
-/// [`QpSolutionOf`] with run-time sizes (feature `alloc`).
-#[cfg(feature = "alloc")]
-pub type QpSolutionDyn = QpSolutionOf<Dyn, Dyn>;
 /// [`RowNormsOf`] with run-time sizes (feature `alloc`).
 #[cfg(feature = "alloc")]
 pub type RowNormsDyn = RowNormsOf<Dyn>;
@@ -382,6 +306,7 @@ impl<const NV: usize, const NC: usize> DualActiveSetOf<Const<NV>, Const<NC>> {
             tol_primal: 0.0,
             tol_dependence: 0.0,
             hot_start: false,
+            max_iter: 0,
         },
         _nc: PhantomData,
     };
@@ -456,6 +381,14 @@ where
     pub fn without_hot_start(&self) -> Self {
         let mut s = self.clone();
         s.settings.hot_start = false;
+        s
+    }
+
+    /// The same solver with the iteration limit [`QpSettings::max_iter`] set
+    /// to `max_iter` (a copy of the factored Hessian, no factorisation).
+    pub fn with_max_iter(&self, max_iter: u32) -> Self {
+        let mut s = self.clone();
+        s.settings.max_iter = max_iter;
         s
     }
 
@@ -569,7 +502,8 @@ where
         x
     }
 
-    /// Solves the QP `qp` with at most `max_iter` adds plus drops. `prefer[i]` marks
+    /// Solves the QP `qp` with at most [`QpSettings::max_iter`] adds plus
+    /// drops. `prefer[i]` marks
     /// row `i` as expected active (warm start); pass all `false` for a cold start
     /// (entries beyond the capacity are ignored, missing ones are `false`).
     ///
@@ -582,24 +516,26 @@ where
     ///     .unwrap();
     /// let mut qp = DenseQp::<2, 4>::with_q(SVector::from([-1.0, -1.0]));
     /// qp.push_row(&SVector::from([1.0, 1.0]), 1.0).unwrap();
-    /// let sol = solver.solve(&qp, &[], 10);
+    /// let sol = solver.solve(&qp, &[]);
     /// assert_eq!(sol.status, QpStatus::Solved);
     /// assert!((sol.x - SVector::from([0.5, 0.5])).amax() < 1e-12);
     /// assert!((sol.lambda[0] - 0.5).abs() < 1e-12); // the row is active
     /// assert_eq!(sol.iterations, 1); // one add
     /// ```
-    pub fn solve(
-        &self,
-        qp: &DenseQpOf<NV, NC>,
-        prefer: &[bool],
-        max_iter: u32,
-    ) -> QpSolutionOf<NV, NC> {
+    pub fn solve(&self, qp: &DenseQpOf<NV, NC>, prefer: &[bool]) -> QpSolutionOf<NV, NC> {
         // The H^-1 norms are left to the solve, which computes them only for
         // rows found violated.
         let mut rows = RowNormsOf::euclidean(qp);
         let nc = qp.h.shape_generic().0;
         let excluded = OVector::<bool, NC>::from_element_generic(nc, U1, false);
-        self.solve_with(qp, &qp.h, excluded, &mut rows, prefer, max_iter)
+        self.solve_with(
+            qp,
+            &qp.h,
+            excluded,
+            &mut rows,
+            prefer,
+            self.settings.max_iter,
+        )
     }
 
     /// [`DualActiveSetOf::solve`] on a selection of `qp`'s rows with other
@@ -611,14 +547,16 @@ where
     /// only the enabled rows, in the same order, without copying them: the
     /// relaxation scheme ([`crate::relax`]) solves its probes so, with no
     /// second QP in memory. Every row of `qp` must be finite, enabled or not
-    /// (else [`QpStatus::NumericalError`]).
+    /// (else [`QpStatus::NumericalError`]). At most `budget` adds plus drops
+    /// (a caller's remaining budget, as the relaxation's budget of a cycle),
+    /// and at most [`QpSettings::max_iter`].
     pub fn solve_selected(
         &self,
         qp: &DenseQpOf<NV, NC>,
         h: &OVector<f64, NC>,
         enabled: &[bool],
         prefer: &[bool],
-        max_iter: u32,
+        budget: u32,
     ) -> QpSolutionOf<NV, NC> {
         let nc = qp.h.shape_generic().0;
         let mut excluded = OVector::<bool, NC>::from_element_generic(nc, U1, true);
@@ -626,6 +564,7 @@ where
             *x = !on;
         }
         let mut rows = RowNormsOf::euclidean(qp);
+        let max_iter = budget.min(self.settings.max_iter);
         self.solve_with(qp, h, excluded, &mut rows, prefer, max_iter)
     }
 
@@ -658,7 +597,6 @@ where
         qp: &DenseQpOf<NV, NC>,
         rows: &RowNormsOf<NC>,
         prefer: &[bool],
-        max_iter: u32,
     ) -> QpSolutionOf<NV, NC> {
         let mut rows = rows.clone();
         let nc = qp.h.shape_generic().0;
@@ -666,7 +604,14 @@ where
             rows.finite = false;
         }
         let excluded = OVector::<bool, NC>::from_element_generic(nc, U1, false);
-        self.solve_with(qp, &qp.h, excluded, &mut rows, prefer, max_iter)
+        self.solve_with(
+            qp,
+            &qp.h,
+            excluded,
+            &mut rows,
+            prefer,
+            self.settings.max_iter,
+        )
     }
 
     /// `1 / |L^-1 g|` for a row with `|g|^2 = n2 > 0`.
@@ -675,13 +620,13 @@ where
     #[cfg_attr(not(target_os = "none"), inline(always))]
     fn inv_hnorm(&self, g: &[f64], n2: f64) -> f64 {
         let w = self.linv_mul(g);
-        let hn = crate::float::sqrt(dot_d::<NV>(w.as_slice(), w.as_slice()));
+        let hn = crate::linalg::sqrt(dot_d::<NV>(w.as_slice(), w.as_slice()));
         // L^-1 is nonsingular, so hn > 0 for a non-zero row (barring underflow,
         // where the Euclidean norm stands in).
         if hn > 0.0 {
             1.0 / hn
         } else {
-            1.0 / crate::float::sqrt(n2)
+            1.0 / crate::linalg::sqrt(n2)
         }
     }
 

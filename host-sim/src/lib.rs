@@ -24,8 +24,9 @@
 //!   the atomic output directory, and the plots and animated GIF;
 //! * [`studies`]: `batch`, `robustness`, `deadline`, `replay` and `qp solve`,
 //!   many runs (or QPs) at once;
-//! * [`cli`]: the `run` pipeline behind the `ldcbf-sim` binary (`src/main.rs`,
-//!   the command line itself, sits on top of it).
+//! * [`cli`]: the command line of the `ldcbf-sim` binary (`src/main.rs` only
+//!   calls [`cli::main`]): arguments, one function per subcommand, and the
+//!   `run` pipeline.
 //!
 //! Frames and units: world frame W, metres, seconds, radians, as in the controller.
 

@@ -12,7 +12,8 @@
 //! 3. `sim`: the closed loop;
 //! 4. `report`: logs, summary, plots;
 //! 5. `studies`: batch, robustness, deadline, replay, qp solve;
-//! 6. `cli`: the `run` pipeline (`src/main.rs`, the binary, is above all).
+//! 6. `cli`: the command line and the `run` pipeline (`src/main.rs`, the
+//!    binary, only calls `cli::main`).
 
 use std::path::{Path, PathBuf};
 

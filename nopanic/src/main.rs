@@ -232,7 +232,12 @@ fn main() -> ! {
         // SAFETY: plain volatile read of a static that is never referenced.
         let d = unsafe { read_volatile(addr_of!(QPRAW)) };
         let hess = SMatrix::<f64, LNV, LNV>::from_fn(|i, j| d[i * LNV + j]);
-        if let Ok(solver) = DualActiveSet::<LNV, LNC>::new(&hess, QpSettings::default()) {
+        let o = LNV * LNV + LNV + LNC * LNV;
+        let settings = QpSettings {
+            max_iter: len(d[o + 2 * LNC + 1], 10_000) as u32,
+            ..QpSettings::default()
+        };
+        if let Ok(solver) = DualActiveSet::<LNV, LNC>::new(&hess, settings) {
             let o = LNV * LNV;
             let mut qp = DenseQp::<LNV, LNC>::with_q(SVector::from_fn(|i, _| d[o + i]));
             let o = o + LNV;
@@ -249,7 +254,7 @@ fn main() -> ! {
             }
             let ldp = LdpSolver::prepare(&solver, &qp);
             let loaded = ldp.load(&qp.q, &h);
-            let sol = ldp.solve(&loaded, &prefer, len(d[o + 2 * LNC + 1], 10_000) as u32);
+            let sol = ldp.solve(&loaded, &prefer);
             out[0] += sol.x[0] + sol.lambda[LNC - 1] + sol.objective;
         }
         publish(out);

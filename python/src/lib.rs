@@ -1113,14 +1113,11 @@ fn solve_qp<'py>(
     tol_primal: Option<&Bound<'py, PyAny>>,
     tol_dependence: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Bound<'py, PyDict>> {
+    let defaults = QpSettings::default();
     let max_iter = match max_iter.filter(|m| !m.is_none()) {
-        None => 1000,
+        None => defaults.max_iter,
         Some(m) => int_arg(m, "max_iter", u32::MAX.into())? as u32,
     };
-    if max_iter == 0 {
-        return Err(arg_err(py, "max_iter", "must be >= 1"));
-    }
-    let defaults = QpSettings::default();
     let tol = |obj: Option<&Bound<'py, PyAny>>, field: &str, default: f64| match obj
         .filter(|t| !t.is_none())
     {
@@ -1130,6 +1127,7 @@ fn solve_qp<'py>(
     let settings = QpSettings {
         tol_primal: tol(tol_primal, "tol_primal", defaults.tol_primal)?,
         tol_dependence: tol(tol_dependence, "tol_dependence", defaults.tol_dependence)?,
+        max_iter,
         ..defaults
     };
     // The controller's one check of the tolerances.
@@ -1192,13 +1190,13 @@ fn solve_qp<'py>(
     macro_rules! dispatch {
         ($(($nv:literal, $nc:literal)),*) => {
             $(if n == $nv && m <= $nc {
-                let sol = py.detach(|| solve_sized(&data, (Const::<$nv>, Const::<$nc>), settings, max_iter, "static"));
+                let sol = py.detach(|| solve_sized(&data, (Const::<$nv>, Const::<$nc>), settings, "static"));
                 return qp_dict(py, sol.map_err(|e| arg_err(py, "P", e))?, m);
             })*
         };
     }
     ldcbf_sim::with_qp_sizes!(dispatch);
-    let sol = py.detach(|| solve_sized(&data, (Dyn(n), Dyn(m)), settings, max_iter, "dynamic"));
+    let sol = py.detach(|| solve_sized(&data, (Dyn(n), Dyn(m)), settings, "dynamic"));
     qp_dict(py, sol.map_err(|e| arg_err(py, "P", e))?, m)
 }
 
@@ -1220,7 +1218,6 @@ fn solve_sized<V: Dim, C: Dim>(
     d: &DenseProblem,
     (nv, nc): (V, C),
     settings: QpSettings,
-    max_iter: u32,
     path: &'static str,
 ) -> Result<QpOut, String>
 where
@@ -1229,7 +1226,7 @@ where
     // The reference's one conversion into the solver's types.
     let (hess, qp) = d.to_qp(nv, nc).map_err(|e| e.0)?;
     let solver = DualActiveSetOf::<V, C>::new(&hess, settings).map_err(|e| e.to_string())?;
-    let sol = solver.solve(&qp, &[], max_iter);
+    let sol = solver.solve(&qp, &[]);
     Ok(QpOut {
         x: sol.x.iter().copied().collect(),
         lambda: sol.lambda.iter().take(d.m).copied().collect(),

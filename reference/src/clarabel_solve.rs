@@ -278,7 +278,6 @@ impl<const NV: usize, const NC: usize> QpBackend<NV, NC> for ClarabelBackend {
         solver: &DualActiveSet<NV, NC>,
         qp: &DenseQp<NV, NC>,
         _prefer: &[bool; NC],
-        _max_iter: u32,
     ) -> QpSolution<NV, NC> {
         let p = DenseProblem::from_dense_qp(solver.hessian(), qp);
         let r = solve_clarabel(&p);

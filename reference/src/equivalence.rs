@@ -18,18 +18,26 @@ pub fn solve_own<const NV: usize, const NC: usize>(
     max_iter: u32,
 ) -> Result<QpSolution<NV, NC>, ProblemError> {
     let (H, qp) = p.to_fixed::<NV, NC>()?;
-    let solver = DualActiveSet::<NV, NC>::new(&H, QpSettings::default())
+    let solver = DualActiveSet::<NV, NC>::new(&H, settings(max_iter))
         .map_err(|e| ProblemError(format!("Hessian rejected: {e}")))?;
-    Ok(solver.solve(&qp, &[false; NC], max_iter))
+    Ok(solver.solve(&qp, &[false; NC]))
 }
 
 /// Solves with the run-time-sized instance of our solver (any `n`, any
 /// number of rows, equality rows held as equalities), cold start.
 pub fn solve_own_dyn(p: &DenseProblem, max_iter: u32) -> Result<QpSolutionDyn, ProblemError> {
     let (H, qp) = p.to_dyn()?;
-    let solver = DualActiveSetDyn::new(&H, QpSettings::default())
+    let solver = DualActiveSetDyn::new(&H, settings(max_iter))
         .map_err(|e| ProblemError(format!("Hessian rejected: {e}")))?;
-    Ok(solver.solve(&qp, &[], max_iter))
+    Ok(solver.solve(&qp, &[]))
+}
+
+/// The default settings with the iteration limit `max_iter`.
+fn settings(max_iter: u32) -> QpSettings {
+    QpSettings {
+        max_iter,
+        ..QpSettings::default()
+    }
 }
 
 /// The agreement figures of docs/maths.md §3 for one problem.

@@ -281,10 +281,14 @@ fn the_least_distance_path_agrees_with_the_orthogonal_one_with_equalities() {
     for (i, (p, kind)) in instances().into_iter().enumerate() {
         let tag = format!("n = {}, m = {}, me = {}, {kind:?}", p.n, p.m, p.me);
         let (hess, qp) = p.to_dyn().unwrap();
-        let s = DualActiveSetDyn::new(&hess, QpSettings::default()).unwrap();
-        let a = s.without_hot_start().solve(&qp, &[], 10_000);
+        let settings = QpSettings {
+            max_iter: 10_000,
+            ..QpSettings::default()
+        };
+        let s = DualActiveSetDyn::new(&hess, settings).unwrap();
+        let a = s.without_hot_start().solve(&qp, &[]);
         let ldp = LdpSolverDyn::prepare(&s, &qp);
-        let b = ldp.solve_qp(&qp, &[], 10_000);
+        let b = ldp.solve_qp(&qp, &[]);
         assert_eq!(a.status, b.status, "{tag}");
         if a.status == QpStatus::Solved {
             let dx = (&a.x - &b.x).amax() / a.x.amax().max(1.0);

@@ -23,19 +23,39 @@ use crate::msgs::{
 use crate::node::{CycleMessages, NavNode};
 use crate::params::{NODE_NAME, Params};
 
-macro_rules! messages {
-    ($($t:ty),*) => { $(impl ros2_client::Message for $t {})* };
+/// A message's ROS 2 interface: its package, its type name and the QoS of the
+/// topics that carry it (the one place that maps a message to them).
+pub trait Interface: ros2_client::Message {
+    /// The interface package, e.g. `nav_msgs`.
+    const PACKAGE: &'static str;
+    /// The type name within the package, e.g. `Odometry`.
+    const TYPE: &'static str;
+    /// The QoS of its topics, publisher and subscriber alike.
+    fn qos() -> QosProfile;
 }
-messages!(
-    LaserScan,
-    Odometry,
-    GaitState,
-    PoseStamped,
-    FootstepCommand,
-    Path,
-    MarkerArray,
-    DiagnosticArray
-);
+
+macro_rules! interfaces {
+    ($($t:ident: $pkg:literal, $qos:ident;)*) => {$(
+        impl ros2_client::Message for $t {}
+        impl Interface for $t {
+            const PACKAGE: &'static str = $pkg;
+            const TYPE: &'static str = stringify!($t);
+            fn qos() -> QosProfile {
+                $qos()
+            }
+        }
+    )*};
+}
+interfaces! {
+    LaserScan: "sensor_msgs", sensor_qos;
+    Odometry: "nav_msgs", sensor_qos;
+    GaitState: "ldcbf_msgs", reliable_qos;
+    PoseStamped: "geometry_msgs", reliable_qos;
+    FootstepCommand: "ldcbf_msgs", reliable_qos;
+    Path: "nav_msgs", reliable_qos;
+    MarkerArray: "visualization_msgs", reliable_qos;
+    DiagnosticArray: "diagnostic_msgs", reliable_qos;
+}
 
 /// Sensor data: best effort, keep last 5, volatile.
 pub fn sensor_qos() -> QosProfile {
@@ -82,28 +102,24 @@ pub fn topic(node: &mut Node, name: &str, pkg: &str, ty: &str, qos: &QosProfile)
         .with_context(|| format!("cannot create topic {name}"))
 }
 
-/// A subscription to `name` (`pkg/msg/ty`) with `qos`.
-pub fn subscribe<M: 'static + serde::de::DeserializeOwned>(
+/// A subscription to `name`, with `M`'s type and QoS ([`Interface`]).
+pub fn subscribe<M: Interface + 'static + serde::de::DeserializeOwned>(
     node: &mut Node,
     name: &str,
-    pkg: &str,
-    ty: &str,
-    qos: QosProfile,
 ) -> Result<Subscription<M>> {
-    let t = topic(node, name, pkg, ty, &qos)?;
+    let qos = M::qos();
+    let t = topic(node, name, M::PACKAGE, M::TYPE, &qos)?;
     node.create_subscription(&t, Some(qos))
         .with_context(|| format!("cannot subscribe to {name}"))
 }
 
-/// A publisher on `name` (`pkg/msg/ty`) with `qos`.
-pub fn advertise<M: serde::Serialize>(
+/// A publisher on `name`, with `M`'s type and QoS ([`Interface`]).
+pub fn advertise<M: Interface + serde::Serialize>(
     node: &mut Node,
     name: &str,
-    pkg: &str,
-    ty: &str,
-    qos: QosProfile,
 ) -> Result<Publisher<M>> {
-    let t = topic(node, name, pkg, ty, &qos)?;
+    let qos = M::qos();
+    let t = topic(node, name, M::PACKAGE, M::TYPE, &qos)?;
     node.create_publisher(&t, Some(qos))
         .with_context(|| format!("cannot publish on {name}"))
 }
@@ -160,56 +176,19 @@ pub fn spin(params: &Params, mut nav: NavNode, idle: Option<Duration>) -> Result
     let ctx = context(params.domain_id, params.localhost_only)?;
     let mut node = node(&ctx, NODE_NAME)?;
     let t = &params.topics;
-    let goal: Subscription<PoseStamped> = subscribe(
-        &mut node,
-        &t.goal,
-        "geometry_msgs",
-        "PoseStamped",
-        reliable_qos(),
-    )?;
-    let odom: Subscription<Odometry> =
-        subscribe(&mut node, &t.odom, "nav_msgs", "Odometry", sensor_qos())?;
-    let gait: Subscription<GaitState> = subscribe(
-        &mut node,
-        &t.gait_state,
-        "ldcbf_msgs",
-        "GaitState",
-        reliable_qos(),
-    )?;
+    let goal: Subscription<PoseStamped> = subscribe(&mut node, &t.goal)?;
+    let odom: Subscription<Odometry> = subscribe(&mut node, &t.odom)?;
+    let gait: Subscription<GaitState> = subscribe(&mut node, &t.gait_state)?;
     let scan: Option<Subscription<LaserScan>> = if params.lidar {
-        Some(subscribe(
-            &mut node,
-            &t.scan,
-            "sensor_msgs",
-            "LaserScan",
-            sensor_qos(),
-        )?)
+        Some(subscribe(&mut node, &t.scan)?)
     } else {
         None
     };
     let out = Outputs {
-        command: advertise(
-            &mut node,
-            &t.command,
-            "ldcbf_msgs",
-            "FootstepCommand",
-            reliable_qos(),
-        )?,
-        footsteps: advertise(&mut node, &t.footsteps, "nav_msgs", "Path", reliable_qos())?,
-        markers: advertise(
-            &mut node,
-            &t.markers,
-            "visualization_msgs",
-            "MarkerArray",
-            reliable_qos(),
-        )?,
-        diagnostics: advertise(
-            &mut node,
-            &t.diagnostics,
-            "diagnostic_msgs",
-            "DiagnosticArray",
-            reliable_qos(),
-        )?,
+        command: advertise(&mut node, &t.command)?,
+        footsteps: advertise(&mut node, &t.footsteps)?,
+        markers: advertise(&mut node, &t.markers)?,
+        diagnostics: advertise(&mut node, &t.diagnostics)?,
     };
     let mut cycles = 0;
     let mut last_input = Instant::now();
@@ -272,31 +251,11 @@ pub fn run_robot(
     let ctx = context(params.domain_id, params.localhost_only)?;
     let mut node = node(&ctx, "ldcbf_robot")?;
     let t = &params.topics;
-    let goal: Publisher<PoseStamped> = advertise(
-        &mut node,
-        &t.goal,
-        "geometry_msgs",
-        "PoseStamped",
-        reliable_qos(),
-    )?;
-    let odom: Publisher<Odometry> =
-        advertise(&mut node, &t.odom, "nav_msgs", "Odometry", sensor_qos())?;
-    let gait: Publisher<GaitState> = advertise(
-        &mut node,
-        &t.gait_state,
-        "ldcbf_msgs",
-        "GaitState",
-        reliable_qos(),
-    )?;
-    let command: Subscription<FootstepCommand> = subscribe(
-        &mut node,
-        &t.command,
-        "ldcbf_msgs",
-        "FootstepCommand",
-        reliable_qos(),
-    )?;
-    let scan: Publisher<LaserScan> =
-        advertise(&mut node, &t.scan, "sensor_msgs", "LaserScan", sensor_qos())?;
+    let goal: Publisher<PoseStamped> = advertise(&mut node, &t.goal)?;
+    let odom: Publisher<Odometry> = advertise(&mut node, &t.odom)?;
+    let gait: Publisher<GaitState> = advertise(&mut node, &t.gait_state)?;
+    let command: Subscription<FootstepCommand> = subscribe(&mut node, &t.command)?;
+    let scan: Publisher<LaserScan> = advertise(&mut node, &t.scan)?;
     let mut cycles = 0;
     loop {
         let (o, g, sc) = robot.sense();

@@ -3,7 +3,7 @@
 //! marked rows ([`hot_start`]).
 
 use super::{ActiveSetFactor, AddError, remove_at};
-use crate::qp::QpStatus;
+use crate::solution::QpStatus;
 
 /// The iteration's state that [`equalities`] and [`hot_start`] set up (slices
 /// of the vectors of [`iterate`]).

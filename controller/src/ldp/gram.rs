@@ -5,8 +5,9 @@
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector, U1};
 
 use super::{LdpSolverOf, PIVOT_FALLBACK, slack_holds};
-use crate::active_set::{ActiveSetFactor, AddError, dot, givens};
-use crate::qp::{QpAllocator, column, column_mut, columns};
+use crate::active_set::{ActiveSetFactor, AddError};
+use crate::linalg::{column, column_mut, columns, dot, givens};
+use crate::qp::QpAllocator;
 
 /// `z -= M_A' r` over the first `nact` active rows (scaled rows `mhat`,
 /// column-major with `n` rows).
@@ -109,7 +110,7 @@ where
         chol_solve(self.Ci, self.b.as_slice(), nact, self.w.as_mut_slice(), r);
         // z = m_p - M_A' r: the component of m_p outside the active span.
         let z = self.z.as_mut_slice();
-        crate::active_set::copy(z, mp);
+        crate::linalg::copy(z, mp);
         sub_active(mhat, n, z, act, r, nact);
         let mut z2 = dot(z, z);
         if z2 < REFINE2 {
@@ -197,7 +198,7 @@ where
         if diag < PIVOT_FALLBACK {
             return Err(AddError::Restart);
         }
-        crate::active_set::copy(row, self.w.as_slice());
+        crate::linalg::copy(row, self.w.as_slice());
         if let Some(c) = row.get_mut(nact) {
             *c = diag;
         }
@@ -365,7 +366,7 @@ pub(super) fn chol_drop<NV: Dim>(
             .and_then(|a| C.as_mut_slice().get_mut(a..a.saturating_add(2 * n)))
         {
             let (row, next) = pair.split_at_mut(n.min(pair.len()));
-            crate::active_set::copy(row, next);
+            crate::linalg::copy(row, next);
         }
     }
     if let Some(row) = column_mut(C.as_mut_slice(), n, last) {
@@ -389,7 +390,7 @@ pub(super) fn chol_drop<NV: Dim>(
         if let Some(v) = C.get_mut((k + 1, k)) {
             *v = 0.0;
         }
-        for row in crate::qp::columns_in_mut(C.as_mut_slice(), n, k + 1, last) {
+        for row in crate::linalg::columns_in_mut(C.as_mut_slice(), n, k + 1, last) {
             if let Some([ra, rb]) = row.get_mut(k..k + 2) {
                 let (a, b) = (*ra, *rb);
                 *ra = c * a + s * b;
@@ -417,7 +418,7 @@ pub(super) fn chol_drop<NV: Dim>(
             *a *= inv;
         }
         if let Some(dst) = column_mut(Ci.as_mut_slice(), n, i) {
-            crate::active_set::copy(dst, row.as_slice());
+            crate::linalg::copy(dst, row.as_slice());
         }
     }
 }

@@ -86,9 +86,9 @@ fn assert_same<const NV: usize, const NC: usize>(
     qp: &DenseQp<NV, NC>,
     prefer: &[bool; NC],
 ) -> QpStatus {
-    let a = s.without_hot_start().solve(qp, prefer, 500);
+    let a = s.without_hot_start().solve(qp, prefer);
     let ldp = LdpSolver::prepare(s, qp);
-    let b = ldp.solve_qp(qp, prefer, 500);
+    let b = ldp.solve_qp(qp, prefer);
     assert_eq!(a.status, b.status, "{qp:?}");
     assert_eq!(a.iterations, b.iterations);
     match b.status {
@@ -173,8 +173,8 @@ fn one_fixed_g_many_q_h() {
     for _ in 0..200 {
         qp.q = SVector::from_fn(|_, _| 5.0 * rnd.next());
         qp.h = SVector::from_fn(|_, _| rnd.next() + 0.4);
-        let a = s.solve(&qp, &[false; 16], 200);
-        let b = ldp.solve(&ldp.load(&qp.q, &qp.h), &[false; 16], 200);
+        let a = s.solve(&qp, &[false; 16]);
+        let b = ldp.solve(&ldp.load(&qp.q, &qp.h), &[false; 16]);
         assert_eq!(a.status, b.status);
         assert_eq!(a.iterations, b.iterations);
         assert!((a.x - b.x).amax() <= 1e-9 * a.x.amax().max(1.0));
@@ -222,8 +222,8 @@ fn degenerate_family<const NV: usize, const NC: usize>(seed: u64, count: usize) 
             };
             qp.push_row(&g, h).unwrap();
         }
-        let a = s.solve(&qp, &[false; NC], 500);
-        let b = LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; NC], 500);
+        let a = s.solve(&qp, &[false; NC]);
+        let b = LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; NC]);
         assert_eq!(a.status, b.status, "case {k}");
         match b.status {
             QpStatus::Solved => {
@@ -323,7 +323,7 @@ fn degenerate_rows() {
     assert!(st.iter().all(|s| s.is_infeasible()));
     // The zero-row certificate is e_1.
     let qp = qp2(cases[6]);
-    let sol = LdpSolver::prepare(&solver2(), &qp).solve_qp(&qp, &[false; 8], 10);
+    let sol = LdpSolver::prepare(&solver2(), &qp).solve_qp(&qp, &[false; 8]);
     assert_eq!(sol.lambda[1], 1.0);
 }
 
@@ -336,8 +336,8 @@ fn ill_conditioned_active_set_falls_back_to_solve() {
     let s = solver2();
     let mut qp = qp2(&[([1.0, 0.0], 0.0), ([1.0, 1e-7], 0.0)]);
     qp.q = Vector2::new(-2e6, -0.1);
-    let a = s.solve(&qp, &[false; 8], 10);
-    let b = LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; 8], 10);
+    let a = s.solve(&qp, &[false; 8]);
+    let b = LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; 8]);
     assert_eq!(a.status, QpStatus::Solved);
     assert_eq!((a.status, a.iterations), (b.status, b.iterations));
     assert_eq!(a.x, b.x);
@@ -349,18 +349,19 @@ fn ill_conditioned_active_set_falls_back_to_solve() {
 fn unconstrained_and_budget() {
     let s = solver2();
     let qp = qp2(&[]);
-    let sol = LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; 8], 10);
+    let sol = LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; 8]);
     assert_eq!(sol.status, QpStatus::Solved);
     assert_eq!(sol.iterations, 0);
     assert!((sol.x - Vector2::new(1.0, 2.0)).amax() < 1e-14);
     assert!((sol.objective + 5.0).abs() < 1e-14);
     let qp = qp2(&[([1.0, 1.0], -2.0), ([0.0, 1.0], -1.0)]);
     let ldp = LdpSolver::prepare(&s, &qp);
-    let full = ldp.solve_qp(&qp, &[false; 8], 10);
+    let full = ldp.solve_qp(&qp, &[false; 8]);
     assert_eq!((full.status, full.iterations), (QpStatus::Solved, 2));
     for budget in [0, 1] {
-        let a = s.solve(&qp, &[false; 8], budget);
-        let b = ldp.solve_qp(&qp, &[false; 8], budget);
+        let s = s.with_max_iter(budget);
+        let a = s.solve(&qp, &[false; 8]);
+        let b = LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; 8]);
         assert_eq!(b.status, QpStatus::IterationLimit);
         assert_eq!(b.iterations, budget);
         // The last iterate is the one of `solve`.
@@ -376,23 +377,23 @@ fn bad_input_is_numerical_error() {
     let err = |sol: QpSolution<2, 8>| assert_eq!(sol.status, QpStatus::NumericalError);
     for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
         // q, h
-        err(ldp.solve(&ldp.load(&Vector2::new(bad, 0.0), &good.h), &[false; 8], 10));
+        err(ldp.solve(&ldp.load(&Vector2::new(bad, 0.0), &good.h), &[false; 8]));
         let mut h = good.h;
         h[0] = bad;
-        err(ldp.solve(&ldp.load(&good.q, &h), &[false; 8], 10));
+        err(ldp.solve(&ldp.load(&good.q, &h), &[false; 8]));
         // G
         let qp = qp2(&[([1.0, bad], 1.0)]);
-        err(LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; 8], 10));
+        err(LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; 8]));
     }
     // A row whose squared norm overflows.
     let qp = qp2(&[([1e200, 0.0], 1.0)]);
-    err(LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; 8], 10));
+    err(LdpSolver::prepare(&s, &qp).solve_qp(&qp, &[false; 8]));
     // Loaded data of a solver with another row count.
     let other = LdpSolver::prepare(&s, &qp2(&[([1.0, 0.0], 0.0), ([0.0, 1.0], 0.0)]));
-    err(ldp.solve(&other.load(&good.q, &good.h), &[false; 8], 10));
+    err(ldp.solve(&other.load(&good.q, &good.h), &[false; 8]));
     // The placeholder solver (H = 0): defined status, no panic.
     let ph = DualActiveSet::<2, 8>::PLACEHOLDER;
-    let sol = LdpSolver::prepare(&ph, &good).solve_qp(&good, &[false; 8], 10);
+    let sol = LdpSolver::prepare(&ph, &good).solve_qp(&good, &[false; 8]);
     assert!(!sol.status.is_solved() || sol.x.iter().all(|v| v.is_finite()));
 }
 

@@ -3,6 +3,7 @@
 //! ([`Config::validate`], [`ConfigError`]) and the margins derived from it
 //! ([`Config::barrier_margin`], [`Config::foot_margin`]).
 
+use crate::qp::QpSettings;
 use nalgebra::Vector2;
 
 /// Controller settings. Units: SI (m, s, rad). Build with `Default` (the paper's
@@ -180,7 +181,7 @@ impl Config {
     /// `n`. The defaults are sized for the paper's `N = 3`; the rows and the
     /// active sets grow linearly with the horizon (closed loops on the shipped
     /// layouts needed at most 112 iterations per cycle at `N = 10` and 326 at
-    /// `N = 20`, `tests/horizon.rs`). Saturates instead of overflowing.
+    /// `N = 20`, `host-sim/tests/horizon.rs`). Saturates instead of overflowing.
     pub fn with_budgets_for_horizon(self, n: usize) -> Config {
         let scale = u32::try_from(n.div_ceil(3)).unwrap_or(u32::MAX).max(1);
         Config {
@@ -248,7 +249,7 @@ impl Config {
             None => body,
             Some(df) => {
                 let foot = df + 0.5 * self.foot_length.min(self.foot_width);
-                let beta = crate::float::sqrt(self.gravity / self.com_height);
+                let beta = crate::linalg::sqrt(self.gravity / self.com_height);
                 let bulge = libm::cosh(0.5 * beta * self.step_duration) - 1.0;
                 body + bulge * (body - foot).max(0.0)
             }
@@ -265,6 +266,16 @@ impl Config {
         let across = (-eta.x * s + eta.y * c).abs();
         self.foot_clearance.unwrap_or(0.0)
             + 0.5 * (self.foot_length * along + self.foot_width * across)
+    }
+
+    /// The settings of the controller's QP solver: `tol_primal` and
+    /// `max_iter` from here, the rest [`QpSettings::default`].
+    pub fn qp_settings(&self) -> QpSettings {
+        QpSettings {
+            tol_primal: self.tol_primal,
+            max_iter: self.max_iter,
+            ..QpSettings::default()
+        }
     }
 
     /// Checks every field; the error names the first bad one.
@@ -345,11 +356,7 @@ impl Config {
         {
             return err("capture_fraction", "must be in (0, 1] when set");
         }
-        let settings = crate::qp::QpSettings {
-            tol_primal: self.tol_primal,
-            ..crate::qp::QpSettings::default()
-        };
-        if let Err((field, requirement)) = settings.validate() {
+        if let Err((field, requirement)) = self.qp_settings().validate() {
             return err(field, requirement);
         }
         Ok(())

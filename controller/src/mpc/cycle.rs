@@ -314,7 +314,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         let pos_ok = |v: &Vector2<f64>| within(v.x, MAX_COORDINATE) && within(v.y, MAX_COORDINATE);
         if !(pos_ok(&input.com_position)
             && within(
-                crate::float::sqrt(input.com_velocity.norm_squared()),
+                crate::linalg::sqrt(input.com_velocity.norm_squared()),
                 MAX_RATE,
             )
             && within(input.heading, MAX_COORDINATE)
@@ -337,7 +337,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             return Err(InputError::ObstacleVelocityCount);
         }
         let t_step = cfg.step_duration;
-        let t_in = crate::clamp(input.time_in_step, 0.0, t_step);
+        let t_in = crate::linalg::clamp(input.time_in_step, 0.0, t_step);
         *time_clamped = t_in != input.time_in_step;
         let tau = t_step - t_in;
 
@@ -522,7 +522,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                 }
             }
         }
-        let sol = backend.solve_qp(&self.solver, &work.qp, &prefer, self.config.max_iter);
+        let sol = backend.solve_qp(&self.solver, &work.qp, &prefer);
         let min_h0 = work
             .active_obstacles()
             .iter()

@@ -88,8 +88,8 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             let th = pred.heading.theta[k];
             let (s, c) = (libm::sin(th), libm::cos(th));
             let xi = v / self.lip.beta;
-            let lon = crate::clamp(c * xi.x + s * xi.y, -l, l);
-            let lat = crate::clamp(-s * xi.x + c * xi.y, -l, l);
+            let lon = crate::linalg::clamp(c * xi.x + s * xi.y, -l, l);
+            let lat = crate::linalg::clamp(-s * xi.x + c * xi.y, -l, l);
             let f = p + Vector2::new(c * lon - s * lat, s * lon + c * lat);
             u[2 * k] = f.x;
             u[2 * k + 1] = f.y;

@@ -80,7 +80,7 @@ use nalgebra::{ArrayStorage, SVector, Vector2};
 
 use crate::constraints::{Condensed, RowId};
 use crate::lip::Lip;
-use crate::qp::{DualActiveSet, QpSettings};
+use crate::qp::DualActiveSet;
 
 /// Row capacity needed for horizon `n`, `nobs` obstacles, with or without the
 /// foot-clearance rows: `8 n + n nobs (x2 with foot clearance)`.
@@ -232,10 +232,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
                 requirement: "gives a barrier margin that is not finite",
             });
         }
-        let settings = QpSettings {
-            tol_primal: config.tol_primal,
-            ..QpSettings::default()
-        };
+        let settings = config.qp_settings();
         let solver = DualActiveSet::new(&model.hessian::<NV>(), settings).map_err(|_| ConfigError {
             field: "com_height",
             requirement: "gives a Hessian that is not positive definite (check gravity, com_height, step_duration)",

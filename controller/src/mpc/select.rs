@@ -145,7 +145,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
                 0.0
             } else {
                 let u = velocities.get(idx).ok_or(InputError::ObstacleVelocity)?;
-                let speed = crate::float::sqrt(u.norm_squared());
+                let speed = crate::linalg::sqrt(u.norm_squared());
                 if speed.is_nan() || speed > MAX_RATE {
                     return Err(InputError::ObstacleVelocity);
                 }

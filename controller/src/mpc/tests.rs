@@ -253,7 +253,11 @@ fn feasible_with(
         let h = asm.qp.h[i] + if c == class { eps } else { 0.0 };
         qp.push_row(&g, h).unwrap();
     }
-    ctl.solver().solve(&qp, &[false; 48], 500).status == QpStatus::Solved
+    ctl.solver()
+        .with_max_iter(500)
+        .solve(&qp, &[false; 48])
+        .status
+        == QpStatus::Solved
 }
 
 #[test]
@@ -360,7 +364,7 @@ fn fallback_prefers_the_candidate_that_keeps_safety() {
     assert!(v.safety <= 1e-9 && v.reach <= 1e-9, "{v:?}");
     // A remembered plan that satisfies every row is used as it is.
     let asm = ctl.last_assembly().clone();
-    let good = ctl.solver().solve(&asm.qp, &[false; 48], 100);
+    let good = ctl.solver().with_max_iter(100).solve(&asm.qp, &[false; 48]);
     assert!(good.status.is_solved());
     let good_feet = ctl.feet_of(&asm.prediction, &good.x);
     ctl.memory.has_plan = true;

@@ -12,18 +12,19 @@ use super::{DenseQp, DualActiveSet, QpSolution};
 /// either solver and compared.
 pub trait QpBackend<const NV: usize, const NC: usize> {
     /// Solves `min 1/2 u'Hu + q'u, G u <= h` where `H = solver.hessian()` and the
-    /// rest is `qp`. `prefer` and `max_iter` are hints an external solver may ignore.
+    /// rest is `qp`. `prefer` and the iteration limit
+    /// (`solver.settings().max_iter`) are hints an external solver may ignore.
     fn solve_qp(
         &mut self,
         solver: &DualActiveSet<NV, NC>,
         qp: &DenseQp<NV, NC>,
         prefer: &[bool; NC],
-        max_iter: u32,
     ) -> QpSolution<NV, NC>;
 
     /// [`QpBackend::solve_qp`] on the rows `i` of `qp` with `enabled[i]`, with the
     /// right-hand side `h` instead of `qp.h`, multipliers (and `prefer`) indexed
-    /// like `qp`'s rows; see [`DualActiveSet::solve_selected`]. The provided
+    /// like `qp`'s rows, in at most `budget` iterations (a hint, as the
+    /// limit of the settings); see [`DualActiveSet::solve_selected`]. The provided
     /// method copies the enabled rows into a compact QP (on the stack) for
     /// `solve_qp` and maps the result back; [`OwnSolver`] solves in place.
     fn solve_selected(
@@ -33,7 +34,7 @@ pub trait QpBackend<const NV: usize, const NC: usize> {
         h: &SVector<f64, NC>,
         enabled: &[bool; NC],
         prefer: &[bool; NC],
-        max_iter: u32,
+        _budget: u32,
     ) -> QpSolution<NV, NC> {
         let mut sub = DenseQp::with_q(qp.q);
         // Compact row -> row of `qp`, and the compact rows' warm-start marks.
@@ -52,7 +53,7 @@ pub trait QpBackend<const NV: usize, const NC: usize> {
                 *p = prefer.get(i).copied().unwrap_or(false);
             }
         }
-        let s = self.solve_qp(solver, &sub, &sub_prefer, max_iter);
+        let s = self.solve_qp(solver, &sub, &sub_prefer);
         let mut out = QpSolution {
             lambda: SVector::zeros(),
             ..s
@@ -79,9 +80,8 @@ impl<const NV: usize, const NC: usize> QpBackend<NV, NC> for OwnSolver {
         solver: &DualActiveSet<NV, NC>,
         qp: &DenseQp<NV, NC>,
         prefer: &[bool; NC],
-        max_iter: u32,
     ) -> QpSolution<NV, NC> {
-        solver.solve(qp, prefer, max_iter)
+        solver.solve(qp, prefer)
     }
 
     fn solve_selected(
@@ -91,8 +91,8 @@ impl<const NV: usize, const NC: usize> QpBackend<NV, NC> for OwnSolver {
         h: &SVector<f64, NC>,
         enabled: &[bool; NC],
         prefer: &[bool; NC],
-        max_iter: u32,
+        budget: u32,
     ) -> QpSolution<NV, NC> {
-        solver.solve_selected(qp, h, enabled, prefer, max_iter)
+        solver.solve_selected(qp, h, enabled, prefer, budget)
     }
 }

@@ -1,8 +1,8 @@
 //! The QP the solver takes, [`DenseQpOf`]: `q`, the rows of `G` (equality
 //! rows first) and `h`, stored with a capacity of `NC` rows for any dimension
-//! types; and the column access to nalgebra's column-major storage that the
-//! solver's kernels use.
+//! types.
 
+use crate::linalg::{column, column_mut, columns};
 #[cfg(feature = "alloc")]
 use nalgebra::Dyn;
 use nalgebra::allocator::Allocator;
@@ -76,72 +76,6 @@ impl DenseQpOf<Dyn, Dyn> {
     }
 }
 
-/// Column `j` of a column-major matrix with `n` rows stored in `s`.
-#[inline(always)]
-pub(crate) fn column(s: &[f64], n: usize, j: usize) -> Option<&[f64]> {
-    // One test, `j < columns` (for the static sizes a compare with the
-    // constant NC, as indexing an array of columns); then `j n + n <= len`
-    // cannot overflow, and the slice's length is visibly `n` (a constant
-    // there too), so loops over the column unroll.
-    if n == 0 || j >= s.len() / n {
-        return None;
-    }
-    let start = j * n;
-    s.get(start..start + n)
-}
-
-/// Column `j` of a column-major matrix with `n` rows stored in `s`, mutable.
-#[inline(always)]
-pub(crate) fn column_mut(s: &mut [f64], n: usize, j: usize) -> Option<&mut [f64]> {
-    if n == 0 || j >= s.len() / n {
-        return None;
-    }
-    let start = j * n;
-    s.get_mut(start..start + n)
-}
-
-/// The columns of a column-major matrix with `n > 0` rows stored in `s`
-/// (nothing for `n = 0`).
-#[inline(always)]
-pub(crate) fn columns(s: &[f64], n: usize) -> core::slice::ChunksExact<'_, f64> {
-    // `n.max(1)`: a zero chunk size would panic; with n = 0 the slice is empty.
-    s.chunks_exact(n.max(1))
-}
-
-/// Columns `j0..j1` of a column-major matrix with `n > 0` rows stored in `s`
-/// (fewer when `s` ends before; no `skip` or `take` on the chunks, which the
-/// compiler may leave as an out-of-line `nth`).
-#[inline(always)]
-pub(crate) fn columns_in(
-    s: &[f64],
-    n: usize,
-    j0: usize,
-    j1: usize,
-) -> core::slice::ChunksExact<'_, f64> {
-    let end = j1.saturating_mul(n).min(s.len());
-    let start = j0.saturating_mul(n).min(end);
-    columns(s.get(start..end).unwrap_or(&[]), n)
-}
-
-/// [`columns_in`], mutable.
-#[inline(always)]
-pub(crate) fn columns_in_mut(
-    s: &mut [f64],
-    n: usize,
-    j0: usize,
-    j1: usize,
-) -> core::slice::ChunksExactMut<'_, f64> {
-    let end = j1.saturating_mul(n).min(s.len());
-    let start = j0.saturating_mul(n).min(end);
-    columns_mut(s.get_mut(start..end).unwrap_or(&mut []), n)
-}
-
-/// [`columns`], mutable.
-#[inline(always)]
-pub(crate) fn columns_mut(s: &mut [f64], n: usize) -> core::slice::ChunksExactMut<'_, f64> {
-    s.chunks_exact_mut(n.max(1))
-}
-
 impl<NV: Dim, NC: Dim> DenseQpOf<NV, NC>
 where
     DefaultAllocator: Allocator<NV> + Allocator<NC> + Allocator<NV, NC>,
@@ -183,7 +117,7 @@ where
         ) else {
             return Err(());
         };
-        crate::active_set::copy(col, g.as_slice());
+        crate::linalg::copy(col, g.as_slice());
         *rhs = h;
         self.m += 1;
         Ok(())

@@ -6,11 +6,11 @@
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
-use super::{
-    DualActiveSetOf, QpAllocator, ZERO_ROW2, column, columns, columns_in, columns_in_mut,
-    columns_mut,
+use super::{DualActiveSetOf, QpAllocator, ZERO_ROW2};
+use crate::active_set::{ActiveSetFactor, AddError};
+use crate::linalg::{
+    column, column_mut, columns, columns_in, columns_in_mut, columns_mut, dot, dot_d, givens,
 };
-use crate::active_set::{ActiveSetFactor, AddError, dot, dot_d, givens};
 
 /// The orthogonal factor of the active set, the iterate and the rows, for one
 /// solve. Slices of length `NV` or `NC` as named (constants for the static
@@ -149,8 +149,8 @@ where
         }
         back_substitute(self.R, self.d.as_slice(), nact, r);
         // Full (primal) step length t2.
-        let dn = crate::float::sqrt(dot(self.d.as_slice(), self.d.as_slice()));
-        let dependent = crate::float::sqrt(d2sq) <= self.solver.settings.tol_dependence * dn;
+        let dn = crate::linalg::sqrt(dot(self.d.as_slice(), self.d.as_slice()));
+        let dependent = crate::linalg::sqrt(d2sq) <= self.solver.settings.tol_dependence * dn;
         let t2 = if dependent {
             f64::INFINITY
         } else {
@@ -229,7 +229,7 @@ where
             let Some((g, ha)) = self.row(usize::from(a)) else {
                 return false;
             };
-            crate::active_set::copy(mcol, self.solver.linv_mul(g).as_slice());
+            crate::linalg::copy(mcol, self.solver.linv_mul(g).as_slice());
             *cj = dot(g, self.x.as_slice()) - ha;
         }
         let Ms = M.as_slice();
@@ -251,7 +251,7 @@ where
                     if s.is_nan() || s <= 1e-10 * dot(mi, mi) {
                         return false;
                     }
-                    crate::float::sqrt(s)
+                    crate::linalg::sqrt(s)
                 } else {
                     s / at(&C, j, j)
                 };
@@ -326,8 +326,8 @@ where
         for &dj in self.d.as_slice().iter().skip(nact) {
             d2sq += dj * dj;
         }
-        let outside = crate::float::sqrt(d2sq);
-        let dn = crate::float::sqrt(dot(self.d.as_slice(), self.d.as_slice()));
+        let outside = crate::linalg::sqrt(d2sq);
+        let dn = crate::linalg::sqrt(dot(self.d.as_slice(), self.d.as_slice()));
         if outside.is_nan() || outside <= self.solver.settings.tol_dependence * dn {
             return Ok(false);
         }
@@ -468,7 +468,7 @@ where
         // x = d[nact..], alpha = -sign(x_0) |x|, v = x - alpha e_0 (no
         // cancellation), reflection I - beta v v' with beta = 2 / v'v and
         // v'v = 2 |x| (|x| + |x_0|).
-        let norm = crate::float::sqrt(d0 * d0 + tail);
+        let norm = crate::linalg::sqrt(d0 * d0 + tail);
         let alpha = if d0 >= 0.0 { -norm } else { norm };
         if let Some(vn) = v.get_mut(nact) {
             *vn = d0 - alpha;
@@ -492,7 +492,7 @@ where
     }
     // Column `nact` of R gets d[..nact], then the new diagonal (checked
     // access, as in givens_drop).
-    let Some(col) = super::column_mut(R.as_mut_slice(), n, nact) else {
+    let Some(col) = column_mut(R.as_mut_slice(), n, nact) else {
         return false;
     };
     for (r, &di) in col.iter_mut().zip(d).take(nact) {
@@ -526,12 +526,12 @@ fn givens_drop<NV: Dim>(
             .and_then(|a| R.as_mut_slice().get_mut(a..a.saturating_add(2 * nv)))
         {
             let (dst, src) = pair.split_at_mut(nv.min(pair.len()));
-            crate::active_set::copy(dst, src);
+            crate::linalg::copy(dst, src);
         }
     }
     if let Some(last) = nact
         .checked_sub(1)
-        .and_then(|c| super::column_mut(R.as_mut_slice(), nv, c))
+        .and_then(|c| column_mut(R.as_mut_slice(), nv, c))
     {
         last.fill(0.0);
     }

@@ -14,7 +14,7 @@ fn solver2() -> DualActiveSet<2, 4> {
 fn unconstrained_minimiser() {
     let s = solver2();
     let qp = DenseQp::<2, 4>::with_q(Vector2::new(-2.0, -4.0));
-    let sol = s.solve(&qp, &[false; 4], 10);
+    let sol = s.solve(&qp, &[false; 4]);
     assert_eq!(sol.status, QpStatus::Solved);
     assert!((sol.x - Vector2::new(1.0, 2.0)).amax() < 1e-14);
     assert_eq!(sol.iterations, 0);
@@ -31,10 +31,9 @@ fn feasible_unconstrained_minimiser_is_returned_after_one_pass() {
         DualActiveSet::<2, 4>::new(&Matrix2::new(3.0, 1.0, 1.0, 2.0), QpSettings::default())
             .unwrap();
     for s in [solver2(), dense] {
-        let free = s.solve(
+        let free = s.with_max_iter(0).solve(
             &DenseQp::<2, 4>::with_q(Vector2::new(-2.0, -4.0)),
             &[false; 4],
-            0,
         );
         let mut qp = DenseQp::<2, 4>::with_q(Vector2::new(-2.0, -4.0));
         qp.push_row(&Vector2::new(1.0, 0.0), 5.0).unwrap();
@@ -43,7 +42,7 @@ fn feasible_unconstrained_minimiser_is_returned_after_one_pass() {
         qp.push_row(&Vector2::new(-1.0, 0.0), 0.0).unwrap();
         assert!(qp.max_violation(&free.x) == 0.0);
         for prefer in [[false; 4], [true; 4]] {
-            let sol = s.solve(&qp, &prefer, 0);
+            let sol = s.with_max_iter(0).solve(&qp, &prefer);
             assert_eq!(
                 (sol.status, sol.iterations, sol.n_active),
                 (QpStatus::Solved, 0, 0)
@@ -60,7 +59,7 @@ fn one_active_bound_and_multiplier() {
     let s = solver2();
     let mut qp = DenseQp::<2, 4>::with_q(Vector2::new(-2.0, -4.0));
     qp.push_row(&Vector2::new(1.0, 1.0), 1.0).unwrap();
-    let sol = s.solve(&qp, &[false; 4], 10);
+    let sol = s.solve(&qp, &[false; 4]);
     assert_eq!(sol.status, QpStatus::Solved);
     assert!((sol.x - Vector2::new(0.0, 1.0)).amax() < 1e-14);
     assert!((sol.lambda[0] - 2.0).abs() < 1e-14);
@@ -75,7 +74,7 @@ fn drop_happens_and_result_is_optimal() {
     qp.push_row(&Vector2::new(1.0, 1.0), -2.0).unwrap();
     qp.push_row(&Vector2::new(0.0, 1.0), 0.0).unwrap();
     qp.push_row(&Vector2::new(1.0, 0.0), -1.0).unwrap();
-    let sol = s.solve(&qp, &[false; 4], 20);
+    let sol = s.solve(&qp, &[false; 4]);
     assert_eq!(sol.status, QpStatus::Solved);
     // Projection of (1, 2) onto {x + y <= -2}: (-1.5, -0.5), which satisfies
     // the other two rows.
@@ -117,7 +116,7 @@ fn infeasible_detected() {
     let mut qp = DenseQp::<2, 4>::default();
     qp.push_row(&Vector2::new(1.0, 0.0), -1.0).unwrap(); // x <= -1
     qp.push_row(&Vector2::new(-1.0, 0.0), -1.0).unwrap(); // x >= 1
-    let sol = s.solve(&qp, &[false; 4], 20);
+    let sol = s.solve(&qp, &[false; 4]);
     assert_eq!(sol.status, QpStatus::Infeasible);
     assert_certificate(&qp, &sol.lambda);
     // Three rows, one of them irrelevant: x + y <= -1, x >= 0, y >= 0.
@@ -126,7 +125,7 @@ fn infeasible_detected() {
     qp.push_row(&Vector2::new(1.0, 1.0), -1.0).unwrap();
     qp.push_row(&Vector2::new(-1.0, 0.0), 0.0).unwrap();
     qp.push_row(&Vector2::new(0.0, -1.0), 0.0).unwrap();
-    let sol = s.solve(&qp, &[false; 4], 20);
+    let sol = s.solve(&qp, &[false; 4]);
     assert_eq!(sol.status, QpStatus::Infeasible);
     assert_certificate(&qp, &sol.lambda);
     assert_eq!(sol.lambda[0], 0.0);
@@ -137,10 +136,10 @@ fn zero_row_negative_rhs_is_infeasible() {
     let s = solver2();
     let mut qp = DenseQp::<2, 4>::default();
     qp.push_row(&Vector2::new(0.0, 0.0), -1.0).unwrap();
-    assert_eq!(s.solve(&qp, &[false; 4], 20).status, QpStatus::Infeasible);
+    assert_eq!(s.solve(&qp, &[false; 4]).status, QpStatus::Infeasible);
     let mut qp = DenseQp::<2, 4>::default();
     qp.push_row(&Vector2::new(0.0, 0.0), 1.0).unwrap();
-    assert_eq!(s.solve(&qp, &[false; 4], 20).status, QpStatus::Solved);
+    assert_eq!(s.solve(&qp, &[false; 4]).status, QpStatus::Solved);
 }
 
 #[test]
@@ -149,13 +148,13 @@ fn budget_is_respected() {
     let mut qp = DenseQp::<2, 4>::with_q(Vector2::new(-2.0, -4.0));
     qp.push_row(&Vector2::new(1.0, 1.0), -2.0).unwrap();
     qp.push_row(&Vector2::new(0.0, 1.0), -1.0).unwrap();
-    let full = s.solve(&qp, &[false; 4], 10);
+    let full = s.solve(&qp, &[false; 4]);
     assert_eq!(full.status, QpStatus::Solved);
     assert_eq!(full.iterations, 2);
-    let sol = s.solve(&qp, &[false; 4], 1);
+    let sol = s.with_max_iter(1).solve(&qp, &[false; 4]);
     assert_eq!(sol.status, QpStatus::IterationLimit);
     assert_eq!(sol.iterations, 1);
-    let sol = s.solve(&qp, &[false; 4], 0);
+    let sol = s.with_max_iter(0).solve(&qp, &[false; 4]);
     assert_eq!(sol.status, QpStatus::IterationLimit);
     assert_eq!(sol.iterations, 0);
 }
@@ -164,10 +163,7 @@ fn budget_is_respected() {
 fn non_finite_data_is_numerical_error() {
     let s = solver2();
     let qp = DenseQp::<2, 4>::with_q(Vector2::new(f64::NAN, 0.0));
-    assert_eq!(
-        s.solve(&qp, &[false; 4], 10).status,
-        QpStatus::NumericalError
-    );
+    assert_eq!(s.solve(&qp, &[false; 4]).status, QpStatus::NumericalError);
 }
 
 #[test]
@@ -203,7 +199,7 @@ fn prepared_rows_give_the_same_solve() {
         qp.push_row(&Vector2::new(0.0, 1.0), 0.0).unwrap();
         qp.push_row(&Vector2::new(1.0, 0.0), -1.0).unwrap();
         let rows = s.prepare_rows(&qp);
-        let cold = s.solve(&qp, &[false; 4], 20);
+        let cold = s.solve(&qp, &[false; 4]);
         assert_eq!(cold.status, QpStatus::Solved);
         // KKT: H x + q + G' lambda = 0, lambda >= 0, rows hold.
         let mut stat = s.hessian() * cold.x + qp.q;
@@ -216,14 +212,14 @@ fn prepared_rows_give_the_same_solve() {
         // Same G, other h and q: the prepared rows still apply.
         qp.h[0] = -3.0;
         qp.q = Vector2::new(1.0, -1.0);
-        let a = s.solve(&qp, &[false; 4], 20);
-        let b = s.solve_prepared(&qp, &rows, &[false; 4], 20);
+        let a = s.solve(&qp, &[false; 4]);
+        let b = s.solve_prepared(&qp, &rows, &[false; 4]);
         assert_eq!(a.status, b.status);
         assert_eq!(a.iterations, b.iterations);
         assert_eq!(a.x, b.x);
         // Rows prepared for another row count are refused.
         qp.push_row(&Vector2::new(-1.0, 0.0), 5.0).unwrap();
-        let c = s.solve_prepared(&qp, &rows, &[false; 4], 20);
+        let c = s.solve_prepared(&qp, &rows, &[false; 4]);
         assert_eq!(c.status, QpStatus::NumericalError);
     }
 }
@@ -282,10 +278,10 @@ fn diagonal_and_dense_hessians_satisfy_kkt_on_random_qps() {
             let g = SVector::<f64, 6>::from_fn(|_, _| rnd());
             qp.push_row(&g, rnd() + 0.3).unwrap();
         }
-        let sol = s.solve(&qp, &[false; 24], 200);
+        let sol = s.solve(&qp, &[false; 24]);
         assert_kkt(&s, &qp, &sol);
         let rows = s.prepare_rows(&qp);
-        let prepared = s.solve_prepared(&qp, &rows, &[false; 24], 200);
+        let prepared = s.solve_prepared(&qp, &rows, &[false; 24]);
         assert_eq!(prepared.x, sol.x);
         solved += usize::from(sol.status.is_solved());
         infeasible += usize::from(sol.status.is_infeasible());
@@ -311,9 +307,8 @@ fn solve_selected_is_solve_on_the_selected_rows() {
             solver: &DualActiveSet<6, 24>,
             qp: &DenseQp<6, 24>,
             prefer: &[bool; 24],
-            max_iter: u32,
         ) -> QpSolution<6, 24> {
-            solver.solve(qp, prefer, max_iter)
+            solver.solve(qp, prefer)
         }
     }
     let mut rnd = uniform(0x0bad_5eed_1234_5678);
@@ -340,7 +335,7 @@ fn solve_selected_is_solve_on_the_selected_rows() {
                 sub.push_row(&g, h[i]).unwrap();
             }
         }
-        let want = s.solve(&sub, &sub_prefer, 200);
+        let want = s.solve(&sub, &sub_prefer);
         for got in [
             s.solve_selected(&qp, &h, &enabled, &prefer, 200),
             Compacting.solve_selected(&s, &qp, &h, &enabled, &prefer, 200),
@@ -373,10 +368,7 @@ fn overflowing_row_norm_is_numerical_error() {
     let s = solver2();
     let mut qp = DenseQp::<2, 4>::default();
     qp.push_row(&Vector2::new(1e200, 0.0), 1.0).unwrap();
-    assert_eq!(
-        s.solve(&qp, &[false; 4], 10).status,
-        QpStatus::NumericalError
-    );
+    assert_eq!(s.solve(&qp, &[false; 4]).status, QpStatus::NumericalError);
 }
 
 #[test]
@@ -386,14 +378,14 @@ fn warm_start_marks_do_not_change_solution() {
     qp.push_row(&Vector2::new(1.0, 1.0), -2.0).unwrap();
     qp.push_row(&Vector2::new(0.0, 1.0), 0.0).unwrap();
     qp.push_row(&Vector2::new(1.0, 0.0), -1.0).unwrap();
-    let cold = s.solve(&qp, &[false; 4], 20);
+    let cold = s.solve(&qp, &[false; 4]);
     // Wrong guesses cost iterations but not accuracy.
-    let wrong = s.solve(&qp, &[false, true, true, false], 20);
+    let wrong = s.solve(&qp, &[false, true, true, false]);
     assert_eq!(wrong.status, QpStatus::Solved);
     assert!((cold.x - wrong.x).amax() < 1e-12);
     assert!(wrong.iterations > cold.iterations);
     // The right guess is never slower.
-    let right = s.solve(&qp, &[true, false, false, false], 20);
+    let right = s.solve(&qp, &[true, false, false, false]);
     assert!((cold.x - right.x).amax() < 1e-12);
     assert!(right.iterations <= cold.iterations);
 }

@@ -18,10 +18,9 @@ impl QpBackend<6, NC> for Counting {
         solver: &DualActiveSet<6, NC>,
         qp: &DenseQp<6, NC>,
         prefer: &[bool; NC],
-        max_iter: u32,
     ) -> crate::qp::QpSolution<6, NC> {
         self.0 += 1;
-        solver.solve(qp, prefer, max_iter)
+        solver.solve(qp, prefer)
     }
 }
 
@@ -67,7 +66,7 @@ fn certified_empty(
             qp.push_row(&g, if out { h } else { rhs }).unwrap();
         }
     }
-    let sol = solver.solve(&qp, &[false; NC], 500);
+    let sol = solver.with_max_iter(500).solve(&qp, &[false; NC]);
     if sol.status != QpStatus::Infeasible {
         return false;
     }
@@ -149,7 +148,7 @@ fn relaxations_are_minimal_in_priority_order() {
         };
         ctl.assemble(&input, &mut asm).unwrap();
         let solver = ctl.solver();
-        let nominal = solver.solve(&asm.qp, &[false; NC], 64);
+        let nominal = solver.with_max_iter(64).solve(&asm.qp, &[false; NC]);
         if !nominal.status.is_infeasible() {
             continue;
         }

@@ -205,9 +205,11 @@ pub struct Tree {
     pub cost: Vec<f64>,
 }
 
-/// A finished plan.
+/// A finished RRT* route on the known map: the grid, the tree, the path and
+/// the subgoals the controller walks through (not the controller's
+/// [`ldcbf_controller::Plan`], the MPC's plan of one cycle).
 #[derive(Clone, Debug)]
-pub struct Plan {
+pub struct Route {
     /// The grid it was planned on.
     pub grid: OccupancyGrid,
     /// The whole tree (for figure 8).
@@ -233,7 +235,7 @@ pub struct Plan {
     pub grid_searched: bool,
 }
 
-impl Plan {
+impl Route {
     /// Euclidean length of the subgoal polyline from `start`, m.
     pub fn subgoal_length(&self, start: Vector2<f64>) -> f64 {
         polyline_length(start, &self.subgoals)
@@ -342,7 +344,7 @@ pub fn plan(
     params: &RrtParams,
     body_radius: f64,
     seed: u64,
-) -> Result<Plan, PlanError> {
+) -> Result<Route, PlanError> {
     params
         .validate()
         .map_err(|(f, m)| PlanError::Settings(f, m))?;
@@ -429,7 +431,7 @@ fn plan_once(
     inflation: f64,
     resolution: f64,
     seed: u64,
-) -> Result<Plan, PlanError> {
+) -> Result<Route, PlanError> {
     // Planning box.
     let mut lo = start.inf(&goal);
     let mut hi = start.sup(&goal);
@@ -601,7 +603,7 @@ fn plan_once(
         path.push(goal_in);
         kept.push(goal_in);
     }
-    Ok(Plan {
+    Ok(Route {
         grid,
         tree,
         path: path.iter().map(|&p| to_v(p)).collect(),

@@ -82,7 +82,7 @@ use ldcbf_controller::{
 use ldcbf_reference::ClarabelBackend;
 
 use crate::plan::Planner;
-use crate::plan::{Plan, remaining_length};
+use crate::plan::{Route, remaining_length};
 use crate::plant::disturbance::{DisturbanceLog, Disturber};
 use crate::plant::{Plant, PlantParams};
 use crate::scenario::Scenario;
@@ -284,7 +284,7 @@ pub struct ScanRecord {
 #[derive(Clone, Debug, Default)]
 pub struct Navigation {
     /// The RRT* plan (tree, path, grid), when planned and found.
-    pub plan: Option<Plan>,
+    pub plan: Option<Route>,
     /// Why planning failed (the run then walked to the goal directly).
     pub error: Option<String>,
     /// Wall-clock planning time, ns (0 without a planner).

@@ -159,18 +159,22 @@ fn solve_sized<V: Dim, C: Dim>(
 where
     DefaultAllocator: QpAllocator<V, C>,
 {
-    let (repeat, max_iter) = (opts.repeat, opts.max_iter);
+    let repeat = opts.repeat;
     let (h, qp) = p
         .to_qp(nv, nc)
         .map_err(|e| anyhow!("{}: {e}", file.display()))?;
-    let solver = DualActiveSetOf::<V, C>::new(&h, QpSettings::default())
+    let settings = QpSettings {
+        max_iter: opts.max_iter,
+        ..QpSettings::default()
+    };
+    let solver = DualActiveSetOf::<V, C>::new(&h, settings)
         .map_err(|e| anyhow!("{}: field `P`: {e}", file.display()))?;
     let prefer: &[bool] = &[];
     let rows = solver.prepare_rows(&qp);
     let (mut best, mut best_prepared) = (u64::MAX, u64::MAX);
     let (mut best_ldp, mut best_load, mut best_prep) = (u64::MAX, u64::MAX, u64::MAX);
-    let mut sol = solver.solve(&qp, prefer, max_iter);
-    let prepared = solver.solve_prepared(&qp, &rows, prefer, max_iter);
+    let mut sol = solver.solve(&qp, prefer);
+    let prepared = solver.solve_prepared(&qp, &rows, prefer);
     let same_x = prepared
         .x
         .iter()
@@ -187,23 +191,18 @@ where
     // The LDP path: `ldp` per G, `loaded` per (q, h), both outside the timing.
     let ldp = Box::new(LdpSolverOf::prepare(&solver, &qp));
     let loaded = ldp.load(&qp.q, &qp.h);
-    let lsol = ldp.solve(&loaded, prefer, max_iter);
+    let lsol = ldp.solve(&loaded, prefer);
     check_ldp(file, &sol, &lsol)?;
     let ns = |t0: Instant| u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX);
     for _ in 0..repeat.max(1) {
         let t0 = Instant::now();
-        sol = std::hint::black_box(solver.solve(std::hint::black_box(&qp), prefer, max_iter));
+        sol = std::hint::black_box(solver.solve(std::hint::black_box(&qp), prefer));
         best = best.min(ns(t0));
         let t0 = Instant::now();
-        std::hint::black_box(solver.solve_prepared(
-            std::hint::black_box(&qp),
-            &rows,
-            prefer,
-            max_iter,
-        ));
+        std::hint::black_box(solver.solve_prepared(std::hint::black_box(&qp), &rows, prefer));
         best_prepared = best_prepared.min(ns(t0));
         let t0 = Instant::now();
-        std::hint::black_box(ldp.solve(std::hint::black_box(&loaded), prefer, max_iter));
+        std::hint::black_box(ldp.solve(std::hint::black_box(&loaded), prefer));
         best_ldp = best_ldp.min(ns(t0));
         let t0 = Instant::now();
         std::hint::black_box(ldp.load(std::hint::black_box(&qp.q), &qp.h));

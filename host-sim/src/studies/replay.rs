@@ -21,7 +21,7 @@
 //! run's configuration and checks that every output is the one the run logged,
 //! bit for bit (with the own solver the controller is deterministic), so a
 //! change of the loop that breaks one of the correspondences above is caught
-//! (`tests/replay.rs`).
+//! (`host-sim/tests/replay.rs`).
 //!
 //! Frames and units: world frame W; m, m/s, rad, rad/s, s.
 

@@ -54,7 +54,7 @@ fn equalities_hold_with_multipliers_of_either_sign() {
     let mut qp = DenseQp::<N, C>::with_q(SVector::repeat(-2.0));
     qp.push_equality(&(e(0) + e(1)), 1.0).unwrap();
     qp.push_equality(&e(2), 3.0).unwrap();
-    let sol = s.solve(&qp, &[], 50);
+    let sol = s.solve(&qp, &[]);
     assert_kkt(&s, &qp, &sol);
     assert!((sol.x[0] - 0.5).abs() < 1e-14 && (sol.x[2] - 3.0).abs() < 1e-14);
     assert!((sol.lambda[0] - 1.0).abs() < 1e-12, "{}", sol.lambda[0]);
@@ -78,7 +78,7 @@ fn an_equality_is_never_dropped() {
     let mut qp = DenseQp::<N, C>::with_q(q);
     qp.push_equality(&e(0), 1.0).unwrap();
     qp.push_row(&(e(0) + e(1)), 0.0).unwrap();
-    let sol = s.solve(&qp, &[], 50);
+    let sol = s.solve(&qp, &[]);
     assert_kkt(&s, &qp, &sol);
     assert!((sol.x[0] - 1.0).abs() < 1e-14);
     assert!((sol.x[1] + 1.0).abs() < 1e-14);
@@ -95,14 +95,14 @@ fn dependent_equalities_are_redundant_or_certified_infeasible() {
     qp.push_equality(&(e(0) + e(1)), 1.0).unwrap();
     qp.push_equality(&(e(0) - e(1)), 0.0).unwrap();
     qp.push_equality(&(e(0) * 2.0), 1.0).unwrap();
-    let sol = s.solve(&qp, &[], 50);
+    let sol = s.solve(&qp, &[]);
     assert_kkt(&s, &qp, &sol);
     assert_eq!(sol.active_set(), &[0, 1]);
     // ... and 2 x0 = 3 contradicts them, from above or from below.
     for (rhs, sign) in [(3.0, -1.0), (-1.0, 1.0)] {
         let mut bad = qp.clone();
         bad.h[2] = rhs;
-        let sol = s.solve(&bad, &[], 50);
+        let sol = s.solve(&bad, &[]);
         assert_eq!(sol.status, QpStatus::Infeasible);
         assert_eq!(sol.lambda[2], sign);
         assert_certificate(&bad, &sol.lambda);
@@ -116,17 +116,17 @@ fn equalities_against_inequalities_are_certified_infeasible() {
     let mut qp = DenseQp::<N, C>::with_q(SVector::zeros());
     qp.push_equality(&e(0), 2.0).unwrap();
     qp.push_row(&e(0), 1.0).unwrap();
-    let sol = s.solve(&qp, &[], 50);
+    let sol = s.solve(&qp, &[]);
     assert_eq!(sol.status, QpStatus::Infeasible);
     assert_certificate(&qp, &sol.lambda);
     // A zero equality row with h != 0 is infeasible at once; with h = 0 it
     // holds.
     let mut z = DenseQp::<N, C>::with_q(SVector::zeros());
     z.push_equality(&SVector::zeros(), 1.0).unwrap();
-    let sol = s.solve(&z, &[], 50);
+    let sol = s.solve(&z, &[]);
     assert_eq!((sol.status, sol.lambda[0]), (QpStatus::Infeasible, -1.0));
     z.h[0] = 0.0;
-    assert_eq!(s.solve(&z, &[], 50).status, QpStatus::Solved);
+    assert_eq!(s.solve(&z, &[]).status, QpStatus::Solved);
 }
 
 #[test]
@@ -157,12 +157,12 @@ fn random_qps_with_equalities_satisfy_kkt_and_hot_starts_agree() {
             };
             qp.push_row(&g, g.dot(&x0) + slack).unwrap();
         }
-        let cold = s.without_hot_start().solve(&qp, &[], 500);
+        let cold = s.without_hot_start().solve(&qp, &[]);
         let mut prefer = [false; C];
         for &a in cold.active_set() {
             prefer[usize::from(a)] = true;
         }
-        let hot = s.solve(&qp, &prefer, 500);
+        let hot = s.solve(&qp, &prefer);
         assert_eq!(cold.status, hot.status, "{k}");
         match cold.status {
             QpStatus::Solved => {
@@ -198,5 +198,5 @@ fn small_static_sizes_refuse_equalities() {
     let s = DualActiveSet::<6, 8>::new(&SMatrix::identity(), QpSettings::default()).unwrap();
     let mut qp = DenseQp::<6, 8>::default();
     qp.push_equality(&SVector::repeat(1.0), 1.0).unwrap();
-    assert_eq!(s.solve(&qp, &[], 50).status, QpStatus::NumericalError);
+    assert_eq!(s.solve(&qp, &[]).status, QpStatus::NumericalError);
 }

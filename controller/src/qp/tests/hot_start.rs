@@ -50,7 +50,7 @@ fn family<const NV: usize, const NC: usize>(seed: u64, count: usize) -> Seen {
             let _ = qp.push_row(&g, rnd() + 0.3);
         }
         let unmarked = [false; NC];
-        let a = cold.solve(&qp, &unmarked, 1000);
+        let a = cold.solve(&qp, &unmarked);
         let optimal = {
             let mut p = [false; NC];
             for &i in a.active_set() {
@@ -67,8 +67,8 @@ fn family<const NV: usize, const NC: usize>(seed: u64, count: usize) -> Seen {
             marks[3][i] = true;
         }
         for (which, prefer) in marks.iter().enumerate() {
-            let b = hot.solve(&qp, prefer, 1000);
-            let c = cold.solve(&qp, prefer, 1000);
+            let b = hot.solve(&qp, prefer);
+            let c = cold.solve(&qp, prefer);
             assert_eq!(a.status, b.status, "qp {k}, marks {which}");
             assert_eq!(a.status, c.status, "qp {k}, marks {which}");
             if b.iterations != c.iterations {
@@ -131,7 +131,7 @@ fn hot_start_keeps_the_budget() {
         }
         let all = [true; 48];
         for budget in 0..24 {
-            let sol = s.solve(&qp, &all, budget);
+            let sol = s.with_max_iter(budget).solve(&qp, &all);
             assert!(sol.iterations <= budget);
             if sol.status == QpStatus::IterationLimit {
                 limited += 1;

@@ -18,7 +18,7 @@
 //! Two kinds of cost, reported side by side by [`markdown`]:
 //!
 //! * **Deterministic**: the iteration counts. They do not depend on the machine
-//!   or its load, so CI can assert them (`tests/deadline_iterations.rs`)
+//!   or its load, so CI can assert them (`host-sim/tests/deadline_iterations.rs`)
 //!   against the configured budgets, `max_iter` per QP solve and
 //!   `max_iter_cycle` per control cycle. The firmware's instruction counts in
 //!   QEMU (`tests/firmware_qemu.rs`) are the other deterministic measure; they
@@ -67,8 +67,8 @@ pub const DEFAULT_CLOCK_MHZ: f64 = 400.0;
 /// The shipped closed loops a deadline study runs by default (and the CI
 /// check): every shipped scenario except the seeded families (`random`, which
 /// is `--random N`, and `corridor`, `doorway`, `cup`, `wall-start`, `clutter`,
-/// `thin`, which `batch` and `tests/sim_body.rs` run, and the people families
-/// `crossing`, `headon`, `crowd`, `room-crossing`, which `tests/sim_people.rs`
+/// `thin`, which `batch` and `host-sim/tests/sim_body.rs` run, and the people families
+/// `crossing`, `headon`, `crowd`, `room-crossing`, which `host-sim/tests/sim_people.rs`
 /// runs), `maze` and `trap` both without and with RRT* subgoals
 /// (`maze` ships with them, `maze+none` is the MPC alone),
 /// `crowded` with its seed 0, the LiDAR regressions `cup-mouth` and
@@ -95,7 +95,7 @@ pub const SHIPPED_CASES: [&str; 14] = [
 /// (kept out of them, which the iteration and budget tests run in debug
 /// builds): `large-map`, 10,000 polygons, whose cycles cost what a small map's
 /// do because the controller is handed only the map index's candidates
-/// ([`crate::world::obstacle_index`]; `tests/obstacle_index.rs` runs it).
+/// ([`crate::world::obstacle_index`]; `host-sim/tests/obstacle_index.rs` runs it).
 pub const LARGE_MAP_CASES: [&str; 1] = ["large-map"];
 
 /// The scenario family of `--random N`.

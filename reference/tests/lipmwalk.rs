@@ -12,7 +12,7 @@ use ldcbf_reference::{DenseProblem, compare, kkt, solve_clarabel, solve_own};
 
 /// `tests/data/lipmwalk` of the repository (source and license in its README).
 fn data_dir() -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/data/lipmwalk");
+    let dir = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/data/lipmwalk");
     assert!(
         dir.is_dir(),
         "test data missing: expected the external QP set at {}",
@@ -77,12 +77,12 @@ fn lipmwalk_ldp_path_agrees_with_clarabel_and_solve() {
             "{}: G differs from LIPMWALK0",
             path.display()
         );
-        let own = ldp.solve(&ldp.load(&qp.q, &qp.h), &[false; 32], 200);
+        let own = ldp.solve(&ldp.load(&qp.q, &qp.h), &[false; 32]);
         let r = solve_clarabel(&p);
         let a = compare(&p, &own, &r);
         assert!(a.holds() && a.both_solved, "{}: {a:?}", path.display());
         let k = kkt(&p, own.x.as_slice(), &own.lambda.as_slice()[..p.m]);
-        let gi = solver.solve(&qp, &[false; 32], 200);
+        let gi = solver.solve(&qp, &[false; 32]);
         assert_eq!(gi.iterations, own.iterations, "{}", path.display());
         let d = (gi.x - own.x).amax() / gi.x.amax().max(1.0);
         worst_vs_solve = worst_vs_solve.max(d);

@@ -199,7 +199,10 @@ fn check_case<const N: usize, const NV: usize, const NC: usize>(
         st.with_obstacles.set(st.with_obstacles.get() + 1);
     }
     let problem = DenseProblem::from_assembly(ctl.solver(), &asm);
-    let own = ctl.solver().solve(&asm.qp, &[false; NC], 1000);
+    let own = ctl
+        .solver()
+        .with_max_iter(1000)
+        .solve(&asm.qp, &[false; NC]);
     let reference = solve_clarabel(&problem);
     prop_assert!(
         reference.status != RefStatus::Failed,

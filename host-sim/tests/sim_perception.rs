@@ -451,7 +451,7 @@ fn layout_strategy() -> impl Strategy<Value = Layout> {
 /// The property test's configuration: a fixed seed and 300 layouts by
 /// default (CI's debug run: the same layouts every time); with
 /// `LDCBF_PROPTEST_RANDOM=1` a new random seed each run (CI's release job,
-/// `LDCBF_PROPTEST_RANDOM=1 PROPTEST_CASES=20000 cargo test --release --test
+/// `LDCBF_PROPTEST_RANDOM=1 PROPTEST_CASES=20000 cargo test --release -p ldcbf-sim --test
 /// sim_perception perception_never`), `PROPTEST_CASES` layouts (default 300).
 /// A failure found with a random seed is kept as a named regression test.
 fn layout_config() -> ProptestConfig {

@@ -11,7 +11,7 @@
 //! simulator's (`ldcbf_sim::scenario::load`, one `ldcbf_sim::sim::run` for the
 //! planner's subgoals).
 //!
-//! `cargo test --release --test horizon -- --nocapture` prints one line per run.
+//! `cargo test --release -p ldcbf-sim --test horizon -- --nocapture` prints one line per run.
 
 use std::time::Instant;
 

@@ -39,7 +39,7 @@
 //! 2,048.
 //! So `max_iter_cycle` is never the binding limit; `max_iter` is.
 //!
-//! Measured (2026-11-22, `cargo test --release --test deadline_iterations --
+//! Measured (2026-11-22, `cargo test --release -p ldcbf-sim --test deadline_iterations --
 //! --nocapture`; `ldcbf-sim deadline --random 200` prints the same counts),
 //! 98,180 cycles in 208 runs (before the relaxations were made physical and
 //! the capturability bound added; after: 98,181 cycles, 97 non-optimal, the
@@ -199,8 +199,8 @@ fn worst_case_iterations_stay_within_the_configured_budget() {
 
 /// The default set covers every shipped scenario but the `random` family
 /// (which the 200 seeds cover) and the layout families of
-/// `ldcbf_sim::world::families` (run by `batch` and `tests/sim_body.rs`), and the
-/// large maps (`LARGE_MAP_CASES`, run by `tests/obstacle_index.rs`): a new
+/// `ldcbf_sim::world::families` (run by `batch` and `host-sim/tests/sim_body.rs`), and the
+/// large maps (`LARGE_MAP_CASES`, run by `host-sim/tests/obstacle_index.rs`): a new
 /// scenario file must be added to `SHIPPED_CASES`.
 #[test]
 fn shipped_cases_cover_every_shipped_scenario() {

@@ -129,7 +129,7 @@ fn the_cup_mouth_start_reaches_the_goal_with_planning() {
 #[test]
 #[cfg_attr(
     debug_assertions,
-    ignore = "release only: cargo test --release --test sim_unknown_maps"
+    ignore = "release only: cargo test --release -p ldcbf-sim --test sim_unknown_maps"
 )]
 fn families_with_lidar_and_planning_keep_body_and_feet_out() {
     let families = [

@@ -95,7 +95,7 @@ struct Cycle {
 }
 
 fn random_cycle(rng: &mut Rng) -> Cycle {
-    // As in tests/equivalence.rs: the state where walking puts it at the END of
+    // As in reference/tests/equivalence.rs: the state where walking puts it at the END of
     // the current step, flowed back by the remaining time.
     let heading = rng.uniform(-PI, PI);
     let (sh, ch) = heading.sin_cos();

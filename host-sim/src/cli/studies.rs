@@ -1,0 +1,69 @@
+//! `ldcbf-sim deadline` (compute time and iterations per cycle against a
+//! deadline) and `ldcbf-sim robustness` (disturbances and safety margins).
+
+use anyhow::Result;
+
+use super::args::{DeadlineArgs, RobustnessArgs, capped_jobs};
+use super::output::out;
+use crate::studies::deadline::{self, DeadlineRequest};
+use crate::studies::robustness::{self, RobustnessRequest};
+
+/// Runs the deadline study and prints its Markdown table.
+pub(crate) fn deadline(args: DeadlineArgs) -> Result<()> {
+    let DeadlineArgs {
+        cases,
+        random,
+        deadline_us,
+        clock_mhz,
+        sets,
+        jobs,
+        repeat,
+        instructions,
+    } = args;
+    let mut req = DeadlineRequest::new();
+    if !cases.is_empty() {
+        req.cases = cases;
+    }
+    req.random = random;
+    req.deadline_us = deadline_us;
+    req.clock_mhz = clock_mhz;
+    req.sets = sets;
+    req.jobs = capped_jobs(jobs);
+    req.repeat = repeat;
+    req.instructions = instructions;
+    out!("{}", deadline::markdown(&deadline::run_deadline(&req)?));
+    Ok(())
+}
+
+/// Runs the robustness study (or one shard of it) and prints its Markdown
+/// tables.
+pub(crate) fn robustness(args: RobustnessArgs) -> Result<()> {
+    let RobustnessArgs {
+        cases,
+        random,
+        deltas,
+        sets,
+        jobs,
+        out,
+        shard,
+        quiet,
+    } = args;
+    let mut req = RobustnessRequest::new();
+    req.shard = shard;
+    if !cases.is_empty() {
+        req.cases = cases;
+    }
+    req.random = random;
+    req.deltas = deltas;
+    req.sets = sets;
+    if let Some(j) = jobs {
+        req.jobs = capped_jobs(j);
+    }
+    req.out = out;
+    req.progress = !quiet;
+    out!(
+        "{}",
+        robustness::markdown(&robustness::run_robustness(&req)?)
+    );
+    Ok(())
+}
