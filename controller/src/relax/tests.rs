@@ -473,7 +473,7 @@ fn a_conflict_ahead_leaves_the_side_wall_its_margin() {
     let mut asm = Assembly::default();
     ctl.assemble(&input, &mut asm).unwrap();
     let solver = ctl.solver();
-    let nominal = solver.solve(&asm.qp, &[false; NC], 64);
+    let nominal = solver.with_max_iter(64).solve(&asm.qp, &[false; NC]);
     assert!(nominal.status.is_infeasible(), "{:?}", nominal.status);
     let cb = CaptureBounds::new(ctl.config(), ctl_kappa(), asm.prediction.heading.omega_bar);
     let mut count = Counting(0);
@@ -542,7 +542,7 @@ fn a_conflict_ahead_leaves_the_side_wall_its_margin() {
             qp.push_row(&g, rhs).unwrap();
         }
     }
-    let uniform = solver.solve(&qp, &[false; NC], 500);
+    let uniform = solver.with_max_iter(500).solve(&qp, &[false; NC]);
     assert_eq!(uniform.status, QpStatus::Solved);
     std::println!("uniform: side wall {:.4}", worst(0, &uniform.x));
     assert!(
