@@ -48,7 +48,31 @@
 //!    [`Relaxed::eps_capture`] and `CycleInfo::relax_capture`: never silent.
 //!
 //! So the priority order, most important first: reachability, capturability,
-//! gait up to the cap, safety, gait beyond the cap.
+//! gait up to the cap, safety, gait beyond the cap. Within the safety class,
+//! the rows outside the conflict come before the rows in it (below).
+//!
+//! # Rows outside the conflict
+//!
+//! The least uniform relaxation `eps_safety` is proven by a Farkas
+//! certificate; the safety rows it weighs are the conflict (say a wall
+//! fragment ahead against reachability and the gait rows). Relaxing every
+//! safety row by `eps_safety` would also let the plan use that much of the
+//! margin of rows that take no part in it (a side wall), and the cost's pull
+//! towards the goal does. So, once `eps_safety` is known, the scheme solves
+//! the same problem with only the conflict's safety rows at `h + eps_safety`
+//! and every other safety row at its nominal `h`. An infeasible solve's
+//! certificate must weigh a safety row outside the conflict (otherwise it
+//! would prove the uniform relaxation empty too), so its safety rows join the
+//! conflict and the solve is repeated: the conflict only grows, and in the
+//! worst case it becomes every safety row, the uniform relaxation. The
+//! relaxation stays the least (relaxing fewer rows by the same amount is a
+//! smaller feasible set, and the uniform one was already the least), the
+//! gait search that follows runs under the confined relaxation, and the
+//! rows that took it are reported ([`Relaxed::conflict`]). These
+//! solves draw on the scheme's probes; when the probes run out (or a
+//! certificate adds no row, which only rounding can do) the uniform plan
+//! stands. Stage 1 relaxes no safety row and is unchanged; no solve is added
+//! to a feasible cycle.
 //!
 //! Why the cap: the gait rows bound the CoM velocity at the end of each step,
 //! which is what keeps the pendulum capturable with steps inside the
@@ -149,8 +173,10 @@
 //! * `rows`: the row classes, their violation, the capturability bound and
 //!   the rows a relaxed problem keeps;
 //! * `search`: the certificate-driven search for one smallest relaxation;
+//! * `confine`: the safety relaxation confined to the rows in conflict;
 //! * this file: the stages, in priority order, and their results.
 
+mod confine;
 mod rows;
 mod search;
 #[cfg(test)]
@@ -176,7 +202,7 @@ pub enum RelaxLevel {
 
 /// A relaxed plan.
 #[derive(Clone, Copy, Debug)]
-pub struct Relaxed<const NV: usize> {
+pub struct Relaxed<const NV: usize, const NC: usize> {
     /// Footsteps.
     pub u: SVector<f64, NV>,
     /// Stage that produced it.
@@ -185,6 +211,10 @@ pub struct Relaxed<const NV: usize> {
     pub eps_gait: f64,
     /// Uniform relaxation of the safety rows, m of `h` (0 at stage 1).
     pub eps_safety: f64,
+    /// The safety rows relaxed by `eps_safety` (the rows in conflict, by row
+    /// of the nominal QP); every other safety row keeps its nominal
+    /// right-hand side. None when `eps_safety` is 0.
+    pub conflict: [bool; NC],
     /// Uniform relaxation of the capturability bound, m/s (0 unless stage 4).
     pub eps_capture: f64,
     /// Solver iterations spent.
@@ -233,7 +263,7 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     gait_cap: f64,
     capture: Option<CaptureBounds>,
     certificate: Option<&SVector<f64, NC>>,
-) -> Result<Relaxed<NV>, RelaxError> {
+) -> Result<Relaxed<NV, NC>, RelaxError> {
     let mut norms = [0.0f64; NC];
     for (n, g) in norms.iter_mut().zip(qp.gt.column_iter().take(qp.m)) {
         *n = crate::linalg::sqrt(g.norm_squared());
@@ -251,6 +281,9 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         probes_left: probes.saturating_mul(2),
         cert: None,
         marks: [false; NC],
+        support: [false; NC],
+        conflict: [false; NC],
+        confined: false,
         capture,
     };
     if let Some(y) = certificate {
@@ -275,11 +308,23 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     })
 }
 
+/// The safety rows of `qp` (all of them take a uniform relaxation).
+fn safety_rows<const NV: usize, const NC: usize>(
+    qp: &DenseQp<NV, NC>,
+    rows: &[RowId; NC],
+) -> [bool; NC] {
+    let mut out = [false; NC];
+    for (o, id) in out.iter_mut().zip(rows).take(qp.m) {
+        *o = RowClass::of(id.kind) == RowClass::Safety;
+    }
+    out
+}
+
 /// The stages of the scheme (see the module docs).
 fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     ctx: &mut Ctx<'_, NV, NC, B>,
     gait_cap: f64,
-) -> Result<Relaxed<NV>, RelaxFailure> {
+) -> Result<Relaxed<NV, NC>, RelaxFailure> {
     // The capturability bound, when on, is kept through stages 1-3.
     let capture0 = ctx.capture.map(|_| 0.0);
     // Stage 1: reachability, safety and capturability hard, gait soft up to the cap.
@@ -295,6 +340,7 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
             level: RelaxLevel::Gait,
             eps_gait: eps,
             eps_safety: 0.0,
+            conflict: [false; NC],
             eps_capture: 0.0,
             iterations: ctx.used,
         });
@@ -354,6 +400,15 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         let Some((u_s, eps_s)) = ctx.minimal(reach, Soft::Safety, f64::INFINITY, known_s)? else {
             continue;
         };
+        // Only the rows in conflict give way; the others keep their margin.
+        let (u_s, conflict) = if eps_s > 0.0 {
+            match ctx.confine(reach.with(Soft::Safety, eps_s))? {
+                Some(u) => (u, ctx.conflict),
+                None => (u_s, safety_rows(ctx.qp, ctx.rows)),
+            }
+        } else {
+            (u_s, [false; NC])
+        };
         let fixed = Keep {
             safety: Some(eps_s),
             gait: None,
@@ -382,6 +437,7 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
             level,
             eps_gait: eps_g,
             eps_safety: eps_s,
+            conflict,
             eps_capture: capture.unwrap_or(0.0),
             iterations: ctx.used,
         });

@@ -28,6 +28,9 @@ pub(super) struct Certificate {
     ys: f64,
     /// Sum of `y` over the gait rows in their capturability form.
     yc: f64,
+    /// Sum of `y` over the safety rows outside the conflict while confined
+    /// (not relaxed: they count in `yh` only).
+    yo: f64,
     /// `y' |g|` over all rows (scale for "zero").
     yn: f64,
 }
@@ -45,6 +48,16 @@ enum Bound {
 }
 
 impl Certificate {
+    /// The certificate once every safety row of its support has joined the
+    /// conflict (they take the safety relaxation from then on).
+    pub(super) fn with_conflict_grown(self) -> Certificate {
+        Certificate {
+            ys: self.ys + self.yo,
+            yo: 0.0,
+            ..self
+        }
+    }
+
     /// The bound on the relaxation of `soft` when the other classes are as in
     /// `fixed` (`None`: left out).
     fn bound(&self, fixed: Keep, soft: Soft) -> Bound {
@@ -114,6 +127,14 @@ pub(super) struct Ctx<'a, const NV: usize, const NC: usize, B> {
     /// Rows of the nominal QP in the support of the last certificate: the rows
     /// that are tight at the smallest relaxation, tried first by the next solve.
     pub(super) marks: [bool; NC],
+    /// Rows of the nominal QP in the support of the last certificate (all of
+    /// them, unlike `marks`).
+    pub(super) support: [bool; NC],
+    /// While `confined`: the safety rows that take the safety relaxation (the
+    /// conflict); every other safety row keeps its nominal right-hand side.
+    pub(super) conflict: [bool; NC],
+    /// Whether the safety relaxation applies to the `conflict` rows only.
+    pub(super) confined: bool,
 }
 
 /// Relative and absolute padding of a probe above a proven lower bound.
@@ -150,6 +171,22 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
                 *on = true;
             }
         }
+        if self.confined {
+            // Safety rows outside the conflict keep their full margin.
+            for (((&h0, id), hi), &c) in self
+                .qp
+                .h
+                .iter()
+                .zip(self.rows)
+                .zip(h.iter_mut())
+                .zip(&self.conflict)
+                .take(self.qp.m)
+            {
+                if !c && RowClass::of(id.kind) == RowClass::Safety {
+                    *hi = h0;
+                }
+            }
+        }
         let sol = self.backend.solve_selected(
             self.solver,
             self.qp,
@@ -179,9 +216,11 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
             yg: 0.0,
             ys: 0.0,
             yc: 0.0,
+            yo: 0.0,
             yn: 0.0,
         };
         self.marks = [false; NC];
+        self.support = [false; NC];
         let m = self.qp.m.min(NC);
         // Weights at rounding level (~1e-17 of the largest) are not
         // part of the certificate's support.
@@ -199,6 +238,9 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
             if let Some(mk) = self.marks.get_mut(o) {
                 *mk = true;
             }
+            if let Some(s) = self.support.get_mut(o) {
+                *s = true;
+            }
             c.yh += y * h;
             c.yn += y * n;
             match RowClass::of(id.kind) {
@@ -213,6 +255,13 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
                         }
                         _ => c.yg += y,
                     }
+                }
+                // A confined safety row outside the conflict is not relaxed:
+                // its weight is in `yh` only.
+                RowClass::Safety
+                    if self.confined && !self.conflict.get(o).copied().unwrap_or(false) =>
+                {
+                    c.yo += y
                 }
                 RowClass::Safety => c.ys += y,
                 RowClass::Reach => {}

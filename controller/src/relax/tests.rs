@@ -1,6 +1,7 @@
 extern crate std;
 
 use super::*;
+use crate::constraints::RowKind;
 use crate::qp::QpStatus;
 use crate::{Assembly, Config, ConvexPolygon, CycleInput, PaperController, Side};
 use nalgebra::Vector2;
@@ -41,13 +42,15 @@ impl Lcg {
 /// The nominal QP with the gait and safety rows relaxed by `gait` and
 /// `safety` (`None`: left out) is empty, as proven by a Farkas
 /// certificate checked here independently of the solver (`y >= 0`,
-/// `G'y = 0` to 1e-9, `h'y < 0`).
+/// `G'y = 0` to 1e-9, `h'y < 0`). `confined`: only these safety rows take
+/// the safety relaxation, the others keep their nominal right-hand side.
 fn certified_empty(
     solver: &DualActiveSet<6, NC>,
     asm: &Assembly<3, 6, NC, 8>,
     gait: Option<f64>,
     safety: Option<f64>,
     capture: Option<(CaptureBounds, f64)>,
+    confined: Option<&[bool; NC]>,
 ) -> bool {
     let keep = Keep {
         safety,
@@ -57,9 +60,10 @@ fn certified_empty(
     };
     let bounds = capture.map(|c| c.0);
     let mut qp = DenseQp::<6, NC>::with_q(asm.qp.q);
-    for ((g, h), id) in asm.qp.rows().zip(&asm.rows) {
+    for (i, ((g, h), id)) in asm.qp.rows().zip(&asm.rows).enumerate() {
         if let Some((rhs, _)) = keep.rhs(id.kind, h, bounds.as_ref()) {
-            qp.push_row(&g, rhs).unwrap();
+            let out = confined.is_some_and(|c| !c[i]) && RowClass::of(id.kind) == RowClass::Safety;
+            qp.push_row(&g, if out { h } else { rhs }).unwrap();
         }
     }
     let sol = solver.with_max_iter(500).solve(&qp, &[false; NC]);
@@ -92,6 +96,8 @@ fn relaxations_are_minimal_in_priority_order() {
     let cap = ctl.config().max_gait_relaxation;
     let mut asm = Assembly::default();
     let (mut infeasible, mut stage1, mut stage2, mut stage3, mut stage4) = (0, 0, 0, 0, 0);
+    // Cycles whose safety relaxation was confined to some of the safety rows.
+    let mut confined = 0usize;
     let less = |e: f64| e - 1e-6 * (1.0 + e);
     let mut solves = [0usize; 32];
     let kappa =
@@ -203,23 +209,40 @@ fn relaxations_are_minimal_in_priority_order() {
             v.safety <= es * (1.0 + 1e-9) + 1e-9,
             "case {case}: {v:?} {r:?}"
         );
+        // The safety rows outside the conflict keep their full margin.
+        for (((g, h), id), &c) in asm.qp.rows().zip(&asm.rows).zip(&r.conflict) {
+            if RowClass::of(id.kind) == RowClass::Safety && !c {
+                assert!(g.dot(&r.u) - h <= 1e-9, "case {case}: {id:?} {r:?}");
+            } else {
+                assert!(!c || es > 0.0, "case {case}: {r:?}");
+            }
+        }
+        let n_conflict = r.conflict.iter().filter(|&&c| c).count();
+        confined += usize::from(n_conflict > 0 && n_conflict < safety_count(&asm));
         if ec > 0.0 {
             // Stage 4: the least relaxation of the capturability bound
             // with reachability alone, then the least safety and gait
             // relaxations under it.
             assert!(
-                certified_empty(solver, &asm, None, None, with_capture(less(ec))),
+                certified_empty(solver, &asm, None, None, with_capture(less(ec)), None),
                 "case {case}: {r:?}: capture not minimal"
             );
             if es > 1e-6 {
                 assert!(
-                    certified_empty(solver, &asm, None, Some(less(es)), with_capture(ec)),
+                    certified_empty(solver, &asm, None, Some(less(es)), with_capture(ec), None),
                     "case {case}: {r:?}: safety not minimal"
                 );
             }
             if eg > 1e-6 {
                 assert!(
-                    certified_empty(solver, &asm, Some(less(eg)), Some(es), with_capture(ec)),
+                    certified_empty(
+                        solver,
+                        &asm,
+                        Some(less(eg)),
+                        Some(es),
+                        with_capture(ec),
+                        Some(&r.conflict)
+                    ),
                     "case {case}: {r:?}: gait not minimal"
                 );
             }
@@ -232,7 +255,14 @@ fn relaxations_are_minimal_in_priority_order() {
             assert_eq!(r.level, RelaxLevel::Gait);
             assert!(eg > 0.0, "case {case}: the nominal QP is infeasible");
             assert!(
-                certified_empty(solver, &asm, Some(less(eg)), Some(0.0), with_capture(0.0)),
+                certified_empty(
+                    solver,
+                    &asm,
+                    Some(less(eg)),
+                    Some(0.0),
+                    with_capture(0.0),
+                    None
+                ),
                 "case {case}: {r:?} not minimal"
             );
             stage1 += 1;
@@ -241,7 +271,7 @@ fn relaxations_are_minimal_in_priority_order() {
         assert_eq!(r.level, RelaxLevel::Safety);
         // Safety gives way only when the capped gait rows cannot help.
         assert!(
-            certified_empty(solver, &asm, Some(cap), Some(0.0), with_capture(0.0)),
+            certified_empty(solver, &asm, Some(cap), Some(0.0), with_capture(0.0), None),
             "case {case}"
         );
         // The least safety relaxation with the gait rows at the cap
@@ -249,13 +279,27 @@ fn relaxations_are_minimal_in_priority_order() {
         // when on).
         let gait_bound = (eg <= cap * (1.0 + 1e-9)).then_some(cap);
         assert!(
-            certified_empty(solver, &asm, gait_bound, Some(less(es)), with_capture(0.0)),
+            certified_empty(
+                solver,
+                &asm,
+                gait_bound,
+                Some(less(es)),
+                with_capture(0.0),
+                None
+            ),
             "case {case}: {r:?}: safety not minimal"
         );
         // Then the least gait relaxation under that safety relaxation.
         if eg > 1e-6 {
             assert!(
-                certified_empty(solver, &asm, Some(less(eg)), Some(es), with_capture(0.0)),
+                certified_empty(
+                    solver,
+                    &asm,
+                    Some(less(eg)),
+                    Some(es),
+                    with_capture(0.0),
+                    Some(&r.conflict)
+                ),
                 "case {case}: {r:?}: gait not minimal"
             );
         }
@@ -267,7 +311,8 @@ fn relaxations_are_minimal_in_priority_order() {
     }
     std::println!(
         "{infeasible} infeasible: {stage1} stage 1, {stage2} stage 2, {stage3} stage 3, \
-         {stage4} stage 4; solves of the priority scheme (count: cycles): {:?}",
+         {stage4} stage 4; {confined} with the safety relaxation confined to the conflict; \
+         solves of the priority scheme (count: cycles): {:?}",
         solves
             .iter()
             .enumerate()
@@ -278,6 +323,15 @@ fn relaxations_are_minimal_in_priority_order() {
         stage1 >= 20 && stage2 >= 50 && stage3 >= 20 && stage4 >= 10,
         "{stage1} {stage2} {stage3} {stage4}"
     );
+}
+
+/// The number of safety rows of a cycle's QP.
+fn safety_count(asm: &Assembly<3, 6, NC, 8>) -> usize {
+    asm.rows
+        .iter()
+        .take(asm.qp.m)
+        .filter(|id| RowClass::of(id.kind) == RowClass::Safety)
+        .count()
 }
 
 /// The largest body-frame velocity component of a plan's `v_1 .. v_N`
@@ -385,4 +439,119 @@ fn push_beyond_the_bound_is_detected() {
     // Not reported when the robot is within the bound.
     let within = pushed(Some(0.92), 0.85, 0.0);
     assert_eq!(within.info.relax_capture, 0.0, "{:?}", within.info);
+}
+
+/// The corridor case: walking fast along a corridor (goal ahead and to the
+/// left) into a wall fragment too close to stop in front of, with the left
+/// side wall beside. The nominal QP is infeasible and only the safety rows
+/// can give way; the relaxed plan keeps every row of the side wall at its
+/// nominal right-hand side (full margin) and relaxes only the fragment's,
+/// by the least uniform amount. The uniform relaxation (every safety row
+/// by the same amount), solved here directly, does use the side wall's
+/// margin: without the confinement this test fails.
+#[test]
+fn a_conflict_ahead_leaves_the_side_wall_its_margin() {
+    let ctl = PaperController::new(Config::default()).unwrap();
+    let cap = ctl.config().max_gait_relaxation;
+    let side =
+        ConvexPolygon::<8>::new(&[[-1.0, 0.45], [3.0, 0.45], [3.0, 0.6], [-1.0, 0.6]]).unwrap();
+    let fragment =
+        ConvexPolygon::<8>::new(&[[0.45, -0.6], [0.6, -0.6], [0.6, 0.2], [0.45, 0.2]]).unwrap();
+    let obstacles = [side, fragment];
+    let input = CycleInput {
+        com_position: Vector2::zeros(),
+        com_velocity: Vector2::new(0.8, 0.0),
+        heading: 0.0,
+        turning_rate: 0.0,
+        stance_foot: Vector2::new(0.0, -0.1),
+        stance_side: Side::Right,
+        time_in_step: 0.4,
+        goal: Vector2::new(10.0, 10.0),
+        obstacles: &obstacles,
+        obstacle_velocities: &[],
+    };
+    let mut asm = Assembly::default();
+    ctl.assemble(&input, &mut asm).unwrap();
+    let solver = ctl.solver();
+    let nominal = solver.with_max_iter(64).solve(&asm.qp, &[false; NC]);
+    assert!(nominal.status.is_infeasible(), "{:?}", nominal.status);
+    let cb = CaptureBounds::new(ctl.config(), ctl_kappa(), asm.prediction.heading.omega_bar);
+    let mut count = Counting(0);
+    let r = relax(
+        solver,
+        &mut count,
+        &asm.qp,
+        &asm.rows,
+        64,
+        2048,
+        12,
+        cap,
+        cb,
+        Some(&nominal.lambda),
+    )
+    .unwrap();
+    assert_eq!(r.level, RelaxLevel::Safety, "{r:?}");
+    assert!(r.eps_safety > 1e-3, "{r:?}");
+    // The worst violation of the rows of obstacle `j` by the plan `u`.
+    let worst = |j: u32, u: &SVector<f64, 6>| {
+        asm.qp
+            .rows()
+            .zip(&asm.rows)
+            .filter(|(_, id)| {
+                matches!(id.kind, RowKind::Ldcbf(i) | RowKind::FootClearance(i) if i == j)
+            })
+            .map(|((g, h), _)| g.dot(u) - h)
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    std::println!(
+        "{r:?}, {} solves; side wall {:.4}, fragment {:.4}",
+        count.0,
+        worst(0, &r.u),
+        worst(1, &r.u)
+    );
+    assert!(worst(0, &r.u) <= 1e-9, "the side wall gave way: {r:?}");
+    assert!(worst(1, &r.u) > 1e-3 && worst(1, &r.u) <= r.eps_safety * (1.0 + 1e-9) + 1e-9);
+    let n_side = asm
+        .rows
+        .iter()
+        .take(asm.qp.m)
+        .filter(|id| matches!(id.kind, RowKind::Ldcbf(0) | RowKind::FootClearance(0)))
+        .count();
+    let n_safety = asm
+        .rows
+        .iter()
+        .take(asm.qp.m)
+        .filter(|id| RowClass::of(id.kind) == RowClass::Safety)
+        .count();
+    let relaxed = r.conflict.iter().filter(|&&c| c).count();
+    assert!(relaxed >= 1 && relaxed <= n_safety - n_side, "{r:?}");
+    for (id, &c) in asm.rows.iter().zip(&r.conflict).take(asm.qp.m) {
+        assert!(!c || RowClass::of(id.kind) == RowClass::Safety);
+    }
+    // The uniform relaxation, for contrast: gait at the cap, every safety
+    // row at `h + eps_safety` (capturability at its ceiling).
+    let keep = Keep {
+        safety: Some(r.eps_safety),
+        gait: Some(r.eps_gait),
+        capture: cb.map(|_| 0.0),
+        first_step: false,
+    };
+    let mut qp = DenseQp::<6, NC>::with_q(asm.qp.q);
+    for ((g, h), id) in asm.qp.rows().zip(&asm.rows) {
+        if let Some((rhs, _)) = keep.rhs(id.kind, h, cb.as_ref()) {
+            qp.push_row(&g, rhs).unwrap();
+        }
+    }
+    let uniform = solver.with_max_iter(500).solve(&qp, &[false; NC]);
+    assert_eq!(uniform.status, QpStatus::Solved);
+    std::println!("uniform: side wall {:.4}", worst(0, &uniform.x));
+    assert!(
+        worst(0, &uniform.x) > 1e-3,
+        "the case does not test anything"
+    );
+}
+
+/// `kappa` of Table I's step map, 1/s.
+fn ctl_kappa() -> f64 {
+    crate::constraints::Condensed::<3>::new(&crate::lip::Lip::new(9.81, 1.0, 0.4)).kappa
 }

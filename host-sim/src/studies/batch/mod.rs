@@ -174,17 +174,30 @@ pub struct RunRow {
     /// Contacts where a person moved into the standing robot (the summary's
     /// `contacts_person`).
     pub contacts_person: u64,
+    /// Plans on the perceived map after the first (0 without LiDAR mapping).
+    pub replans: u64,
+    /// Plans on the perceived map that found no path.
+    pub plan_failures: u64,
+    /// Median wall-clock time of a map update, ms (0 without mapping).
+    pub map_update_p50_ms: f64,
+    /// Largest wall-clock time of a map update, ms.
+    pub map_update_max_ms: f64,
+    /// Median wall-clock time of a plan on the perceived map, ms.
+    pub plan_p50_ms: f64,
+    /// Largest wall-clock time of a plan on the perceived map, ms.
+    pub plan_max_ms: f64,
 }
 
 const CSV_HEADER: &str = "seed,outcome,success,collision,steps,sim_time,final_distance,\
 min_com_clearance,min_footstep_clearance,max_violation,cycles,non_optimal_cycles,\
 compute_p50_ns,compute_p99_ns,compute_max_ns,planner_failed,subgoals,plan_time_ms,\
-obstacles_seen_mean,wall_ms,foot_collision,min_body_clearance,contacts_robot,contacts_person";
+obstacles_seen_mean,wall_ms,foot_collision,min_body_clearance,contacts_robot,contacts_person,\
+replans,plan_failures,map_update_p50_ms,map_update_max_ms,plan_p50_ms,plan_max_ms";
 
 impl RunRow {
     fn csv(&self) -> String {
         format!(
-            "{},{},{},{},{},{},{},{},{},{:e},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{:e},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             self.seed,
             self.outcome,
             u8::from(self.success),
@@ -208,7 +221,13 @@ impl RunRow {
             u8::from(self.foot_collision),
             self.min_body_clearance,
             self.contacts_robot,
-            self.contacts_person
+            self.contacts_person,
+            self.replans,
+            self.plan_failures,
+            self.map_update_p50_ms,
+            self.map_update_max_ms,
+            self.plan_p50_ms,
+            self.plan_max_ms
         )
     }
 
@@ -254,6 +273,12 @@ impl RunRow {
             min_body_clearance: p(f[21], "min_body_clearance")?,
             contacts_robot: p(f[22], "contacts_robot")?,
             contacts_person: p(f[23], "contacts_person")?,
+            replans: p(f[24], "replans")?,
+            plan_failures: p(f[25], "plan_failures")?,
+            map_update_p50_ms: p(f[26], "map_update_p50_ms")?,
+            map_update_max_ms: p(f[27], "map_update_max_ms")?,
+            plan_p50_ms: p(f[28], "plan_p50_ms")?,
+            plan_max_ms: p(f[29], "plan_max_ms")?,
         })
     }
 }
@@ -477,6 +502,12 @@ pub fn run_batch(req: &BatchRequest) -> Result<BatchReport> {
                     min_body_clearance: s.min_body_clearance.unwrap_or(f64::INFINITY),
                     contacts_robot: s.contacts_robot as u64,
                     contacts_person: s.contacts_person as u64,
+                    replans: s.mapping.as_ref().map_or(0, |m| m.replans as u64),
+                    plan_failures: s.mapping.as_ref().map_or(0, |m| m.plan_failures as u64),
+                    map_update_p50_ms: s.mapping.as_ref().map_or(0.0, |m| m.map_update_p50_ms),
+                    map_update_max_ms: s.mapping.as_ref().map_or(0.0, |m| m.map_update_max_ms),
+                    plan_p50_ms: s.mapping.as_ref().map_or(0.0, |m| m.plan_time_p50_ms),
+                    plan_max_ms: s.mapping.as_ref().map_or(0.0, |m| m.plan_time_max_ms),
                 };
                 if !row.success {
                     let n = failures.fetch_add(1, Ordering::Relaxed) + 1;

@@ -51,6 +51,12 @@ fn rows_round_trip_through_csv() {
         min_body_clearance: 0.09,
         contacts_robot: 1,
         contacts_person: 2,
+        replans: 4,
+        plan_failures: 1,
+        map_update_p50_ms: 0.2,
+        map_update_max_ms: 31.5,
+        plan_p50_ms: 120.0,
+        plan_max_ms: 650.25,
     };
     assert_eq!(RunRow::parse(&r.csv()).unwrap(), r);
 }

@@ -1,0 +1,68 @@
+//! Confining a safety relaxation to the rows in conflict (see "Rows outside
+//! the conflict" in the module docs of [`crate::relax`]).
+
+use nalgebra::SVector;
+
+use super::RelaxFailure;
+use super::rows::{Keep, RowClass};
+use super::search::{Ctx, Probe};
+use crate::qp::QpBackend;
+
+impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> {
+    /// Adds the safety rows of the last certificate's support to the
+    /// conflict; the number added.
+    fn grow_conflict(&mut self) -> u32 {
+        let mut added = 0u32;
+        for ((c, &s), id) in self
+            .conflict
+            .iter_mut()
+            .zip(&self.support)
+            .zip(self.rows)
+            .take(self.qp.m)
+        {
+            if s && !*c && RowClass::of(id.kind) == RowClass::Safety {
+                *c = true;
+                added += 1;
+            }
+        }
+        added
+    }
+
+    /// With `keep` (its safety relaxation the least uniform one, feasible),
+    /// the optimal plan when only the safety rows in conflict take that
+    /// relaxation and every other safety row keeps its nominal right-hand
+    /// side (the conflict is left in `self.conflict`). The conflict starts as the safety
+    /// rows of the last certificate (the one that proved the relaxation
+    /// minimal) and grows by the safety rows of each infeasible probe's
+    /// certificate; each probe draws on the scheme's probes. `Ok(None)` (the
+    /// uniform relaxation stands, and the confinement is off again) when the
+    /// probes run out or a certificate adds no row (rounding).
+    ///
+    /// On success the confinement stays on (for the gait search that follows
+    /// under the same safety relaxation), and the last certificate stays valid
+    /// for it: its safety rows are all in the conflict.
+    pub(super) fn confine(&mut self, keep: Keep) -> Result<Option<SVector<f64, NV>>, RelaxFailure> {
+        self.conflict = [false; NC];
+        if self.cert.is_some() {
+            self.grow_conflict();
+        }
+        self.confined = true;
+        while self.probes_left > 0 {
+            self.probes_left -= 1;
+            match self.solve(keep)? {
+                Probe::Feasible(u) => return Ok(Some(u)),
+                Probe::Infeasible => {
+                    if self.grow_conflict() == 0 {
+                        break;
+                    }
+                    self.cert = self.cert.map(|c| c.with_conflict_grown());
+                }
+            }
+        }
+        // A certificate found under the confinement undercounts the
+        // relaxation of the rows outside the conflict: not valid without it.
+        self.confined = false;
+        self.cert = None;
+        Ok(None)
+    }
+}
