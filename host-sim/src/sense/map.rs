@@ -329,13 +329,8 @@ impl OccupancyMap {
     /// was known to ([`crate::sense::movers`]: a person at the edge of the
     /// range, or seen in one cluster with a wall).
     pub fn clear_polygon(&mut self, poly: &Polygon, margin: f64) {
-        let v = poly.vertices();
-        let lo = v
-            .iter()
-            .fold(Vector2::repeat(f64::INFINITY), |a, p| a.inf(p));
-        let hi = v
-            .iter()
-            .fold(Vector2::repeat(f64::NEG_INFINITY), |a, p| a.sup(p));
+        let (lo, hi) = crate::world::obstacle_index::bounding_box(poly);
+        let (lo, hi) = (Vector2::from(lo), Vector2::from(hi));
         let r = self.resolution;
         let idx =
             |x: f64, o: f64, n: usize| (((x - o) / r).floor().clamp(0.0, n as f64 - 1.0)) as usize;

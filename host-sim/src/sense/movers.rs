@@ -238,13 +238,8 @@ mod tests {
 
     /// An occupied cell of `map` whose centre is within `margin` (m) of `poly`.
     fn occupied_near(map: &OccupancyMap, poly: &Polygon, margin: f64) -> Option<Vector2<f64>> {
-        let v = poly.vertices();
-        let lo = v
-            .iter()
-            .fold(Vector2::repeat(f64::INFINITY), |a, p| a.inf(p));
-        let hi = v
-            .iter()
-            .fold(Vector2::repeat(f64::NEG_INFINITY), |a, p| a.sup(p));
+        let (lo, hi) = crate::world::obstacle_index::bounding_box(poly);
+        let (lo, hi) = (Vector2::from(lo), Vector2::from(hi));
         let (a, b) = (
             map.cell_of(lo - Vector2::repeat(margin))?,
             map.cell_of(hi + Vector2::repeat(margin))?,
