@@ -49,15 +49,23 @@ pub fn dbscan(points: &[Vector2<f64>], eps: f64, min_points: usize) -> Vec<Optio
     label
 }
 
-/// The points of each DBSCAN cluster, in cluster order.
-pub fn clusters(points: &[Vector2<f64>], eps: f64, min_points: usize) -> Vec<Vec<Vector2<f64>>> {
-    let labels = dbscan(points, eps, min_points);
+/// The indices of each cluster's points, in cluster order, from [`dbscan`]'s
+/// `labels` (noise is in none).
+pub fn members(labels: &[Option<usize>]) -> Vec<Vec<usize>> {
     let k = labels.iter().flatten().max().map_or(0, |m| m + 1);
     let mut out = vec![Vec::new(); k];
-    for (p, l) in points.iter().zip(&labels) {
+    for (i, l) in labels.iter().enumerate() {
         if let Some(c) = l {
-            out[*c].push(*p);
+            out[*c].push(i);
         }
     }
     out
+}
+
+/// The points of each DBSCAN cluster, in cluster order.
+pub fn clusters(points: &[Vector2<f64>], eps: f64, min_points: usize) -> Vec<Vec<Vector2<f64>>> {
+    members(&dbscan(points, eps, min_points))
+        .into_iter()
+        .map(|m| m.into_iter().map(|i| points[i]).collect())
+        .collect()
 }

@@ -55,7 +55,7 @@ use ldcbf_controller::closest_point_point_polygon;
 use ldcbf_controller::nalgebra::Vector2;
 
 use super::LidarParams;
-use super::dbscan::dbscan;
+use super::dbscan::{dbscan, members};
 use super::infer::cluster_polygon;
 use super::track::{Motion, TrackParams, Tracker, person_sized};
 use crate::world::Polygon;
@@ -114,27 +114,25 @@ impl Movers {
         cluster_polygon(&pts, self.min_thickness, self.max_vertices)
     }
 
-    /// Clusters too large to be one person (not
-    /// [`person_sized`]) are split at the
-    /// moving tracks: each point within `max_extent` of a moving track's
+    /// Each cluster of `members` (indices into `points`) with its hull;
+    /// clusters too large to be one person (not [`person_sized`]) are split at
+    /// the moving tracks: each point within `max_extent` of a moving track's
     /// predicted position goes to the nearest such track's piece, the rest
     /// stay one piece (people walking close together, or past a wall, seen
-    /// as one cluster). Indices into `points`.
+    /// as one cluster).
     fn split_at_tracks(
         &self,
         t: f64,
         points: &[Vector2<f64>],
         members: Vec<Vec<usize>>,
-    ) -> Vec<Vec<usize>> {
+    ) -> Vec<(Vec<usize>, Polygon)> {
         let movers = self.tracker.moving_at(t);
-        if movers.is_empty() {
-            return members;
-        }
         let reach = self.tracker.params().max_extent;
         let mut out = Vec::with_capacity(members.len());
         for m in members {
-            if person_sized(&self.hull(points, &m), reach) {
-                out.push(m);
+            let hull = self.hull(points, &m);
+            if movers.is_empty() || person_sized(&hull, reach) {
+                out.push((m, hull));
                 continue;
             }
             let mut parts: Vec<Vec<usize>> = vec![Vec::new(); movers.len() + 1];
@@ -147,7 +145,10 @@ impl Movers {
                     .min_by(|a, b| a.1.total_cmp(&b.1));
                 parts[nearest.map_or(movers.len(), |(k, _)| k)].push(i);
             }
-            out.extend(parts.into_iter().filter(|p| !p.is_empty()));
+            out.extend(parts.into_iter().filter(|p| !p.is_empty()).map(|p| {
+                let h = self.hull(points, &p);
+                (p, h)
+            }));
         }
         out
     }
@@ -158,22 +159,17 @@ impl Movers {
         let ray_of: Vec<usize> = (0..rays.len()).filter(|&k| rays[k].is_some()).collect();
         let points: Vec<Vector2<f64>> = rays.iter().flatten().copied().collect();
         let labels = dbscan(&points, self.eps, self.min_points);
-        let n = labels.iter().flatten().max().map_or(0, |m| m + 1);
-        let mut members: Vec<Vec<usize>> = vec![Vec::new(); n];
-        for (i, l) in labels.iter().enumerate() {
-            if let Some(c) = l {
-                members[*c].push(i);
-            }
-        }
-        let members = self.split_at_tracks(t, &points, members);
-        let hulls: Vec<Polygon> = members.iter().map(|m| self.hull(&points, m)).collect();
+        let (pieces, hulls): (Vec<_>, Vec<_>) = self
+            .split_at_tracks(t, &points, members(&labels))
+            .into_iter()
+            .unzip();
         let motions = self.tracker.classify(t, &hulls);
         let mut out = MoverScan {
             kept_out: vec![false; rays.len()],
             ..MoverScan::default()
         };
         let matched = self.tracker.matched().to_vec();
-        for (((m, hull), motion), id) in members.iter().zip(hulls).zip(motions).zip(&matched) {
+        for (((m, hull), motion), id) in pieces.iter().zip(hulls).zip(motions).zip(&matched) {
             let v = match motion {
                 Motion::AtRest => continue,
                 Motion::Tentative => Vector2::zeros(),
