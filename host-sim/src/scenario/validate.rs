@@ -13,7 +13,6 @@ use crate::world::families;
 use crate::world::moving::parse_velocity;
 use crate::world::random::{random_obstacles, regular_polygon};
 use crate::world::robot::RobotParams;
-use crate::world::setting::SettingError;
 use crate::world::{MAX_VERTICES, Polygon};
 
 /// Where a scenario's text came from, for the line and file of its errors.
@@ -206,11 +205,9 @@ fn positive(v: f64) -> bool {
 /// The settings tables of the rooms below: `[rrt_star]`, `[lidar]`,
 /// `[disturbance]`, `[robot]`.
 fn check_settings(raw: &RawScenario, src: Source<'_>) -> Result<(), ScenarioError> {
-    // `[lidar]` still reports `(field, requirement)`.
-    let lidar = raw.lidar.get_ref().validate();
     let checks = [
         ("rrt_star", raw.rrt_star.get_ref().validate()),
-        ("lidar", lidar.map_err(|(f, m)| SettingError::new(f, m))),
+        ("lidar", raw.lidar.get_ref().validate()),
         ("disturbance", raw.disturbance.get_ref().validate()),
         ("robot", raw.robot.get_ref().validate()),
     ];

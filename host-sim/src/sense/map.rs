@@ -53,6 +53,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::world::Polygon;
 use crate::world::grid::MAX_CELLS;
+use crate::world::setting::SettingError;
 
 /// Mapping settings: the `[lidar.map]` table. Probabilities in (0, 1).
 #[derive(Clone, Debug, PartialEq, Deserialize, Serialize)]
@@ -96,32 +97,35 @@ impl Default for MapParams {
 
 impl MapParams {
     /// Checks every field; the error names the bad one (as `map.FIELD`).
-    pub fn validate(&self) -> Result<(), (&'static str, String)> {
+    pub fn validate(&self) -> Result<(), SettingError> {
         let pos = |v: f64| v.is_finite() && v > 0.0;
         let prob = |v: f64| v > 0.0 && v < 1.0;
         if !(pos(self.resolution) && self.resolution <= 1.0) {
-            return Err(("map.resolution", "must be in (0, 1] m".into()));
+            return Err(SettingError::new("map.resolution", "must be in (0, 1] m"));
         }
         if !(self.padding.is_finite() && (0.0..=100.0).contains(&self.padding)) {
-            return Err(("map.padding", "must be in [0, 100] m".into()));
+            return Err(SettingError::new("map.padding", "must be in [0, 100] m"));
         }
         if !(prob(self.p_hit) && self.p_hit > 0.5) {
-            return Err(("map.p_hit", "must be in (0.5, 1)".into()));
+            return Err(SettingError::new("map.p_hit", "must be in (0.5, 1)"));
         }
         if !(prob(self.p_miss) && self.p_miss < 0.5) {
-            return Err(("map.p_miss", "must be in (0, 0.5)".into()));
+            return Err(SettingError::new("map.p_miss", "must be in (0, 0.5)"));
         }
         if !(prob(self.clamp_min) && self.clamp_min < 0.5) {
-            return Err(("map.clamp_min", "must be in (0, 0.5)".into()));
+            return Err(SettingError::new("map.clamp_min", "must be in (0, 0.5)"));
         }
         if !(prob(self.clamp_max) && self.clamp_max > 0.5) {
-            return Err(("map.clamp_max", "must be in (0.5, 1)".into()));
+            return Err(SettingError::new("map.clamp_max", "must be in (0.5, 1)"));
         }
         if !(self.decay.is_finite() && self.decay >= 0.0) {
-            return Err(("map.decay", "must be finite and >= 0".into()));
+            return Err(SettingError::new("map.decay", "must be finite and >= 0"));
         }
         if !(self.unknown_radius.is_finite() && self.unknown_radius >= 0.0) {
-            return Err(("map.unknown_radius", "must be finite and >= 0".into()));
+            return Err(SettingError::new(
+                "map.unknown_radius",
+                "must be finite and >= 0",
+            ));
         }
         Ok(())
     }
@@ -173,7 +177,7 @@ impl OccupancyMap {
     /// `params.padding`; fails on invalid params or more than
     /// [`MAX_CELLS`] cells.
     pub fn new(params: MapParams, lo: Vector2<f64>, hi: Vector2<f64>) -> Result<Self, String> {
-        params.validate().map_err(|(f, m)| format!("{f}: {m}"))?;
+        params.validate().map_err(|e| e.to_string())?;
         let pad = Vector2::repeat(params.padding);
         let (lo, hi) = (lo.inf(&hi) - pad, lo.sup(&hi) + pad);
         let r = params.resolution;
@@ -710,7 +714,7 @@ mod tests {
             p_hit: 0.4,
             ..MapParams::default()
         };
-        assert_eq!(bad.validate().unwrap_err().0, "map.p_hit");
+        assert_eq!(bad.validate().unwrap_err().field, "map.p_hit");
         let huge = MapParams {
             resolution: 0.001,
             padding: 100.0,

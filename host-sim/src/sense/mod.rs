@@ -94,6 +94,7 @@ use rand_chacha::rand_core::SeedableRng;
 use rand_distr::{Distribution, Normal};
 use serde::{Deserialize, Serialize};
 
+use crate::world::setting::SettingError;
 use crate::world::{MAX_VERTICES, Polygon};
 
 mod dbscan;
@@ -202,38 +203,47 @@ impl Default for LidarParams {
 
 impl LidarParams {
     /// Checks every field; the error names the bad one and says why.
-    pub fn validate(&self) -> Result<(), (&'static str, String)> {
+    pub fn validate(&self) -> Result<(), SettingError> {
         let pos = |v: f64| v.is_finite() && v > 0.0;
         if !(1..=100_000).contains(&self.rays) {
-            return Err(("rays", "must be in 1..=100000".into()));
+            return Err(SettingError::new("rays", "must be in 1..=100000"));
         }
         if !pos(self.range) {
-            return Err(("range", "must be finite and > 0".into()));
+            return Err(SettingError::new("range", "must be finite and > 0"));
         }
         if !(self.noise_sigma.is_finite() && self.noise_sigma >= 0.0) {
-            return Err(("noise_sigma", "must be finite and >= 0".into()));
+            return Err(SettingError::new("noise_sigma", "must be finite and >= 0"));
         }
         if !pos(self.eps) {
-            return Err(("eps", "must be finite and > 0".into()));
+            return Err(SettingError::new("eps", "must be finite and > 0"));
         }
         if self.min_points == 0 {
-            return Err(("min_points", "must be >= 1".into()));
+            return Err(SettingError::new("min_points", "must be >= 1"));
         }
         if !pos(self.min_thickness) {
-            return Err(("min_thickness", "must be finite and > 0".into()));
+            return Err(SettingError::new("min_thickness", "must be finite and > 0"));
         }
         if !(4..=MAX_VERTICES).contains(&self.max_vertices) {
-            return Err(("max_vertices", format!("must be in 4..={MAX_VERTICES}")));
+            return Err(SettingError::new(
+                "max_vertices",
+                format!("must be in 4..={MAX_VERTICES}"),
+            ));
         }
         let b = self.breakpoint_angle;
         if !(b.is_finite() && b > 0.0 && b < core::f64::consts::FRAC_PI_2) {
-            return Err(("breakpoint_angle", "must be in (0, pi/2) rad".into()));
+            return Err(SettingError::new(
+                "breakpoint_angle",
+                "must be in (0, pi/2) rad",
+            ));
         }
         if !pos(self.line_tolerance) {
-            return Err(("line_tolerance", "must be finite and > 0".into()));
+            return Err(SettingError::new(
+                "line_tolerance",
+                "must be finite and > 0",
+            ));
         }
         if self.line_tolerance < 4.0 * self.noise_sigma {
-            return Err((
+            return Err(SettingError::new(
                 "line_tolerance",
                 format!(
                     "must be at least 4 noise_sigma = {} m (noise alone would cut straight walls into pieces)",
@@ -242,7 +252,7 @@ impl LidarParams {
             ));
         }
         if !(self.free_margin.is_finite() && self.free_margin >= 0.0) {
-            return Err(("free_margin", "must be finite and >= 0".into()));
+            return Err(SettingError::new("free_margin", "must be finite and >= 0"));
         }
         self.map.validate()
     }
@@ -259,9 +269,7 @@ pub struct Lidar {
 impl Lidar {
     /// A LiDAR with validated `params`; its noise stream is seeded by `seed`.
     pub fn new(params: LidarParams, seed: u64) -> Result<Self, String> {
-        params
-            .validate()
-            .map_err(|(f, m)| format!("lidar.{f}: {m}"))?;
+        params.validate().map_err(|e| format!("lidar.{e}"))?;
         let noise = (params.noise_sigma > 0.0)
             .then(|| Normal::new(0.0, params.noise_sigma).expect("sigma is finite and > 0"));
         Ok(Lidar {

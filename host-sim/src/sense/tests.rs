@@ -65,7 +65,7 @@ fn perception_keeps_a_convex_box_whole_and_cuts_an_inside_corner() {
 fn lidar_params_validate_the_new_fields() {
     let ok = LidarParams::default();
     assert!(ok.validate().is_ok());
-    let bad = |p: LidarParams| p.validate().unwrap_err().0;
+    let bad = |p: LidarParams| p.validate().unwrap_err().field;
     let b = LidarParams {
         breakpoint_angle: 2.0,
         ..ok.clone()
