@@ -13,7 +13,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-section() { printf '\n==== %s ====\n' "$*"; }
+# shellcheck source=.ci/section.sh
+source .ci/section.sh
 
 section "embedded tools (Debian packages, rustup targets)"
 need=()
