@@ -27,16 +27,17 @@
 //!    every step (`MpcRate::PerStep`), a [`CycleInput`] is built from the plant's
 //!    true state (CoM position, velocity, heading, the turning rate in force, stance
 //!    foot and side, time in step), the goal and the obstacle list, and
-//!    `Controller::step_with` is called. With the known map, the candidates
+//!    `Controller::step` is called (the controller holds the QP backend,
+//!    [`Solver`]). With the known map, the candidates
 //!    come from the map's R-tree ([`crate::world::obstacle_index`], built once before
 //!    the first tick) around `Controller::obstacle_query` (reused while they
 //!    cover the cycle, [`crate::world::obstacle_index::Candidates`]), and
-//!    `Controller::step_among_with` is called on them: bit for bit the
-//!    result of `step_with` on the whole map, at a cost that does not grow with
+//!    `Controller::step` is called on them: bit for bit the
+//!    result of `step` on the whole map, at a cost that does not grow with
 //!    it. The wall-clock time is measured with [`Instant`] around that query
 //!    and call only; with [`SimOptions::timing_repeats`]
 //!    `K > 1`, the same call is first timed `K - 1` times on clones of the
-//!    controller (and of the QP backend) made just before it, i.e. on the same
+//!    controller (with its QP backend) made just before it, i.e. on the same
 //!    input and the same state, and the cycle's time is the minimum of the `K`
 //!    timings; the loop goes on with the result of the controller's own call,
 //!    so the closed loop does not depend on `K`. Before the call, the current subgoal
@@ -312,39 +313,37 @@ pub fn run(scenario: &Scenario, options: SimOptions) -> Result<SimResult, SimErr
         return Err(SimError::NoTimingRepeats);
     }
     match options.solver {
-        Solver::Own => run_with(scenario, options, &mut OwnSolver),
-        Solver::Clarabel => run_with(scenario, options, &mut ClarabelBackend::default()),
+        Solver::Own => run_with(scenario, options, OwnSolver),
+        Solver::Clarabel => run_with(scenario, options, ClarabelBackend::default()),
     }
 }
 
-/// One controller call: `step_with` on the whole obstacle list, or, with an
-/// index of that list, `step_among_with` on the candidates around
-/// `obstacle_query` (`candidates`: the index queried again only when the last
-/// list does not cover this cycle; bit for bit the same output, see
+/// One controller call: `step` on the whole obstacle list, or, with an
+/// index of that list, on the candidates around `obstacle_query`
+/// (`candidates`: the index queried again only when the last list does not
+/// cover this cycle; bit for bit the same output, see
 /// [`crate::world::obstacle_index`]).
 fn control<const V: usize, B: QpBackend<NV, NC>>(
-    controller: &mut RobotController,
-    backend: &mut B,
+    controller: &mut RobotController<B>,
     input: &CycleInput<'_, V>,
     index: Option<&ObstacleIndex>,
     candidates: &mut Candidates,
 ) -> CycleOutput<HORIZON> {
     let Some(index) = index else {
-        return controller.step_with(input, backend);
+        return controller.step(input, None);
     };
     match controller.obstacle_query(input) {
-        Ok(q) => controller.step_among_with(input, candidates.update(index, &q), backend),
+        Ok(q) => controller.step(input, Some(candidates.update(index, &q))),
         // The controller rejects the input before reading any obstacle.
-        Err(_) => controller.step_among_with(input, &[], backend),
+        Err(_) => controller.step(input, Some(&[])),
     }
 }
 
-/// Times [`control`] `repeats - 1` times on clones (of the controller, the
-/// backend and the candidates, so the originals are untouched), ns each; the
-/// minimum, or `u64::MAX` when `repeats <= 1`.
+/// Times [`control`] `repeats - 1` times on clones (of the controller with
+/// its QP backend, and of the candidates, so the originals are untouched), ns
+/// each; the minimum, or `u64::MAX` when `repeats <= 1`.
 fn time_on_clones<const V: usize, B: QpBackend<NV, NC> + Clone>(
-    controller: &RobotController,
-    backend: &B,
+    controller: &RobotController<B>,
     input: &CycleInput<'_, V>,
     index: Option<&ObstacleIndex>,
     candidates: &Candidates,
@@ -353,10 +352,9 @@ fn time_on_clones<const V: usize, B: QpBackend<NV, NC> + Clone>(
     let mut best = u64::MAX;
     for _ in 1..repeats {
         let mut c = controller.clone();
-        let mut b = backend.clone();
         let mut candidates = candidates.clone();
         let t0 = Instant::now();
-        let out = control(&mut c, &mut b, input, index, &mut candidates);
+        let out = control(&mut c, input, index, &mut candidates);
         let ns = u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX);
         // Keep the computation (the clone and its output are dropped unused).
         std::hint::black_box((&out, &c));
@@ -368,10 +366,11 @@ fn time_on_clones<const V: usize, B: QpBackend<NV, NC> + Clone>(
 fn run_with<B: QpBackend<NV, NC> + Clone>(
     scenario: &Scenario,
     options: SimOptions,
-    backend: &mut B,
+    backend: B,
 ) -> Result<SimResult, SimError> {
     let cfg = scenario.config;
-    let mut controller = RobotController::new(cfg).map_err(SimError::Controller)?;
+    let mut controller =
+        RobotController::with_backend(cfg, backend).map_err(SimError::Controller)?;
     let mut disturber = Disturber::new(
         &scenario.disturbance,
         scenario.seed,
@@ -496,7 +495,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
         }
         // 2. Control.
         let due = match period {
-            Some(p) => plant.tick % p == 0,
+            Some(p) => plant.tick.is_multiple_of(p),
             None => plant.tick_in_step == 0,
         };
         if due {
@@ -589,14 +588,13 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
             };
             let on_clones = time_on_clones(
                 &controller,
-                backend,
                 &input,
                 index,
                 &candidates,
                 options.timing_repeats,
             );
             let t0 = Instant::now();
-            let output = control(&mut controller, backend, &input, index, &mut candidates);
+            let output = control(&mut controller, &input, index, &mut candidates);
             let compute_ns = u64::try_from(t0.elapsed().as_nanos())
                 .unwrap_or(u64::MAX)
                 .min(on_clones);
