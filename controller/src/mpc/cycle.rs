@@ -260,14 +260,14 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize, B: QpB
         candidates: Option<&[u32]>,
     ) -> CycleOutput<N> {
         match candidates {
-            None => self.step_among(input, input.obstacles.iter().enumerate()),
-            Some(c) => self.step_among(input, among(input.obstacles, c)),
+            None => self.cycle_among(input, input.obstacles.iter().enumerate()),
+            Some(c) => self.cycle_among(input, among(input.obstacles, c)),
         }
     }
 
     /// [`Controller::step`] with the obstacles `obstacles`: `(index in
     /// input.obstacles, polygon)` in the order the selection sees them.
-    fn step_among<'o, const V: usize>(
+    fn cycle_among<'o, const V: usize>(
         &mut self,
         input: &CycleInput<'_, V>,
         obstacles: impl Iterator<Item = (usize, &'o ConvexPolygon<V>)>,
