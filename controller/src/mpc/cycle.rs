@@ -480,6 +480,9 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         Ok(())
     }
 
+    /// Solves the assembled QP `work` (warm-started from `memory`), falls
+    /// back when it has no solution, and returns the command with its plan,
+    /// remembering what the next cycle needs in `memory`.
     fn solve_assembled<const V: usize, const NOBS: usize, B: QpBackend<NV, NC>>(
         &self,
         memory: &mut Memory<NV>,
@@ -491,58 +494,9 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         // Shift of the horizon since the last plan: a new step began when the
         // stance side changed.
         let shift = usize::from(memory.has_plan && memory.stance != input.stance_side);
-        let mut prefer = [false; NC];
-        let mut warm = false;
-        if self.config.warm_start {
-            for id in &memory.active[..memory.n_active.min(NV)] {
-                let k = id.k as usize;
-                if k < shift {
-                    continue;
-                }
-                let target = RowId {
-                    kind: id.kind,
-                    k: (k - shift) as u8,
-                };
-                let used = work.qp.m.min(NC);
-                for (p, r) in prefer.iter_mut().zip(&work.rows[..used]) {
-                    if *r == target {
-                        *p = true;
-                        warm = true;
-                        break;
-                    }
-                }
-            }
-        }
+        let (prefer, warm) = self.warm_start(memory, shift, work);
         let sol = backend.solve_qp(&self.solver, &work.qp, &prefer);
-        let min_h0 = work
-            .active_obstacles()
-            .iter()
-            .map(|o| {
-                o.half_plane
-                    .h_at(&pred.p0, self.barrier_margin, pred.time_to_p0)
-            })
-            .fold(f64::INFINITY, f64::min);
-        let inside = work
-            .active_obstacles()
-            .first()
-            .is_some_and(|o| o.distance <= 0.0);
-        let mut info = CycleInfo {
-            qp_status: Some(sol.status),
-            iterations: sol.iterations,
-            active_set_size: sol.n_active as u8,
-            active_obstacles: work.n_obstacles as u8,
-            obstacles_truncated: work.obstacles_truncated,
-            inside_obstacle: inside,
-            time_clamped: work.time_clamped,
-            warm_started: warm,
-            source: CommandSource::Optimal,
-            cost: f64::NAN,
-            max_violation: f64::NAN,
-            min_h0,
-            relax_gait: 0.0,
-            relax_safety: 0.0,
-            relax_capture: 0.0,
-        };
+        let mut info = self.info(&sol, work, warm);
         // `z`: this cycle's decision vector (positions); `feet`: set for the
         // fallbacks, which are defined by their footsteps.
         let (z, fallback_feet, status) = match sol.status {
@@ -550,55 +504,9 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                 remember_active(memory, &sol, work);
                 (sol.x, None, CycleStatus::Optimal)
             }
-            other => {
-                let status = match other {
-                    QpStatus::Infeasible => CycleStatus::Infeasible,
-                    QpStatus::IterationLimit => CycleStatus::BudgetExhausted,
-                    _ => CycleStatus::NumericalFailure,
-                };
+            _ => {
                 memory.n_active = 0;
-                let relaxed = if other == QpStatus::Infeasible {
-                    relax::relax(
-                        &self.solver,
-                        backend,
-                        &work.qp,
-                        &work.rows,
-                        self.config.max_iter,
-                        self.config.max_iter_cycle.saturating_sub(sol.iterations),
-                        self.config.relax_bisections,
-                        self.config.max_gait_relaxation,
-                        relax::CaptureBounds::new(
-                            &self.config,
-                            self.model.kappa,
-                            pred.heading.omega_bar,
-                        ),
-                        Some(&sol.lambda),
-                    )
-                } else {
-                    Err(relax::RelaxError {
-                        kind: relax::RelaxFailure::Budget,
-                        iterations: 0,
-                    })
-                };
-                if let Ok(r) = &relaxed {
-                    info.iterations = info.iterations.saturating_add(r.iterations);
-                    info.relax_gait = r.eps_gait;
-                    info.relax_safety = r.eps_safety;
-                    info.relax_capture = r.eps_capture;
-                    info.source = match r.level {
-                        relax::RelaxLevel::Gait => CommandSource::RelaxedGait,
-                        relax::RelaxLevel::Safety => CommandSource::RelaxedSafety,
-                    };
-                    (r.u, None, status)
-                } else {
-                    // The iterations spent before the relaxation gave up count too.
-                    if let Err(e) = &relaxed {
-                        info.iterations = info.iterations.saturating_add(e.iterations);
-                    }
-                    let (feet, z, source) = self.fallback(memory, shift, work);
-                    info.source = source;
-                    (z, Some(feet), status)
-                }
+                self.recover(memory, backend, work, &sol, shift, &mut info)
             }
         };
         // Plans computed with this cycle's headings turn at omega_bar; the
@@ -635,6 +543,151 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         } else {
             // Unreachable for finite inputs; kept so no NaN can ever leave.
             hold(memory, input, InputError::State)
+        }
+    }
+
+    /// The warm-start marks of this cycle's rows: the rows active in the last
+    /// solved QP, moved `shift` steps earlier (a new step began), and whether
+    /// any was found.
+    // Inlined: one call site on the cycle path (firmware instructions).
+    #[inline(always)]
+    fn warm_start<const NOBS: usize>(
+        &self,
+        memory: &Memory<NV>,
+        shift: usize,
+        work: &Assembly<N, NV, NC, NOBS>,
+    ) -> ([bool; NC], bool) {
+        let mut prefer = [false; NC];
+        let mut warm = false;
+        if self.config.warm_start {
+            for id in &memory.active[..memory.n_active.min(NV)] {
+                let k = id.k as usize;
+                if k < shift {
+                    continue;
+                }
+                let target = RowId {
+                    kind: id.kind,
+                    k: (k - shift) as u8,
+                };
+                let used = work.qp.m.min(NC);
+                for (p, r) in prefer.iter_mut().zip(&work.rows[..used]) {
+                    if *r == target {
+                        *p = true;
+                        warm = true;
+                        break;
+                    }
+                }
+            }
+        }
+        (prefer, warm)
+    }
+
+    /// The diagnostics of a cycle whose nominal QP returned `sol`: the
+    /// solver's figures and the obstacles' (the command's source, cost,
+    /// violation and relaxations are set later).
+    // Inlined: one call site on the cycle path (firmware instructions).
+    #[inline(always)]
+    fn info<const NOBS: usize>(
+        &self,
+        sol: &QpSolution<NV, NC>,
+        work: &Assembly<N, NV, NC, NOBS>,
+        warm: bool,
+    ) -> CycleInfo {
+        let pred = &work.prediction;
+        let min_h0 = work
+            .active_obstacles()
+            .iter()
+            .map(|o| {
+                o.half_plane
+                    .h_at(&pred.p0, self.barrier_margin, pred.time_to_p0)
+            })
+            .fold(f64::INFINITY, f64::min);
+        let inside = work
+            .active_obstacles()
+            .first()
+            .is_some_and(|o| o.distance <= 0.0);
+        CycleInfo {
+            qp_status: Some(sol.status),
+            iterations: sol.iterations,
+            active_set_size: sol.n_active as u8,
+            active_obstacles: work.n_obstacles as u8,
+            obstacles_truncated: work.obstacles_truncated,
+            inside_obstacle: inside,
+            time_clamped: work.time_clamped,
+            warm_started: warm,
+            source: CommandSource::Optimal,
+            cost: f64::NAN,
+            max_violation: f64::NAN,
+            min_h0,
+            relax_gait: 0.0,
+            relax_safety: 0.0,
+            relax_capture: 0.0,
+        }
+    }
+
+    /// A cycle whose nominal QP was not solved (`sol`): the priority scheme
+    /// of [`crate::relax`] when it is infeasible, else (or when that cannot
+    /// finish) a fallback. Returns the decision vector, the fallback's feet
+    /// (interleaved, m, world; `None` for a relaxed plan) and the status; records the source,
+    /// iterations and relaxations in `info`.
+    // Inlined: one call site on the cycle path (firmware instructions).
+    #[inline(always)]
+    fn recover<const NOBS: usize, B: QpBackend<NV, NC>>(
+        &self,
+        memory: &mut Memory<NV>,
+        backend: &mut B,
+        work: &Assembly<N, NV, NC, NOBS>,
+        sol: &QpSolution<NV, NC>,
+        shift: usize,
+        info: &mut CycleInfo,
+    ) -> (SVector<f64, NV>, Option<SVector<f64, NV>>, CycleStatus) {
+        let status = match sol.status {
+            QpStatus::Infeasible => CycleStatus::Infeasible,
+            QpStatus::IterationLimit => CycleStatus::BudgetExhausted,
+            _ => CycleStatus::NumericalFailure,
+        };
+        let relaxed = if sol.status == QpStatus::Infeasible {
+            relax::relax(
+                &self.solver,
+                backend,
+                &work.qp,
+                &work.rows,
+                self.config.max_iter,
+                self.config.max_iter_cycle.saturating_sub(sol.iterations),
+                self.config.relax_bisections,
+                self.config.max_gait_relaxation,
+                relax::CaptureBounds::new(
+                    &self.config,
+                    self.model.kappa,
+                    work.prediction.heading.omega_bar,
+                ),
+                Some(&sol.lambda),
+            )
+        } else {
+            Err(relax::RelaxError {
+                kind: relax::RelaxFailure::Budget,
+                iterations: 0,
+            })
+        };
+        match relaxed {
+            Ok(r) => {
+                info.iterations = info.iterations.saturating_add(r.iterations);
+                info.relax_gait = r.eps_gait;
+                info.relax_safety = r.eps_safety;
+                info.relax_capture = r.eps_capture;
+                info.source = match r.level {
+                    relax::RelaxLevel::Gait => CommandSource::RelaxedGait,
+                    relax::RelaxLevel::Safety => CommandSource::RelaxedSafety,
+                };
+                (r.u, None, status)
+            }
+            Err(e) => {
+                // The iterations spent before the relaxation gave up count too.
+                info.iterations = info.iterations.saturating_add(e.iterations);
+                let (feet, z, source) = self.fallback(memory, shift, work);
+                info.source = source;
+                (z, Some(feet), status)
+            }
         }
     }
 

@@ -204,30 +204,7 @@ pub fn summarize(r: &SimResult) -> Summary {
         .iter()
         .map(|f| f.clearance)
         .fold(f64::INFINITY, f64::min);
-    let mut status_counts = BTreeMap::new();
-    let mut source_counts = BTreeMap::new();
-    let mut max_violation = 0.0f64;
-    let mut max_violation_landed = 0.0f64;
-    let (mut max_relax_gait, mut max_relax_safety) = (0.0f64, 0.0f64);
-    let mut max_relax_capture = 0.0f64;
-    for c in &r.cycles {
-        max_relax_capture = max_relax_capture.max(c.output.info.relax_capture);
-        max_relax_gait = max_relax_gait.max(c.output.info.relax_gait);
-        max_relax_safety = max_relax_safety.max(c.output.info.relax_safety);
-        *status_counts
-            .entry(c.output.status.name().to_string())
-            .or_insert(0) += 1;
-        *source_counts
-            .entry(c.output.info.source.name().to_string())
-            .or_insert(0) += 1;
-        let v = c.output.info.max_violation;
-        if v.is_finite() {
-            max_violation = max_violation.max(v);
-            if c.landed {
-                max_violation_landed = max_violation_landed.max(v);
-            }
-        }
-    }
+    let totals = CycleTotals::of(&r.cycles);
     let ns: Vec<u64> = r.cycles.iter().map(|c| c.compute_ns).collect();
     let reached = r.outcome == crate::sim::Outcome::GoalReached;
     let min_body = sc.robot.body_clearance(min_c);
@@ -265,13 +242,13 @@ pub fn summarize(r: &SimResult) -> Summary {
         min_com_clearance_time: has_obs.then_some(min_t),
         min_body_clearance: has_obs.then_some(min_body),
         min_footstep_clearance: has_obs.then_some(min_foot),
-        max_violation,
-        max_violation_landed,
-        max_relax_gait,
-        max_relax_safety,
-        max_relax_capture,
-        status_counts,
-        source_counts,
+        max_violation: totals.max_violation,
+        max_violation_landed: totals.max_violation_landed,
+        max_relax_gait: totals.max_relax_gait,
+        max_relax_safety: totals.max_relax_safety,
+        max_relax_capture: totals.max_relax_capture,
+        status_counts: totals.status_counts,
+        source_counts: totals.source_counts,
         cycles: r.cycles.len(),
         compute: compute_stats(&ns),
         timing_repeats: r.options.timing_repeats,
@@ -292,12 +269,7 @@ pub fn summarize(r: &SimResult) -> Summary {
             .map(|_| "walked straight at the goal (the MPC alone)".to_string()),
         plan_margin: r.navigation.plan.as_ref().map(|p| p.margin_used),
         plan_grid_searched: r.navigation.plan.as_ref().map(|p| p.grid_searched),
-        plan_attempts: (sc.planner != crate::plan::Planner::None).then(|| {
-            r.navigation.plan.as_ref().map_or(
-                crate::plan::attempt_margins(sc.rrt.margin).len() as u32,
-                |p| p.attempts,
-            )
-        }),
+        plan_attempts: plan_attempts(r),
         plan_time_ms: (sc.planner != crate::plan::Planner::None)
             .then(|| r.navigation.plan_time_ns as f64 / 1e6),
         tree_nodes: r.navigation.plan.as_ref().map(|p| p.tree.nodes.len()),
@@ -326,6 +298,68 @@ pub fn summarize(r: &SimResult) -> Summary {
             .is_active(sc.config.com_height)
             .then(|| r.disturbance.clone()),
         mapping: r.mapping.as_ref().map(super::summarize_mapping),
+    }
+}
+
+/// The planner's attempts (margins tried): those of the plan, or every
+/// margin when planning failed; `None` without a planner.
+fn plan_attempts(r: &SimResult) -> Option<u32> {
+    let sc = &r.scenario;
+    (sc.planner != crate::plan::Planner::None).then(|| {
+        r.navigation.plan.as_ref().map_or(
+            crate::plan::attempt_margins(sc.rrt.margin).len() as u32,
+            |p| p.attempts,
+        )
+    })
+}
+
+/// What the summary counts over a run's control cycles.
+struct CycleTotals {
+    /// Cycles per status name.
+    status_counts: BTreeMap<String, usize>,
+    /// Cycles per command source name.
+    source_counts: BTreeMap<String, usize>,
+    /// Largest finite row violation of a cycle's command, and of a landed one.
+    max_violation: f64,
+    max_violation_landed: f64,
+    /// Largest relaxations of the priority scheme (gait, safety rows, m;
+    /// capturability bound).
+    max_relax_gait: f64,
+    max_relax_safety: f64,
+    max_relax_capture: f64,
+}
+
+impl CycleTotals {
+    fn of(cycles: &[crate::sim::CycleRecord]) -> CycleTotals {
+        let mut t = CycleTotals {
+            status_counts: BTreeMap::new(),
+            source_counts: BTreeMap::new(),
+            max_violation: 0.0,
+            max_violation_landed: 0.0,
+            max_relax_gait: 0.0,
+            max_relax_safety: 0.0,
+            max_relax_capture: 0.0,
+        };
+        for c in cycles {
+            let info = &c.output.info;
+            t.max_relax_capture = t.max_relax_capture.max(info.relax_capture);
+            t.max_relax_gait = t.max_relax_gait.max(info.relax_gait);
+            t.max_relax_safety = t.max_relax_safety.max(info.relax_safety);
+            *t.status_counts
+                .entry(c.output.status.name().to_string())
+                .or_insert(0) += 1;
+            *t.source_counts
+                .entry(info.source.name().to_string())
+                .or_insert(0) += 1;
+            let v = info.max_violation;
+            if v.is_finite() {
+                t.max_violation = t.max_violation.max(v);
+                if c.landed {
+                    t.max_violation_landed = t.max_violation_landed.max(v);
+                }
+            }
+        }
+        t
     }
 }
 

@@ -49,10 +49,12 @@ use crate::sim::{CycleRecord, ScanRecord, SimResult};
 
 mod figures;
 mod mapping;
+mod planner;
 mod scene;
 
-pub use figures::{frames_png, map_png, perception_png, planner_png, states_png, walk_gif};
+pub use figures::{frames_png, map_png, perception_png, states_png, walk_gif};
 pub use mapping::mapping_png;
+pub use planner::planner_png;
 
 /// Figure options.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -262,6 +264,9 @@ struct Moment<'a> {
     /// The LiDAR scan drawn on top.
     scan: Option<&'a ScanRecord>,
 }
+
+/// A map chart in metres ([`map_chart`]).
+type MapChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
 /// A map chart in metres (x right, y up) on `chart_area`, with `title`
 /// (text, size relative to the layout's font) centred in `title_area`: the

@@ -5,9 +5,6 @@
 use super::*;
 use crate::world::moving::vertex_centre;
 
-/// A map chart in metres ([`map_chart`]).
-type MapChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
-
 /// Draws a map-like scene into `area`: title, axes, (half-planes of `cycle`),
 /// obstacles, path and footsteps up to `until` (s), robot, start and goal.
 /// Layers are drawn bottom first, in the order of the legend.

@@ -15,6 +15,16 @@ fn pct(part: f64, whole: f64) -> String {
 pub fn markdown(rep: &DeadlineReport) -> String {
     let mut s = String::new();
     let budget = rep.instruction_budget();
+    header(&mut s, rep, budget);
+    table(&mut s, rep);
+    totals(&mut s, rep);
+    instructions_note(&mut s, rep, budget);
+    s
+}
+
+/// The first line: the deadline, how compute is timed, the build and the
+/// machine.
+fn header(s: &mut String, rep: &DeadlineReport, budget: u64) {
     let timing = if rep.repeat > 1 {
         format!(
             "compute = wall clock around the controller call only, each cycle's minimum of {} timings \
@@ -42,9 +52,13 @@ pub fn markdown(rep: &DeadlineReport) -> String {
         rep.wall_time_s
     );
     s.push('\n');
-    s += "| case | runs | reached | cycles | non-optimal | compute p50 [ns] | p99 [ns] | max [ns] \
+}
+
+/// The table: a row per case and, with `--instructions`, the firmware's.
+fn table(s: &mut String, rep: &DeadlineReport) {
+    *s += "| case | runs | reached | cycles | non-optimal | compute p50 [ns] | p99 [ns] | max [ns] \
           | max at | over deadline | iterations max: optimal / all | instructions max | margin [ns] |\n";
-    s += "|---|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---|---:|\n";
+    *s += "|---|---:|---:|---:|---:|---:|---:|---:|---|---:|---:|---|---:|\n";
     let it = |w: &Option<Worst>| w.as_ref().map_or("-".to_string(), |w| w.value.to_string());
     for row in &rep.rows {
         let st = &row.stats;
@@ -93,6 +107,11 @@ pub fn markdown(rep: &DeadlineReport) -> String {
         );
     }
     s.push('\n');
+}
+
+/// The notes on the last row (all cases): the worst iteration counts, the
+/// non-optimal cycles and the slowest cycle.
+fn totals(s: &mut String, rep: &DeadlineReport) {
     if let Some(total) = rep.rows.last().map(|r| &r.stats) {
         let worst = |w: &Option<Worst>, budget: u32| match w {
             Some(w) => format!(
@@ -143,6 +162,10 @@ pub fn markdown(rep: &DeadlineReport) -> String {
             );
         }
     }
+}
+
+/// Where the instruction counts come from, or why there are none.
+fn instructions_note(s: &mut String, rep: &DeadlineReport, budget: u64) {
     match &rep.instructions {
         Some(fw) => {
             let _ = writeln!(
@@ -153,9 +176,8 @@ pub fn markdown(rep: &DeadlineReport) -> String {
             );
         }
         None => {
-            s += "- instructions max: n/a (see firmware/README.md; `--instructions FILE` reads the \
+            *s += "- instructions max: n/a (see firmware/README.md; `--instructions FILE` reads the \
                   per-cycle CSV that tests/firmware_qemu.rs writes to firmware/target/instructions.csv)\n";
         }
     }
-    s
 }
