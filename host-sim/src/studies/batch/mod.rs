@@ -36,7 +36,7 @@ use anyhow::{Context, Result, anyhow, bail};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use crate::report::{OutputDir, summarize};
+use crate::report::{OutputDir, Summary, summarize};
 mod aggregate;
 mod seeds;
 #[cfg(test)]
@@ -437,19 +437,11 @@ pub fn run_batch(req: &BatchRequest) -> Result<BatchReport> {
         .num_threads(jobs)
         .build()
         .context("cannot start the worker threads")?;
-    let bar = if req.progress {
-        let b = indicatif::ProgressBar::new(seeds.len() as u64);
-        b.set_style(
-            indicatif::ProgressStyle::with_template(
-                "{prefix} [{elapsed_precise}] {wide_bar} {pos}/{len} (eta {eta}) {msg}",
-            )
-            .expect("valid template"),
-        );
-        b.set_prefix(format!("{} {}", first.name, req.shard));
-        b
-    } else {
-        indicatif::ProgressBar::hidden()
-    };
+    let bar = progress_bar(
+        req.progress,
+        seeds.len(),
+        &format!("{} {}", first.name, req.shard),
+    );
     let failures = AtomicUsize::new(0);
     let opts = SimOptions {
         solver: req.solver,
@@ -474,41 +466,7 @@ pub fn run_batch(req: &BatchRequest) -> Result<BatchReport> {
                 )
                 .with_context(|| format!("seed {seed}"))?;
                 let r = run(&sc, opts).with_context(|| format!("seed {seed}"))?;
-                let s = summarize(&r);
-                let row = RunRow {
-                    seed,
-                    outcome: s.ended.clone(),
-                    success: s.success,
-                    collision: s.collision,
-                    steps: s.steps as u64,
-                    sim_time: s.sim_time,
-                    final_distance: s.final_distance,
-                    min_com_clearance: s.min_com_clearance.unwrap_or(f64::INFINITY),
-                    min_footstep_clearance: s.min_footstep_clearance.unwrap_or(f64::INFINITY),
-                    max_violation: s.max_violation,
-                    cycles: s.cycles as u64,
-                    non_optimal_cycles: (s.cycles
-                        - s.status_counts.get("optimal").copied().unwrap_or(0))
-                        as u64,
-                    compute_p50_ns: s.compute.p50_ns,
-                    compute_p99_ns: s.compute.p99_ns,
-                    compute_max_ns: s.compute.max_ns,
-                    planner_failed: s.planner_error.is_some(),
-                    subgoals: s.subgoals as u64,
-                    plan_time_ms: s.plan_time_ms.unwrap_or(0.0),
-                    obstacles_seen_mean: s.obstacles_seen_mean,
-                    wall_ms: t.elapsed().as_secs_f64() * 1e3,
-                    foot_collision: s.foot_collision,
-                    min_body_clearance: s.min_body_clearance.unwrap_or(f64::INFINITY),
-                    contacts_robot: s.contacts_robot as u64,
-                    contacts_person: s.contacts_person as u64,
-                    replans: s.mapping.as_ref().map_or(0, |m| m.replans as u64),
-                    plan_failures: s.mapping.as_ref().map_or(0, |m| m.plan_failures as u64),
-                    map_update_p50_ms: s.mapping.as_ref().map_or(0.0, |m| m.map_update_p50_ms),
-                    map_update_max_ms: s.mapping.as_ref().map_or(0.0, |m| m.map_update_max_ms),
-                    plan_p50_ms: s.mapping.as_ref().map_or(0.0, |m| m.plan_time_p50_ms),
-                    plan_max_ms: s.mapping.as_ref().map_or(0.0, |m| m.plan_time_max_ms),
-                };
+                let row = run_row(seed, &summarize(&r), t);
                 if !row.success {
                     let n = failures.fetch_add(1, Ordering::Relaxed) + 1;
                     bar.set_message(format!("{n} not successful"));
@@ -549,6 +507,60 @@ pub fn run_batch(req: &BatchRequest) -> Result<BatchReport> {
         rows,
         aggregate: agg,
     })
+}
+
+/// The batch row of the run of `seed` from its summary; `started` is when
+/// the run began (its wall time ends now).
+fn run_row(seed: u64, s: &Summary, started: Instant) -> RunRow {
+    RunRow {
+        seed,
+        outcome: s.ended.clone(),
+        success: s.success,
+        collision: s.collision,
+        steps: s.steps as u64,
+        sim_time: s.sim_time,
+        final_distance: s.final_distance,
+        min_com_clearance: s.min_com_clearance.unwrap_or(f64::INFINITY),
+        min_footstep_clearance: s.min_footstep_clearance.unwrap_or(f64::INFINITY),
+        max_violation: s.max_violation,
+        cycles: s.cycles as u64,
+        non_optimal_cycles: (s.cycles - s.status_counts.get("optimal").copied().unwrap_or(0))
+            as u64,
+        compute_p50_ns: s.compute.p50_ns,
+        compute_p99_ns: s.compute.p99_ns,
+        compute_max_ns: s.compute.max_ns,
+        planner_failed: s.planner_error.is_some(),
+        subgoals: s.subgoals as u64,
+        plan_time_ms: s.plan_time_ms.unwrap_or(0.0),
+        obstacles_seen_mean: s.obstacles_seen_mean,
+        wall_ms: started.elapsed().as_secs_f64() * 1e3,
+        foot_collision: s.foot_collision,
+        min_body_clearance: s.min_body_clearance.unwrap_or(f64::INFINITY),
+        contacts_robot: s.contacts_robot as u64,
+        contacts_person: s.contacts_person as u64,
+        replans: s.mapping.as_ref().map_or(0, |m| m.replans as u64),
+        plan_failures: s.mapping.as_ref().map_or(0, |m| m.plan_failures as u64),
+        map_update_p50_ms: s.mapping.as_ref().map_or(0.0, |m| m.map_update_p50_ms),
+        map_update_max_ms: s.mapping.as_ref().map_or(0.0, |m| m.map_update_max_ms),
+        plan_p50_ms: s.mapping.as_ref().map_or(0.0, |m| m.plan_time_p50_ms),
+        plan_max_ms: s.mapping.as_ref().map_or(0.0, |m| m.plan_time_max_ms),
+    }
+}
+
+/// The batch's progress bar over `len` runs (hidden unless `show`).
+fn progress_bar(show: bool, len: usize, prefix: &str) -> indicatif::ProgressBar {
+    if !show {
+        return indicatif::ProgressBar::hidden();
+    }
+    let b = indicatif::ProgressBar::new(len as u64);
+    b.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{prefix} [{elapsed_precise}] {wide_bar} {pos}/{len} (eta {eta}) {msg}",
+        )
+        .expect("valid template"),
+    );
+    b.set_prefix(prefix.to_string());
+    b
 }
 
 /// Reads a batch directory written by [`run_batch`] or [`merge`]. Errors name
