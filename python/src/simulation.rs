@@ -291,8 +291,26 @@ pub(crate) fn result_dict<'py>(
         py.import("json")?.call_method1("loads", (json,))?,
     )?;
 
-    // cycles.csv's columns, unrounded, plus the goal and subgoal given.
-    let cy = &r.cycles;
+    d.set_item("cycles", cycle_columns(py, &r.cycles)?)?;
+    d.set_item("footsteps", footstep_columns(py, &r.footsteps)?)?;
+    d.set_item("trajectory", trajectory_columns(py, r, trajectory_every)?)?;
+
+    let sg: Vec<f64> = r
+        .navigation
+        .subgoals
+        .iter()
+        .flat_map(|g| [g.x, g.y])
+        .collect();
+    d.set_item("subgoals", arr2(py, r.navigation.subgoals.len(), 2, sg)?)?;
+    d.set_item("scenario", scenario_dict(py, &r.scenario)?)?;
+    Ok(d)
+}
+
+/// cycles.csv's columns, unrounded, plus the goal and subgoal given.
+fn cycle_columns<'py>(
+    py: Python<'py>,
+    cy: &[ldcbf_sim::sim::CycleRecord],
+) -> PyResult<Bound<'py, PyDict>> {
     let cols = PyDict::new(py);
     let f = |g: &dyn Fn(&ldcbf_sim::sim::CycleRecord) -> f64| arr1(py, cy.iter().map(g).collect());
     let i = |g: &dyn Fn(&ldcbf_sim::sim::CycleRecord) -> i64| {
@@ -350,9 +368,14 @@ pub(crate) fn result_dict<'py>(
     cols.set_item("goal_y", f(&|c| c.goal.y))?;
     cols.set_item("subgoal", i(&|c| c.subgoal as i64))?;
     cols.set_item("obstacles_seen", i(&|c| c.obstacles_seen as i64))?;
-    d.set_item("cycles", cols)?;
+    Ok(cols)
+}
 
-    let fs = &r.footsteps;
+/// footsteps.csv's columns.
+fn footstep_columns<'py>(
+    py: Python<'py>,
+    fs: &[ldcbf_sim::sim::Footstep],
+) -> PyResult<Bound<'py, PyDict>> {
     let cols = PyDict::new(py);
     cols.set_item(
         "step",
@@ -373,9 +396,15 @@ pub(crate) fn result_dict<'py>(
         "clearance",
         arr1(py, fs.iter().map(|s| s.clearance).collect()),
     )?;
-    d.set_item("footsteps", cols)?;
+    Ok(cols)
+}
 
-    // Every n-th sample and the last, as trajectory.csv.
+/// trajectory.csv's columns: every `trajectory_every`-th sample and the last.
+fn trajectory_columns<'py>(
+    py: Python<'py>,
+    r: &SimResult,
+    trajectory_every: usize,
+) -> PyResult<Bound<'py, PyDict>> {
     let n = r.samples.len();
     let sm: Vec<_> = r
         .samples
@@ -403,17 +432,7 @@ pub(crate) fn result_dict<'py>(
         "clearance",
         arr1(py, sm.iter().map(|s| s.clearance).collect()),
     )?;
-    d.set_item("trajectory", cols)?;
-
-    let sg: Vec<f64> = r
-        .navigation
-        .subgoals
-        .iter()
-        .flat_map(|g| [g.x, g.y])
-        .collect();
-    d.set_item("subgoals", arr2(py, r.navigation.subgoals.len(), 2, sg)?)?;
-    d.set_item("scenario", scenario_dict(py, &r.scenario)?)?;
-    Ok(d)
+    Ok(cols)
 }
 
 // ------------------------------------------------------------------ QP

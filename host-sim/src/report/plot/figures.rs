@@ -287,7 +287,10 @@ pub fn walk_gif(scene: &Scene<'_>, path: &Path, opts: &PlotOptions) -> Result<()
             nq.index_of(&px) as u8
         })
         .collect();
-    let file = std::fs::File::create(path)?;
+    let file = std::fs::File::create(path).map_err(|source| PlotError::Create {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let mut enc = gif::Encoder::new(
         std::io::BufWriter::new(file),
         w as u16,

@@ -36,7 +36,6 @@
 use std::path::Path;
 use std::sync::Once;
 
-use anyhow::{Result, anyhow};
 use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_controller::{HalfPlane, Side};
 use plotters::coord::Shift;
@@ -103,33 +102,65 @@ fn ensure_fonts() {
     });
 }
 
-fn e<E: core::fmt::Display>(err: E) -> anyhow::Error {
-    anyhow!("plot: {err}")
+/// Why a figure was not written.
+#[derive(Debug, thiserror::Error)]
+pub enum PlotError {
+    /// plotters or the GIF encoder failed (drawing, encoding or writing).
+    #[error("{0}")]
+    Draw(String),
+    /// The file could not be created.
+    #[error("cannot create {}: {source}", path.display())]
+    Create {
+        /// The figure's path.
+        path: std::path::PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// A figure of [`render_all`] failed: its file name and why.
+    #[error("plot {file}: {source}")]
+    Figure {
+        /// The figure's file name in the output directory.
+        file: &'static str,
+        /// Why.
+        source: Box<PlotError>,
+    },
 }
 
-/// Writes all figures into `dir`; returns the file names written.
+/// The result of drawing a figure.
+pub type Result<T> = std::result::Result<T, PlotError>;
+
+fn e<E: core::fmt::Display>(err: E) -> PlotError {
+    PlotError::Draw(err.to_string())
+}
+
+/// Writes all figures into `dir`; returns the file names written. An error
+/// names the figure's file ([`PlotError::Figure`]).
 pub fn render_all(r: &SimResult, dir: &Path, opts: &PlotOptions) -> Result<Vec<String>> {
     ensure_fonts();
     let scene = Scene::new(r);
-    map_png(&scene, &dir.join("map.png"))?;
-    states_png(r, &dir.join("states.png"))?;
-    frames_png(&scene, &dir.join("frames.png"))?;
-    let mut files = vec!["map.png".into(), "states.png".into(), "frames.png".into()];
+    let mut files = Vec::new();
+    let mut figure = |file: &'static str, draw: &dyn Fn(&Path) -> Result<()>| {
+        draw(&dir.join(file)).map_err(|source| PlotError::Figure {
+            file,
+            source: Box::new(source),
+        })?;
+        files.push(file.to_string());
+        Ok::<(), PlotError>(())
+    };
+    figure("map.png", &|p| map_png(&scene, p))?;
+    figure("states.png", &|p| states_png(r, p))?;
+    figure("frames.png", &|p| frames_png(&scene, p))?;
     if r.navigation.plan.is_some() {
-        planner_png(r, &dir.join("planner.png"))?;
-        files.push("planner.png".into());
+        figure("planner.png", &|p| planner_png(r, p))?;
     }
     if r.scenario.perception == Perception::Lidar && !r.scans.is_empty() {
-        perception_png(&scene, &dir.join("perception.png"))?;
-        files.push("perception.png".into());
+        figure("perception.png", &|p| perception_png(&scene, p))?;
     }
     if r.mapping.is_some() {
-        mapping_png(&scene, &dir.join("mapping.png"))?;
-        files.push("mapping.png".into());
+        figure("mapping.png", &|p| mapping_png(&scene, p))?;
     }
     if opts.gif {
-        walk_gif(&scene, &dir.join("walk.gif"), opts)?;
-        files.push("walk.gif".into());
+        figure("walk.gif", &|p| walk_gif(&scene, p, opts))?;
     }
     Ok(files)
 }
