@@ -66,7 +66,7 @@
 use nalgebra::{Const, DefaultAllocator, Dim, OMatrix, OVector, U1};
 
 use crate::active_set;
-use crate::linalg::{column, column_mut, columns, dot};
+use crate::linalg::{column, column_mut, columns, dot_d};
 
 mod gram;
 use crate::qp::{
@@ -183,9 +183,9 @@ where
             finite: solver.nv().value() == n,
         };
         for (i, g) in columns(qp.gt.as_slice(), n).enumerate().take(m) {
-            let n2 = dot(g, g);
+            let n2 = dot_d::<NV>(g, g);
             let mi = solver.linv_mul(g);
-            let mn2 = dot(mi.as_slice(), mi.as_slice());
+            let mn2 = dot_d::<NV>(mi.as_slice(), mi.as_slice());
             if !(n2.is_finite() && mn2.is_finite()) {
                 p.finite = false;
                 continue;
@@ -211,7 +211,7 @@ where
                 ) else {
                     continue;
                 };
-                let k = dot(mi, mj);
+                let k = dot_d::<NV>(mi, mj);
                 if let Some(e) = p.K.get_mut((i, j)) {
                     *e = k;
                 }
@@ -245,7 +245,7 @@ where
         let mut ld = LdpLoadedOf {
             q: q.clone(),
             h: h.clone(),
-            vv: dot(v.as_slice(), v.as_slice()),
+            vv: dot_d::<NV>(v.as_slice(), v.as_slice()),
             v,
             s0: OVector::zeros_generic(nc, U1),
             zero_infeasible: None,
@@ -276,7 +276,7 @@ where
                 continue;
             }
             // d_i / |m_i| = h_i / |m_i| + mhat_i . v
-            *s0 = hi * inv + dot(mh, ld.v.as_slice());
+            *s0 = hi * inv + dot_d::<NV>(mh, ld.v.as_slice());
         }
         ld
     }
@@ -396,7 +396,7 @@ where
             *a -= b;
         }
         let x = self.solver.linvt_mul(uv.as_slice());
-        let objective = 0.5 * (dot(u.as_slice(), u.as_slice()) - loaded.vv);
+        let objective = 0.5 * (dot_d::<NV>(u.as_slice(), u.as_slice()) - loaded.vv);
         let nc = self.inv_mnorm.shape_generic().0;
         it.solution(nc, x, objective, |i| {
             self.inv_mnorm.get(i).copied().unwrap_or(1.0)

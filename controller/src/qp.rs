@@ -496,6 +496,21 @@ where
                     *wk = c * gk;
                 }
             }
+        } else if NV::try_to_usize().is_none() {
+            // Run-time sizes: the triangle only (rows `k..` of column `k`).
+            // The products skipped are exact zeros, which would leave `w`
+            // as it is (it starts at +0 and never becomes -0), so the bits
+            // are those of the full-length loop for finite `g`.
+            for (k, &gk) in g.iter().enumerate() {
+                let (Some(col), Some(wt)) =
+                    (column(linv, n, k).and_then(|c| c.get(k..)), ws.get_mut(k..))
+                else {
+                    break;
+                };
+                for (wi, c) in wt.iter_mut().zip(col) {
+                    *wi += c * gk;
+                }
+            }
         } else {
             for (k, &gk) in g.iter().enumerate() {
                 let Some(col) = column(linv, n, k) else {
@@ -529,6 +544,16 @@ where
         {
             *xk = if self.linv_diag {
                 col.get(k).copied().unwrap_or(0.0) * w.get(k).copied().unwrap_or(0.0)
+            } else if NV::try_to_usize().is_none() {
+                // Run-time sizes: from the even index at or above the
+                // diagonal (the products skipped are exact zeros, which
+                // leave both partial sums at +0; each index keeps its
+                // parity, hence its partial sum): the bits of `dot`.
+                let k0 = k & !1;
+                match (col.get(k0..), w.get(k0..)) {
+                    (Some(c), Some(wt)) => dot_d::<NV>(c, wt),
+                    _ => 0.0,
+                }
             } else {
                 dot(col, w) // zeros above the diagonal included: no branches
             };

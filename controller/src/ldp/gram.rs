@@ -6,7 +6,7 @@ use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector, U1};
 
 use super::{LdpSolverOf, PIVOT_FALLBACK, slack_holds};
 use crate::active_set::{ActiveSetFactor, AddError};
-use crate::linalg::{column, column_mut, columns, dot, givens};
+use crate::linalg::{column, column_mut, columns, dot, dot_d, givens};
 use crate::qp::QpAllocator;
 
 /// `z -= M_A' r` over the first `nact` active rows (scaled rows `mhat`,
@@ -112,7 +112,7 @@ where
         let z = self.z.as_mut_slice();
         crate::linalg::copy(z, mp);
         sub_active(mhat, n, z, act, r, nact);
-        let mut z2 = dot(z, z);
+        let mut z2 = dot_d::<NV>(z, z);
         if z2 < REFINE2 {
             // Cancellation: z carries rounding of order eps cond(M_A)^2.
             // Project it once more (Gram-Schmidt "twice is enough"),
@@ -120,7 +120,7 @@ where
             self.b.as_mut_slice().fill(0.0);
             for (bi, &a) in self.b.as_mut_slice().iter_mut().zip(act).take(nact) {
                 if let Some(ma) = column(mhat, n, usize::from(a)) {
-                    *bi = dot(ma, z);
+                    *bi = dot_d::<NV>(ma, z);
                 }
             }
             self.w2.as_mut_slice().fill(0.0);
@@ -144,7 +144,7 @@ where
             {
                 *wi += w2i;
             }
-            z2 = dot(z, z);
+            z2 = dot_d::<NV>(z, z);
         }
         // Full (primal) step length t2 (|mhat_p| = 1).
         // With NV rows active (independent) the span is everything.
@@ -327,6 +327,24 @@ fn chol_solve<NV: Dim>(
     DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
 {
     let n = Ci.nrows();
+    if NV::try_to_usize().is_none() {
+        // Run-time sizes: the leading `nact` entries only. The products
+        // skipped are exact zeros (`b` and `r` are zero beyond `nact`, the
+        // rows of `C^-1` finite), which leave the sums as they are (they
+        // start at +0 and never become -0): the bits of the loops below.
+        let (Some(b), Some(r)) = (b.get(..nact), r.get_mut(..nact)) else {
+            return;
+        };
+        for (wi, row) in w.iter_mut().zip(columns(Ci.as_slice(), n)).take(nact) {
+            *wi = dot_d::<NV>(row.get(..nact).unwrap_or(row), b);
+        }
+        for (&wi, row) in w.iter().zip(columns(Ci.as_slice(), n)).take(nact) {
+            for (rk, c) in r.iter_mut().zip(row) {
+                *rk += wi * c;
+            }
+        }
+        return;
+    }
     for (wi, row) in w.iter_mut().zip(columns(Ci.as_slice(), n)).take(nact) {
         *wi = dot(row, b);
     }

@@ -2,6 +2,7 @@
 
 use super::gram::chol_drop;
 use super::*;
+use crate::linalg::dot;
 
 use crate::qp::QpSettings;
 use crate::qp::{DenseQp, DualActiveSet, QpSolution};
