@@ -11,8 +11,8 @@ use nalgebra::{SVector, Vector2};
 use super::fallback::hold;
 use super::select::among;
 use super::{
-    Assembly, CommandSource, Controller, Core, CycleInfo, CycleOutput, CycleStatus, LipState,
-    Memory, Plan, Prediction, Side,
+    Assembly, CommandSource, Config, Controller, Core, CycleInfo, CycleOutput, CycleStatus,
+    LipState, Memory, Plan, Prediction, Side,
 };
 use crate::constraints::{
     GaitBounds, RowId, RowKind, push_foot_row, push_gait_rows, push_ldcbf_row,
@@ -397,9 +397,15 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         let (q, c) = self.model.gradient::<NV>(&input.goal);
         out.qp.q = q;
         out.cost_constant = c;
+        // Near a moving obstacle, no faster than the robot can stop in one step.
+        let vx_max = self.forward_speed_limit(
+            &out.obstacles[..out.n_obstacles.min(NOBS)],
+            input.obstacle_velocities,
+            tau,
+        );
         let bounds = GaitBounds {
             vx_min: cfg.vx_min,
-            vx_max: cfg.vx_max,
+            vx_max,
             vy_min: cfg.vy_min,
             vy_max: cfg.vy_max,
             l_max: cfg.l_max,
@@ -493,10 +499,9 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         &self,
         memory: &mut Memory<NV>,
         input: &CycleInput<'_, V>,
-        work: &Assembly<N, NV, NC, NOBS>,
+        work: &mut Assembly<N, NV, NC, NOBS>,
         backend: &mut B,
     ) -> CycleOutput<N> {
-        let pred = &work.prediction;
         // Shift of the horizon since the last plan: a new step began when the
         // stance side changed.
         let shift = usize::from(memory.has_plan && memory.stance != input.stance_side);
@@ -523,6 +528,15 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             }
         }
         let sol = backend.solve_qp(&self.solver, &work.qp, &prefer);
+        // A person in the conflict: the relaxation plans away from them
+        // (`give_way`); the nominal cost is restored below.
+        let nominal_q = work.qp.q;
+        if sol.status == QpStatus::Infeasible
+            && let Some(goal) = self.give_way_goal(work, &sol.lambda)
+        {
+            work.qp.q = self.model.gradient::<NV>(&goal).0;
+        }
+        let pred = &work.prediction;
         let min_h0 = work
             .active_obstacles()
             .iter()
@@ -577,7 +591,14 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                         self.config.relax_bisections,
                         self.config.max_gait_relaxation,
                         relax::CaptureBounds::new(
-                            &self.config,
+                            &Config {
+                                vx_max: self.forward_speed_limit(
+                                    work.active_obstacles(),
+                                    input.obstacle_velocities,
+                                    pred.time_to_p0,
+                                ),
+                                ..self.config
+                            },
                             self.model.kappa,
                             pred.heading.omega_bar,
                         ),
@@ -589,6 +610,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                         iterations: 0,
                     })
                 };
+                work.qp.q = nominal_q;
                 if let Ok(r) = &relaxed {
                     info.iterations = info.iterations.saturating_add(r.iterations);
                     info.relax_gait = r.eps_gait;

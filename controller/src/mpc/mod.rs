@@ -64,6 +64,7 @@
 mod config;
 mod cycle;
 mod fallback;
+mod give_way;
 mod plan;
 mod select;
 #[cfg(test)]
