@@ -11,8 +11,8 @@ use nalgebra::{SVector, Vector2};
 use super::fallback::hold;
 use super::select::among;
 use super::{
-    Assembly, CommandSource, Config, Controller, Core, CycleInfo, CycleOutput, CycleStatus,
-    LipState, Memory, Plan, Prediction, Side,
+    Assembly, CommandSource, Controller, Core, CycleInfo, CycleOutput, CycleStatus, LipState,
+    Memory, Plan, Prediction, Side,
 };
 use crate::constraints::{
     GaitBounds, RowId, RowKind, push_foot_row, push_gait_rows, push_ldcbf_row,
@@ -397,15 +397,18 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         let (q, c) = self.model.gradient::<NV>(&input.goal);
         out.qp.q = q;
         out.cost_constant = c;
-        // Near a moving obstacle, no faster than the robot can stop in one step.
-        let vx_max = self.forward_speed_limit(
+        // Near a moving obstacle, no faster than the robot can stop in one
+        // step, reached as fast as it can brake.
+        let vx_max = self.forward_speed_bounds(
             &out.obstacles[..out.n_obstacles.min(NOBS)],
             input.obstacle_velocities,
             tau,
+            &v0,
+            heading.omega_bar,
         );
-        let bounds = GaitBounds {
+        let mut bounds = GaitBounds {
             vx_min: cfg.vx_min,
-            vx_max,
+            vx_max: cfg.vx_max,
             vy_min: cfg.vy_min,
             vy_max: cfg.vy_max,
             l_max: cfg.l_max,
@@ -416,8 +419,9 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         // checked anyway and reported as a numerical failure by the caller.
         let mut ok = true;
         let mut side = first_side;
-        for k in 0..N {
+        for (k, &vx) in vx_max.iter().enumerate() {
             let m_before = out.qp.m;
+            bounds.vx_max = vx;
             ok &= push_gait_rows(
                 &mut out.qp,
                 &self.model,
@@ -591,14 +595,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                         self.config.relax_bisections,
                         self.config.max_gait_relaxation,
                         relax::CaptureBounds::new(
-                            &Config {
-                                vx_max: self.forward_speed_limit(
-                                    work.active_obstacles(),
-                                    input.obstacle_velocities,
-                                    pred.time_to_p0,
-                                ),
-                                ..self.config
-                            },
+                            &self.config,
                             self.model.kappa,
                             pred.heading.omega_bar,
                         ),

@@ -26,27 +26,36 @@ use crate::constraints::RowKind;
 pub const GIVE_WAY_DISTANCE: f64 = 1.0;
 
 impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
-    /// The forward speed bound of this cycle's gait rows, m/s (body frame):
-    /// [`Config::vx_max`](super::Config::vx_max), lowered to the
-    /// one-step stopping speed `beta tanh(beta T) l_max` when a selected
-    /// obstacle moves and robot and obstacle could meet within the horizon:
-    /// its signed distance from `p_0` is at most `(|u| + vx_max) (tau + N
-    /// T)`, `u` its velocity (`velocities[index]`, world frame W; none or
-    /// zero: at rest) and `tau` the time to `p_0`, s.
+    /// The forward speed bound of each step's gait rows, m/s (body frame;
+    /// entry `k` bounds `v_{k+1}`): [`Config::vx_max`](super::Config::vx_max)
+    /// for every step, unless a selected obstacle moves and robot and
+    /// obstacle could meet within the horizon (its signed distance from
+    /// `p_0` is at most `(|u| + vx_max) (tau + N T)`, `u` its velocity,
+    /// `velocities[index]`, world frame W, none or zero: at rest; `tau` the
+    /// time to `p_0`, s). Then the bound comes down to the one-step stopping
+    /// speed `stop = beta tanh(beta T) l_max` (0.46 m/s for Table I) as fast
+    /// as the robot can brake: entry `k` is `min(vx_max, max(stop, s_{k+1} +
+    /// turn + 0.02))` with `s_0 = |v_0|`, `s_{k+1} = cosh(beta T) s_k - beta
+    /// sinh(beta T) l_max` (the step map of [`crate::relax`] with the foot at
+    /// the edge of reach: the fastest braking) and `turn = alpha |omega_bar|
+    /// / pi` (the turning term the forward row subtracts), so the lowered
+    /// rows never make a cycle infeasible by themselves.
     ///
-    /// From `v <= beta tanh(beta T) l_max` one step with the foot at the
-    /// edge of reach brings the LIP to rest (`v_1 = cosh(beta T) v - beta
-    /// sinh(beta T) l_max <= 0`, [`crate::relax`]'s step map), so near people
-    /// the robot can always stop within one step, the next cycle's
-    /// prediction permitting: 0.46 m/s for Table I. Without moving
-    /// obstacles the bound is `vx_max` (the static rows bit for bit).
-    pub(super) fn forward_speed_limit(
+    /// From `v <= stop` one step with the foot at the edge of reach brings
+    /// the LIP to rest (`cosh(beta T) v - beta sinh(beta T) l_max <= 0`): near
+    /// people the robot walks no faster than it can stop within one step.
+    /// Without moving obstacles every bound is `vx_max` (the static rows bit
+    /// for bit).
+    pub(super) fn forward_speed_bounds(
         &self,
         active: &[ActiveObstacle],
         velocities: &[Vector2<f64>],
         tau: f64,
-    ) -> f64 {
+        v0: &Vector2<f64>,
+        omega_bar: f64,
+    ) -> [f64; N] {
         let cfg = &self.config;
+        let mut out = [cfg.vx_max; N];
         let horizon = tau + N as f64 * cfg.step_duration;
         let near = active.iter().any(|o| {
             velocities.get(o.index as usize).is_some_and(|u| {
@@ -55,14 +64,27 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             })
         });
         if !near {
-            return cfg.vx_max;
+            return out;
         }
-        // tanh(beta T) = 2 t / (1 + t^2) with t = tanh(beta T / 2) = beta /
-        // |kappa| (`Condensed::kappa`, |kappa| = beta coth(beta T / 2)).
+        // With t = tanh(beta T / 2) = beta / |kappa| (`Condensed::kappa`,
+        // |kappa| = beta coth(beta T / 2)): tanh(beta T) = 2 t / (1 + t^2),
+        // cosh(beta T) = (1 + t^2) / (1 - t^2), sinh(beta T) = 2 t / (1 - t^2).
         let beta = self.lip.beta;
         let t = beta / self.model.kappa.abs();
         let stop = beta * (2.0 * t / (1.0 + t * t)) * cfg.l_max;
-        if stop < cfg.vx_max { stop } else { cfg.vx_max }
+        let cosh = (1.0 + t * t) / (1.0 - t * t);
+        let brake = beta * (2.0 * t / (1.0 - t * t)) * cfg.l_max;
+        let turn = cfg.alpha / core::f64::consts::PI * omega_bar.abs();
+        let mut s = crate::linalg::sqrt(v0.norm_squared());
+        for b in &mut out {
+            s = cosh * s - brake;
+            let ramp = s + turn + 0.02;
+            let bound = if ramp > stop { ramp } else { stop };
+            if bound < cfg.vx_max {
+                *b = bound;
+            }
+        }
+        out
     }
 
     /// The goal the priority scheme plans towards on an infeasible cycle
