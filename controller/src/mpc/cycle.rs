@@ -535,10 +535,12 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         // A person in the conflict: the relaxation plans away from them
         // (`give_way`); the nominal cost is restored below.
         let nominal_q = work.qp.q;
+        let mut give_way = false;
         if sol.status == QpStatus::Infeasible
             && let Some(goal) = self.give_way_goal(work, &sol.lambda)
         {
             work.qp.q = self.model.gradient::<NV>(&goal).0;
+            give_way = true;
         }
         let pred = &work.prediction;
         let min_h0 = work
@@ -600,6 +602,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                             pred.heading.omega_bar,
                         ),
                         Some(&sol.lambda),
+                        give_way,
                     )
                 } else {
                     Err(relax::RelaxError {
