@@ -70,7 +70,7 @@ fn fixture(velocities: &[Vector2<f64>]) -> String {
             obstacles: &polys,
             obstacle_velocities: velocities,
         };
-        let out = ctl.step(&input);
+        let out = ctl.step(&input, None);
         let ins = [
             input.com_position.x,
             input.com_position.y,

@@ -462,7 +462,7 @@ pub unsafe extern "C" fn ldcbf_step_moving(
         obstacles: &handle.obstacles,
         obstacle_velocities: velocities,
     };
-    let result = handle.controller.step(&cycle);
+    let result = handle.controller.step(&cycle, None);
     // SAFETY: non-NULL, aligned, writable by contract, outside the controller.
     unsafe { out.write(LdcbfOutput::from(&result)) };
     handle.last_error = LastError::None;

@@ -90,7 +90,7 @@ fn closed_loop<const N: usize, const NV: usize, const NC: usize>(
                 obstacle_velocities: &[],
             };
             let t0 = Instant::now();
-            let out = ctl.step(&input);
+            let out = ctl.step(&input, None);
             r.cycle_ns.push(t0.elapsed().as_nanos() as u64);
             r.cycles += 1;
             r.iterations.push(out.info.iterations);

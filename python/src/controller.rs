@@ -151,7 +151,7 @@ impl PyController {
             obstacles: &obstacles,
             obstacle_velocities: &velocities,
         };
-        with_controller!(&mut self.inner, c => output_dict(py, &c.step(&input)))
+        with_controller!(&mut self.inner, c => output_dict(py, &c.step(&input, None)))
     }
 
     fn __repr__(&self) -> String {
