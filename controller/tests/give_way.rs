@@ -69,7 +69,7 @@ fn a_person_closing_in_head_on_is_not_stepped_towards() {
     let people = [person(v(0.9, 0.0))];
     let vel = [v(-1.0, 0.0)];
     let mut ctl = PaperController::new(Config::default()).unwrap();
-    let out = ctl.step(&standing(v(5.0, 0.0), &people, &vel));
+    let out = ctl.step(&standing(v(5.0, 0.0), &people, &vel), None);
     assert_eq!(out.status, CycleStatus::Infeasible);
     assert_eq!(out.info.source, CommandSource::RelaxedSafety);
     let towards = largest_move(&out, v(1.0, 0.0));
@@ -85,7 +85,7 @@ fn a_person_closing_in_from_the_side_is_not_stepped_towards() {
     let people = [person(v(0.2, 0.75))];
     let vel = [v(0.0, -1.2)];
     let mut ctl = PaperController::new(Config::default()).unwrap();
-    let out = ctl.step(&standing(v(5.0, 0.0), &people, &vel));
+    let out = ctl.step(&standing(v(5.0, 0.0), &people, &vel), None);
     assert_eq!(out.status, CycleStatus::Infeasible);
     let towards = largest_move(&out, v(0.0, 1.0));
     assert!(towards <= 1e-9, "moves {towards} m towards the person");
@@ -107,7 +107,7 @@ fn near_a_moving_person_the_robot_walks_no_faster_than_it_can_stop() {
             com_velocity: v(0.5, 0.0),
             ..standing(v(8.0, 0.0), &people, velocities)
         };
-        let out = ctl.step(&input);
+        let out = ctl.step(&input, None);
         assert_eq!(out.status, CycleStatus::Optimal);
         out.plan
             .states

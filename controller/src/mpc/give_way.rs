@@ -167,7 +167,7 @@ mod tests {
         };
         let ctl = PaperController::new(cfg).unwrap();
         let mut asm = Assembly::EMPTY;
-        ctl.assemble(&input, &mut asm).unwrap();
+        ctl.assemble(&input, None, &mut asm).unwrap();
         (ctl, asm)
     }
 
