@@ -388,7 +388,16 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         let (q, c) = self.model.gradient::<NV>(&input.goal);
         out.qp.q = q;
         out.cost_constant = c;
-        let bounds = GaitBounds {
+        // Near a moving obstacle, no faster than the robot can stop in one
+        // step, reached as fast as it can brake.
+        let vx_max = self.forward_speed_bounds(
+            &out.obstacles[..out.n_obstacles.min(NOBS)],
+            input.obstacle_velocities,
+            tau,
+            &v0,
+            heading.omega_bar,
+        );
+        let mut bounds = GaitBounds {
             vx_min: cfg.vx_min,
             vx_max: cfg.vx_max,
             vy_min: cfg.vy_min,
@@ -401,8 +410,9 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         // checked anyway and reported as a numerical failure by the caller.
         let mut ok = true;
         let mut side = first_side;
-        for k in 0..N {
+        for (k, &vx) in vx_max.iter().enumerate() {
             let m_before = out.qp.m;
+            bounds.vx_max = vx;
             ok &= push_gait_rows(
                 &mut out.qp,
                 &self.model,
@@ -487,15 +497,24 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         &self,
         memory: &mut Memory<NV>,
         input: &CycleInput<'_, V>,
-        work: &Assembly<N, NV, NC, NOBS>,
+        work: &mut Assembly<N, NV, NC, NOBS>,
         backend: &mut B,
     ) -> CycleOutput<N> {
-        let pred = &work.prediction;
         // Shift of the horizon since the last plan: a new step began when the
         // stance side changed.
         let shift = usize::from(memory.has_plan && memory.stance != input.stance_side);
         let (prefer, warm) = self.warm_start(memory, shift, work);
         let sol = backend.solve_qp(&self.solver, &work.qp, &prefer);
+        // A person in the conflict: the relaxation plans away from them
+        // (`give_way`); the nominal cost is restored in `recover`.
+        let nominal_q = work.qp.q;
+        let mut give_way = false;
+        if sol.status == QpStatus::Infeasible
+            && let Some(goal) = self.give_way_goal(work, &sol.lambda)
+        {
+            work.qp.q = self.model.gradient::<NV>(&goal).0;
+            give_way = true;
+        }
         let mut info = self.info(&sol, work, warm);
         // `z`: this cycle's decision vector (positions); `feet`: set for the
         // fallbacks, which are defined by their footsteps.
@@ -506,9 +525,18 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             }
             _ => {
                 memory.n_active = 0;
-                self.recover(memory, backend, work, &sol, shift, &mut info)
+                self.recover(
+                    memory,
+                    backend,
+                    work,
+                    &sol,
+                    shift,
+                    &mut info,
+                    (nominal_q, give_way),
+                )
             }
         };
+        let pred = &work.prediction;
         // Plans computed with this cycle's headings turn at omega_bar; the
         // fallbacks stop turning.
         let omega = match info.source {
@@ -636,10 +664,11 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         &self,
         memory: &mut Memory<NV>,
         backend: &mut B,
-        work: &Assembly<N, NV, NC, NOBS>,
+        work: &mut Assembly<N, NV, NC, NOBS>,
         sol: &QpSolution<NV, NC>,
         shift: usize,
         info: &mut CycleInfo,
+        (nominal_q, give_way): (SVector<f64, NV>, bool),
     ) -> (SVector<f64, NV>, Option<SVector<f64, NV>>, CycleStatus) {
         let status = match sol.status {
             QpStatus::Infeasible => CycleStatus::Infeasible,
@@ -662,6 +691,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                     work.prediction.heading.omega_bar,
                 ),
                 Some(&sol.lambda),
+                give_way,
             )
         } else {
             Err(relax::RelaxError {
@@ -669,6 +699,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                 iterations: 0,
             })
         };
+        work.qp.q = nominal_q;
         match relaxed {
             Ok(r) => {
                 info.iterations = info.iterations.saturating_add(r.iterations);

@@ -30,7 +30,8 @@
 //! * [`CycleStatus::Infeasible`]: the nominal QP has no solution. The priority
 //!   scheme of [`crate::relax`] relaxes the gait rows, and if that is not enough
 //!   the safety rows, by the smallest uniform amount and returns the optimal plan
-//!   of that relaxed problem ([`CommandSource::RelaxedGait`],
+//!   of that relaxed problem (planned away from the people when a moving
+//!   obstacle is in the conflict, see `give_way`) ([`CommandSource::RelaxedGait`],
 //!   [`CommandSource::RelaxedSafety`]; the amounts are in [`CycleInfo`]). Leg
 //!   reachability always holds for these commands.
 //! * If the relaxation cannot finish (budget, numerical failure), and for
@@ -59,11 +60,14 @@
 //! * `select`: obstacle selection and [`ObstacleQuery`];
 //! * `cycle`: the cycle itself ([`Controller::step`], [`Controller::assemble`]);
 //! * `fallback`: the fallback and hold commands;
+//! * `give_way`: the policy toward people (the forward speed bound near a
+//!   moving obstacle, the goal of a relaxation with a person in the conflict);
 //! * this file: the [`Controller`], its sizes, configuration and memory.
 
 mod config;
 mod cycle;
 mod fallback;
+mod give_way;
 mod plan;
 mod select;
 #[cfg(test)]

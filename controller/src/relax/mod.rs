@@ -250,7 +250,14 @@ pub enum RelaxFailure {
 /// the nominal QP (one weight per row of `qp`, as
 /// [`crate::qp::QpSolution::lambda`] of its infeasible solve), used as the
 /// first search's starting certificate when it proves the nominal QP empty
-/// (`y'h < 0`); it replaces the first-step solve.
+/// (`y'h < 0`); it replaces the first-step solve. `give_way` (a person in
+/// the conflict, docs/safety.md "The policy toward people"): after a safety
+/// relaxation, no search for the least gait relaxation under it; the plan of
+/// the safety search (feasible with the gait rows at the cap, or at its own
+/// gait violation in stages 3 and 4) stands, and that is the reported
+/// `eps_gait`. It saves that search's solves (one to three) on the cycles
+/// where a person walks into the robot; the cost, which then pulls away from
+/// the person, chooses the plan.
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     solver: &DualActiveSet<NV, NC>,
@@ -263,6 +270,7 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     gait_cap: f64,
     capture: Option<CaptureBounds>,
     certificate: Option<&SVector<f64, NC>>,
+    give_way: bool,
 ) -> Result<Relaxed<NV, NC>, RelaxError> {
     let mut norms = [0.0f64; NC];
     for (n, g) in norms.iter_mut().zip(qp.gt.column_iter().take(qp.m)) {
@@ -301,7 +309,7 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
             ctx.marks = [false; NC];
         }
     }
-    let out = run_stages(&mut ctx, gait_cap);
+    let out = run_stages(&mut ctx, gait_cap, give_way);
     out.map_err(|kind| RelaxError {
         kind,
         iterations: ctx.used,
@@ -324,6 +332,7 @@ fn safety_rows<const NV: usize, const NC: usize>(
 fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     ctx: &mut Ctx<'_, NV, NC, B>,
     gait_cap: f64,
+    give_way: bool,
 ) -> Result<Relaxed<NV, NC>, RelaxFailure> {
     // The capturability bound, when on, is kept through stages 1-3.
     let capture0 = ctx.capture.map(|_| 0.0);
@@ -422,9 +431,12 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         } else {
             ctx.violation(Soft::Gait, &u_s).max(0.0)
         };
-        let (u, eps_g) = ctx
-            .minimal(fixed, Soft::Gait, cap, Some((known, u_s)))?
-            .ok_or(RelaxFailure::Numerical)?;
+        let (u, eps_g) = if give_way {
+            (u_s, known)
+        } else {
+            ctx.minimal(fixed, Soft::Gait, cap, Some((known, u_s)))?
+                .ok_or(RelaxFailure::Numerical)?
+        };
         // Without any safety relaxation this is still a gait relaxation (beyond
         // the cap: the robot moves too fast already).
         let level = if eps_s > 0.0 {

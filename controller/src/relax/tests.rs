@@ -183,6 +183,7 @@ fn relaxations_are_minimal_in_priority_order() {
             cap,
             cb,
             certificate,
+            false,
         )
         .unwrap_or_else(|e| panic!("case {case}: {e:?}"));
         solves[count.0.min(31)] += 1;
@@ -488,6 +489,7 @@ fn a_conflict_ahead_leaves_the_side_wall_its_margin() {
         cap,
         cb,
         Some(&nominal.lambda),
+        false,
     )
     .unwrap();
     assert_eq!(r.level, RelaxLevel::Safety, "{r:?}");

@@ -25,13 +25,15 @@
 //!   standing, moving away, or moving across (approach at most 5 cm/s), or
 //!   onto a foot already planted.
 //!
-//! The robot's standing policy toward a person who walks into it is the
-//! controller's: with the obstacles' velocities the barrier at each horizon
-//! step keeps the body and the feet off the person's predicted position, so
-//! the MPC steps aside or back while that is feasible within the gait limits;
-//! when it is not (a person faster than the robot's backward speed, or coming
-//! from two sides), the priority scheme relaxes the barrier and the contact
-//! counts as the person's.
+//! The robot's policy toward a person who walks into it is the controller's
+//! (`controller/src/mpc/give_way.rs`, docs/safety.md): near people it walks no
+//! faster than it can stop in one step, the barrier at each horizon step keeps
+//! the body and the feet off the person's predicted position, so the MPC
+//! steps aside or back while that is feasible within the gait limits; when it
+//! is not (a person faster than the robot's backward speed, or coming from
+//! two sides), the priority scheme relaxes the barrier while planning away
+//! from the people in the conflict, and the contact counts as the person's
+//! unless the robot was still moving toward them.
 
 use ldcbf_controller::nalgebra::Vector2;
 use serde::Serialize;
