@@ -24,7 +24,7 @@
 //!    error (`disturbance.foot_sigma`) the foot lands off the target by a seeded
 //!    Gaussian draw; the landed position is the stance foot from then on.
 //! 2. **Control.** At 20 Hz (every 50 ticks; `MpcRate::Hz`) or once at the start of
-//!    every step (`MpcRate::PerStep`), a [`CycleInput`] is built from the plant's
+//!    every step (`MpcRate::PerStep`), a [`CycleInput`](ldcbf_controller::CycleInput) is built from the plant's
 //!    true state (CoM position, velocity, heading, the turning rate in force, stance
 //!    foot and side, time in step), the goal and the obstacle list, and
 //!    `Controller::step` is called (the controller holds the QP backend,
@@ -34,7 +34,7 @@
 //!    cover the cycle, [`crate::world::obstacle_index::Candidates`]), and
 //!    `Controller::step` is called on them: bit for bit the
 //!    result of `step` on the whole map, at a cost that does not grow with
-//!    it. The wall-clock time is measured with [`Instant`] around that query
+//!    it. The wall-clock time is measured with [`Instant`](std::time::Instant) around that query
 //!    and call only; with [`SimOptions::timing_repeats`]
 //!    `K > 1`, the same call is first timed `K - 1` times on clones of the
 //!    controller (with its QP backend) made just before it, i.e. on the same
@@ -95,11 +95,11 @@ mod options;
 pub use contacts::{Contact, ContactCause, ContactPart, STANDING_SPEED, contact_counts};
 pub use options::{MpcRate, SimError, SimOptions, Solver};
 
-/// Horizon of [`RobotController`].
+/// Horizon of [`RobotController`](ldcbf_controller::RobotController).
 pub const HORIZON: usize = 3;
-/// QP variables of [`RobotController`].
+/// QP variables of [`RobotController`](ldcbf_controller::RobotController).
 pub const NV: usize = 2 * HORIZON;
-/// QP row capacity of [`RobotController`].
+/// QP row capacity of [`RobotController`](ldcbf_controller::RobotController).
 pub const NC: usize = ldcbf_controller::constraint_capacity(HORIZON, 8, true);
 
 /// Plant tick, s (1 kHz).

@@ -39,7 +39,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, anyhow, bail};
+use anyhow::{Context, Result, bail};
 use ldcbf_controller::{CommandSource, CycleStatus};
 use rayon::prelude::*;
 
@@ -49,7 +49,10 @@ mod stats;
 mod tests;
 
 pub use markdown::markdown;
-pub use stats::{CostStats, FirmwareInstructions, Slowest, Worst, cost_stats, read_instructions};
+pub use stats::{
+    CostStats, FirmwareInstructions, InstructionsError, Slowest, Worst, cost_stats,
+    read_instructions,
+};
 
 use crate::plan::Planner;
 use crate::report::{ComputeStats, compute_stats};

@@ -202,44 +202,102 @@ pub struct FirmwareInstructions {
     pub iterations_all: u32,
 }
 
+/// Why a per-cycle instruction CSV could not be read: each names the file
+/// (and the line where there is one).
+#[derive(Debug, thiserror::Error)]
+pub enum InstructionsError {
+    /// The path is a directory.
+    #[error("{}: is a directory, not an instruction CSV (firmware/target/instructions.csv)", path.display())]
+    Directory {
+        /// The path given.
+        path: PathBuf,
+    },
+    /// The file could not be read.
+    #[error("{}: cannot read the instruction counts", path.display())]
+    Read {
+        /// The path given.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The file is not UTF-8 text.
+    #[error("{}: not a text file (invalid UTF-8), expected the instruction CSV", path.display())]
+    NotText {
+        /// The path given.
+        path: PathBuf,
+    },
+    /// The file is empty (or blank).
+    #[error("{}: empty file, expected the header {INSTRUCTIONS_HEADER:?}", path.display())]
+    Empty {
+        /// The path given.
+        path: PathBuf,
+    },
+    /// The last line has no newline.
+    #[error("{}:{line}: the last line ends without a newline (truncated file?)", path.display())]
+    Truncated {
+        /// The path given.
+        path: PathBuf,
+        /// The last line's number (from 1).
+        line: usize,
+    },
+    /// The first line is not [`INSTRUCTIONS_HEADER`].
+    #[error("{}:1: expected the header {INSTRUCTIONS_HEADER:?} (written by tests/firmware_qemu.rs), got {header:?}", path.display())]
+    Header {
+        /// The path given.
+        path: PathBuf,
+        /// The first line, trimmed.
+        header: String,
+    },
+    /// A data row is malformed.
+    #[error("{}:{line}: {problem} in {text:?}", path.display())]
+    Row {
+        /// The path given.
+        path: PathBuf,
+        /// The row's line number (from 1).
+        line: usize,
+        /// What is wrong: a field count, or which field does not parse.
+        problem: &'static str,
+        /// The row as read.
+        text: String,
+    },
+    /// The file has a header and no data row.
+    #[error("{}: no cycles", path.display())]
+    NoCycles {
+        /// The path given.
+        path: PathBuf,
+    },
+}
+
 /// Reads a per-cycle instruction CSV ([`INSTRUCTIONS_HEADER`], as written by
 /// `tests/firmware_qemu.rs`). Any malformed line is an error naming the file
 /// and line.
-pub fn read_instructions(path: &Path) -> Result<FirmwareInstructions> {
+pub fn read_instructions(path: &Path) -> Result<FirmwareInstructions, InstructionsError> {
+    let path_buf = || path.to_path_buf();
     if path.is_dir() {
-        bail!(
-            "{}: is a directory, not an instruction CSV (firmware/target/instructions.csv)",
-            path.display()
-        );
+        return Err(InstructionsError::Directory { path: path_buf() });
     }
-    let bytes = std::fs::read(path)
-        .with_context(|| format!("{}: cannot read the instruction counts", path.display()))?;
-    let text = String::from_utf8(bytes).map_err(|_| {
-        anyhow!(
-            "{}: not a text file (invalid UTF-8), expected the instruction CSV",
-            path.display()
-        )
+    let bytes = std::fs::read(path).map_err(|source| InstructionsError::Read {
+        path: path_buf(),
+        source,
     })?;
+    let text =
+        String::from_utf8(bytes).map_err(|_| InstructionsError::NotText { path: path_buf() })?;
     if text.trim().is_empty() {
-        bail!(
-            "{}: empty file, expected the header {INSTRUCTIONS_HEADER:?}",
-            path.display()
-        );
+        return Err(InstructionsError::Empty { path: path_buf() });
     }
     if !text.ends_with('\n') {
-        bail!(
-            "{}:{}: the last line ends without a newline (truncated file?)",
-            path.display(),
-            text.lines().count()
-        );
+        return Err(InstructionsError::Truncated {
+            path: path_buf(),
+            line: text.lines().count(),
+        });
     }
     let mut lines = text.lines();
     let header = lines.next().unwrap_or("").trim();
     if header != INSTRUCTIONS_HEADER {
-        bail!(
-            "{}:1: expected the header {INSTRUCTIONS_HEADER:?} (written by tests/firmware_qemu.rs), got {header:?}",
-            path.display()
-        );
+        return Err(InstructionsError::Header {
+            path: path_buf(),
+            header: header.to_string(),
+        });
     }
     let mut out = FirmwareInstructions {
         source: path.to_path_buf(),
@@ -256,7 +314,12 @@ pub fn read_instructions(path: &Path) -> Result<FirmwareInstructions> {
         if line.trim().is_empty() {
             continue;
         }
-        let bad = |what: &str| anyhow!("{}:{}: {what} in {line:?}", path.display(), i + 2);
+        let bad = |problem: &'static str| InstructionsError::Row {
+            path: path_buf(),
+            line: i + 2,
+            problem,
+            text: line.to_string(),
+        };
         let f: Vec<&str> = line.split(',').map(str::trim).collect();
         if f.len() != 4 {
             return Err(bad("expected 4 fields"));
@@ -279,7 +342,7 @@ pub fn read_instructions(path: &Path) -> Result<FirmwareInstructions> {
         }
     }
     if out.cycles == 0 {
-        bail!("{}: no cycles", path.display());
+        return Err(InstructionsError::NoCycles { path: path_buf() });
     }
     Ok(out)
 }
