@@ -82,6 +82,7 @@ fn decode<'a>(r: &Row, goal: Vector2<f64>, obstacles: &'a [Poly]) -> CycleInput<
         goal,
         obstacles,
         obstacle_velocities: &[],
+        speed_cap: ldcbf_controller::NO_SPEED_CAP,
     }
 }
 
@@ -131,6 +132,7 @@ fn host_replay(
         .map(|r| {
             let out = ctl.step(&CycleInput {
                 obstacle_velocities: velocities,
+                speed_cap: ldcbf_controller::NO_SPEED_CAP,
                 ..decode(r, goal, obstacles)
             });
             HostCommand {

@@ -47,6 +47,8 @@ pub struct RecordedInput {
     pub goal: Vector2<f64>,
     /// Index of the cycle's obstacle list among the caller's lists.
     pub obstacles: usize,
+    /// The cycle's speed cap, m/s ([`CycleInput::speed_cap`]).
+    pub speed_cap: f64,
 }
 
 impl RecordedInput {
@@ -63,6 +65,7 @@ impl RecordedInput {
             time_in_step: 0.0,
             goal,
             obstacles: 0,
+            speed_cap: NO_SPEED_CAP,
         }
     }
 
@@ -83,6 +86,7 @@ impl RecordedInput {
             goal: self.goal,
             obstacles,
             obstacle_velocities: &[],
+            speed_cap: self.speed_cap,
         }
     }
 
@@ -133,7 +137,22 @@ pub struct CycleInput<'a, const V: usize> {
     /// speed of at most [`MAX_RATE`] (else [`InputError::ObstacleVelocity`]);
     /// the velocities of obstacles the cycle does not select are not read.
     pub obstacle_velocities: &'a [Vector2<f64>],
+    /// Speed cap, m/s: an upper bound on the CoM velocity along the heading
+    /// at every planned step end (`lon' v_{k+1}`, the walking-velocity row
+    /// [`RowKind::VelLonUpper`](crate::constraints::RowKind::VelLonUpper)),
+    /// for this cycle only. A host that sees its surroundings as it goes
+    /// passes the speed from which the robot can still stop inside the space
+    /// it has seen free (the capture-step limit of `docs/safety.md`). The row
+    /// takes `min(vx_max, max(c, vx_min))` with `c = speed_cap` when
+    /// `speed_cap >= 0`, else `c = 0` (NaN too): a cap never loosens the
+    /// configured bound nor crosses the lower one. [`NO_SPEED_CAP`]
+    /// (infinity) is the configured bound, bit for bit.
+    pub speed_cap: f64,
 }
+
+/// [`CycleInput::speed_cap`] of a cycle without a cap (m/s): the configured
+/// `vx_max` holds alone.
+pub const NO_SPEED_CAP: f64 = f64::INFINITY;
 
 /// Largest accepted CoM speed (m/s), turning rate (rad/s) and obstacle speed
 /// (m/s): far beyond any walking robot or person; larger values are treated
@@ -397,9 +416,20 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         let (q, c) = self.model.gradient::<NV>(&input.goal);
         out.qp.q = q;
         out.cost_constant = c;
+        // The host's speed cap tightens the longitudinal upper bound only
+        // (`CycleInput::speed_cap`); no cap keeps `cfg.vx_max` bit for bit.
+        let cap = if input.speed_cap >= 0.0 {
+            input.speed_cap
+        } else {
+            0.0
+        };
         let bounds = GaitBounds {
             vx_min: cfg.vx_min,
-            vx_max: cfg.vx_max,
+            vx_max: if cap < cfg.vx_max {
+                cap.max(cfg.vx_min)
+            } else {
+                cfg.vx_max
+            },
             vy_min: cfg.vy_min,
             vy_max: cfg.vy_max,
             l_max: cfg.l_max,

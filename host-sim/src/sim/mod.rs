@@ -521,6 +521,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                 goal,
                 obstacles: &[],
                 obstacle_velocities: &[],
+                speed_cap: ldcbf_controller::NO_SPEED_CAP,
             };
             // Known velocities with the true map (none when every obstacle
             // is at rest: the static controller, bit for bit).

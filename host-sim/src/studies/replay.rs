@@ -121,6 +121,7 @@ impl Recording {
                 time_in_step: c.time_in_step,
                 goal: c.goal,
                 obstacles,
+                speed_cap: ldcbf_controller::NO_SPEED_CAP,
             });
         }
         Ok(Recording {
