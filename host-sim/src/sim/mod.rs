@@ -93,6 +93,7 @@ use crate::world::moving::MovingMap;
 use crate::world::obstacle_index::{Candidates, ObstacleIndex};
 
 pub mod cancel;
+pub mod capture;
 mod contacts;
 mod options;
 pub use contacts::{Contact, ContactCause, ContactPart, STANDING_SPEED, contact_counts};
@@ -192,6 +193,8 @@ pub struct ScanRecord {
     pub points: Vec<Vector2<f64>>,
     /// Inferred obstacles (one per DBSCAN cluster), world frame.
     pub obstacles: Vec<Polygon>,
+    /// The cycle's speed cap, m/s (`crate::sim::capture`; infinite without).
+    pub speed_cap: f64,
 }
 
 /// The planner's part of a run.
@@ -530,6 +533,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
             } else {
                 world.velocities()
             };
+            let mut speed_cap = ldcbf_controller::NO_SPEED_CAP;
             let cycle_obstacles: &[Polygon] = match mapper.as_mut() {
                 Some(m) => {
                     let points = m.sense(
@@ -557,6 +561,10 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                         }
                     }
                     let q = controller.obstacle_query(&measured(subgoals[current]));
+                    if scenario.lidar.map.capture_speed_limit {
+                        speed_cap =
+                            m.capture_cap(&cfg, &measured(subgoals[current]), &subgoals[current..]);
+                    }
                     seen = match q {
                         Ok(q) => m.obstacles(&q),
                         Err(_) => Vec::new(),
@@ -577,6 +585,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
                             origin: plant.position,
                             points,
                             obstacles: seen.clone(),
+                            speed_cap,
                         });
                     }
                     &seen
@@ -586,6 +595,7 @@ fn run_with<B: QpBackend<NV, NC> + Clone>(
             let input = CycleInput {
                 obstacles: cycle_obstacles,
                 obstacle_velocities: cycle_velocities,
+                speed_cap,
                 ..measured(subgoals[current])
             };
             let on_clones = time_on_clones(
