@@ -80,7 +80,7 @@ fn bench_step<const N: usize, const NV: usize, const NC: usize, const NOBS: usiz
         b.iter(|| {
             let c = &cycles[i % cycles.len()];
             i += 1;
-            black_box(ctl.step(black_box(&c.input(obs))))
+            black_box(ctl.step(black_box(&c.input(obs)), None))
         })
     });
 }
@@ -99,7 +99,7 @@ fn paper(cr: &mut Criterion) {
         b.iter(|| {
             let c = &cycles[i % cycles.len()];
             i += 1;
-            black_box(ctl.step(black_box(&c.input(&obs))))
+            black_box(ctl.step(black_box(&c.input(&obs)), None))
         })
     });
     let velocities = moving::VELOCITIES.map(Vector2::from);
@@ -109,7 +109,7 @@ fn paper(cr: &mut Criterion) {
         b.iter(|| {
             let c = &cycles[i % cycles.len()];
             i += 1;
-            black_box(ctl.step(black_box(&c.input_moving(&obs, &velocities))))
+            black_box(ctl.step(black_box(&c.input_moving(&obs, &velocities)), None))
         })
     });
     group.bench_function("step/cold", |b| {
@@ -119,7 +119,7 @@ fn paper(cr: &mut Criterion) {
             let c = &cycles[i % cycles.len()];
             i += 1;
             ctl.reset();
-            black_box(ctl.step(black_box(&c.input(&obs))))
+            black_box(ctl.step(black_box(&c.input(&obs)), None))
         })
     });
     let ctl = Paper::new(Config::default()).unwrap();
@@ -127,7 +127,7 @@ fn paper(cr: &mut Criterion) {
         .iter()
         .map(|c| {
             let mut a = Assembly::default();
-            ctl.assemble(&c.input(&obs), &mut a).unwrap();
+            ctl.assemble(&c.input(&obs), None, &mut a).unwrap();
             a
         })
         .collect();

@@ -145,7 +145,7 @@ fn steps<const N: usize, const NV: usize, const NC: usize>(
 ) -> u64 {
     inputs
         .iter()
-        .map(|c| u64::from(ctl.step(black_box(c)).info.iterations))
+        .map(|c| u64::from(ctl.step(black_box(c), None).info.iterations))
         .sum()
 }
 

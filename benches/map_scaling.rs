@@ -20,7 +20,7 @@
 //! * `indexed`: `Controller::obstacle_query`, the candidates
 //!   (`ldcbf_sim::world::obstacle_index::Candidates`: the R-tree queried 0.5 m
 //!   beyond `r_active` around `p_0`, the list reused while it covers later
-//!   cycles) and `Controller::step_among`: what the simulator does with a
+//!   cycles) and `Controller::step` on them: what the simulator does with a
 //!   known map;
 //! * `queried`: the same with the R-tree queried every cycle
 //!   (`ObstacleIndex::candidates_into`, sorted indices), no reuse;
@@ -43,7 +43,7 @@
 //! The cycles of `crowded@0` (LiDAR: each cycle's obstacles are those inferred
 //! from its scan, a few per cycle), two ways: `step` on the perceived list
 //! (what the simulator does), and an index rebuilt from the list each cycle,
-//! queried, then `step_among`. Same timing as the table.
+//! queried, then `step` on the candidates. Same timing as the table.
 //!
 //! `cargo bench --bench map_scaling` (all); `cargo bench --bench map_scaling --
 //! none` prints the tables alone.
@@ -127,7 +127,7 @@ struct Map {
 }
 
 /// Cycle `i` of `rec` on `map`: query, candidates (reused while they cover
-/// the cycle), `step_among`.
+/// the cycle), `step` on the candidates.
 fn indexed(
     ctl: &mut RobotController,
     rec: &Recording,
@@ -138,12 +138,12 @@ fn indexed(
     let mut input = rec.input(i).expect("cycle");
     input.obstacles = &m.map;
     match ctl.obstacle_query(&input) {
-        Ok(q) => ctl.step_among(&input, candidates.update(&m.index, &q)),
-        Err(_) => ctl.step_among(&input, &[]),
+        Ok(q) => ctl.step(&input, Some(candidates.update(&m.index, &q))),
+        Err(_) => ctl.step(&input, Some(&[])),
     }
 }
 
-/// Cycle `i` of `rec` on `map`: query, the R-tree queried, `step_among`.
+/// Cycle `i` of `rec` on `map`: query, the R-tree queried, `step` on the candidates.
 fn queried(
     ctl: &mut RobotController,
     rec: &Recording,
@@ -157,14 +157,14 @@ fn queried(
         Ok(q) => m.index.candidates_into(&q, candidates),
         Err(_) => candidates.clear(),
     }
-    ctl.step_among(&input, candidates)
+    ctl.step(&input, Some(candidates))
 }
 
 /// Cycle `i` of `rec` on `map`, the whole map scanned.
 fn full(ctl: &mut RobotController, rec: &Recording, i: usize, m: &Map) -> CycleOutput<HORIZON> {
     let mut input = rec.input(i).expect("cycle");
     input.obstacles = &m.map;
-    ctl.step(&input)
+    ctl.step(&input, None)
 }
 
 /// Every cycle's output, indexed and full, is the logged one.
@@ -255,7 +255,7 @@ fn table(rec: &Recording, maps: &[Map], lidar: &Recording, passes: usize) {
         lidar,
         passes,
         || {},
-        |c, i| c.step(&lidar.input(i).unwrap()),
+        |c, i| c.step(&lidar.input(i).unwrap(), None),
     );
     let mut cand = Vec::new();
     let rebuilt = per_cycle(
@@ -269,7 +269,7 @@ fn table(rec: &Recording, maps: &[Map], lidar: &Recording, passes: usize) {
                 Ok(q) => index.candidates_into(&q, &mut cand),
                 Err(_) => cand.clear(),
             }
-            c.step_among(&input, &cand)
+            c.step(&input, Some(&cand))
         },
     );
     let seen: Vec<usize> = (0..lidar.len())
@@ -286,7 +286,10 @@ fn table(rec: &Recording, maps: &[Map], lidar: &Recording, passes: usize) {
     println!("|---|---:|---:|---:|");
     for (name, v) in [
         ("step on the perceived list", &linear),
-        ("index rebuilt per scan + query + step_among", &rebuilt),
+        (
+            "index rebuilt per scan + query + step on the candidates",
+            &rebuilt,
+        ),
     ] {
         let (a, b, c) = stats(v);
         println!("| {name} | {a} | {b} | {c} |");

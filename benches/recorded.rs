@@ -163,12 +163,12 @@ impl Set {
             .collect();
         let mut qps = Vec::new();
         for (k, r) in runs.iter().enumerate() {
-            let mut ctl = r.controller().expect("config");
+            let mut ctl = RobotController::<Capture>::with_backend(r.config, Capture::default())
+                .expect("config");
             for i in 0..r.len() {
-                let mut cap = Capture::default();
-                let out = ctl.step_with(&r.input(i).expect("input"), &mut cap);
+                let out = ctl.step(&r.input(i).expect("input"), None);
                 assert_eq!(format!("{out:?}"), format!("{:?}", r.outputs[i]));
-                if let Some((qp, prefer)) = cap.first {
+                if let Some((qp, prefer)) = ctl.backend_mut().first.take() {
                     qps.push(Qp {
                         run: k,
                         cycle: i,
@@ -251,7 +251,7 @@ fn timed_pass(set: &Set, mode: Mode, ctls: &mut [RobotController]) -> Vec<(usize
                     ctls[k].reset();
                 }
                 let t0 = Instant::now();
-                let out = ctls[k].step(black_box(&input));
+                let out = ctls[k].step(black_box(&input), None);
                 let ns = t0.elapsed().as_nanos();
                 black_box(out);
                 (k, i, u64::try_from(ns).unwrap_or(u64::MAX))
@@ -406,7 +406,7 @@ fn bench_set(cr: &mut Criterion, set: &Set) {
                 if *i == 0 || mode == Mode::StepCold {
                     ctls[*k].reset();
                 }
-                black_box(ctls[*k].step(black_box(input)))
+                black_box(ctls[*k].step(black_box(input), None))
             })
         });
     }

@@ -43,7 +43,7 @@ trap 'rm -f "$LOG"' EXIT
 echo "Linking the no-panic harness ($TARGET, release, panic-never)..."
 if cargo build --release --locked 2>"$LOG"; then
     echo "OK: no panicking branch is reachable from Controller::new, Controller::configure, Controller::step,"
-    echo "    Controller::step_among, Controller::obstacle_query,"
+    echo "    Controller::step (with and without candidates), Controller::obstacle_query,"
     echo "    ConvexPolygon::new, ConvexPolygon::hull, or DualActiveSet::new and LdpSolver (NV = 16, NC = 32),"
     echo "    nor from any function of the C API (ffi/: ldcbf_init, ldcbf_configure, ldcbf_step, ...)"
     echo "    in the release build for Cortex-M7."

@@ -65,7 +65,7 @@ pub mod fixtures {
         let mut c = RecordedInput::at_rest(goal);
         let mut out = Vec::new();
         for _ in 0..8 * max_steps {
-            let cmd = ctl.step(&c.input(obstacles));
+            let cmd = ctl.step(&c.input(obstacles), None);
             out.push((c, cmd));
             let (p, v) = lip.propagate(&c.com_position, &c.com_velocity, &c.stance_foot, dt);
             c.com_position = p;

@@ -130,11 +130,13 @@ fn host_replay(
     let mut ctl = PaperController::new(Config::default()).expect("valid config");
     rows.iter()
         .map(|r| {
-            let out = ctl.step(&CycleInput {
-                obstacle_velocities: velocities,
-                speed_cap: ldcbf_controller::NO_SPEED_CAP,
-                ..decode(r, goal, obstacles)
-            });
+            let out = ctl.step(
+                &CycleInput {
+                    obstacle_velocities: velocities,
+                    ..decode(r, goal, obstacles)
+                },
+                None,
+            );
             HostCommand {
                 foot: [out.foot_target.x, out.foot_target.y],
                 turning_rate: out.turning_rate,

@@ -91,7 +91,7 @@ fn main() {
     };
     let mut min_clearance = f64::INFINITY;
     for cycle in 0..8 * 60 {
-        let out = controller.step(&cycle_input(&robot, goal, &obstacles));
+        let out = controller.step(&cycle_input(&robot, goal, &obstacles), None);
         robot.advance(dt, beta);
         let clearance = closest_point_point_polygon(&robot.position, &obstacles[0]).signed_distance;
         min_clearance = min_clearance.min(clearance);

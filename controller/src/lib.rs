@@ -13,7 +13,7 @@
 //! 3. selects the obstacles within `r_active`, nearest first, and linearises each
 //!    as a half-plane at the boundary point closest to `p_0` ([`geometry`]);
 //!    a caller with a large map passes only the candidates its spatial index
-//!    finds around [`Controller::obstacle_query`] ([`Controller::step_among`]),
+//!    finds around [`Controller::obstacle_query`] (the `candidates` of [`Controller::step`]),
 //!    with the same result; an obstacle may move
 //!    ([`CycleInput::obstacle_velocities`]): the half-plane at step end `k` is
 //!    then the one moved with it to that step end's time;

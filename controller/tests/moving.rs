@@ -43,7 +43,7 @@ fn walking<'a>(obstacles: &'a [Poly], velocities: &'a [Vector2<f64>]) -> CycleIn
 fn velocities_of_another_length_are_an_input_error() {
     let obstacles = [rect(1.0, 1.5, -0.5, 0.5), rect(2.0, 2.5, 1.0, 1.5)];
     let mut ctl = Ctl::new(Config::default()).unwrap();
-    let out = ctl.step(&walking(&obstacles, &[v(0.0, 0.0)]));
+    let out = ctl.step(&walking(&obstacles, &[v(0.0, 0.0)]), None);
     assert_eq!(
         out.status,
         CycleStatus::InvalidInput(InputError::ObstacleVelocityCount)
@@ -51,7 +51,7 @@ fn velocities_of_another_length_are_an_input_error() {
     assert_eq!(out.info.source, CommandSource::Hold);
     assert!(out.foot_target.x.is_finite() && out.foot_target.y.is_finite());
     // Velocities without obstacles are of another length too.
-    let out = ctl.step(&walking(&[], &[v(0.0, 0.0)]));
+    let out = ctl.step(&walking(&[], &[v(0.0, 0.0)]), None);
     assert_eq!(
         out.status,
         CycleStatus::InvalidInput(InputError::ObstacleVelocityCount)
@@ -75,7 +75,7 @@ fn bad_velocities_of_selected_obstacles_are_an_input_error() {
         v(100.0, 1.0),
         v(-70.8, 70.8),
     ] {
-        let out = ctl.step(&walking(&obstacles, &[bad, v(0.0, 0.0)]));
+        let out = ctl.step(&walking(&obstacles, &[bad, v(0.0, 0.0)]), None);
         assert_eq!(
             out.status,
             CycleStatus::InvalidInput(InputError::ObstacleVelocity),
@@ -84,10 +84,10 @@ fn bad_velocities_of_selected_obstacles_are_an_input_error() {
         assert_eq!(out.info.source, CommandSource::Hold);
         let mut asm = Asm::EMPTY;
         assert_eq!(
-            ctl.assemble(&walking(&obstacles, &[bad, v(0.0, 0.0)]), &mut asm),
+            ctl.assemble(&walking(&obstacles, &[bad, v(0.0, 0.0)]), None, &mut asm),
             Err(InputError::ObstacleVelocity)
         );
-        let far = ctl.step(&walking(&obstacles, &[v(0.2, 0.0), bad]));
+        let far = ctl.step(&walking(&obstacles, &[v(0.2, 0.0), bad]), None);
         assert!(
             !matches!(far.status, CycleStatus::InvalidInput(_)),
             "{bad:?}: {:?}",
@@ -95,7 +95,7 @@ fn bad_velocities_of_selected_obstacles_are_an_input_error() {
         );
     }
     // 100 m/s exactly is accepted.
-    let out = ctl.step(&walking(&obstacles, &[v(100.0, 0.0), v(0.0, 0.0)]));
+    let out = ctl.step(&walking(&obstacles, &[v(100.0, 0.0), v(0.0, 0.0)]), None);
     assert!(!matches!(out.status, CycleStatus::InvalidInput(_)));
 }
 
@@ -118,10 +118,10 @@ fn at_rest_is_the_static_controller_bit_for_bit() {
             speed_cap: ldcbf_controller::NO_SPEED_CAP,
             ..ia
         };
-        let (oa, ob) = (a.step(&ia), b.step(&ib));
+        let (oa, ob) = (a.step(&ia, None), b.step(&ib, None));
         assert_eq!(format!("{oa:?}"), format!("{ob:?}"), "t = {t}");
-        a.assemble(&ia, &mut asm_a).unwrap();
-        b.assemble(&ib, &mut asm_b).unwrap();
+        a.assemble(&ia, None, &mut asm_a).unwrap();
+        b.assemble(&ib, None, &mut asm_b).unwrap();
         assert_eq!(format!("{asm_a:?}"), format!("{asm_b:?}"), "t = {t}");
     }
 }
@@ -157,7 +157,7 @@ fn rows_follow_the_moved_polygon<const NC: usize>(
     input: &CycleInput<'_, 16>,
 ) {
     let mut asm = Assembly::<3, 6, NC, 8>::EMPTY;
-    ctl.assemble(input, &mut asm).unwrap();
+    ctl.assemble(input, None, &mut asm).unwrap();
     let cfg = ctl.config();
     let (t_step, gamma, margin) = (cfg.step_duration, cfg.gamma, cfg.barrier_margin());
     let pred = asm.prediction;

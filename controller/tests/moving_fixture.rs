@@ -71,7 +71,7 @@ fn fixture(velocities: &[Vector2<f64>]) -> String {
             obstacle_velocities: velocities,
             speed_cap: ldcbf_controller::NO_SPEED_CAP,
         };
-        let out = ctl.step(&input);
+        let out = ctl.step(&input, None);
         let ins = [
             input.com_position.x,
             input.com_position.y,

@@ -232,7 +232,7 @@ impl Walker {
     /// Walks towards `goal` (no obstacles) for `cycles` cycles.
     fn warm_up(&mut self, ctl: &mut Ctl, goal: Vector2<f64>, cycles: usize) {
         for _ in 0..cycles {
-            let out = ctl.step(&self.input(goal, &[]));
+            let out = ctl.step(&self.input(goal, &[]), None);
             check_contract(ctl, &out);
             self.advance(ctl, &out);
         }
@@ -265,7 +265,7 @@ fn start_inside_the_delta_margin_recovers() {
     for (name, wall, goal) in cases {
         let obs = [wall];
         let mut ctl = Ctl::new(cfg).unwrap();
-        let out = ctl.step(&at_rest(v(0.0, 0.0), goal, &obs));
+        let out = ctl.step(&at_rest(v(0.0, 0.0), goal, &obs), None);
         let viol = check_contract(&ctl, &out);
         assert!(
             viol.safety <= TOL,
@@ -298,7 +298,7 @@ fn start_inside_the_delta_margin_recovers() {
         let mut h_prev = h[0];
         for c in 0..80 {
             let step_start = w.t_in == 0.0;
-            let out = ctl.step(&w.input(goal, &obs));
+            let out = ctl.step(&w.input(goal, &obs), None);
             check_contract(&ctl, &out);
             assert!(out.info.relax_safety == 0.0, "{name}, cycle {c}");
             if step_start && c >= 16 {
@@ -337,11 +337,11 @@ fn obstacle_appears_right_in_front() {
         let mut w = Walker::standing();
         w.warm_up(&mut ctl, goal, 80);
         while w.t_in != t_seen {
-            let out = ctl.step(&w.input(goal, &[]));
+            let out = ctl.step(&w.input(goal, &[]), None);
             w.advance(&ctl, &out);
         }
         let mut asm = Asm::default();
-        ctl.assemble(&w.input(goal, &[]), &mut asm).unwrap();
+        ctl.assemble(&w.input(goal, &[]), None, &mut asm).unwrap();
         let (p0, v0) = (asm.prediction.p0, asm.prediction.v0);
         assert!((v0.x - 0.6).abs() < 0.1, "not walking at 0.6 m/s: {v0:?}");
         let x = p0.x + 0.1;
@@ -350,7 +350,7 @@ fn obstacle_appears_right_in_front() {
             _ => rect(x, x + 0.3, p0.y - 0.15, p0.y + 0.15),
         };
         let obs = [obstacle];
-        let out = ctl.step(&w.input(goal, &obs));
+        let out = ctl.step(&w.input(goal, &obs), None);
         let what = format!("{shape} seen at t = {t_seen}");
         check_contract(&ctl, &out);
         assert!(
@@ -394,7 +394,7 @@ fn turn_conflicts_with_velocity_limits() {
     w.warm_up(&mut ctl, v(100.0, 0.0), 80);
     assert!((w.v.x - 0.8).abs() < 1e-3 && w.t_in == 0.0, "{w:?}");
     let goal = w.p - v(5.0, 0.0);
-    let out = ctl.step(&w.input(goal, &[]));
+    let out = ctl.step(&w.input(goal, &[]), None);
     let first = out;
     check_contract(&ctl, &out);
     assert_eq!(out.status, CycleStatus::Infeasible);
@@ -413,7 +413,7 @@ fn turn_conflicts_with_velocity_limits() {
     let mut fastest: f64 = 0.0;
     let mut reached = None;
     for c in 0..400 {
-        let out = ctl.step(&w.input(goal, &[]));
+        let out = ctl.step(&w.input(goal, &[]), None);
         check_contract(&ctl, &out);
         assert!(out.turning_rate.abs() <= cfg.omega_max);
         for p in w.advance(&ctl, &out) {
@@ -467,7 +467,7 @@ fn robot_exactly_on_an_edge_or_a_vertex() {
                 ..Config::default()
             })
             .unwrap();
-            let out = ctl.step(&at_rest(p, goal, &square));
+            let out = ctl.step(&at_rest(p, goal, &square), None);
             check_contract(&ctl, &out);
             assert!(out.info.inside_obstacle, "{name}: {:?}", out.info);
             let ob = ctl.last_assembly().active_obstacles()[0];
@@ -498,7 +498,7 @@ fn goal_inside_an_obstacle() {
     let mut w = Walker::standing();
     let mut closest = f64::INFINITY;
     for c in 0..200 {
-        let out = ctl.step(&w.input(goal, &box_));
+        let out = ctl.step(&w.input(goal, &box_), None);
         check_contract(&ctl, &out);
         check_plan_clearance(&ctl, &out, &box_);
         // No safety row is relaxed on this approach, so the CoM must stay out.
@@ -538,7 +538,7 @@ fn more_obstacles_than_capacity_keeps_the_nearest() {
     }
     let p0 = v(0.0, 0.0);
     let mut ctl = Ctl::new(Config::default()).unwrap();
-    let out = ctl.step(&at_rest(p0, v(0.0, 5.0), &obs));
+    let out = ctl.step(&at_rest(p0, v(0.0, 5.0), &obs), None);
     check_contract(&ctl, &out);
     assert!(out.info.obstacles_truncated);
     assert_eq!(out.info.active_obstacles, 8);
@@ -564,7 +564,7 @@ fn more_obstacles_than_capacity_keeps_the_nearest() {
         .map(|&i| obs[i])
         .chain(obs[12..].iter().copied())
         .collect();
-    let out = ctl.step(&at_rest(p0, v(0.0, 5.0), &fewer));
+    let out = ctl.step(&at_rest(p0, v(0.0, 5.0), &fewer), None);
     check_contract(&ctl, &out);
     assert!(!out.info.obstacles_truncated);
     assert_eq!(out.info.active_obstacles, 8);
@@ -588,13 +588,13 @@ fn time_in_step_outside_the_step_is_clamped() {
     ] {
         w.t_in = t;
         let mut ctl = Ctl::new(Config::default()).unwrap();
-        let out = ctl.step(&w.input(goal, &[]));
+        let out = ctl.step(&w.input(goal, &[]), None);
         check_contract(&ctl, &out);
         assert!(out.info.time_clamped, "t = {t}");
         assert_eq!(out.status, CycleStatus::Optimal);
         w.t_in = clamped;
         let mut reference = Ctl::new(Config::default()).unwrap();
-        let expected = reference.step(&w.input(goal, &[]));
+        let expected = reference.step(&w.input(goal, &[]), None);
         assert!(!expected.info.time_clamped);
         let mut info = out.info;
         info.time_clamped = false;
@@ -607,13 +607,13 @@ fn time_in_step_outside_the_step_is_clamped() {
         w.t_in = t;
         let out = Ctl::new(Config::default())
             .unwrap()
-            .step(&w.input(goal, &[]));
+            .step(&w.input(goal, &[]), None);
         assert!(!out.info.time_clamped, "t = {t}");
     }
     for t in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
         w.t_in = t;
         let mut ctl = Ctl::new(Config::default()).unwrap();
-        let out = ctl.step(&w.input(goal, &[]));
+        let out = ctl.step(&w.input(goal, &[]), None);
         assert_eq!(
             out.status,
             CycleStatus::InvalidInput(InputError::TimeInStep)

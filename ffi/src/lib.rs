@@ -463,7 +463,7 @@ pub unsafe extern "C" fn ldcbf_step_moving(
         obstacle_velocities: velocities,
         speed_cap: ldcbf_controller::NO_SPEED_CAP,
     };
-    let result = handle.controller.step(&cycle);
+    let result = handle.controller.step(&cycle, None);
     // SAFETY: non-NULL, aligned, writable by contract, outside the controller.
     unsafe { out.write(LdcbfOutput::from(&result)) };
     handle.last_error = LastError::None;

@@ -529,19 +529,22 @@ fn names_cover_every_value() {
 fn sentinel_rust() -> CycleOutput<LDCBF_HORIZON> {
     let mut c = RobotController::new(Config::default()).unwrap();
     let obstacles: [ConvexPolygon<LDCBF_MAX_VERTICES>; 0] = [];
-    c.step(&CycleInput {
-        com_position: Vector2::zeros(),
-        com_velocity: Vector2::zeros(),
-        heading: 0.0,
-        turning_rate: 0.0,
-        stance_foot: Vector2::zeros(),
-        stance_side: Side::Left,
-        time_in_step: 0.0,
-        goal: Vector2::new(1.0, 0.0),
-        obstacles: &obstacles,
-        obstacle_velocities: &[],
-        speed_cap: ldcbf_controller::NO_SPEED_CAP,
-    })
+    c.step(
+        &CycleInput {
+            com_position: Vector2::zeros(),
+            com_velocity: Vector2::zeros(),
+            heading: 0.0,
+            turning_rate: 0.0,
+            stance_foot: Vector2::zeros(),
+            stance_side: Side::Left,
+            time_in_step: 0.0,
+            goal: Vector2::new(1.0, 0.0),
+            obstacles: &obstacles,
+            obstacle_velocities: &[],
+            speed_cap: ldcbf_controller::NO_SPEED_CAP,
+        },
+        None,
+    )
 }
 
 #[test]
@@ -674,7 +677,7 @@ fn robot_cycles_equal_rust(velocities: &[Vector2<f64>]) {
             assert_eq!(unsafe { ldcbf_reset(ctl) }, LdcbfResult::Ok);
             rust.reset();
         }
-        let expected = rust.step(&input);
+        let expected = rust.step(&input, None);
         let c_input = LdcbfInput {
             com_position: arr(&input.com_position),
             com_velocity: arr(&input.com_velocity),

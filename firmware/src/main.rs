@@ -143,7 +143,7 @@ fn main() -> ! {
         let input = decode(black_box(rec), goal, state.obstacles, black_box(moving));
         let sp = cortex_m::register::msp::read() as usize;
         let bottom = paint_stack();
-        let (cmd, ticks) = measure(&mut syst, || state.controller.step(black_box(&input)));
+        let (cmd, ticks) = measure(&mut syst, || state.controller.step(black_box(&input), None));
         let lowest = lowest_touched(bottom);
         if lowest == bottom {
             // The cycle used the whole painted window: the mark is unknown.

@@ -80,7 +80,7 @@ fuzz_target!(|case: Case| {
             obstacles: &polys,
             obstacle_velocities: &[],
         };
-        let out = ctl.step(&input);
+        let out = ctl.step(&input, None);
         assert!(finite(&out), "non-finite output {out:?} for {c:?}");
         if out.info.source != CommandSource::Hold {
             // Reachability rows of this cycle's QP hold for the returned plan.

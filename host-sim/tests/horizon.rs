@@ -91,7 +91,7 @@ fn closed_loop<const N: usize, const NV: usize, const NC: usize>(
                 speed_cap: ldcbf_controller::NO_SPEED_CAP,
             };
             let t0 = Instant::now();
-            let out = ctl.step(&input);
+            let out = ctl.step(&input, None);
             r.cycle_ns.push(t0.elapsed().as_nanos() as u64);
             r.cycles += 1;
             r.iterations.push(out.info.iterations);

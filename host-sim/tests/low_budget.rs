@@ -247,7 +247,7 @@ fn check_case(case: &Case, b: u32, time_limit: f64) -> (String, Vec<String>, usi
             obstacle_velocities: &[],
             speed_cap: ldcbf_controller::NO_SPEED_CAP,
         };
-        ctl.assemble(&input, &mut asm).expect("valid input");
+        ctl.assemble(&input, None, &mut asm).expect("valid input");
         assert_eq!(
             (asm.prediction.p0, asm.prediction.v0),
             (out.plan.x0.position, out.plan.x0.velocity),

@@ -1,7 +1,7 @@
 //! The known map's spatial index (`ldcbf_sim::world::obstacle_index`, issue 14
 //! part 2): its query returns exactly what a linear scan of the bounding boxes
 //! returns, the candidates it gives hold every obstacle the controller can
-//! select, and `Controller::step_among` on them is `Controller::step` on the
+//! select, and `Controller::step` on them is `Controller::step` on the
 //! whole map, bit for bit (random maps with exact duplicates, so that distance
 //! ties are broken by the map's order); a closed loop on a 10,000-polygon map
 //! reaches its goal and its every cycle replays on the whole map.
@@ -195,7 +195,7 @@ proptest! {
     /// assemblies of the same cycles on the whole map, and the query's centre
     /// is the cycle's `p_0`.
     #[test]
-    fn step_among_the_candidates_is_step_on_the_whole_map(
+    fn step_on_the_candidates_is_step_on_the_whole_map(
         map in map(),
         states in prop::collection::vec((state(), prop::array::uniform2(-0.3..0.3f64)), 1..6),
     ) {
@@ -212,9 +212,9 @@ proptest! {
                 let inp = input(s, &map);
                 let q = among.obstacle_query(&inp).expect("a valid input");
                 index.candidates_into(&q, &mut candidates);
-                let a = whole.step(&inp);
-                let b = among.step_among(&inp, &candidates);
-                let c = reused.step_among(&inp, cache.update(&index, &q));
+                let a = whole.step(&inp, None);
+                let b = among.step(&inp, Some(&candidates));
+                let c = reused.step(&inp, Some(cache.update(&index, &q)));
                 prop_assert_eq!(format!("{a:?}"), format!("{b:?}"));
                 prop_assert_eq!(format!("{a:?}"), format!("{c:?}"));
                 prop_assert!(same_assembly(whole.last_assembly(), among.last_assembly()));
@@ -243,7 +243,7 @@ fn selection_is_not_vacuous() {
         let s = state().new_tree(&mut runner).unwrap().current();
         let ctl = controller();
         let mut asm = Assembly::default();
-        if ctl.assemble(&input(&s, &map), &mut asm).is_ok() {
+        if ctl.assemble(&input(&s, &map), None, &mut asm).is_ok() {
             total += 1;
             with += usize::from(asm.n_obstacles > 0);
             truncated += usize::from(asm.obstacles_truncated);
@@ -274,11 +274,11 @@ fn candidates_out_of_range_are_skipped_and_order_breaks_ties() {
     let ctl = controller();
     let inp = input(&s, &map);
     let mut asm = Assembly::default();
-    ctl.assemble_among(&inp, &[1, 0, 7, u32::MAX], &mut asm)
+    ctl.assemble(&inp, Some(&[1, 0, 7, u32::MAX]), &mut asm)
         .unwrap();
     let idx: Vec<u32> = asm.active_obstacles().iter().map(|o| o.index).collect();
     assert_eq!(idx, [1, 0]);
-    ctl.assemble(&inp, &mut asm).unwrap();
+    ctl.assemble(&inp, None, &mut asm).unwrap();
     let idx: Vec<u32> = asm.active_obstacles().iter().map(|o| o.index).collect();
     assert_eq!(idx, [0, 1]);
 }
@@ -308,8 +308,8 @@ fn a_map_past_u16_indices_is_selected_whole() {
     index.candidates_into(&ctl.obstacle_query(&inp).unwrap(), &mut candidates);
     assert_eq!(candidates, [70_000]);
     let (mut a, mut b) = (Assembly::default(), Assembly::default());
-    ctl.assemble(&inp, &mut a).unwrap();
-    ctl.assemble_among(&inp, &candidates, &mut b).unwrap();
+    ctl.assemble(&inp, None, &mut a).unwrap();
+    ctl.assemble(&inp, Some(&candidates), &mut b).unwrap();
     assert_eq!(a.active_obstacles().len(), 1);
     assert_eq!(a.active_obstacles()[0].index, 70_000);
     assert!(!a.obstacles_truncated);

@@ -46,7 +46,7 @@ static mut QPRAW: [f64; LNV * LNV + LNC * LNV + LNV + 2 * LNC + 2] =
 /// Opaque obstacle velocities (any bits, any count up to `NPOLY`).
 static mut VEL: [[f64; 2]; NPOLY] = [[0.0; 2]; NPOLY];
 
-/// Opaque candidate lists for `step_among` (any indices, in or out of range).
+/// Opaque candidate lists for `Controller::step` (any indices, in or out of range).
 static mut CAND: [u32; 16] = [0; 16];
 
 /// Outputs, written so that nothing is dead code.
@@ -213,8 +213,8 @@ fn main() -> ! {
         // SAFETY: plain volatile read of a static that is never referenced.
         let vel = unsafe { read_volatile(addr_of!(VEL)) }.map(|[x, y]| Vector2::new(x, y));
         let inp = input(&r, obstacles, &vel[..len(r[58], NPOLY)]);
-        let a = paper.step(&inp);
-        let b = foot.step(&inp);
+        let a = paper.step(&inp, None);
+        let b = foot.step(&inp, None);
         let mut out = summary(&a);
         for (o, x) in out.iter_mut().zip(summary(&b)) {
             *o += x;
@@ -222,7 +222,7 @@ fn main() -> ! {
         // The large-map path: the query and a step among opaque candidates.
         // SAFETY: plain volatile read of a static that is never referenced.
         let cand = unsafe { read_volatile(addr_of!(CAND)) };
-        let among = paper.step_among(&inp, &cand[..len(r[57], cand.len())]);
+        let among = paper.step(&inp, Some(&cand[..len(r[57], cand.len())]));
         for (o, x) in out.iter_mut().zip(summary(&among)) {
             *o += x;
         }

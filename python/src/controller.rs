@@ -152,7 +152,7 @@ impl PyController {
             obstacle_velocities: &velocities,
             speed_cap: ldcbf_controller::NO_SPEED_CAP,
         };
-        with_controller!(&mut self.inner, c => output_dict(py, &c.step(&input)))
+        with_controller!(&mut self.inner, c => output_dict(py, &c.step(&input, None)))
     }
 
     fn __repr__(&self) -> String {

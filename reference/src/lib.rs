@@ -23,10 +23,11 @@
 //!   fixed-size [`QpSolution`] (docs/maths.md §3 scaling).
 //! * [`random_problem`] makes deterministic random QPs, feasible or infeasible
 //!   by construction ([`QpKind`]).
-//! * [`ClarabelBackend`] plugs Clarabel into [`Controller::step_with`] so a whole
-//!   closed loop can be run with the reference solver.
+//! * [`ClarabelBackend`] is a QP backend of the controller
+//!   ([`Controller::with_backend`]) so a whole closed loop can be run with the
+//!   reference solver.
 //!
-//! [`Controller::step_with`]: ldcbf_controller::Controller::step_with
+//! [`Controller::with_backend`]: ldcbf_controller::Controller::with_backend
 #![allow(non_snake_case)]
 
 // Named in the crate docs only (intra-doc links).

@@ -194,7 +194,7 @@ fn check_case<const N: usize, const NV: usize, const NC: usize>(
     let mut ctl =
         Controller::<N, NV, NC, 8>::new(cfg).map_err(|e| TestCaseError::fail(e.to_string()))?;
     let mut asm = Assembly::default();
-    ctl.assemble(&input, &mut asm)
+    ctl.assemble(&input, None, &mut asm)
         .map_err(|e| TestCaseError::fail(e.to_string()))?;
     if asm.n_obstacles > 0 {
         st.with_obstacles.set(st.with_obstacles.get() + 1);
@@ -245,8 +245,8 @@ fn check_case<const N: usize, const NV: usize, const NC: usize>(
         st.worst_kkt.set(st.worst_kkt.get().max(k.max()));
         // Cold `step`, then the same input again: warm start from the first
         // active set must reproduce the plan.
-        let first = ctl.step(&input);
-        let second = ctl.step(&input);
+        let first = ctl.step(&input, None);
+        let second = ctl.step(&input, None);
         prop_assert_eq!(first.status, CycleStatus::Optimal);
         prop_assert!(second.info.warm_started || first.info.active_set_size == 0);
         let d = (first.foot_target - second.foot_target).amax();
@@ -275,7 +275,7 @@ fn check_case<const N: usize, const NV: usize, const NC: usize>(
         prop_assert!(hty < 0.0, "h'y = {hty}");
         // The priority scheme answers every infeasible cycle with a relaxed
         // optimal plan (never a blind fallback) on these inputs.
-        let out = ctl.step(&input);
+        let out = ctl.step(&input, None);
         prop_assert_eq!(out.status, CycleStatus::Infeasible);
         prop_assert!(
             matches!(

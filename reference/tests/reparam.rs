@@ -328,7 +328,7 @@ fn compare_with_spec<const N: usize, const NV: usize, const NC: usize>(
             speed_cap: ldcbf_controller::NO_SPEED_CAP,
         };
         let mut ctl = Controller::<N, NV, NC, 8>::new(cfg).expect("valid configuration");
-        let out = ctl.step(&input);
+        let out = ctl.step(&input, None);
         let spec = spec_foot_qp(N, &c, &cfg);
         let r = solve_clarabel(&spec);
         match r.status {

@@ -232,7 +232,7 @@ impl NavNode {
         self.last = Some(gait.header.stamp);
         let out = self
             .controller
-            .step(&input_of(&odom, &gait, goal, &self.obstacles));
+            .step(&input_of(&odom, &gait, goal, &self.obstacles), None);
         let compute_ns = start.elapsed().as_nanos() as u64;
         Some(self.messages(&out, gait.header.stamp, compute_ns))
     }

@@ -93,7 +93,10 @@ fn gait_state_waits_for_its_odometry() {
         "a repeated gait state is ignored"
     );
     let o = odom(0.5);
-    let want = twin.step(&input_of(&o, &gait(0.5), Vector2::new(9.0, 3.0), &obs));
+    let want = twin.step(
+        &input_of(&o, &gait(0.5), Vector2::new(9.0, 3.0), &obs),
+        None,
+    );
     let c = &m.command;
     assert_eq!(c.header.stamp, stamp(0.5));
     assert_eq!(

@@ -19,7 +19,7 @@ use crate::constraints::{
 };
 use crate::geometry::{ConvexPolygon, MAX_COORDINATE};
 use crate::heading::{plan_heading, wrap_angle};
-use crate::qp::{OwnSolver, QpBackend, QpSolution, QpStatus};
+use crate::qp::{QpBackend, QpSolution, QpStatus};
 use crate::relax;
 
 /// The input of one recorded control cycle, owned: a [`CycleInput`] whose
@@ -202,25 +202,47 @@ impl core::fmt::Display for InputError {
 
 impl core::error::Error for InputError {}
 
-impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
-    Controller<N, NV, NC, NOBS>
+impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize, B: QpBackend<NV, NC>>
+    Controller<N, NV, NC, NOBS, B>
 {
     /// docs/maths.md §2.1-2.5: prediction, headings, obstacle selection
-    /// and all QP rows, written into `out`. Pure: uses no warm-start memory.
+    /// (among `candidates` as in [`Controller::step`]) and all QP rows,
+    /// written into `out`. Pure: uses no warm-start memory.
     /// `Err(InputError::NotConfigured)` (and `out` unchanged) on an
     /// unconfigured controller.
     pub fn assemble<const V: usize>(
         &self,
         input: &CycleInput<'_, V>,
+        candidates: Option<&[u32]>,
         out: &mut Assembly<N, NV, NC, NOBS>,
     ) -> Result<(), InputError> {
-        self.core
-            .assemble(input, input.obstacles.iter().enumerate(), out)
+        match candidates {
+            None => self
+                .core
+                .assemble(input, input.obstacles.iter().enumerate(), out),
+            Some(c) => self.core.assemble(input, among(input.obstacles, c), out),
+        }
     }
 
     /// One control cycle (docs/maths.md §2): predict, plan headings, assemble and
     /// solve the QP, and return the command. Never panics on any input; the
     /// command is always finite (see the module docs for the fallbacks).
+    ///
+    /// `candidates`: `None` considers every obstacle of `input.obstacles`;
+    /// `Some(candidates)` only the obstacles `input.obstacles[i]` for `i` in
+    /// `candidates`, in the candidates' order (entries out of range are
+    /// skipped). The output is bit for bit that of `None` when `candidates`
+    /// is in increasing order and holds every obstacle within
+    /// [`ObstacleQuery::radius`](super::ObstacleQuery::radius) of
+    /// [`ObstacleQuery::center`](super::ObstacleQuery::center)
+    /// ([`Controller::obstacle_query`]; a superset is fine): the cycle skips
+    /// every other obstacle without side effect, keeps the rest in slice
+    /// order (nearer first, ties in slice order), and identifies them (in
+    /// [`ActiveObstacle::index`](super::ActiveObstacle::index), the row ids
+    /// and so the warm start) by their index in `input.obstacles`, which is
+    /// unchanged. The cost is that of the candidates only, whatever the
+    /// length of `input.obstacles` (for a caller whose map sits in a spatial
+    /// index). The QP is solved by the controller's backend `B`.
     ///
     /// A robot at rest at the origin, facing +x, walks to (3, 0) past a box
     /// (`controller/examples/closed_loop.rs` runs the whole loop):
@@ -236,7 +258,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
     ///     [ConvexPolygon::<8>::hull(&[[1.0, 0.3], [1.5, 0.3], [1.5, 0.8], [1.0, 0.8]]).unwrap()];
     /// // At rest, left foot under the CoM, at the start of a step.
     /// let input = RecordedInput::at_rest(Vector2::new(3.0, 0.0)).input(&obstacles);
-    /// let out = controller.step(&input);
+    /// let out = controller.step(&input, None);
     /// assert_eq!(out.status, CycleStatus::Optimal);
     /// assert_eq!(out.info.source, CommandSource::Optimal);
     /// assert_eq!(out.info.active_obstacles, 1);
@@ -247,69 +269,38 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
     /// // ... and the planned CoM moves towards the goal.
     /// assert!(out.plan.states[2].position.x > out.plan.states[0].position.x);
     /// ```
-    pub fn step<const V: usize>(&mut self, input: &CycleInput<'_, V>) -> CycleOutput<N> {
-        self.step_with(input, &mut OwnSolver)
-    }
-
-    /// [`Controller::step`] with another QP solver (for the reference closed loop).
-    pub fn step_with<const V: usize, B: QpBackend<NV, NC>>(
+    // Always inlined, so that a caller passing `None` (or `Some`) as a
+    // constant gets the one path it uses, with no test and no second copy of
+    // the cycle (the firmware's instructions and flash).
+    #[inline(always)]
+    pub fn step<const V: usize>(
         &mut self,
         input: &CycleInput<'_, V>,
-        backend: &mut B,
+        candidates: Option<&[u32]>,
     ) -> CycleOutput<N> {
-        let Controller { core, memory, work } = self;
-        match core.assemble(input, input.obstacles.iter().enumerate(), work) {
-            Ok(()) => core.solve_assembled(memory, input, work, backend),
-            Err(e) => hold(memory, input, e),
+        match candidates {
+            None => self.cycle_among(input, input.obstacles.iter().enumerate()),
+            Some(c) => self.cycle_among(input, among(input.obstacles, c)),
         }
     }
 
-    /// [`Controller::step`] considering only the obstacles
-    /// `input.obstacles[i]` for `i` in `candidates`, in the candidates' order;
-    /// entries out of range are skipped. The output is bit for bit that of
-    /// `step` on the whole slice when `candidates` is in increasing order and
-    /// holds every obstacle within
-    /// [`ObstacleQuery::radius`](super::ObstacleQuery::radius) of
-    /// [`ObstacleQuery::center`](super::ObstacleQuery::center)
-    /// ([`Controller::obstacle_query`]; a superset is fine): `step` skips
-    /// every other obstacle without side effect, keeps the rest in slice
-    /// order (nearer first, ties in slice order), and identifies them (in
-    /// [`ActiveObstacle::index`](super::ActiveObstacle::index), the row ids
-    /// and so the warm start) by their index in `input.obstacles`, which is
-    /// unchanged. The cost is that of the candidates only, whatever the
-    /// length of `input.obstacles`.
-    pub fn step_among<const V: usize>(
+    /// [`Controller::step`] with the obstacles `obstacles`: `(index in
+    /// input.obstacles, polygon)` in the order the selection sees them.
+    fn cycle_among<'o, const V: usize>(
         &mut self,
         input: &CycleInput<'_, V>,
-        candidates: &[u32],
+        obstacles: impl Iterator<Item = (usize, &'o ConvexPolygon<V>)>,
     ) -> CycleOutput<N> {
-        self.step_among_with(input, candidates, &mut OwnSolver)
-    }
-
-    /// [`Controller::step_among`] with another QP solver.
-    pub fn step_among_with<const V: usize, B: QpBackend<NV, NC>>(
-        &mut self,
-        input: &CycleInput<'_, V>,
-        candidates: &[u32],
-        backend: &mut B,
-    ) -> CycleOutput<N> {
-        let Controller { core, memory, work } = self;
-        match core.assemble(input, among(input.obstacles, candidates), work) {
+        let Controller {
+            core,
+            memory,
+            work,
+            backend,
+        } = self;
+        match core.assemble(input, obstacles, work) {
             Ok(()) => core.solve_assembled(memory, input, work, backend),
             Err(e) => hold(memory, input, e),
         }
-    }
-
-    /// [`Controller::assemble`] considering only the `candidates`, as
-    /// [`Controller::step_among`] does.
-    pub fn assemble_among<const V: usize>(
-        &self,
-        input: &CycleInput<'_, V>,
-        candidates: &[u32],
-        out: &mut Assembly<N, NV, NC, NOBS>,
-    ) -> Result<(), InputError> {
-        self.core
-            .assemble(input, among(input.obstacles, candidates), out)
     }
 }
 

@@ -57,7 +57,7 @@
 //! * `config`: [`Config`], its field names and validation;
 //! * `plan`: the plan, status, diagnostics and assembly types of a cycle;
 //! * `select`: obstacle selection and [`ObstacleQuery`];
-//! * `cycle`: the cycle itself ([`Controller::step`], [`Controller::step_among`]);
+//! * `cycle`: the cycle itself ([`Controller::step`], [`Controller::assemble`]);
 //! * `fallback`: the fallback and hold commands;
 //! * this file: the [`Controller`], its sizes, configuration and memory.
 
@@ -80,7 +80,7 @@ use nalgebra::{ArrayStorage, SVector, Vector2};
 
 use crate::constraints::{Condensed, RowId};
 use crate::lip::Lip;
-use crate::qp::DualActiveSet;
+use crate::qp::{DualActiveSet, OwnSolver, QpBackend};
 
 /// Row capacity needed for horizon `n`, `nobs` obstacles, with or without the
 /// foot-clearance rows: `8 n + n nobs (x2 with foot clearance)`.
@@ -89,13 +89,16 @@ pub const fn constraint_capacity(n: usize, nobs: usize, foot_clearance: bool) ->
 }
 
 /// The paper's configuration: horizon 3, up to 8 active obstacles, no foot
-/// clearance rows.
-pub type PaperController = Controller<3, 6, { constraint_capacity(3, 8, false) }, 8>;
+/// clearance rows; the QP backend `B` is [`OwnSolver`] unless given.
+pub type PaperController<B = OwnSolver> =
+    Controller<3, 6, { constraint_capacity(3, 8, false) }, 8, B>;
 
 /// The paper's horizon and obstacle capacity with room for the foot-clearance
 /// rows (`NC = 72`): a robot with a body and feet ([`Config::body_radius`],
-/// [`Config::foot_clearance`]). The simulator runs this one.
-pub type RobotController = Controller<3, 6, { constraint_capacity(3, 8, true) }, 8>;
+/// [`Config::foot_clearance`]). The simulator runs this one. The QP backend
+/// `B` is [`OwnSolver`] unless given.
+pub type RobotController<B = OwnSolver> =
+    Controller<3, 6, { constraint_capacity(3, 8, true) }, 8, B>;
 
 /// Warm-start and fallback memory carried from one cycle to the next.
 #[derive(Clone, Copy, Debug)]
@@ -114,17 +117,28 @@ struct Memory<const NV: usize> {
 }
 
 /// The LDCBF-MPC controller: precomputed model and factored Hessian, plus the
-/// warm-start memory. One [`Controller::step`] per control cycle.
+/// warm-start memory and the QP backend `B`. One [`Controller::step`] per
+/// control cycle.
 ///
 /// Build it with [`Controller::new`], or, without the controller ever being
 /// on the stack (embedded targets), as [`Controller::UNCONFIGURED`] in a
 /// `static` (all storage zero: `.bss`, no flash) followed by
-/// [`Controller::configure`] in place.
+/// [`Controller::configure`] in place. `B` is the QP solver the cycle calls:
+/// [`OwnSolver`] (the dual active-set method of [`crate::qp`]) unless another
+/// is given with [`Controller::with_backend`] (the reference crate's Clarabel,
+/// to run a whole closed loop with either solver).
 #[derive(Clone, Debug)]
-pub struct Controller<const N: usize, const NV: usize, const NC: usize, const NOBS: usize> {
+pub struct Controller<
+    const N: usize,
+    const NV: usize,
+    const NC: usize,
+    const NOBS: usize,
+    B: QpBackend<NV, NC> = OwnSolver,
+> {
     core: Core<N, NV, NC>,
     memory: Memory<NV>,
     work: Assembly<N, NV, NC, NOBS>,
+    backend: B,
 }
 
 /// The immutable, precomputed part of the controller.
@@ -141,6 +155,30 @@ struct Core<const N: usize, const NV: usize, const NC: usize> {
     solver: DualActiveSet<NV, NC>,
 }
 
+impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
+    /// The all-zero placeholder of an unconfigured controller.
+    const UNCONFIGURED: Self = Core {
+        configured: false,
+        config: Config::UNSET,
+        barrier_margin: 0.0,
+        lip: Lip::ZERO,
+        model: Condensed::ZERO,
+        solver: DualActiveSet::PLACEHOLDER,
+    };
+}
+
+impl<const NV: usize> Memory<NV> {
+    /// No warm start, no plan, no last target.
+    const EMPTY: Self = Memory {
+        active: [RowId::DEFAULT; NV],
+        n_active: 0,
+        plan: SVector::from_array_storage(ArrayStorage([[0.0; NV]; 1])),
+        has_plan: false,
+        stance: Side::Left,
+        last_target: None,
+    };
+}
+
 impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
     Controller<N, NV, NC, NOBS>
 {
@@ -149,28 +187,14 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
     /// [`Controller::configure`] succeeds, [`Controller::step`] returns
     /// [`CycleStatus::InvalidInput`]`(`[`InputError::NotConfigured`]`)` with the
     /// hold command ([`CommandSource::Hold`]: the stance foot, or the origin if
-    /// that is not finite, and turning rate 0), and [`Controller::assemble`]
-    /// returns `Err(InputError::NotConfigured)`; [`Controller::config`],
-    /// [`Controller::lip`], [`Controller::model`] and [`Controller::solver`]
-    /// return all-zero placeholders.
+    /// that is not finite, and turning rate 0), [`Controller::assemble`]
+    /// returns `Err(InputError::NotConfigured)`, and [`Controller::config`]
+    /// and [`Controller::lip`] return all-zero placeholders.
     pub const UNCONFIGURED: Self = Controller {
-        core: Core {
-            configured: false,
-            config: Config::UNSET,
-            barrier_margin: 0.0,
-            lip: Lip::ZERO,
-            model: Condensed::ZERO,
-            solver: DualActiveSet::PLACEHOLDER,
-        },
-        memory: Memory {
-            active: [RowId::DEFAULT; NV],
-            n_active: 0,
-            plan: SVector::from_array_storage(ArrayStorage([[0.0; NV]; 1])),
-            has_plan: false,
-            stance: Side::Left,
-            last_target: None,
-        },
+        core: Core::UNCONFIGURED,
+        memory: Memory::EMPTY,
         work: Assembly::EMPTY,
+        backend: OwnSolver,
     };
 
     /// Validates `config` and precomputes the model and the Hessian
@@ -190,6 +214,34 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
         let mut controller = Self::UNCONFIGURED;
         controller.configure(config)?;
         Ok(controller)
+    }
+}
+
+impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize, B: QpBackend<NV, NC>>
+    Controller<N, NV, NC, NOBS, B>
+{
+    /// [`Controller::new`] with another QP solver `backend` (every QP of the
+    /// cycle, the priority scheme's included, is solved by it).
+    pub fn with_backend(config: Config, backend: B) -> Result<Self, ConfigError> {
+        let mut controller = Controller {
+            core: Core::UNCONFIGURED,
+            memory: Memory::EMPTY,
+            work: Assembly::EMPTY,
+            backend,
+        };
+        controller.configure(config)?;
+        Ok(controller)
+    }
+
+    /// The QP backend (e.g. to read what an instrumented backend recorded).
+    pub fn backend(&self) -> &B {
+        &self.backend
+    }
+
+    /// The QP backend, mutable (e.g. to reset an instrumented backend between
+    /// cycles).
+    pub fn backend_mut(&mut self) -> &mut B {
+        &mut self.backend
     }
 
     /// Validates `config`, precomputes the model and the Hessian factorisation
@@ -272,13 +324,10 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
         &self.core.lip
     }
 
-    /// The condensed model: predictions, feet and rows as affine maps of the QP
-    /// variables.
-    pub fn model(&self) -> &Condensed<N> {
-        &self.core.model
-    }
-
-    /// The QP solver (holds the constant Hessian `H`).
+    /// The QP solver (holds the constant Hessian `H` and the settings). An
+    /// internal for tests, benchmarks and the simulator's QP export (the QP
+    /// of a cycle is `H` with [`Controller::last_assembly`]).
+    #[doc(hidden)]
     pub fn solver(&self) -> &DualActiveSet<NV, NC> {
         &self.core.solver
     }
@@ -305,7 +354,9 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
             .0
     }
 
-    /// The assembly of the last `step` (its QP, rows and obstacles).
+    /// The assembly of the last [`Controller::step`]: its prediction, QP rows
+    /// and active obstacles (world frame W), e.g. to show the LDCBF
+    /// half-planes the cycle used.
     pub fn last_assembly(&self) -> &Assembly<N, NV, NC, NOBS> {
         &self.work
     }

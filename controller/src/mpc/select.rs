@@ -4,17 +4,19 @@
 //! `p_0` ([`ActiveObstacle`]). For a caller whose map is too large to scan
 //! every cycle: the disk that holds every obstacle a cycle can select
 //! ([`ObstacleQuery`], [`Controller::obstacle_query`]) and the candidates a
-//! spatial index returns for it (`among`, [`Controller::step_among`]).
+//! spatial index returns for it (`among`, the `candidates` of
+//! [`Controller::step`]).
 
 use nalgebra::Vector2;
 
 use super::{Assembly, Config, Controller, CycleInput, InputError, MAX_RATE};
 use crate::constraints::HalfPlane;
 use crate::geometry::{ConvexPolygon, closest_point_point_polygon};
+use crate::qp::QpBackend;
 
 /// The disk, world frame W, that holds every obstacle a cycle can select:
 /// [`Controller::obstacle_query`] for a caller that keeps its map in a spatial
-/// index and passes only the candidates to [`Controller::step_among`].
+/// index and passes only the candidates to [`Controller::step`].
 ///
 /// A cycle selects obstacle `j` only if `closest_point_point_polygon(center,
 /// P_j).signed_distance <= radius` (`center` is the cycle's `p_0`, `radius` is
@@ -52,7 +54,7 @@ impl ObstacleQuery {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ActiveObstacle {
     /// Index in the caller's obstacle slice [`CycleInput::obstacles`] (also
-    /// with [`Controller::step_among`], whose candidates are such indices).
+    /// with the `candidates` of [`Controller::step`], which are such indices).
     pub index: u32,
     /// Signed distance from `p_0`, m.
     pub distance: f64,
@@ -73,14 +75,14 @@ impl ActiveObstacle {
     };
 }
 
-impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
-    Controller<N, NV, NC, NOBS>
+impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize, B: QpBackend<NV, NC>>
+    Controller<N, NV, NC, NOBS, B>
 {
     /// Where this cycle will look for obstacles: its `p_0` (the CoM predicted
     /// at the end of the current step, computed exactly as [`Controller::step`]
     /// computes it) and [`Config::r_active`]. For a caller whose map is too
     /// large to scan every cycle: query a spatial index with it, then call
-    /// [`Controller::step_among`] with the result. `Err` when `step` would
+    /// [`Controller::step`] with the result as `candidates`. `Err` when `step` would
     /// reject the input (the obstacles do not matter then). Costs one LIP
     /// propagation; reads no obstacle.
     pub fn obstacle_query<const V: usize>(

@@ -88,7 +88,7 @@ fn unconfigured_controller_holds_until_configured_in_place() {
     let wall = [Poly::new(&[[0.6, -2.0], [1.6, -2.0], [1.6, 2.0], [0.6, 2.0]]).unwrap()];
     let inp = input(&wall);
     let not_configured = CycleStatus::InvalidInput(InputError::NotConfigured);
-    let out = ctl.step(&inp);
+    let out = ctl.step(&inp, None);
     assert_eq!(out.status, not_configured);
     assert_eq!(out.info.source, CommandSource::Hold);
     assert_eq!(out.foot_target, inp.stance_foot);
@@ -96,12 +96,15 @@ fn unconfigured_controller_holds_until_configured_in_place() {
     assert!(output_is_finite(&out));
     let mut bad_foot = inp;
     bad_foot.stance_foot.x = f64::NAN;
-    let out = ctl.step(&bad_foot);
+    let out = ctl.step(&bad_foot, None);
     assert_eq!(out.status, not_configured);
     assert_eq!(out.foot_target, Vector2::zeros());
     assert!(output_is_finite(&out));
     let mut asm = Assembly::default();
-    assert_eq!(ctl.assemble(&inp, &mut asm), Err(InputError::NotConfigured));
+    assert_eq!(
+        ctl.assemble(&inp, None, &mut asm),
+        Err(InputError::NotConfigured)
+    );
     // A failed configure leaves it unconfigured.
     let bad = Config {
         gamma: 0.0,
@@ -114,7 +117,7 @@ fn unconfigured_controller_holds_until_configured_in_place() {
     };
     assert_eq!(ctl.configure(t).unwrap_err().field, "step_duration");
     assert!(!ctl.is_configured());
-    assert_eq!(ctl.step(&inp).status, not_configured);
+    assert_eq!(ctl.step(&inp, None).status, not_configured);
     // Configured in place it behaves as `new`, cycle after cycle (the
     // warm-start memory included).
     ctl.configure(Config::default()).unwrap();
@@ -125,7 +128,7 @@ fn unconfigured_controller_holds_until_configured_in_place() {
         for k in 0..6 {
             i.time_in_step = 0.1 * f64::from(k % 4);
             i.com_velocity = Vector2::new(0.3 + 0.1 * f64::from(k), 0.05);
-            let (a, b) = (ctl.step(&i), fresh.step(&i));
+            let (a, b) = (ctl.step(&i, None), fresh.step(&i, None));
             assert_eq!(a, b, "cycle {k}");
             assert_ne!(a.status, not_configured);
         }
@@ -151,7 +154,7 @@ fn unconfigured_controller_holds_until_configured_in_place() {
 #[test]
 fn free_walk_is_optimal_and_feasible() {
     let mut ctl = Ctl::new(Config::default()).unwrap();
-    let out = ctl.step(&input(&[]));
+    let out = ctl.step(&input(&[]), None);
     assert_eq!(out.status, CycleStatus::Optimal);
     assert_eq!(out.info.source, CommandSource::Optimal);
     assert!(out.info.max_violation <= 1e-9);
@@ -169,7 +172,7 @@ fn obstacles_are_selected_nearest_first_and_truncated() {
     }
     let ctl = Ctl::new(Config::default()).unwrap();
     let mut asm = Assembly::default();
-    ctl.assemble(&input(&obs), &mut asm).unwrap();
+    ctl.assemble(&input(&obs), None, &mut asm).unwrap();
     assert_eq!(asm.n_obstacles, 8);
     assert!(asm.obstacles_truncated);
     assert_eq!(asm.obstacles[0].index, 9);
@@ -189,7 +192,7 @@ fn prediction_uses_remaining_time_and_current_turn_rate() {
     inp.turning_rate = 0.2;
     inp.time_in_step = 0.1;
     let mut asm = Assembly::default();
-    ctl.assemble(&inp, &mut asm).unwrap();
+    ctl.assemble(&inp, None, &mut asm).unwrap();
     let lip = Lip::new(9.81, 1.0, 0.4);
     let (px, vx) = lip.propagate_axis(0.0, 0.3, 0.0, 0.3);
     let (py, vy) = lip.propagate_axis(0.0, -0.1, -0.05, 0.3);
@@ -201,7 +204,7 @@ fn prediction_uses_remaining_time_and_current_turn_rate() {
     assert_eq!(pr.first_side, Side::Right);
     // Out-of-range time is clamped and flagged.
     inp.time_in_step = 0.5;
-    ctl.assemble(&inp, &mut asm).unwrap();
+    ctl.assemble(&inp, None, &mut asm).unwrap();
     assert!(asm.time_clamped);
     assert!((asm.prediction.v0 - Vector2::new(0.3, -0.1)).amax() < 1e-15);
 }
@@ -209,21 +212,21 @@ fn prediction_uses_remaining_time_and_current_turn_rate() {
 #[test]
 fn warm_start_follows_the_horizon_shift() {
     let mut ctl = Ctl::new(Config::default()).unwrap();
-    let first = ctl.step(&input(&[]));
+    let first = ctl.step(&input(&[]), None);
     assert!(first.status.is_optimal());
     let n_active = ctl.memory.n_active;
     assert!(n_active > 0);
     // Same step: same rows are preferred.
-    let again = ctl.step(&input(&[]));
+    let again = ctl.step(&input(&[]), None);
     assert!(again.info.warm_started);
     // The step ended: stance switches, rows of k = 0 are dropped and k >= 1
     // move to k - 1; the plan is still the same optimum as a cold solve.
     let mut next = input(&[]);
     next.stance_side = Side::Right;
     next.stance_foot = first.foot_target;
-    let warm = ctl.step(&next);
+    let warm = ctl.step(&next, None);
     let mut cold_ctl = Ctl::new(Config::default()).unwrap();
-    let cold = cold_ctl.step(&next);
+    let cold = cold_ctl.step(&next, None);
     assert!((warm.foot_target - cold.foot_target).amax() < 1e-9);
     assert_eq!(warm.status, cold.status);
 }
@@ -268,7 +271,7 @@ fn velocity_conflict_relaxes_gait_rows_minimally() {
     // Sideways at 1.2 m/s towards the stance side: no reachable foot brings the
     // lateral velocity into [0.1, 0.4] at the end of the next step.
     inp.com_velocity = Vector2::new(0.0, -1.2);
-    let out = ctl.step(&inp);
+    let out = ctl.step(&inp, None);
     assert_eq!(out.status, CycleStatus::Infeasible);
     assert_eq!(out.info.source, CommandSource::RelaxedGait);
     let eps = out.info.relax_gait;
@@ -305,7 +308,7 @@ fn wall_ahead_inside_margin_relaxes_safety_but_keeps_reach() {
     inp.com_position = Vector2::new(-0.05, 0.0);
     inp.stance_foot = Vector2::new(-0.05, -0.05);
     inp.com_velocity = Vector2::new(0.8, 0.0);
-    let out = ctl.step(&inp);
+    let out = ctl.step(&inp, None);
     assert_eq!(out.status, CycleStatus::Infeasible);
     assert_eq!(out.info.source, CommandSource::RelaxedSafety);
     assert!(out.info.relax_safety > 0.0);
@@ -333,7 +336,7 @@ fn exhausted_cycle_budget_falls_back() {
     let mut ctl = Ctl::new(cfg).unwrap();
     let mut inp = input(&[]);
     inp.com_velocity = Vector2::new(0.0, -1.2);
-    let out = ctl.step(&inp);
+    let out = ctl.step(&inp, None);
     assert_eq!(out.status, CycleStatus::Infeasible);
     assert_eq!(out.info.source, CommandSource::CaptureStep);
     assert!(out.info.iterations <= 64);
@@ -354,7 +357,7 @@ fn fallback_prefers_the_candidate_that_keeps_safety() {
     ctl.memory.has_plan = true;
     ctl.memory.stance = inp.stance_side;
     ctl.memory.plan = SVector::<f64, 6>::from([0.15, 0.0, 0.3, 0.0, 0.45, 0.0]);
-    let out = ctl.step(&inp);
+    let out = ctl.step(&inp, None);
     assert_eq!(out.status, CycleStatus::BudgetExhausted);
     assert_eq!(out.info.source, CommandSource::CaptureStep);
     let v = relax::class_violation(
@@ -374,7 +377,7 @@ fn fallback_prefers_the_candidate_that_keeps_safety() {
         ctl.memory.plan[2 * k] = f.x;
         ctl.memory.plan[2 * k + 1] = f.y;
     }
-    let out = ctl.step(&inp);
+    let out = ctl.step(&inp, None);
     assert_eq!(out.info.source, CommandSource::PreviousPlan);
     assert_eq!(out.plan.feet, good_feet);
     assert!((ctl.variables_of(&out.plan) - good.x).amax() < 1e-12);
@@ -387,7 +390,7 @@ fn long_horizons_are_accepted_and_their_plans_are_lip_rollouts() {
         let wall = [Poly::new(&[[1.5, -2.0], [2.5, -2.0], [2.5, 0.3], [1.5, 0.3]]).unwrap()];
         let mut inp = input(&wall);
         inp.com_velocity = Vector2::new(0.4, 0.1);
-        let out = ctl.step(&inp);
+        let out = ctl.step(&inp, None);
         assert_eq!(out.status, CycleStatus::Optimal, "N = {N}");
         assert!(out.info.max_violation <= 1e-9);
         // The returned feet, rolled forward through the LIP, give the
@@ -415,14 +418,14 @@ fn non_finite_input_holds() {
     let mut ctl = Ctl::new(Config::default()).unwrap();
     let mut inp = input(&[]);
     inp.com_velocity.x = f64::NAN;
-    let out = ctl.step(&inp);
+    let out = ctl.step(&inp, None);
     assert_eq!(out.status, CycleStatus::InvalidInput(InputError::State));
     assert_eq!(out.foot_target, inp.stance_foot);
     assert_eq!(out.info.source, CommandSource::Hold);
     inp.com_velocity.x = 0.0;
     inp.goal.y = f64::INFINITY;
     assert_eq!(
-        ctl.step(&inp).status,
+        ctl.step(&inp, None).status,
         CycleStatus::InvalidInput(InputError::Goal)
     );
 }
@@ -437,7 +440,7 @@ fn fuzz_regression_huge_coordinates_are_invalid_input() {
     inp.com_position = Vector2::new(1.210_696_639_093_781_8e111, -1.2e-59);
     inp.stance_foot = Vector2::new(1.2e111, 0.0);
     inp.time_in_step = -1.2e-59;
-    let out = ctl.step(&inp);
+    let out = ctl.step(&inp, None);
     assert_eq!(out.status, CycleStatus::InvalidInput(InputError::State));
     assert!(output_is_finite(&out));
 }
@@ -449,7 +452,7 @@ fn budget_exhaustion_falls_back_to_finite_command() {
         ..Config::default()
     };
     let mut ctl = Ctl::new(cfg).unwrap();
-    let out = ctl.step(&input(&[]));
+    let out = ctl.step(&input(&[]), None);
     assert_eq!(out.status, CycleStatus::BudgetExhausted);
     assert_eq!(out.info.source, CommandSource::CaptureStep);
     assert!(output_is_finite(&out));
@@ -470,12 +473,14 @@ fn the_speed_cap_bounds_the_planned_longitudinal_velocity() {
         |s: &LipState| s.velocity.x * libm::cos(s.heading) + s.velocity.y * libm::sin(s.heading);
     let free = Ctl::new(Config::default())
         .unwrap()
-        .step(&moving(NO_SPEED_CAP));
+        .step(&moving(NO_SPEED_CAP), None);
     assert_eq!(free.status, CycleStatus::Optimal);
     // Without a cap the plan speeds up towards the goal, past the cap below.
     assert!(free.plan.states.iter().any(|s| lon(s) > 0.25));
     for cap in [0.2, 0.15] {
-        let out = Ctl::new(Config::default()).unwrap().step(&moving(cap));
+        let out = Ctl::new(Config::default())
+            .unwrap()
+            .step(&moving(cap), None);
         assert_eq!(out.status, CycleStatus::Optimal, "cap {cap}");
         for s in &out.plan.states {
             assert!(lon(s) <= cap + 1e-9, "cap {cap}: {}", lon(s));
@@ -483,12 +488,18 @@ fn the_speed_cap_bounds_the_planned_longitudinal_velocity() {
     }
     let vx_max = Config::default().vx_max;
     for cap in [vx_max, 2.0 * vx_max] {
-        let out = Ctl::new(Config::default()).unwrap().step(&moving(cap));
+        let out = Ctl::new(Config::default())
+            .unwrap()
+            .step(&moving(cap), None);
         assert_eq!(out, free, "cap {cap}");
     }
-    let zero = Ctl::new(Config::default()).unwrap().step(&moving(0.0));
+    let zero = Ctl::new(Config::default())
+        .unwrap()
+        .step(&moving(0.0), None);
     for cap in [-1.0, f64::NAN, f64::NEG_INFINITY] {
-        let out = Ctl::new(Config::default()).unwrap().step(&moving(cap));
+        let out = Ctl::new(Config::default())
+            .unwrap()
+            .step(&moving(cap), None);
         assert_eq!(out, zero, "cap {cap}");
     }
 }

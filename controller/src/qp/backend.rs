@@ -6,10 +6,11 @@ use nalgebra::SVector;
 
 use super::{DenseQp, DualActiveSet, QpSolution};
 
-/// Something that solves the controller's QPs. The controller uses
-/// [`OwnSolver`] (the dual active-set method of this module); the reference crate
-/// plugs in Clarabel through this trait so a whole closed loop can be run with
-/// either solver and compared.
+/// Something that solves the controller's QPs: the type parameter `B` of
+/// [`Controller`](crate::Controller), [`OwnSolver`] (the dual active-set
+/// method of this module) by default; the reference crate plugs in Clarabel
+/// through this trait ([`Controller::with_backend`](crate::Controller::with_backend))
+/// so a whole closed loop can be run with either solver and compared.
 pub trait QpBackend<const NV: usize, const NC: usize> {
     /// Solves `min 1/2 u'Hu + q'u, G u <= h` where `H = solver.hessian()` and the
     /// rest is `qp`. `prefer` and the iteration limit

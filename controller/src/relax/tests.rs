@@ -147,7 +147,7 @@ fn relaxations_are_minimal_in_priority_order() {
             obstacle_velocities: &[],
             speed_cap: crate::NO_SPEED_CAP,
         };
-        ctl.assemble(&input, &mut asm).unwrap();
+        ctl.assemble(&input, None, &mut asm).unwrap();
         let solver = ctl.solver();
         let nominal = solver.with_max_iter(64).solve(&asm.qp, &[false; NC]);
         if !nominal.status.is_infeasible() {
@@ -371,7 +371,7 @@ fn pushed(capture_fraction: Option<f64>, forward: f64, lateral: f64) -> crate::C
         obstacle_velocities: &[],
         speed_cap: crate::NO_SPEED_CAP,
     };
-    ctl.step(&input)
+    ctl.step(&input, None)
 }
 
 /// Pushed to 0.75 m/s sideways (beyond `vy_max` = 0.4 m/s, but below the
@@ -474,7 +474,7 @@ fn a_conflict_ahead_leaves_the_side_wall_its_margin() {
         speed_cap: crate::NO_SPEED_CAP,
     };
     let mut asm = Assembly::default();
-    ctl.assemble(&input, &mut asm).unwrap();
+    ctl.assemble(&input, None, &mut asm).unwrap();
     let solver = ctl.solver();
     let nominal = solver.with_max_iter(64).solve(&asm.qp, &[false; NC]);
     assert!(nominal.status.is_infeasible(), "{:?}", nominal.status);

@@ -1,4 +1,4 @@
-//! The closed loop: the 1 kHz [`Plant`] and the controller, called as an onboard
+//! The closed loop: the 1 kHz [`Plant`](crate::plant::Plant) and the controller, called as an onboard
 //! loop would call it. A room of the simulator above the scenario, the plant,
 //! perception and the planner; the report and the studies read what it
 //! records ([`SimResult`]).
@@ -27,16 +27,17 @@
 //!    every step (`MpcRate::PerStep`), a [`CycleInput`] is built from the plant's
 //!    true state (CoM position, velocity, heading, the turning rate in force, stance
 //!    foot and side, time in step), the goal and the obstacle list, and
-//!    `Controller::step_with` is called. With the known map, the candidates
+//!    `Controller::step` is called (the controller holds the QP backend,
+//!    [`Solver`]). With the known map, the candidates
 //!    come from the map's R-tree ([`crate::world::obstacle_index`], built once before
 //!    the first tick) around `Controller::obstacle_query` (reused while they
 //!    cover the cycle, [`crate::world::obstacle_index::Candidates`]), and
-//!    `Controller::step_among_with` is called on them: bit for bit the
-//!    result of `step_with` on the whole map, at a cost that does not grow with
+//!    `Controller::step` is called on them: bit for bit the
+//!    result of `step` on the whole map, at a cost that does not grow with
 //!    it. The wall-clock time is measured with [`Instant`] around that query
 //!    and call only; with [`SimOptions::timing_repeats`]
 //!    `K > 1`, the same call is first timed `K - 1` times on clones of the
-//!    controller (and of the QP backend) made just before it, i.e. on the same
+//!    controller (with its QP backend) made just before it, i.e. on the same
 //!    input and the same state, and the cycle's time is the minimum of the `K`
 //!    timings; the loop goes on with the result of the controller's own call,
 //!    so the closed loop does not depend on `K`. Before the call, the current subgoal
@@ -73,27 +74,23 @@
 //! [`ldcbf_controller::CycleOutput`] to drive the plant and reads
 //! `Controller::last_assembly` only to log the cycle's LDCBF half-planes for the
 //! figures.
-
-use std::time::Instant;
+//!
+//! The loop is `closed_loop::Loop`: its set-up, one method per step of a tick
+//! (`land`, `control` with `perceive` and `log_cycle`, `record`,
+//! `end_condition`) and `finish`, which returns the [`SimResult`].
 
 use ldcbf_controller::nalgebra::Vector2;
-use ldcbf_controller::{
-    CycleInput, CycleOutput, HalfPlane, OwnSolver, QpBackend, RobotController, Side,
-};
+use ldcbf_controller::{CycleOutput, HalfPlane, OwnSolver, QpBackend, Side};
 use ldcbf_reference::ClarabelBackend;
 
-use crate::plan::Planner;
-use crate::plan::{Route, remaining_length};
-use crate::plant::disturbance::{DisturbanceLog, Disturber};
-use crate::plant::{Plant, PlantParams};
+use crate::plan::Route;
+use crate::plant::disturbance::DisturbanceLog;
 use crate::scenario::Scenario;
-use crate::sense::Perception;
 use crate::world::Polygon;
-use crate::world::moving::MovingMap;
-use crate::world::obstacle_index::{Candidates, ObstacleIndex};
 
 pub mod cancel;
 pub mod capture;
+mod closed_loop;
 mod contacts;
 mod options;
 pub use contacts::{Contact, ContactCause, ContactPart, STANDING_SPEED, contact_counts};
@@ -315,413 +312,27 @@ pub fn run(scenario: &Scenario, options: SimOptions) -> Result<SimResult, SimErr
         return Err(SimError::NoTimingRepeats);
     }
     match options.solver {
-        Solver::Own => run_with(scenario, options, &mut OwnSolver),
-        Solver::Clarabel => run_with(scenario, options, &mut ClarabelBackend::default()),
+        Solver::Own => run_with(scenario, options, OwnSolver),
+        Solver::Clarabel => run_with(scenario, options, ClarabelBackend::default()),
     }
 }
 
-/// One controller call: `step_with` on the whole obstacle list, or, with an
-/// index of that list, `step_among_with` on the candidates around
-/// `obstacle_query` (`candidates`: the index queried again only when the last
-/// list does not cover this cycle; bit for bit the same output, see
-/// [`crate::world::obstacle_index`]).
-fn control<const V: usize, B: QpBackend<NV, NC>>(
-    controller: &mut RobotController,
-    backend: &mut B,
-    input: &CycleInput<'_, V>,
-    index: Option<&ObstacleIndex>,
-    candidates: &mut Candidates,
-) -> CycleOutput<HORIZON> {
-    let Some(index) = index else {
-        return controller.step_with(input, backend);
-    };
-    match controller.obstacle_query(input) {
-        Ok(q) => controller.step_among_with(input, candidates.update(index, &q), backend),
-        // The controller rejects the input before reading any obstacle.
-        Err(_) => controller.step_among_with(input, &[], backend),
-    }
-}
-
-/// Times [`control`] `repeats - 1` times on clones (of the controller, the
-/// backend and the candidates, so the originals are untouched), ns each; the
-/// minimum, or `u64::MAX` when `repeats <= 1`.
-fn time_on_clones<const V: usize, B: QpBackend<NV, NC> + Clone>(
-    controller: &RobotController,
-    backend: &B,
-    input: &CycleInput<'_, V>,
-    index: Option<&ObstacleIndex>,
-    candidates: &Candidates,
-    repeats: u32,
-) -> u64 {
-    let mut best = u64::MAX;
-    for _ in 1..repeats {
-        let mut c = controller.clone();
-        let mut b = backend.clone();
-        let mut candidates = candidates.clone();
-        let t0 = Instant::now();
-        let out = control(&mut c, &mut b, input, index, &mut candidates);
-        let ns = u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX);
-        // Keep the computation (the clone and its output are dropped unused).
-        std::hint::black_box((&out, &c));
-        best = best.min(ns);
-    }
-    best
-}
-
+/// [`run`] with the QP backend `backend`: [`closed_loop::Loop`] ticked to its
+/// end.
 fn run_with<B: QpBackend<NV, NC> + Clone>(
     scenario: &Scenario,
     options: SimOptions,
-    backend: &mut B,
+    backend: B,
 ) -> Result<SimResult, SimError> {
-    let cfg = scenario.config;
-    let mut controller = RobotController::new(cfg).map_err(SimError::Controller)?;
-    let mut disturber = Disturber::new(
-        &scenario.disturbance,
-        scenario.seed,
-        PLANT_DT,
-        cfg.com_height,
-    );
-    let mut plant = Plant::new(
-        PlantParams {
-            gravity: cfg.gravity,
-            com_height: disturber.plant_com_height(),
-            step_duration: cfg.step_duration,
-            dt: PLANT_DT,
-        },
-        scenario.start,
-        scenario.start_heading,
-        scenario.stance,
-    )
-    .map_err(SimError::Plant)?;
-    let period = match options.mpc_rate {
-        MpcRate::Hz(h) => Some(((1.0 / f64::from(h)) / PLANT_DT).round().max(1.0) as u64),
-        MpcRate::PerStep => None,
-    };
-    // The true map at the plant's time (moving obstacles, crate::world::moving),
-    // with the index of its obstacles at rest: the controller's candidates with
-    // a known static map (with LiDAR its few obstacles per scan are passed
-    // whole, and so is a map with moving obstacles), and the clearances of the
-    // samples and footsteps (the linear scans' values).
-    let mut world =
-        MovingMap::new(&scenario.obstacles, &scenario.velocities).map_err(SimError::Map)?;
-    let control_index = (scenario.perception == Perception::Known && world.is_static())
-        .then(|| world.rest_index().clone());
-    let index = control_index.as_ref();
-    let mut contacts = contacts::ContactMonitor::default();
-    let mut landed_now = true;
-    let mut candidates = Candidates::default();
-    let robot = &scenario.robot;
-    // Global planner: subgoals, the goal last.
-    let mut navigation = Navigation::default();
-    let on_map = scenario.planner == Planner::RrtStar && scenario.perception == Perception::Lidar;
-    if scenario.planner == Planner::RrtStar && !on_map {
-        let t0 = Instant::now();
-        let res = crate::plan::plan(
-            scenario.start,
-            scenario.goal,
-            world.rest_obstacles(),
-            &scenario.rrt,
-            scenario.robot.body_radius,
-            scenario.seed,
-        );
-        navigation.plan_time_ns = u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX);
-        match res {
-            Ok(p) => {
-                navigation.subgoals = p.subgoals.clone();
-                navigation.plan = Some(p);
-            }
-            Err(e) => navigation.error = Some(e.to_string()),
-        }
-    }
-    if navigation.subgoals.is_empty() {
-        navigation.subgoals.push(scenario.goal);
-    }
-    let mut subgoals = navigation.subgoals.clone();
-    let switch_radius = scenario.rrt.switch_radius;
-    let mut current = 0usize;
-    let mut mapper = match scenario.perception {
-        Perception::Lidar => {
-            Some(mapping::Mapper::new(scenario, on_map).map_err(SimError::Mapping)?)
-        }
-        Perception::Known => None,
-    };
-    // The velocities of this cycle's obstacles with LiDAR tracking (the map's
-    // pieces at rest, the tracked people's estimates).
-    let mut seen_velocities: Vec<Vector2<f64>>;
-    let mut scans: Vec<ScanRecord> = Vec::new();
-    let mut qps = Vec::new();
-    // The inferred obstacles of the current cycle (LiDAR), borrowed by its input.
-    let mut seen: Vec<Polygon>;
-    let max_ticks = (scenario.time_limit / PLANT_DT).round() as u64;
-    let stuck_ticks = (scenario.stuck_window / PLANT_DT).round() as u64;
-
-    let mut cycles: Vec<CycleRecord> = Vec::new();
-    let mut footsteps = vec![Footstep {
-        index: 0,
-        position: plant.stance_foot,
-        side: plant.stance_side,
-        time: 0.0,
-        heading: plant.heading,
-        clearance: world.foot_clearance(robot, plant.stance_foot, plant.heading),
-    }];
-    let mut samples = Vec::with_capacity(max_ticks.min(1 << 20) as usize + 1);
-    let mut best_distance = f64::INFINITY;
-    let mut best_tick = 0u64;
-
+    let mut state = closed_loop::Loop::new(scenario, options, backend)?;
     let outcome = loop {
         // SIGINT, SIGTERM or the caller's flag: end now (sim::cancel).
         cancel::check().map_err(SimError::Cancelled)?;
-        if !world.is_static() {
-            world.set_time(plant.time());
+        if let Some(outcome) = state.tick() {
+            break outcome;
         }
-        // 0. Push.
-        if let Some(dv) = disturber.push_at(plant.tick, plant.heading) {
-            plant.push(dv);
-        }
-        // 1. Step end: land the swing foot at the latest target.
-        if plant.step_over() {
-            let last = cycles
-                .last_mut()
-                .expect("a cycle runs at t = 0, before the first step ends");
-            last.landed = true;
-            let (target, omega) = (last.output.foot_target, last.output.turning_rate);
-            let foot = disturber.land(target);
-            plant.land(foot, omega);
-            footsteps.push(Footstep {
-                index: plant.steps,
-                position: foot,
-                side: plant.stance_side,
-                time: plant.time(),
-                heading: plant.heading,
-                clearance: world.foot_clearance(robot, foot, plant.heading),
-            });
-            landed_now = true;
-        }
-        // 2. Control.
-        let due = match period {
-            Some(p) => plant.tick % p == 0,
-            None => plant.tick_in_step == 0,
-        };
-        if due {
-            let (position, velocity, heading) =
-                disturber.measure(plant.position, plant.velocity, plant.heading);
-            while current + 1 < subgoals.len()
-                && (position - subgoals[current]).norm() <= switch_radius
-            {
-                navigation.reached_at.push(plant.time());
-                current += 1;
-            }
-            // This cycle's measured state toward `goal`, before its obstacles
-            // (one construction for the map's obstacle query and the cycle).
-            let measured = |goal| CycleInput {
-                com_position: position,
-                com_velocity: velocity,
-                heading,
-                turning_rate: plant.turning_rate,
-                stance_foot: plant.stance_foot,
-                stance_side: plant.stance_side,
-                time_in_step: plant.time_in_step(),
-                goal,
-                obstacles: &[],
-                obstacle_velocities: &[],
-                speed_cap: ldcbf_controller::NO_SPEED_CAP,
-            };
-            // Known velocities with the true map (none when every obstacle
-            // is at rest: the static controller, bit for bit).
-            let mut cycle_velocities: &[Vector2<f64>] = if world.is_static() {
-                &[]
-            } else {
-                world.velocities()
-            };
-            let mut speed_cap = ldcbf_controller::NO_SPEED_CAP;
-            let cycle_obstacles: &[Polygon] = match mapper.as_mut() {
-                Some(m) => {
-                    let points = m.sense(
-                        plant.position,
-                        plant.heading,
-                        plant.time(),
-                        world.obstacles(),
-                    );
-                    let stalled = 2 * (plant.tick - best_tick) >= stuck_ticks && stuck_ticks > 0;
-                    if let Some((reason, new)) = m.plan(
-                        scenario,
-                        plant.time(),
-                        position,
-                        &subgoals[current..],
-                        stalled,
-                    ) {
-                        subgoals = new;
-                        current = 0;
-                        navigation.plan_time_ns += m.log.plans.last().map_or(0, |p| p.ns);
-                        // The progress measure follows the new path; a stall
-                        // replan does not restart the stuck clock.
-                        best_distance = remaining_length(plant.position, &subgoals, 0);
-                        if reason != ReplanReason::Stalled {
-                            best_tick = plant.tick;
-                        }
-                    }
-                    let q = controller.obstacle_query(&measured(subgoals[current]));
-                    if scenario.lidar.map.capture_speed_limit {
-                        speed_cap =
-                            m.capture_cap(&cfg, &measured(subgoals[current]), &subgoals[current..]);
-                    }
-                    seen = match q {
-                        Ok(q) => m.obstacles(&q),
-                        Err(_) => Vec::new(),
-                    };
-                    cycle_velocities = &[];
-                    if scenario.lidar.track_moving {
-                        // The map's pieces at rest, then the people kept out
-                        // of the map with their tracked velocities.
-                        let (people, v) = m.people();
-                        seen_velocities = vec![Vector2::zeros(); seen.len()];
-                        seen.extend_from_slice(people);
-                        seen_velocities.extend_from_slice(v);
-                        cycle_velocities = &seen_velocities;
-                    }
-                    if options.record_scans {
-                        scans.push(ScanRecord {
-                            cycle: cycles.len(),
-                            origin: plant.position,
-                            points,
-                            obstacles: seen.clone(),
-                            speed_cap,
-                        });
-                    }
-                    &seen
-                }
-                None => world.obstacles(),
-            };
-            let input = CycleInput {
-                obstacles: cycle_obstacles,
-                obstacle_velocities: cycle_velocities,
-                speed_cap,
-                ..measured(subgoals[current])
-            };
-            let on_clones = time_on_clones(
-                &controller,
-                backend,
-                &input,
-                index,
-                &candidates,
-                options.timing_repeats,
-            );
-            let t0 = Instant::now();
-            let output = control(&mut controller, backend, &input, index, &mut candidates);
-            let compute_ns = u64::try_from(t0.elapsed().as_nanos())
-                .unwrap_or(u64::MAX)
-                .min(on_clones);
-            if options.record_qps && output.status.name() != "invalid_input" {
-                qps.push((
-                    cycles.len(),
-                    ldcbf_reference::DenseProblem::from_assembly(
-                        controller.solver(),
-                        controller.last_assembly(),
-                    ),
-                ));
-            }
-            let half_planes = if output.status.name() == "invalid_input" {
-                Vec::new()
-            } else {
-                let asm = controller.last_assembly();
-                asm.obstacles[..asm.n_obstacles]
-                    .iter()
-                    .map(|o| ActiveHalfPlane {
-                        obstacle: o.index as usize,
-                        half_plane: o.half_plane,
-                    })
-                    .collect()
-            };
-            cycles.push(CycleRecord {
-                index: cycles.len(),
-                time: plant.time(),
-                time_in_step: plant.time_in_step(),
-                step: plant.steps,
-                stance_side: plant.stance_side,
-                goal: subgoals[current],
-                output,
-                compute_ns,
-                landed: false,
-                half_planes,
-                subgoal: current,
-                obstacles_seen: cycle_obstacles.len(),
-            });
-        }
-        let diverged = due
-            && cycles.last().is_some_and(|c| {
-                matches!(
-                    c.output.status,
-                    ldcbf_controller::CycleStatus::InvalidInput(_)
-                )
-            });
-        // 3. Record and check the end conditions.
-        let sample = Sample {
-            time: plant.time(),
-            position: plant.position,
-            velocity: plant.velocity,
-            heading: plant.heading,
-            turning_rate: plant.turning_rate,
-            stance_side: plant.stance_side,
-            clearance: if options.record_clearance {
-                world.clearance(&plant.position)
-            } else {
-                f64::NAN
-            },
-        };
-        samples.push(sample);
-        if options.record_clearance {
-            let stance = footsteps.last().expect("the initial stance foot");
-            contacts.observe(
-                &world,
-                robot,
-                plant.time(),
-                plant.position,
-                contacts::mean_velocity(&samples, plant.ticks_per_step() as usize),
-                stance.position,
-                stance.heading,
-                landed_now,
-            );
-        }
-        landed_now = false;
-        let dist = (plant.position - scenario.goal).norm();
-        if dist <= scenario.success_radius {
-            navigation.reached_at.push(plant.time());
-            break Outcome::GoalReached;
-        }
-        if diverged {
-            break Outcome::Diverged;
-        }
-        let progress = remaining_length(plant.position, &subgoals, current);
-        if progress < best_distance - 0.05 {
-            best_distance = progress;
-            best_tick = plant.tick;
-        }
-        if stuck_ticks > 0 && plant.tick - best_tick >= stuck_ticks {
-            break Outcome::Stuck;
-        }
-        if plant.tick >= max_ticks {
-            break Outcome::TimeLimit;
-        }
-        // 4. Integrate.
-        plant.tick();
     };
-    if on_map {
-        navigation.subgoals = subgoals;
-    }
-    Ok(SimResult {
-        scenario: scenario.clone(),
-        options,
-        outcome,
-        cycles,
-        footsteps,
-        samples,
-        navigation,
-        scans,
-        qps,
-        disturbance: disturber.log,
-        contacts: contacts.contacts,
-        mapping: mapper.map(|m| m.log),
-    })
+    Ok(state.finish(outcome))
 }
 
 #[cfg(test)]

@@ -174,7 +174,7 @@ impl Recording {
             let input = self
                 .input(i)
                 .with_context(|| format!("{}: cycle {i} has no input", self.label))?;
-            let out = ctl.step(&input);
+            let out = ctl.step(&input, None);
             let (a, b) = (format!("{out:?}"), format!("{logged:?}"));
             if a != b {
                 bail!(

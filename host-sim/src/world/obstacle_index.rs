@@ -11,7 +11,7 @@
 //! boxes within that disk (queried from the tree `r_active` +
 //! [`CANDIDATE_MARGIN`] around `p_0` and reused while they cover later cycles,
 //! [`Candidates`]), sorted by index, and passes them to
-//! [`Controller::step_among`], which tests only those. `benches/map_scaling.rs`
+//! [`Controller::step`] as its `candidates`, which tests only those. `benches/map_scaling.rs`
 //! and `docs/benchmarks.md` give the cost against the map's size.
 //!
 //! # Why the results are bit for bit those of a full scan
@@ -45,7 +45,7 @@
 //! against that.
 //!
 //! [`Controller::obstacle_query`]: ldcbf_controller::Controller::obstacle_query
-//! [`Controller::step_among`]: ldcbf_controller::Controller::step_among
+//! [`Controller::step`]: ldcbf_controller::Controller::step
 
 use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_controller::{ObstacleQuery, closest_point_point_polygon};
@@ -195,7 +195,7 @@ impl ObstacleIndex {
     /// The candidates of one control cycle, in increasing order, into `out`:
     /// the obstacles within [`ObstacleQuery::padded_radius`] of
     /// [`ObstacleQuery::center`], a superset of those the controller can
-    /// select (see the module docs), for `Controller::step_among`.
+    /// select (see the module docs), for the `candidates` of `Controller::step`.
     pub fn candidates_into(&self, query: &ObstacleQuery, out: &mut Vec<u32>) {
         self.within_into(&query.center, query.padded_radius(), out);
     }

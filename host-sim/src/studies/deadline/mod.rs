@@ -8,7 +8,7 @@
 //! it keeps the status, where the command came from, the solver iterations
 //! (`CycleInfo::iterations`, the whole cycle's adds plus drops, the priority
 //! scheme's solves included) and the wall-clock time of the controller call
-//! (measured by the simulator around `Controller::step_with` only). With
+//! (measured by the simulator around `Controller::step` only). With
 //! `--repeat K` ([`DeadlineRequest::repeat`], [`SimOptions::timing_repeats`])
 //! each cycle's call is timed `K` times on the same input and the same
 //! controller state (clones made just before the call) and its time is the
