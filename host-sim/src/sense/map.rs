@@ -80,7 +80,7 @@ pub struct MapParams {
     pub unknown_radius: f64,
     /// The capture-step speed limit (`crate::sim::capture`): each cycle's
     /// speed cap lets the robot stop inside the space seen free along its
-    /// way (default true).
+    /// planned way (default false: docs/safety.md gives its measured cost).
     pub capture_speed_limit: bool,
 }
 
@@ -95,7 +95,7 @@ impl Default for MapParams {
             clamp_max: 0.971,
             decay: 0.0,
             unknown_radius: 1.0,
-            capture_speed_limit: true,
+            capture_speed_limit: false,
         }
     }
 }
