@@ -82,6 +82,7 @@ fn decode<'a>(r: &Row, goal: Vector2<f64>, obstacles: &'a [Poly]) -> CycleInput<
         goal,
         obstacles,
         obstacle_velocities: &[],
+        speed_cap: ldcbf_controller::NO_SPEED_CAP,
     }
 }
 

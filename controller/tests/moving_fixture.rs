@@ -69,6 +69,7 @@ fn fixture(velocities: &[Vector2<f64>]) -> String {
             goal: Vector2::new(4.0, 5.0),
             obstacles: &polys,
             obstacle_velocities: velocities,
+            speed_cap: ldcbf_controller::NO_SPEED_CAP,
         };
         let out = ctl.step(&input, None);
         let ins = [

@@ -461,6 +461,7 @@ pub unsafe extern "C" fn ldcbf_step_moving(
         goal: xy(input.goal),
         obstacles: &handle.obstacles,
         obstacle_velocities: velocities,
+        speed_cap: ldcbf_controller::NO_SPEED_CAP,
     };
     let result = handle.controller.step(&cycle, None);
     // SAFETY: non-NULL, aligned, writable by contract, outside the controller.

@@ -541,6 +541,7 @@ fn sentinel_rust() -> CycleOutput<LDCBF_HORIZON> {
             goal: Vector2::new(1.0, 0.0),
             obstacles: &obstacles,
             obstacle_velocities: &[],
+            speed_cap: ldcbf_controller::NO_SPEED_CAP,
         },
         None,
     )
@@ -670,6 +671,7 @@ fn robot_cycles_equal_rust(velocities: &[Vector2<f64>]) {
             goal: Vector2::new(4.0, 5.0),
             obstacles: &polys,
             obstacle_velocities: velocities,
+            speed_cap: ldcbf_controller::NO_SPEED_CAP,
         };
         if i == 100 {
             assert_eq!(unsafe { ldcbf_reset(ctl) }, LdcbfResult::Ok);

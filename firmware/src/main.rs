@@ -225,6 +225,7 @@ fn decode<'a>(
         goal,
         obstacles,
         obstacle_velocities: velocities,
+        speed_cap: ldcbf_controller::NO_SPEED_CAP,
     }
 }
 

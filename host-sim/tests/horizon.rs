@@ -88,6 +88,7 @@ fn closed_loop<const N: usize, const NV: usize, const NC: usize>(
                 goal: subgoals[current],
                 obstacles: &sc.obstacles,
                 obstacle_velocities: &[],
+                speed_cap: ldcbf_controller::NO_SPEED_CAP,
             };
             let t0 = Instant::now();
             let out = ctl.step(&input, None);

@@ -67,6 +67,43 @@ fn a_small_obstacle_hidden_behind_a_large_one_is_met_safely() {
     assert!(seen, "the hidden box is in the map");
 }
 
+/// The capture-step speed limit (`ldcbf_sim::sim::capture`,
+/// `lidar.map.capture_speed_limit`): each cycle's cap is in `[0, vx_max]`,
+/// the controller's optimal plans keep their longitudinal velocity under it,
+/// and it binds as the robot walks towards the box's shadow; off (the
+/// default), no cycle has a cap.
+#[test]
+fn the_capture_speed_limit_binds_and_the_plans_keep_it() {
+    let with = |on: &str| {
+        let sets = vec![("lidar.map.capture_speed_limit".to_string(), on.to_string())];
+        load("occluded", &LoadOptions { seed: None, sets }).unwrap()
+    };
+    let r = run(&with("true"), SimOptions::default()).unwrap();
+    let s = summarize(&r);
+    assert_eq!(r.outcome, Outcome::GoalReached, "{s:#?}");
+    assert!(!s.collision && !s.foot_collision, "{s:#?}");
+    let vx_max = r.scenario.config.vx_max;
+    assert_eq!(r.scans.len(), r.cycles.len());
+    let mut bound = 0;
+    for (scan, c) in r.scans.iter().zip(&r.cycles) {
+        assert_eq!(scan.cycle, c.index);
+        let cap = scan.speed_cap;
+        assert!((0.0..=vx_max).contains(&cap), "cycle {}: {cap}", c.index);
+        bound += usize::from(cap < vx_max);
+        if c.output.info.source == ldcbf_controller::CommandSource::Optimal {
+            for s in &c.output.plan.states {
+                let lon = s.velocity.x * s.heading.cos() + s.velocity.y * s.heading.sin();
+                assert!(lon <= cap + 1e-9, "cycle {}: {lon} > {cap}", c.index);
+            }
+        }
+    }
+    assert!(bound > 0, "the cap never binds");
+    let off = run(&with("false"), SimOptions::default()).unwrap();
+    assert!(off.scans.iter().all(|s| s.speed_cap == f64::INFINITY));
+    let default = reaches_without_contact("occluded");
+    assert!(default.scans.iter().all(|s| s.speed_cap == f64::INFINITY));
+}
+
 #[test]
 fn a_needle_along_the_path_is_seen_and_avoided() {
     let r = reaches_without_contact("needle");

@@ -127,6 +127,7 @@ fn input<'a>(
         goal: Vector2::new(r[10], r[11]),
         obstacles,
         obstacle_velocities: velocities,
+        speed_cap: ldcbf_controller::NO_SPEED_CAP,
     }
 }
 

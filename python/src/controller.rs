@@ -150,6 +150,7 @@ impl PyController {
             goal: vec2(goal, "goal")?,
             obstacles: &obstacles,
             obstacle_velocities: &velocities,
+            speed_cap: ldcbf_controller::NO_SPEED_CAP,
         };
         with_controller!(&mut self.inner, c => output_dict(py, &c.step(&input, None)))
     }

@@ -189,6 +189,7 @@ fn check_case<const N: usize, const NV: usize, const NC: usize>(
         ),
         obstacles: &polys,
         obstacle_velocities: &[],
+        speed_cap: ldcbf_controller::NO_SPEED_CAP,
     };
     let mut ctl =
         Controller::<N, NV, NC, 8>::new(cfg).map_err(|e| TestCaseError::fail(e.to_string()))?;

@@ -47,6 +47,8 @@ pub struct RecordedInput {
     pub goal: Vector2<f64>,
     /// Index of the cycle's obstacle list among the caller's lists.
     pub obstacles: usize,
+    /// The cycle's speed cap, m/s ([`CycleInput::speed_cap`]).
+    pub speed_cap: f64,
 }
 
 impl RecordedInput {
@@ -63,6 +65,7 @@ impl RecordedInput {
             time_in_step: 0.0,
             goal,
             obstacles: 0,
+            speed_cap: NO_SPEED_CAP,
         }
     }
 
@@ -83,6 +86,7 @@ impl RecordedInput {
             goal: self.goal,
             obstacles,
             obstacle_velocities: &[],
+            speed_cap: self.speed_cap,
         }
     }
 
@@ -133,7 +137,22 @@ pub struct CycleInput<'a, const V: usize> {
     /// speed of at most [`MAX_RATE`] (else [`InputError::ObstacleVelocity`]);
     /// the velocities of obstacles the cycle does not select are not read.
     pub obstacle_velocities: &'a [Vector2<f64>],
+    /// Speed cap, m/s: an upper bound on the CoM velocity along the heading
+    /// at every planned step end (`lon' v_{k+1}`, the walking-velocity row
+    /// [`RowKind::VelLonUpper`](crate::constraints::RowKind::VelLonUpper)),
+    /// for this cycle only. A host that sees its surroundings as it goes
+    /// passes the speed from which the robot can still stop inside the space
+    /// it has seen free (the capture-step limit of `docs/safety.md`). The row
+    /// takes `min(vx_max, max(c, vx_min))` with `c = speed_cap` when
+    /// `speed_cap >= 0`, else `c = 0` (NaN too): a cap never loosens the
+    /// configured bound nor crosses the lower one. [`NO_SPEED_CAP`]
+    /// (infinity) is the configured bound, bit for bit.
+    pub speed_cap: f64,
 }
+
+/// [`CycleInput::speed_cap`] of a cycle without a cap (m/s): the configured
+/// `vx_max` holds alone.
+pub const NO_SPEED_CAP: f64 = f64::INFINITY;
 
 /// Largest accepted CoM speed (m/s), turning rate (rad/s) and obstacle speed
 /// (m/s): far beyond any walking robot or person; larger values are treated
@@ -397,6 +416,13 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             &v0,
             heading.omega_bar,
         );
+        // The host's speed cap tightens the longitudinal upper bound only
+        // (`CycleInput::speed_cap`); no cap keeps the bounds above bit for bit.
+        let cap = if input.speed_cap >= 0.0 {
+            input.speed_cap
+        } else {
+            0.0
+        };
         let mut bounds = GaitBounds {
             vx_min: cfg.vx_min,
             vx_max: cfg.vx_max,
@@ -412,7 +438,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         let mut side = first_side;
         for (k, &vx) in vx_max.iter().enumerate() {
             let m_before = out.qp.m;
-            bounds.vx_max = vx;
+            bounds.vx_max = if cap < vx { cap.max(cfg.vx_min) } else { vx };
             ok &= push_gait_rows(
                 &mut out.qp,
                 &self.model,
@@ -505,16 +531,6 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         let shift = usize::from(memory.has_plan && memory.stance != input.stance_side);
         let (prefer, warm) = self.warm_start(memory, shift, work);
         let sol = backend.solve_qp(&self.solver, &work.qp, &prefer);
-        // A person in the conflict: the relaxation plans away from them
-        // (`give_way`); the nominal cost is restored in `recover`.
-        let nominal_q = work.qp.q;
-        let mut give_way = false;
-        if sol.status == QpStatus::Infeasible
-            && let Some(goal) = self.give_way_goal(work, &sol.lambda)
-        {
-            work.qp.q = self.model.gradient::<NV>(&goal).0;
-            give_way = true;
-        }
         let mut info = self.info(&sol, work, warm);
         // `z`: this cycle's decision vector (positions); `feet`: set for the
         // fallbacks, which are defined by their footsteps.
@@ -525,15 +541,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             }
             _ => {
                 memory.n_active = 0;
-                self.recover(
-                    memory,
-                    backend,
-                    work,
-                    &sol,
-                    shift,
-                    &mut info,
-                    (nominal_q, give_way),
-                )
+                self.recover(memory, backend, work, &sol, shift, &mut info)
             }
         };
         let pred = &work.prediction;
@@ -668,13 +676,22 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         sol: &QpSolution<NV, NC>,
         shift: usize,
         info: &mut CycleInfo,
-        (nominal_q, give_way): (SVector<f64, NV>, bool),
     ) -> (SVector<f64, NV>, Option<SVector<f64, NV>>, CycleStatus) {
         let status = match sol.status {
             QpStatus::Infeasible => CycleStatus::Infeasible,
             QpStatus::IterationLimit => CycleStatus::BudgetExhausted,
             _ => CycleStatus::NumericalFailure,
         };
+        // A person in the conflict: the relaxation plans away from them
+        // (`give_way`); the nominal cost is restored after it.
+        let nominal_q = work.qp.q;
+        let mut give_way = false;
+        if sol.status == QpStatus::Infeasible
+            && let Some(goal) = self.give_way_goal(work, &sol.lambda)
+        {
+            work.qp.q = self.model.gradient::<NV>(&goal).0;
+            give_way = true;
+        }
         let relaxed = if sol.status == QpStatus::Infeasible {
             relax::relax(
                 &self.solver,

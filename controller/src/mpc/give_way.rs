@@ -164,6 +164,7 @@ mod tests {
             goal: Vector2::new(5.0, 0.0),
             obstacles: &person,
             obstacle_velocities: &velocities,
+            speed_cap: crate::NO_SPEED_CAP,
         };
         let ctl = PaperController::new(cfg).unwrap();
         let mut asm = Assembly::EMPTY;

@@ -74,7 +74,7 @@ mod select;
 mod tests;
 
 pub use config::{Config, ConfigError};
-pub use cycle::{CycleInput, InputError, MAX_RATE, RecordedInput};
+pub use cycle::{CycleInput, InputError, MAX_RATE, NO_SPEED_CAP, RecordedInput};
 pub use plan::{
     Assembly, CommandSource, CycleInfo, CycleOutput, CycleStatus, LipState, Plan, Prediction, Side,
 };

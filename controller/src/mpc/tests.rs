@@ -37,6 +37,7 @@ fn input<'a>(obstacles: &'a [Poly]) -> CycleInput<'a, 16> {
         goal: Vector2::new(5.0, 0.0),
         obstacles,
         obstacle_velocities: &[],
+        speed_cap: crate::NO_SPEED_CAP,
     }
 }
 
@@ -456,4 +457,49 @@ fn budget_exhaustion_falls_back_to_finite_command() {
     assert_eq!(out.info.source, CommandSource::CaptureStep);
     assert!(output_is_finite(&out));
     assert_eq!(out.turning_rate, 0.0);
+}
+
+/// `CycleInput::speed_cap` bounds the planned longitudinal velocity at every
+/// step end; a cap at or above `vx_max` is no cap, bit for bit; a negative or
+/// NaN cap is a cap of 0.
+#[test]
+fn the_speed_cap_bounds_the_planned_longitudinal_velocity() {
+    let moving = |cap: f64| CycleInput {
+        com_velocity: Vector2::new(0.1, 0.0),
+        speed_cap: cap,
+        ..input(&[])
+    };
+    let lon =
+        |s: &LipState| s.velocity.x * libm::cos(s.heading) + s.velocity.y * libm::sin(s.heading);
+    let free = Ctl::new(Config::default())
+        .unwrap()
+        .step(&moving(NO_SPEED_CAP), None);
+    assert_eq!(free.status, CycleStatus::Optimal);
+    // Without a cap the plan speeds up towards the goal, past the cap below.
+    assert!(free.plan.states.iter().any(|s| lon(s) > 0.25));
+    for cap in [0.2, 0.15] {
+        let out = Ctl::new(Config::default())
+            .unwrap()
+            .step(&moving(cap), None);
+        assert_eq!(out.status, CycleStatus::Optimal, "cap {cap}");
+        for s in &out.plan.states {
+            assert!(lon(s) <= cap + 1e-9, "cap {cap}: {}", lon(s));
+        }
+    }
+    let vx_max = Config::default().vx_max;
+    for cap in [vx_max, 2.0 * vx_max] {
+        let out = Ctl::new(Config::default())
+            .unwrap()
+            .step(&moving(cap), None);
+        assert_eq!(out, free, "cap {cap}");
+    }
+    let zero = Ctl::new(Config::default())
+        .unwrap()
+        .step(&moving(0.0), None);
+    for cap in [-1.0, f64::NAN, f64::NEG_INFINITY] {
+        let out = Ctl::new(Config::default())
+            .unwrap()
+            .step(&moving(cap), None);
+        assert_eq!(out, zero, "cap {cap}");
+    }
 }

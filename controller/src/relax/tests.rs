@@ -145,6 +145,7 @@ fn relaxations_are_minimal_in_priority_order() {
             goal: dir * 10.0,
             obstacles: &obstacles[..n_obs],
             obstacle_velocities: &[],
+            speed_cap: crate::NO_SPEED_CAP,
         };
         ctl.assemble(&input, None, &mut asm).unwrap();
         let solver = ctl.solver();
@@ -369,6 +370,7 @@ fn pushed(capture_fraction: Option<f64>, forward: f64, lateral: f64) -> crate::C
         goal: Vector2::new(20.0, 0.0),
         obstacles: &[],
         obstacle_velocities: &[],
+        speed_cap: crate::NO_SPEED_CAP,
     };
     ctl.step(&input, None)
 }
@@ -470,6 +472,7 @@ fn a_conflict_ahead_leaves_the_side_wall_its_margin() {
         goal: Vector2::new(10.0, 10.0),
         obstacles: &obstacles,
         obstacle_velocities: &[],
+        speed_cap: crate::NO_SPEED_CAP,
     };
     let mut asm = Assembly::default();
     ctl.assemble(&input, None, &mut asm).unwrap();

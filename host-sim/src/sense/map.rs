@@ -78,6 +78,10 @@ pub struct MapParams {
     /// Unknown cells next to a free cell within this distance of the robot
     /// are obstacles for the controller, m (0 = never).
     pub unknown_radius: f64,
+    /// The capture-step speed limit (`crate::sim::capture`): each cycle's
+    /// speed cap lets the robot stop inside the space seen free along its
+    /// planned way (default false: docs/safety.md gives its measured cost).
+    pub capture_speed_limit: bool,
 }
 
 impl Default for MapParams {
@@ -91,6 +95,7 @@ impl Default for MapParams {
             clamp_max: 0.971,
             decay: 0.0,
             unknown_radius: 1.0,
+            capture_speed_limit: false,
         }
     }
 }

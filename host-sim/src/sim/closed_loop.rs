@@ -10,7 +10,9 @@
 use std::time::Instant;
 
 use ldcbf_controller::nalgebra::Vector2;
-use ldcbf_controller::{CycleInput, CycleOutput, CycleStatus, QpBackend, RobotController};
+use ldcbf_controller::{
+    CycleInput, CycleOutput, CycleStatus, NO_SPEED_CAP, QpBackend, RobotController,
+};
 
 use super::contacts::{self, ContactMonitor};
 use super::mapping::{self, ReplanReason};
@@ -60,6 +62,9 @@ pub(super) struct Loop<'s, B: QpBackend<NV, NC>> {
     /// tracking, their velocities (the map's pieces at rest, then the people).
     seen: Vec<Polygon>,
     seen_velocities: Vec<Vector2<f64>>,
+    /// With LiDAR, the cycle's capture-step speed cap, m/s
+    /// ([`super::capture`]; [`NO_SPEED_CAP`] when off).
+    speed_cap: f64,
     progress: Progress,
     cycles: Vec<CycleRecord>,
     footsteps: Vec<Footstep>,
@@ -153,6 +158,7 @@ impl<'s, B: QpBackend<NV, NC> + Clone> Loop<'s, B> {
             current: 0,
             seen: Vec::new(),
             seen_velocities: Vec::new(),
+            speed_cap: NO_SPEED_CAP,
             progress: Progress {
                 best_distance: f64::INFINITY,
                 best_tick: 0,
@@ -261,9 +267,15 @@ impl<'s, B: QpBackend<NV, NC> + Clone> Loop<'s, B> {
         } else {
             (self.world.obstacles(), self.world.velocities())
         };
+        let speed_cap = if self.mapper.is_some() {
+            self.speed_cap
+        } else {
+            NO_SPEED_CAP
+        };
         let input = CycleInput {
             obstacles,
             obstacle_velocities: velocities,
+            speed_cap,
             ..state.input(&self.plant, self.subgoals[self.current])
         };
         let (output, compute_ns) = timed_control(
@@ -317,6 +329,13 @@ impl<'s, B: QpBackend<NV, NC> + Clone> Loop<'s, B> {
         }
         let input: CycleInput<'_, MAX_VERTICES> = state.input(plant, self.subgoals[self.current]);
         let q = self.controller.obstacle_query(&input);
+        if self.scenario.lidar.map.capture_speed_limit {
+            self.speed_cap = m.capture_cap(
+                &self.scenario.config,
+                &input,
+                &self.subgoals[self.current..],
+            );
+        }
         self.seen = match q {
             Ok(q) => m.obstacles(&q),
             Err(_) => Vec::new(),
@@ -333,6 +352,7 @@ impl<'s, B: QpBackend<NV, NC> + Clone> Loop<'s, B> {
                 origin: plant.position,
                 points,
                 obstacles: self.seen.clone(),
+                speed_cap: self.speed_cap,
             });
         }
     }
@@ -486,6 +506,7 @@ impl Measured {
             goal,
             obstacles: &[],
             obstacle_velocities: &[],
+            speed_cap: NO_SPEED_CAP,
         }
     }
 }

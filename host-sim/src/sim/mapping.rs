@@ -20,11 +20,18 @@
 //! it is replanned when the robot has made no progress for half the stuck
 //! window ("stalled", at most once per half window). A failed plan keeps the
 //! goal as the only subgoal and counts as a failure.
+//!
+//! **Speed cap** ([`Mapper::capture_cap`]): with
+//! `lidar.map.capture_speed_limit`, each cycle's
+//! [`ldcbf_controller::CycleInput::speed_cap`] lets the robot stop inside the
+//! space the map has seen free along its way ([`super::capture`]).
 
 use std::time::Instant;
 
 use ldcbf_controller::nalgebra::Vector2;
-use ldcbf_controller::{ObstacleQuery, closest_point_point_polygon};
+use ldcbf_controller::{Config, CycleInput, ObstacleQuery, closest_point_point_polygon};
+
+use super::capture;
 
 use crate::plan::on_map::{CellMap, plan_on_map};
 use crate::scenario::Scenario;
@@ -159,6 +166,39 @@ impl Mapper {
             .update_ns
             .push(u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX));
         rays.into_iter().flatten().collect()
+    }
+
+    /// The capture-step speed cap of a cycle (m/s, [`super::capture`]):
+    /// `input` is the cycle's measured state, `subgoals` the rest of the
+    /// planned path. [`ldcbf_controller::NO_SPEED_CAP`] without planning.
+    pub(super) fn capture_cap(
+        &self,
+        config: &Config,
+        input: &CycleInput<'_, { crate::world::MAX_VERTICES }>,
+        subgoals: &[Vector2<f64>],
+    ) -> f64 {
+        if !self.planning {
+            return ldcbf_controller::NO_SPEED_CAP;
+        }
+        let tau = config.step_duration - input.time_in_step;
+        let (p0, v0) = capture::end_of_step(
+            config,
+            input.com_position,
+            input.com_velocity,
+            input.stance_foot,
+            tau,
+        );
+        let map = &self.log.map;
+        let s0 = (p0 - input.com_position).norm();
+        let max = capture::march_length(config, s0, v0.norm(), map.resolution);
+        let free = capture::free_distance(
+            map,
+            &capture::travel_path(input.com_position, subgoals),
+            input.heading,
+            config.body_radius,
+            max,
+        );
+        capture::capture_cap(config, input.com_position, p0, v0, free)
     }
 
     /// With `lidar.track_moving`, the last scan's people (hulls, world frame)

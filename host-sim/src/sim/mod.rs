@@ -89,6 +89,7 @@ use crate::scenario::Scenario;
 use crate::world::Polygon;
 
 pub mod cancel;
+pub mod capture;
 mod closed_loop;
 mod contacts;
 mod options;
@@ -189,6 +190,8 @@ pub struct ScanRecord {
     pub points: Vec<Vector2<f64>>,
     /// Inferred obstacles (one per DBSCAN cluster), world frame.
     pub obstacles: Vec<Polygon>,
+    /// The cycle's speed cap, m/s (`crate::sim::capture`; infinite without).
+    pub speed_cap: f64,
 }
 
 /// The planner's part of a run.

@@ -85,12 +85,14 @@ impl Recording {
                 .footsteps
                 .get(foot)
                 .with_context(|| format!("{label}: no footsteps"))?;
+            let mut speed_cap = ldcbf_controller::NO_SPEED_CAP;
             let obstacles = if lidar {
                 while scan < result.scans.len() && result.scans[scan].cycle < c.index {
                     scan += 1;
                 }
                 match result.scans.get(scan) {
                     Some(sc) if sc.cycle == c.index => {
+                        speed_cap = sc.speed_cap;
                         obstacle_sets.push(sc.obstacles.clone());
                         obstacle_sets.len() - 1
                     }
@@ -121,6 +123,7 @@ impl Recording {
                 time_in_step: c.time_in_step,
                 goal: c.goal,
                 obstacles,
+                speed_cap,
             });
         }
         Ok(Recording {
