@@ -27,6 +27,7 @@ struct Cycle {
     right: bool,
     t_in: f64,
     goal: [f64; 2],
+    speed_cap: f64,
 }
 
 #[derive(Arbitrary, Debug)]
@@ -79,6 +80,7 @@ fuzz_target!(|case: Case| {
             goal: Vector2::from(c.goal),
             obstacles: &polys,
             obstacle_velocities: &[],
+            speed_cap: c.speed_cap,
         };
         let out = ctl.step(&input, None);
         assert!(finite(&out), "non-finite output {out:?} for {c:?}");
