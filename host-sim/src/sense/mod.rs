@@ -62,7 +62,7 @@
 //!      that of one hull per cluster (the controller keeps only the nearest
 //!      few).
 //!
-//! Guarantee (tested by a property test in `host-sim/tests/sim_perception.rs`): no
+//! Guarantee (tested by a property test in `host-sim/tests/perception_free_space.rs`): no
 //! piece contains the sensor, and for every ray the segment from the sensor
 //! along the ray's direction to its measured range (the distance of its hit
 //! point) shortened by `3 noise_sigma + free_margin`, or to `range` when it
