@@ -203,3 +203,27 @@ fn the_check_sees_upward_sideways_and_root_arrows() {
         .is_empty()
     );
 }
+
+/// `anyhow` is for the command line only (`cli/`, `main.rs`): the library's
+/// rooms return typed errors (`thiserror` enums naming the file and field).
+#[test]
+fn anyhow_only_at_the_cli_edge() {
+    let root = src();
+    let mut bad = Vec::new();
+    for (room, _) in ROOMS.iter().filter(|&&(r, _)| r != "cli") {
+        for f in sources(&root.join(room)) {
+            let text = std::fs::read_to_string(&f).unwrap();
+            for (i, line) in text.lines().enumerate() {
+                if line.split("//").next().unwrap_or("").contains("anyhow") {
+                    let rel = f.strip_prefix(&root).unwrap_or(&f).display().to_string();
+                    bad.push(format!("src/{rel}:{}: {}", i + 1, line.trim()));
+                }
+            }
+        }
+    }
+    assert!(
+        bad.is_empty(),
+        "anyhow outside cli/ (return a typed error instead):\n{}",
+        bad.join("\n")
+    );
+}

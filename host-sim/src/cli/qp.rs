@@ -24,7 +24,7 @@ pub(crate) fn solve(args: QpSolveArgs) -> Result<()> {
     let rows = files
         .iter()
         .map(|f| solve_file(f, &opts))
-        .collect::<Result<Vec<_>>>()?;
+        .collect::<Result<Vec<_>, _>>()?;
     outln!("{CSV_HEADER}");
     for r in &rows {
         outln!("{}", r.csv());

@@ -49,12 +49,103 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Result, anyhow};
 use ldcbf_controller::nalgebra::{Const, DefaultAllocator, Dim, Dyn};
 use ldcbf_controller::{
-    DualActiveSetOf, LdpSolverOf, QpAllocator, QpSettings, QpSolutionOf, QpStatus,
+    DualActiveSetOf, HessianError, LdpSolverOf, QpAllocator, QpSettings, QpSolutionOf, QpStatus,
 };
-use ldcbf_reference::{Candidate, DenseProblem, compare_stacked, solve_clarabel};
+use ldcbf_reference::{Candidate, DenseProblem, ProblemError, compare_stacked, solve_clarabel};
+
+/// Why a QP file could not be solved and checked, or the options are out of
+/// range; each names the file (and the field where there is one).
+#[derive(Debug, thiserror::Error)]
+pub enum QpBenchError {
+    /// `--repeat` outside `1..=MAX_REPEAT`.
+    #[error("--repeat must be in 1..={MAX_REPEAT}, got {0}")]
+    Repeat(usize),
+    /// `--max-iter 0`.
+    #[error("--max-iter must be >= 1, got 0")]
+    MaxIter,
+    /// The file could not be read as a problem (the message names the file).
+    #[error(transparent)]
+    Read(ProblemError),
+    /// The problem does not fit the solver's sizes.
+    #[error("{}: {error}", file.display())]
+    Problem {
+        /// The file.
+        file: PathBuf,
+        /// Why.
+        error: ProblemError,
+    },
+    /// The Hessian (field `P`) was refused by the solver.
+    #[error("{}: field `P`: {error}", file.display())]
+    Hessian {
+        /// The file.
+        file: PathBuf,
+        /// Why.
+        error: HessianError,
+    },
+    /// `solve` and `solve_prepared` disagree (status, iterations or `x`).
+    #[error("{}: solve and solve_prepared disagree ({solve:?} vs {prepared:?})", file.display())]
+    Prepared {
+        /// The file.
+        file: PathBuf,
+        /// `solve`'s status.
+        solve: QpStatus,
+        /// `solve_prepared`'s status.
+        prepared: QpStatus,
+    },
+    /// `solve` and the LDP solve disagree on the status.
+    #[error(
+        "{}: solve and the LDP solve disagree on the status ({solve:?} vs {ldp:?})",
+        file.display()
+    )]
+    LdpStatus {
+        /// The file.
+        file: PathBuf,
+        /// `solve`'s status.
+        solve: QpStatus,
+        /// The LDP solve's status.
+        ldp: QpStatus,
+    },
+    /// `solve` and the LDP solve disagree on the objective or `x`.
+    #[error(
+        "{}: solve and the LDP solve disagree (objective {solve} vs {ldp}, scaled x difference {dx:e})",
+        file.display()
+    )]
+    Ldp {
+        /// The file.
+        file: PathBuf,
+        /// `solve`'s objective.
+        solve: f64,
+        /// The LDP solve's objective.
+        ldp: f64,
+        /// `max |x_a - x_b| / max(1, max |x|)`.
+        dx: f64,
+    },
+    /// Our solution and Clarabel's disagree (module docs).
+    #[error(
+        "{}: our solution and Clarabel's disagree (ours {ours:?}, Clarabel {clarabel}; scaled \
+         primal difference {dx:e}, objective {objective:e}, certificate {certificate:?})",
+        file.display()
+    )]
+    Clarabel {
+        /// The file.
+        file: PathBuf,
+        /// Our status.
+        ours: QpStatus,
+        /// Clarabel's raw status (its `Debug` form).
+        clarabel: String,
+        /// Scaled primal difference.
+        dx: f64,
+        /// Relative objective difference.
+        objective: f64,
+        /// Whether our Farkas certificate holds (on infeasible).
+        certificate: Option<bool>,
+    },
+}
+
+/// `Result` of this module.
+type Result<T, E = QpBenchError> = core::result::Result<T, E>;
 
 /// The compiled solver sizes `(NV, NC)`, listed once: `with_qp_sizes!(m)`
 /// expands to `m!((6, 48), (6, 72), ...)`. It defines [`SIZES`], the dispatch
@@ -160,15 +251,19 @@ where
     DefaultAllocator: QpAllocator<V, C>,
 {
     let repeat = opts.repeat;
-    let (h, qp) = p
-        .to_qp(nv, nc)
-        .map_err(|e| anyhow!("{}: {e}", file.display()))?;
+    let (h, qp) = p.to_qp(nv, nc).map_err(|error| QpBenchError::Problem {
+        file: file.to_path_buf(),
+        error,
+    })?;
     let settings = QpSettings {
         max_iter: opts.max_iter,
         ..QpSettings::default()
     };
-    let solver = DualActiveSetOf::<V, C>::new(&h, settings)
-        .map_err(|e| anyhow!("{}: field `P`: {e}", file.display()))?;
+    let solver =
+        DualActiveSetOf::<V, C>::new(&h, settings).map_err(|error| QpBenchError::Hessian {
+            file: file.to_path_buf(),
+            error,
+        })?;
     let prefer: &[bool] = &[];
     let rows = solver.prepare_rows(&qp);
     let (mut best, mut best_prepared) = (u64::MAX, u64::MAX);
@@ -181,12 +276,11 @@ where
         .zip(sol.x.iter())
         .all(|(a, b)| a.to_bits() == b.to_bits());
     if prepared.status != sol.status || prepared.iterations != sol.iterations || !same_x {
-        return Err(anyhow!(
-            "{}: solve and solve_prepared disagree ({:?} vs {:?})",
-            file.display(),
-            sol.status,
-            prepared.status
-        ));
+        return Err(QpBenchError::Prepared {
+            file: file.to_path_buf(),
+            solve: sol.status,
+            prepared: prepared.status,
+        });
     }
     // The LDP path: `ldp` per G, `loaded` per (q, h), both outside the timing.
     let ldp = Box::new(LdpSolverOf::prepare(&solver, &qp));
@@ -250,23 +344,23 @@ where
     DefaultAllocator: QpAllocator<V, C>,
 {
     if a.status != b.status {
-        return Err(anyhow!(
-            "{}: solve and the LDP solve disagree on the status ({:?} vs {:?})",
-            file.display(),
-            a.status,
-            b.status
-        ));
+        return Err(QpBenchError::LdpStatus {
+            file: file.to_path_buf(),
+            solve: a.status,
+            ldp: b.status,
+        });
     }
     if a.status.is_solved() {
         let (oa, ob) = (a.objective, b.objective);
         let dobj = (oa - ob).abs() / oa.abs().max(ob.abs()).max(1.0);
         let dx = (&a.x - &b.x).amax() / a.x.amax().max(1.0);
         if !(dobj <= 1e-9 && dx <= 1e-9) {
-            return Err(anyhow!(
-                "{}: solve and the LDP solve disagree (objective {oa} vs {ob}, scaled x \
-                 difference {dx:e})",
-                file.display()
-            ));
+            return Err(QpBenchError::Ldp {
+                file: file.to_path_buf(),
+                solve: oa,
+                ldp: ob,
+                dx,
+            });
         }
     }
     Ok(())
@@ -292,16 +386,14 @@ where
     };
     let a = compare_stacked(p, &own, &r);
     if !a.holds() {
-        return Err(anyhow!(
-            "{}: our solution and Clarabel's disagree (ours {:?}, Clarabel {:?}; scaled primal \
-             difference {:e}, objective {:e}, certificate {:?})",
-            file.display(),
-            sol.status,
-            r.raw_status,
-            a.dx / a.x_ref_norm.max(1.0),
-            a.objective,
-            a.certificate
-        ));
+        return Err(QpBenchError::Clarabel {
+            file: file.to_path_buf(),
+            ours: sol.status,
+            clarabel: format!("{:?}", r.raw_status),
+            dx: a.dx / a.x_ref_norm.max(1.0),
+            objective: a.objective,
+            certificate: a.certificate,
+        });
     }
     Ok((a.dx / a.x_ref_norm.max(1.0), a.objective))
 }
@@ -325,13 +417,10 @@ impl SolveOptions {
     /// the controller's `Config::max_iter`).
     pub fn validate(&self) -> Result<()> {
         if !(1..=MAX_REPEAT).contains(&self.repeat) {
-            return Err(anyhow!(
-                "--repeat must be in 1..={MAX_REPEAT}, got {}",
-                self.repeat
-            ));
+            return Err(QpBenchError::Repeat(self.repeat));
         }
         if self.max_iter == 0 {
-            return Err(anyhow!("--max-iter must be >= 1, got 0"));
+            return Err(QpBenchError::MaxIter);
         }
         Ok(())
     }
@@ -341,7 +430,7 @@ impl SolveOptions {
 /// [`SolveOptions::validate`].
 pub fn solve_file(file: &Path, opts: &SolveOptions) -> Result<QpRow> {
     opts.validate()?;
-    let p = DenseProblem::from_npz(file).map_err(|e| anyhow!("{e}"))?;
+    let p = DenseProblem::from_npz(file).map_err(QpBenchError::Read)?;
     // The solver's rows: `A` (equalities), `G` and the finite bounds.
     let rows = p.rows();
     macro_rules! dispatch {

@@ -25,13 +25,107 @@
 //!
 //! Frames and units: world frame W; m, m/s, rad, rad/s, s.
 
-use anyhow::{Context, Result, bail};
-use ldcbf_controller::{Config, CycleInput, CycleOutput, RecordedInput, RobotController};
+use ldcbf_controller::{
+    Config, ConfigError, CycleInput, CycleOutput, RecordedInput, RobotController, Side,
+};
 
 use crate::sense::Perception;
 use crate::sim::{HORIZON, SimOptions, SimResult, Solver, run};
-use crate::studies::deadline::Case;
+use crate::studies::deadline::{Case, DeadlineError};
 use crate::world::{MAX_VERTICES, Polygon};
+
+/// Why a recording could not be built or replayed; each names the run's label
+/// (and the cycle where there is one). Cycle indices count from 0; times in s.
+#[derive(Debug, thiserror::Error)]
+pub enum ReplayError {
+    /// A cycle has no plant sample of its tick (a truncated result).
+    #[error("{label}: no plant sample at t = {time} s for cycle {cycle}")]
+    NoSample {
+        /// The run's label.
+        label: String,
+        /// Simulated time of the cycle, s.
+        time: f64,
+        /// The cycle's index.
+        cycle: usize,
+    },
+    /// The run logged no footstep.
+    #[error("{label}: no footsteps")]
+    NoFootsteps {
+        /// The run's label.
+        label: String,
+    },
+    /// A LiDAR run has no scan of a cycle (run without `record_scans`).
+    #[error("{label}: no LiDAR scan for cycle {cycle} (run with record_scans)")]
+    NoScan {
+        /// The run's label.
+        label: String,
+        /// The cycle's index.
+        cycle: usize,
+    },
+    /// The last logged footstep is not on the plant's stance side.
+    #[error(
+        "{label}: cycle {cycle}: stance foot {foot} is on the {side:?} side, the plant's stance is {stance:?}"
+    )]
+    StanceSide {
+        /// The run's label.
+        label: String,
+        /// The cycle's index.
+        cycle: usize,
+        /// The footstep's index.
+        foot: u32,
+        /// The footstep's side.
+        side: Side,
+        /// The plant's stance side in the cycle's sample.
+        stance: Side,
+    },
+    /// The controller refused the run's configuration.
+    #[error("{label}: controller: {error}")]
+    Controller {
+        /// The run's label.
+        label: String,
+        /// Why.
+        error: ConfigError,
+    },
+    /// The run used Clarabel, the replay the own solver.
+    #[error("{label}: the run used Clarabel; the replay uses the own solver")]
+    Clarabel {
+        /// The run's label.
+        label: String,
+    },
+    /// A logged output has no input.
+    #[error("{label}: cycle {cycle} has no input")]
+    NoInput {
+        /// The run's label.
+        label: String,
+        /// The cycle's index.
+        cycle: usize,
+    },
+    /// The replay's output differs from the logged one (their `Debug` forms).
+    #[error("{label}: cycle {cycle}: the replay returned\n  {replay}\nthe run logged\n  {logged}")]
+    Mismatch {
+        /// The run's label.
+        label: String,
+        /// The cycle's index.
+        cycle: usize,
+        /// The replay's output.
+        replay: String,
+        /// The logged output.
+        logged: String,
+    },
+    /// Inputs and outputs differ in number.
+    #[error("{label}: {inputs} inputs for {outputs} outputs")]
+    Count {
+        /// The run's label.
+        label: String,
+        /// Number of inputs.
+        inputs: usize,
+        /// Number of outputs.
+        outputs: usize,
+    },
+    /// The case could not be loaded or run ([`record_case`]).
+    #[error(transparent)]
+    Case(#[from] DeadlineError),
+}
 
 /// Every control cycle of one run, ready to replay in order.
 #[derive(Clone, Debug)]
@@ -57,7 +151,7 @@ impl Recording {
     /// Rebuilds the inputs of every control cycle of `result` (see the module
     /// docs). Fails if a cycle has no sample of its tick (a truncated result)
     /// or, with LiDAR, no scan (run without [`SimOptions::record_scans`]).
-    pub fn from_run(label: &str, result: &SimResult) -> Result<Recording> {
+    pub fn from_run(label: &str, result: &SimResult) -> Result<Recording, ReplayError> {
         let lidar = result.scenario.perception == Perception::Lidar;
         let mut obstacle_sets = Vec::new();
         if !lidar {
@@ -72,11 +166,13 @@ impl Recording {
             }
             let s = match result.samples.get(sample) {
                 Some(s) if s.time == c.time => s,
-                _ => bail!(
-                    "{label}: no plant sample at t = {} s for cycle {}",
-                    c.time,
-                    c.index
-                ),
+                _ => {
+                    return Err(ReplayError::NoSample {
+                        label: label.to_string(),
+                        time: c.time,
+                        cycle: c.index,
+                    });
+                }
             };
             while foot + 1 < result.footsteps.len() && result.footsteps[foot + 1].time <= c.time {
                 foot += 1;
@@ -84,7 +180,9 @@ impl Recording {
             let f = result
                 .footsteps
                 .get(foot)
-                .with_context(|| format!("{label}: no footsteps"))?;
+                .ok_or_else(|| ReplayError::NoFootsteps {
+                    label: label.to_string(),
+                })?;
             let mut speed_cap = ldcbf_controller::NO_SPEED_CAP;
             let obstacles = if lidar {
                 while scan < result.scans.len() && result.scans[scan].cycle < c.index {
@@ -96,22 +194,24 @@ impl Recording {
                         obstacle_sets.push(sc.obstacles.clone());
                         obstacle_sets.len() - 1
                     }
-                    _ => bail!(
-                        "{label}: no LiDAR scan for cycle {} (run with record_scans)",
-                        c.index
-                    ),
+                    _ => {
+                        return Err(ReplayError::NoScan {
+                            label: label.to_string(),
+                            cycle: c.index,
+                        });
+                    }
                 }
             } else {
                 0
             };
             if f.side != s.stance_side {
-                bail!(
-                    "{label}: cycle {}: stance foot {} is on the {:?} side, the plant's stance is {:?}",
-                    c.index,
-                    f.index,
-                    f.side,
-                    s.stance_side
-                );
+                return Err(ReplayError::StanceSide {
+                    label: label.to_string(),
+                    cycle: c.index,
+                    foot: f.index,
+                    side: f.side,
+                    stance: s.stance_side,
+                });
             }
             inputs.push(RecordedInput {
                 com_position: s.position,
@@ -153,43 +253,45 @@ impl Recording {
     }
 
     /// A fresh controller with the run's configuration (as the run started).
-    pub fn controller(&self) -> Result<RobotController> {
-        RobotController::new(self.config)
-            .map_err(|e| anyhow::anyhow!("{}: controller: {e}", self.label))
+    pub fn controller(&self) -> Result<RobotController, ReplayError> {
+        RobotController::new(self.config).map_err(|error| ReplayError::Controller {
+            label: self.label.clone(),
+            error,
+        })
     }
 
     /// Replays every input in order through a fresh controller (own solver,
     /// warm start carried as in the loop) and checks that each output is the
     /// logged one, bit for bit (compared through their `Debug` forms, so NaN
     /// fields compare equal). The first mismatch is the error.
-    pub fn verify(&self) -> Result<()> {
+    pub fn verify(&self) -> Result<(), ReplayError> {
+        let label = || self.label.clone();
         if !self.own_solver {
-            bail!(
-                "{}: the run used Clarabel; the replay uses the own solver",
-                self.label
-            );
+            return Err(ReplayError::Clarabel { label: label() });
         }
         let mut ctl = self.controller()?;
         for (i, logged) in self.outputs.iter().enumerate() {
-            let input = self
-                .input(i)
-                .with_context(|| format!("{}: cycle {i} has no input", self.label))?;
+            let input = self.input(i).ok_or_else(|| ReplayError::NoInput {
+                label: label(),
+                cycle: i,
+            })?;
             let out = ctl.step(&input, None);
             let (a, b) = (format!("{out:?}"), format!("{logged:?}"));
             if a != b {
-                bail!(
-                    "{}: cycle {i}: the replay returned\n  {a}\nthe run logged\n  {b}",
-                    self.label
-                );
+                return Err(ReplayError::Mismatch {
+                    label: label(),
+                    cycle: i,
+                    replay: a,
+                    logged: b,
+                });
             }
         }
         if self.inputs.len() != self.outputs.len() {
-            bail!(
-                "{}: {} inputs for {} outputs",
-                self.label,
-                self.inputs.len(),
-                self.outputs.len()
-            );
+            return Err(ReplayError::Count {
+                label: label(),
+                inputs: self.inputs.len(),
+                outputs: self.outputs.len(),
+            });
         }
         Ok(())
     }
@@ -198,13 +300,16 @@ impl Recording {
 /// Runs `case` to its end exactly as `ldcbf-sim deadline` does (own solver,
 /// 20 Hz, no clearances), keeping the LiDAR scans, and returns its recording.
 /// `sets` are `--set` overrides for the scenario.
-pub fn record_case(case: &Case, sets: &[(String, String)]) -> Result<Recording> {
+pub fn record_case(case: &Case, sets: &[(String, String)]) -> Result<Recording, ReplayError> {
     let sc = case.load(sets)?;
     let opts = SimOptions {
         record_scans: sc.perception == Perception::Lidar,
         record_clearance: false,
         ..SimOptions::default()
     };
-    let res = run(&sc, opts).with_context(|| format!("case {}", case.label()))?;
+    let res = run(&sc, opts).map_err(|source| DeadlineError::Run {
+        label: case.label(),
+        source,
+    })?;
     Recording::from_run(&case.label(), &res)
 }

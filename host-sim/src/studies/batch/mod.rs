@@ -32,23 +32,27 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-use anyhow::{Context, Result, anyhow, bail};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use crate::report::{OutputDir, Summary, summarize};
 mod aggregate;
+mod error;
 mod seeds;
 #[cfg(test)]
 mod tests;
 
 pub use aggregate::{Aggregate, aggregate, label, markdown_table};
+pub use error::BatchError;
 pub use seeds::{JOBS_PER_CORE, MAX_SEEDS, SeedRange, Shard, cap_jobs};
 
 use crate::plan::Planner;
 use crate::scenario::{LoadOptions, load};
 use crate::sense::Perception;
 use crate::sim::{MpcRate, SimOptions, Solver, run};
+
+/// `Result` of this module.
+type Result<T, E = BatchError> = core::result::Result<T, E>;
 
 /// What `ldcbf-sim batch` needs.
 #[derive(Clone, Debug)]
@@ -365,19 +369,26 @@ struct SummaryFile {
 }
 
 fn write_dir(out: &Path, meta: &BatchMeta, rows: &[RunRow], agg: &Aggregate) -> Result<PathBuf> {
-    let dir = OutputDir::create(out).with_context(|| format!("--out {}", out.display()))?;
+    let dir = OutputDir::create(out).map_err(|source| BatchError::Out {
+        path: out.to_path_buf(),
+        source,
+    })?;
+    let write = |name: &str, text: String| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).map_err(|error| BatchError::Write { path, error })
+    };
     let mut csv = String::from(CSV_HEADER);
     csv.push('\n');
     for r in rows {
         csv += &r.csv();
         csv.push('\n');
     }
-    std::fs::write(dir.path().join("runs.csv"), csv)?;
+    write("runs.csv", csv)?;
     let json = serde_json::to_string_pretty(&SummaryFile {
         meta: meta.clone(),
         aggregate: agg.clone(),
     })?;
-    std::fs::write(dir.path().join("summary.json"), json + "\n")?;
+    write("summary.json", json + "\n")?;
     let mut md = format!(
         "# {} seeds {} (shard {}), {} runs\n\nplanner {}, perception {}, overrides {:?}; wall time {:.1} s\n\n",
         meta.scenario,
@@ -390,19 +401,21 @@ fn write_dir(out: &Path, meta: &BatchMeta, rows: &[RunRow], agg: &Aggregate) -> 
         meta.wall_time_s
     );
     md += &markdown_table(&[(label(meta), agg.clone())]);
-    std::fs::write(dir.path().join("summary.md"), md)?;
-    dir.commit()
-        .with_context(|| format!("cannot move the results into {}", out.display()))
+    write("summary.md", md)?;
+    dir.commit().map_err(|source| BatchError::Commit {
+        path: out.to_path_buf(),
+        source,
+    })
 }
 
 /// Runs a batch (see the module docs). Nothing is written unless every run
 /// completed.
 pub fn run_batch(req: &BatchRequest) -> Result<BatchReport> {
     if req.jobs == 0 {
-        bail!("--jobs must be >= 1");
+        return Err(BatchError::NoJobs);
     }
     if req.seeds.len() > MAX_SEEDS {
-        bail!("seed range {} holds more than {MAX_SEEDS} seeds", req.seeds);
+        return Err(BatchError::TooManySeeds(req.seeds));
     }
     let jobs = cap_jobs(req.jobs).0;
     let sets = req.all_sets();
@@ -414,29 +427,30 @@ pub fn run_batch(req: &BatchRequest) -> Result<BatchReport> {
         },
     )?;
     if first.generator.is_none() {
-        bail!(
-            "scenario {} ({}) has no [generator]: a batch needs a seeded family (e.g. random)",
-            first.name,
-            first.source
-        );
+        return Err(BatchError::NoGenerator {
+            name: first.name.clone(),
+            file: first.source.clone(),
+        });
     }
     let seeds = req.shard.seeds(req.seeds);
     if seeds.is_empty() {
-        bail!(
-            "shard {} of seeds {} holds no seed (more shards than seeds)",
-            req.shard,
-            req.seeds
-        );
+        return Err(BatchError::EmptyShard {
+            shard: req.shard,
+            seeds: req.seeds,
+        });
     }
     let out = req
         .out
         .clone()
         .unwrap_or_else(|| req.default_out(&first.name, first.planner, first.perception));
-    OutputDir::preflight(&out).with_context(|| format!("--out {}", out.display()))?;
+    OutputDir::preflight(&out).map_err(|source| BatchError::Out {
+        path: out.clone(),
+        source,
+    })?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs)
         .build()
-        .context("cannot start the worker threads")?;
+        .map_err(BatchError::Threads)?;
     let bar = progress_bar(
         req.progress,
         seeds.len(),
@@ -464,8 +478,8 @@ pub fn run_batch(req: &BatchRequest) -> Result<BatchReport> {
                         sets: sets.clone(),
                     },
                 )
-                .with_context(|| format!("seed {seed}"))?;
-                let r = run(&sc, opts).with_context(|| format!("seed {seed}"))?;
+                .map_err(|source| BatchError::SeedScenario { seed, source })?;
+                let r = run(&sc, opts).map_err(|source| BatchError::SeedRun { seed, source })?;
                 let row = run_row(seed, &summarize(&r), t);
                 if !row.success {
                     let n = failures.fetch_add(1, Ordering::Relaxed) + 1;
@@ -570,70 +584,87 @@ fn progress_bar(show: bool, len: usize, prefix: &str) -> indicatif::ProgressBar 
 pub fn read_dir(dir: &Path) -> Result<(BatchMeta, Aggregate, Vec<RunRow>)> {
     match std::fs::metadata(dir) {
         Ok(m) if m.is_dir() => {}
-        Ok(_) => bail!(
-            "{}: is a file, not a batch directory (give the directory written by `batch` or `merge`)",
-            dir.display()
-        ),
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
-            bail!("{}: no such batch directory", dir.display())
+        Ok(_) => {
+            return Err(BatchError::NotADirectory {
+                dir: dir.to_path_buf(),
+            });
         }
-        Err(e) => bail!("{}: {e}", dir.display()),
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            return Err(BatchError::NoDirectory {
+                dir: dir.to_path_buf(),
+            });
+        }
+        Err(error) => {
+            return Err(BatchError::Metadata {
+                dir: dir.to_path_buf(),
+                error,
+            });
+        }
     }
     let read = |name: &str| -> Result<(PathBuf, String)> {
         let p = dir.join(name);
         if !p.exists() {
-            bail!(
-                "{}: not a batch directory (no {name}; give the directory written by `batch` or `merge`)",
-                dir.display()
-            );
+            return Err(BatchError::Missing {
+                dir: dir.to_path_buf(),
+                name: name.to_string(),
+            });
         }
-        let bytes = std::fs::read(&p).map_err(|e| anyhow!("{}: cannot read: {e}", p.display()))?;
-        let text = String::from_utf8(bytes)
-            .map_err(|_| anyhow!("{}: not a text file (invalid UTF-8)", p.display()))?;
+        let bytes = match std::fs::read(&p) {
+            Ok(b) => b,
+            Err(error) => return Err(BatchError::Read { path: p, error }),
+        };
+        let Ok(text) = String::from_utf8(bytes) else {
+            return Err(BatchError::NotText { path: p });
+        };
         if text.trim().is_empty() {
-            bail!("{}: empty file", p.display());
+            return Err(BatchError::Empty { path: p });
         }
         Ok((p, text))
     };
     let (sj, text) = read("summary.json")?;
-    let sf: SummaryFile = serde_json::from_str(&text)
-        .map_err(|e| anyhow!("{}: not a batch summary: {e}", sj.display()))?;
+    let sf: SummaryFile = match serde_json::from_str(&text) {
+        Ok(sf) => sf,
+        Err(error) => return Err(BatchError::Summary { path: sj, error }),
+    };
     if sf.meta.kind != "ldcbf-sim batch" {
-        bail!(
-            "{}: field `meta.kind` is {:?}, not \"ldcbf-sim batch\"",
-            sj.display(),
-            sf.meta.kind
-        );
+        return Err(BatchError::Kind {
+            path: sj,
+            kind: sf.meta.kind,
+        });
     }
     let (csv, text) = read("runs.csv")?;
     let mut lines = text.lines();
     if lines.next() != Some(CSV_HEADER) {
-        bail!(
-            "{}:1: unexpected header (not a runs.csv written by ldcbf-sim batch)",
-            csv.display()
-        );
+        return Err(BatchError::Header { path: csv });
     }
     if !text.ends_with('\n') {
-        bail!(
-            "{}:{}: the last line ends without a newline (truncated file?)",
-            csv.display(),
-            text.lines().count()
-        );
+        return Err(BatchError::Truncated {
+            path: csv,
+            line: text.lines().count(),
+        });
     }
     let mut rows = Vec::new();
     for (i, l) in lines.enumerate() {
         if l.trim().is_empty() {
             continue;
         }
-        rows.push(RunRow::parse(l).map_err(|e| anyhow!("{}:{}: {e}", csv.display(), i + 2))?);
+        match RunRow::parse(l) {
+            Ok(r) => rows.push(r),
+            Err(error) => {
+                return Err(BatchError::Row {
+                    path: csv,
+                    line: i + 2,
+                    error,
+                });
+            }
+        }
     }
     if rows.len() != sf.meta.runs {
-        bail!(
-            "{}: {} rows but summary.json says {} runs (truncated file?)",
-            csv.display(),
-            rows.len(),
-            sf.meta.runs
-        );
+        return Err(BatchError::RowCount {
+            path: csv,
+            rows: rows.len(),
+            runs: sf.meta.runs,
+        });
     }
     Ok((sf.meta, sf.aggregate, rows))
 }
@@ -643,7 +674,7 @@ pub fn read_dir(dir: &Path) -> Result<(BatchMeta, Aggregate, Vec<RunRow>)> {
 /// runs it holds).
 pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<BatchReport> {
     if inputs.is_empty() {
-        bail!("merge needs at least one batch directory");
+        return Err(BatchError::NoInputs);
     }
     let mut parts = Vec::new();
     for d in inputs {
@@ -655,11 +686,10 @@ pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Batc
     let mut wall = 0.0;
     for ((meta, _, r), dir) in parts.iter().zip(inputs) {
         if meta.study_key() != key {
-            bail!(
-                "{}: not the same study as {} (family, seeds, planner, perception, overrides, solver, rate and shard count must agree)",
-                dir.display(),
-                inputs[0].display()
-            );
+            return Err(BatchError::OtherStudy {
+                dir: dir.clone(),
+                first: inputs[0].clone(),
+            });
         }
         let mine: Vec<u32> = if meta.merged_shards.is_empty() {
             vec![meta.shard.index]
@@ -668,11 +698,11 @@ pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Batc
         };
         for s in mine {
             if shards.contains(&s) {
-                bail!(
-                    "{}: shard {s}/{} given twice",
-                    dir.display(),
-                    meta.shard.count
-                );
+                return Err(BatchError::ShardTwice {
+                    dir: dir.clone(),
+                    shard: s,
+                    count: meta.shard.count,
+                });
             }
             shards.push(s);
         }
@@ -681,7 +711,7 @@ pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Batc
     }
     rows.sort_by_key(|r| r.seed);
     if let Some(w) = rows.windows(2).find(|w| w[0].seed == w[1].seed) {
-        bail!("seed {} appears twice", w[0].seed);
+        return Err(BatchError::SeedTwice(w[0].seed));
     }
     let m0 = &parts[0].0;
     let expected = m0.seeds.len();
@@ -691,16 +721,15 @@ pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Batc
             .filter(|s| !shards.contains(s))
             .map(|s| format!("{s}/{}", m0.shard.count))
             .collect();
-        bail!(
-            "incomplete study: {} of {} seeds (missing shards: {}); pass --allow-partial to merge anyway",
-            rows.len(),
+        return Err(BatchError::Incomplete {
+            runs: rows.len(),
             expected,
-            if missing.is_empty() {
+            missing: if missing.is_empty() {
                 "none, but seeds are missing".into()
             } else {
                 missing.join(", ")
-            }
-        );
+            },
+        });
     }
     shards.sort_unstable();
     let meta = BatchMeta {

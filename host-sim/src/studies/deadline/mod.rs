@@ -39,7 +39,6 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, Result, bail};
 use ldcbf_controller::{CommandSource, CycleStatus};
 use rayon::prelude::*;
 
@@ -56,12 +55,56 @@ pub use stats::{
 
 use crate::plan::Planner;
 use crate::report::{ComputeStats, compute_stats};
-use crate::scenario::{LoadOptions, Scenario, load};
-use crate::sim::{Outcome, SimOptions, run};
+use crate::scenario::{LoadOptions, Scenario, ScenarioError, load};
+use crate::sim::{Outcome, SimError, SimOptions, run};
 
 /// Default deadline per control cycle, µs: the 100,000 instructions at
 /// 400 MHz.
 pub const DEFAULT_DEADLINE_US: f64 = 250.0;
+
+/// Why a deadline study (or one of its cases) could not run: a bad argument,
+/// a case whose scenario does not load or whose run fails (naming the case), or
+/// an unreadable instruction file.
+#[derive(Debug, thiserror::Error)]
+pub enum DeadlineError {
+    /// `--jobs 0`.
+    #[error("--jobs must be >= 1")]
+    NoJobs,
+    /// `--repeat 0`.
+    #[error("--repeat must be >= 1 (timings of each control cycle), got 0")]
+    NoRepeat,
+    /// `--deadline-us` is not a positive number (µs).
+    #[error("--deadline-us must be a positive number of microseconds, got {0}")]
+    Deadline(f64),
+    /// `--clock-mhz` is not a positive number (MHz).
+    #[error("--clock-mhz must be a positive number, got {0}")]
+    Clock(f64),
+    /// Neither scenarios nor `--random N` were given.
+    #[error("nothing to run: give scenarios or --random N")]
+    NothingToRun,
+    /// The case's scenario could not be loaded or validated.
+    #[error("case {label}")]
+    Load {
+        /// The case ([`Case::label`]).
+        label: String,
+        /// Why.
+        source: ScenarioError,
+    },
+    /// The case's simulation could not start or was cancelled.
+    #[error("case {label}")]
+    Run {
+        /// The case ([`Case::label`]).
+        label: String,
+        /// Why.
+        source: SimError,
+    },
+    /// The worker thread pool could not be built.
+    #[error("cannot start the worker threads")]
+    Threads(#[source] rayon::ThreadPoolBuildError),
+    /// The per-cycle instruction CSV could not be read.
+    #[error(transparent)]
+    Instructions(#[from] InstructionsError),
+}
 
 /// Default clock of the target processor, MHz, used to turn instruction counts
 /// into time (one instruction per clock).
@@ -146,7 +189,7 @@ impl Case {
 
     /// Loads and validates the scenario: `sets` first, then this case's planner
     /// (so `maze+rrt_star` wins over a global `--set planner=none`).
-    pub fn load(&self, sets: &[(String, String)]) -> Result<Scenario> {
+    pub fn load(&self, sets: &[(String, String)]) -> Result<Scenario, DeadlineError> {
         let mut all = sets.to_vec();
         if let Some(p) = self.planner {
             all.push(("planner".into(), format!("\"{}\"", p.name())));
@@ -158,7 +201,10 @@ impl Case {
                 sets: all,
             },
         )
-        .with_context(|| format!("case {}", self.label()))
+        .map_err(|source| DeadlineError::Load {
+            label: self.label(),
+            source,
+        })
     }
 }
 
@@ -286,7 +332,11 @@ pub struct CaseRun {
 /// with `jobs` worker threads, one timing per controller call. The results are
 /// in the order of `cases` and do not depend on `jobs` (except the wall-clock
 /// times).
-pub fn run_cases(cases: &[Case], sets: &[(String, String)], jobs: usize) -> Result<Vec<CaseRun>> {
+pub fn run_cases(
+    cases: &[Case],
+    sets: &[(String, String)],
+    jobs: usize,
+) -> Result<Vec<CaseRun>, DeadlineError> {
     run_cases_timed(cases, sets, jobs, 1)
 }
 
@@ -298,18 +348,21 @@ pub fn run_cases_timed(
     sets: &[(String, String)],
     jobs: usize,
     repeat: u32,
-) -> Result<Vec<CaseRun>> {
+) -> Result<Vec<CaseRun>, DeadlineError> {
     if jobs == 0 {
-        bail!("--jobs must be >= 1");
+        return Err(DeadlineError::NoJobs);
     }
     if repeat == 0 {
-        bail!("--repeat must be >= 1 (timings of each control cycle), got 0");
+        return Err(DeadlineError::NoRepeat);
     }
-    let scenarios: Vec<Scenario> = cases.iter().map(|c| c.load(sets)).collect::<Result<_>>()?;
+    let scenarios: Vec<Scenario> = cases
+        .iter()
+        .map(|c| c.load(sets))
+        .collect::<Result<_, _>>()?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(jobs)
         .build()
-        .context("cannot start the worker threads")?;
+        .map_err(DeadlineError::Threads)?;
     // No clearances: the study does not report them, and the walk is the same.
     let opts = SimOptions {
         record_scans: false,
@@ -317,12 +370,15 @@ pub fn run_cases_timed(
         timing_repeats: repeat,
         ..SimOptions::default()
     };
-    let runs: Vec<Result<CaseRun>> = pool.install(|| {
+    let runs: Vec<Result<CaseRun, DeadlineError>> = pool.install(|| {
         cases
             .par_iter()
             .zip(scenarios.par_iter())
             .map(|(case, sc)| {
-                let r = run(sc, opts).with_context(|| format!("case {}", case.label()))?;
+                let r = run(sc, opts).map_err(|source| DeadlineError::Run {
+                    label: case.label(),
+                    source,
+                })?;
                 Ok(CaseRun {
                     case: case.clone(),
                     label: case.label(),
@@ -440,24 +496,18 @@ impl DeadlineReport {
 
 /// Runs a deadline study (see the module docs). Bad arguments, an unknown
 /// scenario or an unreadable instruction file fail before any simulation.
-pub fn run_deadline(req: &DeadlineRequest) -> Result<DeadlineReport> {
+pub fn run_deadline(req: &DeadlineRequest) -> Result<DeadlineReport, DeadlineError> {
     if !(req.deadline_us.is_finite() && req.deadline_us > 0.0) {
-        bail!(
-            "--deadline-us must be a positive number of microseconds, got {}",
-            req.deadline_us
-        );
+        return Err(DeadlineError::Deadline(req.deadline_us));
     }
     if !(req.clock_mhz.is_finite() && req.clock_mhz > 0.0) {
-        bail!(
-            "--clock-mhz must be a positive number, got {}",
-            req.clock_mhz
-        );
+        return Err(DeadlineError::Clock(req.clock_mhz));
     }
     if req.repeat == 0 {
-        bail!("--repeat must be >= 1 (timings of each control cycle), got 0");
+        return Err(DeadlineError::NoRepeat);
     }
     if req.cases.is_empty() && req.random == 0 {
-        bail!("nothing to run: give scenarios or --random N");
+        return Err(DeadlineError::NothingToRun);
     }
     let instructions = req
         .instructions

@@ -5,14 +5,22 @@ use super::*;
 
 /// Writes `runs.csv`, `table.md` and `summary.json` into `out` (atomically).
 pub(super) fn write_dir(out: &Path, rep: &RobustnessReport) -> Result<PathBuf> {
-    let dir = OutputDir::create(out)
-        .with_context(|| format!("cannot create output directory {}", out.display()))?;
-    std::fs::write(dir.path().join("runs.csv"), runs_csv(rep))?;
-    std::fs::write(dir.path().join("table.md"), markdown(rep))?;
+    let dir = OutputDir::create(out).map_err(|source| RobustnessError::Create {
+        path: out.to_path_buf(),
+        source,
+    })?;
+    let write = |name: &str, text: String| {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).map_err(|error| RobustnessError::File { path, error })
+    };
+    write("runs.csv", runs_csv(rep))?;
+    write("table.md", markdown(rep))?;
     let json = serde_json::to_string_pretty(&RobustnessMeta::of(rep))?;
-    std::fs::write(dir.path().join("summary.json"), json + "\n")?;
-    dir.commit()
-        .with_context(|| format!("cannot move the results into {}", out.display()))
+    write("summary.json", json + "\n")?;
+    dir.commit().map_err(|source| RobustnessError::Commit {
+        path: out.to_path_buf(),
+        source,
+    })
 }
 
 /// Whether `dir` holds a `summary.json` written by `robustness --out` (so
@@ -33,21 +41,21 @@ pub fn is_robustness_dir(dir: &Path) -> bool {
 /// place), with their 0-based indices in the whole study.
 pub fn read_dir(dir: &Path) -> Result<(RobustnessMeta, Vec<(usize, RobustRun)>)> {
     if !dir.is_dir() {
-        bail!(
-            "{}: no such robustness directory (give the directory written by `robustness --out` or `merge`)",
-            dir.display()
-        );
+        return Err(RobustnessError::NoDirectory {
+            dir: dir.to_path_buf(),
+        });
     }
     let sj = dir.join("summary.json");
-    let text = std::fs::read_to_string(&sj).map_err(|e| anyhow!("{}: {e}", sj.display()))?;
-    let meta: RobustnessMeta = serde_json::from_str(&text)
-        .map_err(|e| anyhow!("{}: not a robustness summary: {e}", sj.display()))?;
+    let text = read(&sj)?;
+    let meta: RobustnessMeta = match serde_json::from_str(&text) {
+        Ok(m) => m,
+        Err(error) => return Err(RobustnessError::Summary { path: sj, error }),
+    };
     if meta.kind != KIND {
-        bail!(
-            "{}: field `meta.kind` is {:?}, not {KIND:?}",
-            sj.display(),
-            meta.kind
-        );
+        return Err(RobustnessError::Kind {
+            path: sj,
+            kind: meta.kind,
+        });
     }
     if meta.shard_count == 0
         || meta.shard.count
@@ -61,22 +69,20 @@ pub fn read_dir(dir: &Path) -> Result<(RobustnessMeta, Vec<(usize, RobustRun)>)>
             .iter()
             .any(|&i| i == 0 || i > meta.shard_count)
     {
-        bail!(
-            "{}: inconsistent shard fields (shard {}, shard_count {}, merged_shards {:?})",
-            sj.display(),
-            meta.shard,
-            meta.shard_count,
-            meta.merged_shards
-        );
+        return Err(RobustnessError::ShardFields {
+            path: sj,
+            shard: meta.shard,
+            shard_count: meta.shard_count,
+            merged_shards: meta.merged_shards,
+        });
     }
     let cases = meta.all_cases();
     let per_cell = cases.len();
     if meta.study_runs != meta.conditions.len() * meta.deltas.len() * per_cell {
-        bail!(
-            "{}: study_runs {} does not match the study it describes",
-            sj.display(),
-            meta.study_runs
-        );
+        return Err(RobustnessError::StudyRuns {
+            path: sj,
+            study_runs: meta.study_runs,
+        });
     }
     // Indices in the study of this directory's runs, in order.
     let indices: Vec<usize> = if meta.merged_shards.is_empty() {
@@ -97,45 +103,56 @@ pub fn read_dir(dir: &Path) -> Result<(RobustnessMeta, Vec<(usize, RobustRun)>)>
             .collect()
     };
     let csv = dir.join("runs.csv");
-    let text = std::fs::read_to_string(&csv).map_err(|e| anyhow!("{}: {e}", csv.display()))?;
+    let text = read(&csv)?;
     let mut lines = text.lines();
     if lines.next() != Some(RUNS_HEADER) {
-        bail!(
-            "{}:1: unexpected header (not a runs.csv written by ldcbf-sim robustness)",
-            csv.display()
-        );
+        return Err(RobustnessError::Header { path: csv });
     }
     let rows: Vec<&str> = lines.filter(|l| !l.trim().is_empty()).collect();
     if rows.len() != meta.runs || rows.len() != indices.len() {
-        bail!(
-            "{}: {} rows but summary.json says {} runs of shard {} (truncated file?)",
-            csv.display(),
-            rows.len(),
-            meta.runs,
-            meta.shard
-        );
+        return Err(RobustnessError::RowCount {
+            path: csv,
+            rows: rows.len(),
+            runs: meta.runs,
+            shard: meta.shard,
+        });
     }
     let mut out = Vec::with_capacity(rows.len());
     for (i, (line, &k)) in rows.iter().zip(&indices).enumerate() {
         let ci = k / (meta.deltas.len() * per_cell);
         let di = (k / per_cell) % meta.deltas.len();
         let (group, label) = &cases[k % per_cell];
-        let run = parse_run(
+        match parse_run(
             line,
             &meta.conditions[ci],
             ci,
             meta.deltas[di],
             group,
             label,
-        )
-        .map_err(|e| anyhow!("{}:{}: {e}", csv.display(), i + 2))?;
-        out.push((k, run));
+        ) {
+            Ok(run) => out.push((k, run)),
+            Err(error) => {
+                return Err(RobustnessError::Row {
+                    path: csv,
+                    line: i + 2,
+                    error,
+                });
+            }
+        }
     }
     Ok((meta, out))
 }
 
+/// Reads a file of a study directory as text.
+fn read(path: &Path) -> Result<String> {
+    std::fs::read_to_string(path).map_err(|error| RobustnessError::File {
+        path: path.to_path_buf(),
+        error,
+    })
+}
+
 /// Parses a line of `runs.csv`, which must be the run of `condition`, `delta`
-/// and case `label`.
+/// and case `label`; the error names the field.
 fn parse_run(
     line: &str,
     cond: &Condition,
@@ -143,10 +160,10 @@ fn parse_run(
     delta: f64,
     group: &'static str,
     label: &str,
-) -> Result<RobustRun> {
+) -> Result<RobustRun, String> {
     let f: Vec<&str> = line.split(',').collect();
     if f.len() != 13 {
-        bail!("{} fields, expected 13", f.len());
+        return Err(format!("{} fields, expected 13", f.len()));
     }
     let expect = [
         cond.disturbance.clone(),
@@ -156,11 +173,11 @@ fn parse_run(
         label.to_string(),
     ];
     if f[..5] != expect {
-        bail!(
+        return Err(format!(
             "run {:?} where the study has {:?} (not the same study, or rows out of order)",
             f[..5].join(","),
             expect.join(",")
-        );
+        ));
     }
     let outcome = [
         Outcome::GoalReached,
@@ -170,19 +187,19 @@ fn parse_run(
     ]
     .into_iter()
     .find(|o| o.name() == f[5])
-    .ok_or_else(|| anyhow!("unknown outcome {:?}", f[5]))?;
+    .ok_or_else(|| format!("unknown outcome {:?}", f[5]))?;
     let flag = |s: &str, name: &str| match s {
         "0" => Ok(false),
         "1" => Ok(true),
-        _ => Err(anyhow!("{name}: expected 0 or 1, got {s:?}")),
+        _ => Err(format!("{name}: expected 0 or 1, got {s:?}")),
     };
     let num = |s: &str, name: &str| {
         s.parse::<f64>()
-            .map_err(|_| anyhow!("{name}: not a number: {s:?}"))
+            .map_err(|_| format!("{name}: not a number: {s:?}"))
     };
     let count = |s: &str, name: &str| {
         s.parse::<usize>()
-            .map_err(|_| anyhow!("{name}: not a count: {s:?}"))
+            .map_err(|_| format!("{name}: not a count: {s:?}"))
     };
     let fell = flag(f[6], "fell")?;
     let fall_time = if f[7].is_empty() {
@@ -191,7 +208,7 @@ fn parse_run(
         Some(num(f[7], "fall_time")?)
     };
     if fell != fall_time.is_some() {
-        bail!("fell and fall_time disagree");
+        return Err("fell and fall_time disagree".into());
     }
     Ok(RobustRun {
         condition,
@@ -215,7 +232,7 @@ fn parse_run(
 /// whole study (nothing on error).
 pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<RobustnessReport> {
     if inputs.is_empty() {
-        bail!("merge needs at least one robustness directory");
+        return Err(RobustnessError::NoInputs);
     }
     let mut parts = Vec::new();
     for d in inputs {
@@ -228,11 +245,10 @@ pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Robu
     let mut wall = 0.0;
     for ((meta, r), dir) in parts.into_iter().zip(inputs) {
         if meta.study_key() != key {
-            bail!(
-                "{}: not the same study as {} (cases, random seeds, conditions, deltas, overrides and shard count must agree)",
-                dir.display(),
-                inputs[0].display()
-            );
+            return Err(RobustnessError::OtherStudy {
+                dir: dir.clone(),
+                first: inputs[0].clone(),
+            });
         }
         let mine = if meta.merged_shards.is_empty() {
             vec![meta.shard.index]
@@ -241,11 +257,11 @@ pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Robu
         };
         for s in mine {
             if shards.contains(&s) {
-                bail!(
-                    "{}: shard {s}/{} given twice",
-                    dir.display(),
-                    meta.shard_count
-                );
+                return Err(RobustnessError::ShardTwice {
+                    dir: dir.clone(),
+                    shard: s,
+                    count: meta.shard_count,
+                });
             }
             shards.push(s);
         }
@@ -259,12 +275,11 @@ pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Robu
             .filter(|s| !shards.contains(s))
             .map(|s| format!("{s}/{}", m0.shard_count))
             .collect();
-        bail!(
-            "incomplete study: {} of {} runs (missing shards: {}); pass --allow-partial to merge anyway",
-            runs.len(),
-            m0.study_runs,
-            missing.join(", ")
-        );
+        return Err(RobustnessError::Incomplete {
+            runs: runs.len(),
+            expected: m0.study_runs,
+            missing: missing.join(", "),
+        });
     }
     let rep = RobustnessReport {
         cases: m0.cases,

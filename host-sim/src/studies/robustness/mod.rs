@@ -40,14 +40,15 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
-use anyhow::{Context, Result, anyhow, bail};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
+mod error;
 mod files;
 #[cfg(test)]
 mod tests;
 
+pub use error::RobustnessError;
 use files::write_dir;
 pub use files::{RUNS_HEADER, is_robustness_dir, merge, read_dir, runs_csv};
 
@@ -56,6 +57,9 @@ use crate::scenario::Scenario;
 use crate::sim::{Outcome, SimOptions, SimResult, run};
 use crate::studies::batch::Shard;
 use crate::studies::deadline::{Case, random_cases, shipped_cases};
+
+/// `Result` of this module.
+type Result<T, E = RobustnessError> = core::result::Result<T, E>;
 
 /// Fall threshold: horizontal CoM offset from the stance foot over the plant's
 /// CoM height (0.5: 27 degrees of lean; the undisturbed walks of the shipped
@@ -249,7 +253,10 @@ fn one_run(
         record_scans: false,
         ..SimOptions::default()
     };
-    let r = run(sc, opts).with_context(|| label.clone())?;
+    let r = run(sc, opts).map_err(|source| RobustnessError::Run {
+        label: label.clone(),
+        source,
+    })?;
     let (fall_time, min_com) = fall_and_clearance(&r, r.disturbance.plant_com_height);
     let min_clearance = sc.robot.body_clearance(min_com);
     let collision =
@@ -450,20 +457,20 @@ impl RobustnessMeta {
 /// any simulation).
 pub fn run_robustness(req: &RobustnessRequest) -> Result<RobustnessReport> {
     if req.jobs == 0 {
-        bail!("--jobs must be >= 1");
+        return Err(RobustnessError::NoJobs);
     }
     if req.deltas.iter().any(|d| !(d.is_finite() && *d >= 0.0)) {
-        bail!("every delta must be finite and >= 0");
+        return Err(RobustnessError::Delta);
     }
     if req.shard != Shard::ALL && req.out.is_none() {
-        bail!(
-            "--shard {} needs --out (merge reads the shard directories)",
-            req.shard
-        );
+        return Err(RobustnessError::ShardNeedsOut(req.shard));
     }
     if let Some(out) = &req.out {
         // Before the study, not after it: a bad --out fails at once.
-        OutputDir::preflight(out).with_context(|| format!("--out {}", out.display()))?;
+        OutputDir::preflight(out).map_err(|source| RobustnessError::Out {
+            path: out.clone(),
+            source,
+        })?;
     }
     let mut cases: Vec<(&'static str, Case)> =
         req.cases.iter().map(|c| ("shipped", c.clone())).collect();
@@ -481,26 +488,26 @@ pub fn run_robustness(req: &RobustnessRequest) -> Result<RobustnessReport> {
                 if !req.shard.holds(k - 1) {
                     continue;
                 }
-                let sc = case.load(&sets).with_context(|| {
-                    format!(
-                        "condition {} {}, delta {delta}",
-                        cond.disturbance, cond.magnitude
-                    )
+                let sc = case.load(&sets).map_err(|source| RobustnessError::Case {
+                    disturbance: cond.disturbance.clone(),
+                    magnitude: cond.magnitude.clone(),
+                    delta,
+                    source: Box::new(source),
                 })?;
                 jobs.push((ci, delta, *group, case.label(), sc));
             }
         }
     }
     if jobs.is_empty() && req.shard != Shard::ALL {
-        bail!(
-            "shard {} of a study of {study_runs} runs holds no run (more shards than runs)",
-            req.shard
-        );
+        return Err(RobustnessError::EmptyShard {
+            shard: req.shard,
+            runs: study_runs,
+        });
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(req.jobs)
         .build()
-        .context("cannot start the worker threads")?;
+        .map_err(RobustnessError::Threads)?;
     let bar = if req.progress {
         let b = indicatif::ProgressBar::new(jobs.len() as u64);
         b.set_style(
