@@ -332,6 +332,29 @@ impl OccupancyMap {
         }
     }
 
+    /// The column range `(i0, i1)` and row range `(j0, j1)` (inclusive) of
+    /// the cells that overlap the box from `lo` to `hi` (world frame, m),
+    /// clamped to the map.
+    pub fn cell_range(
+        &self,
+        lo: Vector2<f64>,
+        hi: Vector2<f64>,
+    ) -> ((usize, usize), (usize, usize)) {
+        let r = self.resolution;
+        let idx =
+            |x: f64, o: f64, n: usize| (((x - o) / r).floor().clamp(0.0, n as f64 - 1.0)) as usize;
+        (
+            (
+                idx(lo.x, self.origin.x, self.width),
+                idx(hi.x, self.origin.x, self.width),
+            ),
+            (
+                idx(lo.y, self.origin.y, self.height),
+                idx(hi.y, self.origin.y, self.height),
+            ),
+        )
+    }
+
     /// Clears the occupied cells whose centre is within `margin` (m) of
     /// `poly` (world frame): their log-odds become one miss's (free, not
     /// sure). For the cells of something that moves and was mapped before it
@@ -340,22 +363,12 @@ impl OccupancyMap {
     pub fn clear_polygon(&mut self, poly: &Polygon, margin: f64) {
         let (lo, hi) = crate::world::obstacle_index::bounding_box(poly);
         let (lo, hi) = (Vector2::from(lo), Vector2::from(hi));
-        let r = self.resolution;
-        let idx =
-            |x: f64, o: f64, n: usize| (((x - o) / r).floor().clamp(0.0, n as f64 - 1.0)) as usize;
         let m = Vector2::repeat(margin);
         let (lo, hi) = (lo - m, hi + m);
         if hi.x < self.origin.x || hi.y < self.origin.y {
             return;
         }
-        let (i0, i1) = (
-            idx(lo.x, self.origin.x, self.width),
-            idx(hi.x, self.origin.x, self.width),
-        );
-        let (j0, j1) = (
-            idx(lo.y, self.origin.y, self.height),
-            idx(hi.y, self.origin.y, self.height),
-        );
+        let ((i0, i1), (j0, j1)) = self.cell_range(lo, hi);
         for j in j0..=j1 {
             for i in i0..=i1 {
                 let k = j * self.width + i;

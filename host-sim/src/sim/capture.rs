@@ -154,21 +154,11 @@ fn first_contact(
     len: f64,
     radius: f64,
 ) -> Option<f64> {
-    let res = map.resolution;
     let rr = radius;
     let to = from + dir * len;
     let lo = from.inf(&to) - Vector2::repeat(rr);
     let hi = from.sup(&to) + Vector2::repeat(rr);
-    let cell =
-        |x: f64, o: f64, n: usize| ((x - o) / res).floor().clamp(0.0, n as f64 - 1.0) as usize;
-    let (i0, i1) = (
-        cell(lo.x, map.origin.x, map.width),
-        cell(hi.x, map.origin.x, map.width),
-    );
-    let (j0, j1) = (
-        cell(lo.y, map.origin.y, map.height),
-        cell(hi.y, map.origin.y, map.height),
-    );
+    let ((i0, i1), (j0, j1)) = map.cell_range(lo, hi);
     let normal = Vector2::new(-dir.y, dir.x);
     let mut best: Option<f64> = None;
     // Beyond the map's box every cell is unknown.
