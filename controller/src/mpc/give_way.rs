@@ -140,7 +140,7 @@ mod tests {
 
     use crate::constraints::{RowId, RowKind};
     use crate::geometry::ConvexPolygon;
-    use crate::mpc::{Assembly, Config, CycleInput, PaperController, Side};
+    use crate::mpc::{Assembly, Config, PaperController, RecordedInput};
 
     const NC: usize = 48;
 
@@ -153,19 +153,11 @@ mod tests {
         ];
         let velocities = [velocity];
         let cfg = Config::default();
-        let input = CycleInput {
-            com_position: Vector2::zeros(),
-            com_velocity: Vector2::zeros(),
-            heading: 0.0,
-            turning_rate: 0.0,
-            stance_foot: Vector2::zeros(),
-            stance_side: Side::Left,
+        let input = RecordedInput {
             time_in_step: cfg.step_duration,
-            goal: Vector2::new(5.0, 0.0),
-            obstacles: &person,
-            obstacle_velocities: &velocities,
-            speed_cap: crate::NO_SPEED_CAP,
-        };
+            ..RecordedInput::at_rest(Vector2::new(5.0, 0.0))
+        }
+        .input_moving(&person, &velocities);
         let ctl = PaperController::new(cfg).unwrap();
         let mut asm = Assembly::EMPTY;
         ctl.assemble(&input, None, &mut asm).unwrap();
