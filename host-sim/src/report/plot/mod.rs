@@ -299,6 +299,22 @@ struct Moment<'a> {
 /// A map chart in metres ([`map_chart`]).
 type MapChart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
+/// The legend of a map chart: its series' labels in the upper left, on a
+/// white box, in the layout's font.
+fn map_legend<'a, DB: DrawingBackend + 'a>(
+    chart: &mut MapChart<'a, DB>,
+    layout: &MapLayout,
+) -> Result<()> {
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperLeft)
+        .label_font((FONT, layout.font))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(e)
+}
+
 /// A map chart in metres (x right, y up) on `chart_area`, with `title`
 /// (text, size relative to the layout's font) centred in `title_area`: the
 /// axes, the labels and the grid of `layout` (`bold`: the major grid colour).

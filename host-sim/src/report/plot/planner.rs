@@ -45,14 +45,7 @@ pub fn planner_png(r: &SimResult, path: &Path) -> Result<()> {
     draw_true_obstacles(&mut chart, sc)?;
     draw_tree(&mut chart, &plan.tree)?;
     draw_route(&mut chart, plan, sc, 0.025 * (x1 - x0))?;
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .label_font((FONT, layout.font))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
-        .map_err(e)?;
+    map_legend(&mut chart, &layout)?;
     root.present().map_err(e)?;
     Ok(())
 }

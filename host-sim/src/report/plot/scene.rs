@@ -48,14 +48,7 @@ pub(super) fn draw_scene<DB: DrawingBackend>(
         draw_robot(&mut chart, scene, until)?;
     }
     if legend {
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperLeft)
-            .label_font((FONT, layout.font))
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .draw()
-            .map_err(e)?;
+        map_legend(&mut chart, &layout)?;
     }
     Ok(())
 }
