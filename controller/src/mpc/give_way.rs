@@ -66,14 +66,10 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         if !near {
             return out;
         }
-        // With t = tanh(beta T / 2) = beta / |kappa| (`Condensed::kappa`,
-        // |kappa| = beta coth(beta T / 2)): tanh(beta T) = 2 t / (1 + t^2),
-        // cosh(beta T) = (1 + t^2) / (1 - t^2), sinh(beta T) = 2 t / (1 - t^2).
-        let beta = self.lip.beta;
-        let t = beta / self.model.kappa.abs();
-        let stop = beta * (2.0 * t / (1.0 + t * t)) * cfg.l_max;
-        let cosh = (1.0 + t * t) / (1.0 - t * t);
-        let brake = beta * (2.0 * t / (1.0 - t * t)) * cfg.l_max;
+        let lip = &self.lip;
+        let stop = lip.beta * (lip.sinh_bt / lip.cosh_bt) * cfg.l_max;
+        let cosh = lip.cosh_bt;
+        let brake = lip.beta * lip.sinh_bt * cfg.l_max;
         let turn = cfg.alpha / core::f64::consts::PI * omega_bar.abs();
         let mut s = crate::linalg::sqrt(v0.norm_squared());
         for b in &mut out {
