@@ -44,46 +44,48 @@ use crate::sense::{CellState, OccupancyMap};
 /// Most steps a stop may take before the state counts as not capturable.
 const MAX_STOP_STEPS: usize = 20;
 
-/// The distance (m) the CoM travels to rest from a step end where it moves
-/// at `speed` (m/s, `>= 0`) along a line, stepping at most `l_max` (m) ahead
-/// of the CoM every `step_duration` (s), pendulum constant `beta` (1/s)
-/// (module docs). `f64::INFINITY` when it does not stop within
-/// `MAX_STOP_STEPS` steps.
-pub fn stop_distance(beta: f64, step_duration: f64, l_max: f64, speed: f64) -> f64 {
-    let lip = ((beta * step_duration).cosh(), (beta * step_duration).sinh());
+/// The distance (m) the CoM of the pendulum `lip` travels to rest from a
+/// step end where it moves at `speed` (m/s, `>= 0`) along a line, stepping
+/// at most `l_max` (m) ahead of the CoM every step (module docs).
+/// `f64::INFINITY` when it does not stop within `MAX_STOP_STEPS` steps.
+pub fn stop_distance(lip: &Lip, l_max: f64, speed: f64) -> f64 {
     let (mut x, mut v) = (0.0, speed.max(0.0));
     for _ in 0..MAX_STOP_STEPS {
-        let xi = x + v / beta;
+        let xi = x + v / lip.beta;
         if xi - x <= l_max {
             return xi;
         }
-        let f = x + l_max;
-        let (c, s) = lip;
-        (x, v) = (
-            c * x + s / beta * v + (1.0 - c) * f,
-            beta * s * x + c * v - beta * s * f,
-        );
+        (x, v) = lip.propagate_axis(x, v, x + l_max, lip.step_duration);
     }
     f64::INFINITY
 }
 
+/// `k` (s): the distance the first planned step adds per m/s of the speeds
+/// at its two ends, `tanh(beta T / 2) / beta` (module docs).
+fn step_travel(lip: &Lip) -> f64 {
+    (0.5 * lip.beta * lip.step_duration).tanh() / lip.beta
+}
+
+/// The controller's pendulum for `config` (the one [`end_of_step`],
+/// [`capture_cap`] and [`march_length`] take).
+pub fn pendulum(config: &Config) -> Lip {
+    Lip::new(config.gravity, config.com_height, config.step_duration)
+}
+
 /// The speed cap (m/s) for a cycle whose current step ends at `p0` with
 /// velocity `v0` (m/s, world frame) while the CoM is at `position`, with the
-/// free distance `free` (m) along the way, for the controller `config`
-/// (module docs). In `[0, config.vx_max]`.
+/// free distance `free` (m) along the way, for the controller `config` and
+/// its pendulum `lip` ([`pendulum`]; module docs). In `[0, config.vx_max]`.
 pub fn capture_cap(
     config: &Config,
+    lip: &Lip,
     position: Vector2<f64>,
-    p0: Vector2<f64>,
-    v0: Vector2<f64>,
+    (p0, v0): (Vector2<f64>, Vector2<f64>),
     free: f64,
 ) -> f64 {
-    let beta = (config.gravity / config.com_height).sqrt();
-    let t = config.step_duration;
-    let k = (0.5 * beta * t).tanh() / beta;
-    let need = |c: f64| {
-        (p0 - position).norm() + k * (v0.norm() + c) + stop_distance(beta, t, config.l_max, c)
-    };
+    let k = step_travel(lip);
+    let need =
+        |c: f64| (p0 - position).norm() + k * (v0.norm() + c) + stop_distance(lip, config.l_max, c);
     if need(config.vx_max) <= free {
         return config.vx_max;
     }
@@ -198,31 +200,23 @@ pub fn travel_path(position: Vector2<f64>, subgoals: &[Vector2<f64>]) -> Vec<Vec
 
 /// `(p_0, v_0)`: the CoM at the end of the current step (m, m/s, world
 /// frame) from the CoM `position`, `velocity`, the `stance` foot and the
-/// time left in the step `tau` (s), by the controller's LIP.
+/// time left in the step `tau` (s), by the controller's pendulum `lip`.
 pub fn end_of_step(
-    config: &Config,
+    lip: &Lip,
     position: Vector2<f64>,
     velocity: Vector2<f64>,
     stance: Vector2<f64>,
     tau: f64,
 ) -> (Vector2<f64>, Vector2<f64>) {
-    Lip::new(config.gravity, config.com_height, config.step_duration).propagate(
-        &position,
-        &velocity,
-        &stance,
-        tau.max(0.0),
-    )
+    lip.propagate(&position, &velocity, &stance, tau.max(0.0))
 }
 
 /// The longest free distance worth measuring (m): the need of
 /// [`capture_cap`] at `vx_max`, plus a cell.
-pub fn march_length(config: &Config, p0_distance: f64, v0: f64, resolution: f64) -> f64 {
-    let beta = (config.gravity / config.com_height).sqrt();
-    let t = config.step_duration;
-    let k = (0.5 * beta * t).tanh() / beta;
+pub fn march_length(config: &Config, lip: &Lip, p0_distance: f64, v0: f64, resolution: f64) -> f64 {
     p0_distance
-        + k * (v0 + config.vx_max)
-        + stop_distance(beta, t, config.l_max, config.vx_max).min(10.0)
+        + step_travel(lip) * (v0 + config.vx_max)
+        + stop_distance(lip, config.l_max, config.vx_max).min(10.0)
         + resolution
 }
 
@@ -233,29 +227,32 @@ mod tests {
 
     #[test]
     fn a_capture_point_within_reach_is_a_one_step_stop() {
-        let beta = (9.81f64).sqrt();
-        let d = stop_distance(beta, 0.4, 0.2, 0.3);
+        let lip = Lip::new(9.81, 1.0, 0.4);
+        let beta = lip.beta;
+        let d = stop_distance(&lip, 0.2, 0.3);
         assert!((d - 0.3 / beta).abs() < 1e-12);
         // Farther than the reach: more steps, and farther than the capture point.
-        let d = stop_distance(beta, 0.4, 0.17, 0.8);
+        let d = stop_distance(&lip, 0.17, 0.8);
         assert!(d.is_finite() && d > 0.8 / beta, "{d}");
-        assert!(stop_distance(beta, 0.4, 0.17, 0.5) < d);
+        assert!(stop_distance(&lip, 0.17, 0.5) < d);
         // A reach too short to catch the pendulum: no stop.
-        assert_eq!(stop_distance(beta, 0.4, 0.01, 3.0), f64::INFINITY);
+        assert_eq!(stop_distance(&lip, 0.01, 3.0), f64::INFINITY);
     }
 
     #[test]
     fn the_cap_is_the_largest_speed_that_stops_within_the_free_distance() {
         let c = Config::default();
         let p = Vector2::zeros();
-        assert_eq!(capture_cap(&c, p, p, Vector2::zeros(), 100.0), c.vx_max);
-        assert_eq!(capture_cap(&c, p, p, Vector2::zeros(), 0.0), 0.0);
+        let lip = pendulum(&c);
+        let rest = (p, Vector2::zeros());
+        assert_eq!(capture_cap(&c, &lip, p, rest, 100.0), c.vx_max);
+        assert_eq!(capture_cap(&c, &lip, p, rest, 0.0), 0.0);
         let beta = (c.gravity / c.com_height).sqrt();
         let k = (0.5 * beta * c.step_duration).tanh() / beta;
         for free in [0.1, 0.2, 0.4] {
-            let cap = capture_cap(&c, p, p, Vector2::zeros(), free);
+            let cap = capture_cap(&c, &lip, p, rest, free);
             assert!(cap > 0.0 && cap < c.vx_max, "{free}: {cap}");
-            let need = |v: f64| k * v + stop_distance(beta, c.step_duration, c.l_max, v);
+            let need = |v: f64| k * v + stop_distance(&lip, c.l_max, v);
             assert!(need(cap) <= free + 1e-12 && need(cap + 1e-6) > free);
         }
     }

@@ -181,8 +181,9 @@ impl Mapper {
             return ldcbf_controller::NO_SPEED_CAP;
         }
         let tau = config.step_duration - input.time_in_step;
+        let lip = capture::pendulum(config);
         let (p0, v0) = capture::end_of_step(
-            config,
+            &lip,
             input.com_position,
             input.com_velocity,
             input.stance_foot,
@@ -190,7 +191,7 @@ impl Mapper {
         );
         let map = &self.log.map;
         let s0 = (p0 - input.com_position).norm();
-        let max = capture::march_length(config, s0, v0.norm(), map.resolution);
+        let max = capture::march_length(config, &lip, s0, v0.norm(), map.resolution);
         let free = capture::free_distance(
             map,
             &capture::travel_path(input.com_position, subgoals),
@@ -198,7 +199,7 @@ impl Mapper {
             config.body_radius,
             max,
         );
-        capture::capture_cap(config, input.com_position, p0, v0, free)
+        capture::capture_cap(config, &lip, input.com_position, (p0, v0), free)
     }
 
     /// With `lidar.track_moving`, the last scan's people (hulls, world frame)
