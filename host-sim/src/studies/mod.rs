@@ -17,3 +17,4 @@ pub mod deadline;
 pub mod qpbench;
 pub mod replay;
 pub mod robustness;
+pub mod shards;

@@ -214,15 +214,8 @@ pub enum BatchError {
         first: PathBuf,
     },
     /// A shard is given twice to `merge`.
-    #[error("{}: shard {shard}/{count} given twice", dir.display())]
-    ShardTwice {
-        /// The directory.
-        dir: PathBuf,
-        /// The shard's index, from 1.
-        shard: u32,
-        /// The shard count.
-        count: u32,
-    },
+    #[error(transparent)]
+    ShardTwice(#[from] crate::studies::shards::ShardTwice),
     /// A seed appears in two merged directories.
     #[error("seed {0} appears twice")]
     SeedTwice(u64),

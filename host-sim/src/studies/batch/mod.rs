@@ -28,6 +28,7 @@
 //! merged study can still be summarised). Timings from different machines are
 //! comparable only as far as the machines are.
 
+use crate::studies::shards::add_shards;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
@@ -691,21 +692,13 @@ pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Batc
                 first: inputs[0].clone(),
             });
         }
-        let mine: Vec<u32> = if meta.merged_shards.is_empty() {
-            vec![meta.shard.index]
-        } else {
-            meta.merged_shards.clone()
-        };
-        for s in mine {
-            if shards.contains(&s) {
-                return Err(BatchError::ShardTwice {
-                    dir: dir.clone(),
-                    shard: s,
-                    count: meta.shard.count,
-                });
-            }
-            shards.push(s);
-        }
+        add_shards(
+            &mut shards,
+            dir,
+            meta.shard.index,
+            &meta.merged_shards,
+            meta.shard.count,
+        )?;
         wall += meta.wall_time_s;
         rows.extend(r.iter().cloned());
     }

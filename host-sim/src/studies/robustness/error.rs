@@ -187,15 +187,8 @@ pub enum RobustnessError {
         first: PathBuf,
     },
     /// A shard is given twice to `merge`.
-    #[error("{}: shard {shard}/{count} given twice", dir.display())]
-    ShardTwice {
-        /// The directory.
-        dir: PathBuf,
-        /// The shard's index, from 1.
-        shard: u32,
-        /// The shard count.
-        count: u32,
-    },
+    #[error(transparent)]
+    ShardTwice(#[from] crate::studies::shards::ShardTwice),
     /// Shards are missing and `--allow-partial` was not given.
     #[error(
         "incomplete study: {runs} of {expected} runs (missing shards: {missing}); pass --allow-partial to merge anyway"

@@ -2,6 +2,7 @@
 //! merging shards, and `runs.csv`.
 
 use super::*;
+use crate::studies::shards::add_shards;
 
 /// Writes `runs.csv`, `table.md` and `summary.json` into `out` (atomically).
 pub(super) fn write_dir(out: &Path, rep: &RobustnessReport) -> Result<PathBuf> {
@@ -250,21 +251,13 @@ pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Robu
                 first: inputs[0].clone(),
             });
         }
-        let mine = if meta.merged_shards.is_empty() {
-            vec![meta.shard.index]
-        } else {
-            meta.merged_shards.clone()
-        };
-        for s in mine {
-            if shards.contains(&s) {
-                return Err(RobustnessError::ShardTwice {
-                    dir: dir.clone(),
-                    shard: s,
-                    count: meta.shard_count,
-                });
-            }
-            shards.push(s);
-        }
+        add_shards(
+            &mut shards,
+            dir,
+            meta.shard.index,
+            &meta.merged_shards,
+            meta.shard_count,
+        )?;
         wall += meta.wall_time_s;
         runs.extend(r);
     }
