@@ -239,39 +239,57 @@ pub enum RelaxFailure {
     Numerical,
 }
 
+/// What one run of the priority scheme may spend and relax, and what it
+/// starts from (the arguments of [`relax`] besides the problem).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Params<'a, const NC: usize> {
+    /// Solver iterations of one solve at most.
+    pub max_iter: u32,
+    /// Solver iterations left in this cycle.
+    pub budget: u32,
+    /// The largest number of solves of one search for a smallest relaxation
+    /// (the scheme makes at most `2 probes + 6` solves after the nominal one,
+    /// see the module docs).
+    pub probes: u32,
+    /// The largest relaxation of the gait rows (m/s) allowed before the
+    /// safety rows give way.
+    pub gait_cap: f64,
+    /// The capturability bound (`None`: off).
+    pub capture: Option<CaptureBounds>,
+    /// A Farkas certificate of the nominal QP (one weight per row of `qp`, as
+    /// [`crate::qp::QpSolution::lambda`] of its infeasible solve), used as the
+    /// first search's starting certificate when it proves the nominal QP
+    /// empty (`y'h < 0`); it replaces the first-step solve.
+    pub certificate: Option<&'a SVector<f64, NC>>,
+    /// A person in the conflict (docs/safety.md "The policy toward people"):
+    /// after a safety relaxation, no search for the least gait relaxation
+    /// under it; the plan of the safety search (feasible with the gait rows
+    /// at the cap, or at its own gait violation in stages 3 and 4) stands,
+    /// and that is the reported `eps_gait`. It saves that search's solves
+    /// (one to three) on the cycles where a person walks into the robot; the
+    /// cost, which then pulls away from the person, chooses the plan.
+    pub give_way: bool,
+}
+
 /// Runs the priority scheme on the nominal QP `qp` (rows identified by `rows`;
-/// each probe solves a selection of its rows in place, with no copy).
-/// `budget` is the number of solver iterations left in this cycle; `probes`
-/// the largest number of solves of one search for a smallest relaxation
-/// (the scheme makes at most `2 probes + 6` solves after the nominal one,
-/// see the module docs); `gait_cap` the largest relaxation of the gait rows
-/// (m/s) allowed before the safety rows give way; `capture` the
-/// capturability bound (`None`: off). `certificate`: a Farkas certificate of
-/// the nominal QP (one weight per row of `qp`, as
-/// [`crate::qp::QpSolution::lambda`] of its infeasible solve), used as the
-/// first search's starting certificate when it proves the nominal QP empty
-/// (`y'h < 0`); it replaces the first-step solve. `give_way` (a person in
-/// the conflict, docs/safety.md "The policy toward people"): after a safety
-/// relaxation, no search for the least gait relaxation under it; the plan of
-/// the safety search (feasible with the gait rows at the cap, or at its own
-/// gait violation in stages 3 and 4) stands, and that is the reported
-/// `eps_gait`. It saves that search's solves (one to three) on the cycles
-/// where a person walks into the robot; the cost, which then pulls away from
-/// the person, chooses the plan.
-#[allow(clippy::too_many_arguments)]
+/// each probe solves a selection of its rows in place, with no copy), within
+/// the limits of `p`.
 pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     solver: &DualActiveSet<NV, NC>,
     backend: &mut B,
     qp: &DenseQp<NV, NC>,
     rows: &[RowId; NC],
-    max_iter: u32,
-    budget: u32,
-    probes: u32,
-    gait_cap: f64,
-    capture: Option<CaptureBounds>,
-    certificate: Option<&SVector<f64, NC>>,
-    give_way: bool,
+    p: Params<'_, NC>,
 ) -> Result<Relaxed<NV, NC>, RelaxError> {
+    let Params {
+        max_iter,
+        budget,
+        probes,
+        gait_cap,
+        capture,
+        certificate,
+        give_way,
+    } = p;
     let mut norms = [0.0f64; NC];
     for (n, g) in norms.iter_mut().zip(qp.gt.column_iter().take(qp.m)) {
         *n = crate::linalg::sqrt(g.norm_squared());
