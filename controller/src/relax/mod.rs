@@ -325,6 +325,7 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         if !ctx.cert.is_some_and(|c| c.yh < 0.0) {
             ctx.cert = None;
             ctx.marks = [false; NC];
+            ctx.support = [false; NC];
         }
     }
     let out = run_stages(&mut ctx, gait_cap, give_way);
@@ -429,7 +430,7 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         };
         // Only the rows in conflict give way; the others keep their margin.
         let (u_s, conflict) = if eps_s > 0.0 {
-            match ctx.confine(reach.with(Soft::Safety, eps_s))? {
+            match ctx.confine(reach.with(Soft::Safety, eps_s), &u_s)? {
                 Some(u) => (u, ctx.conflict),
                 None => (u_s, safety_rows(ctx.qp, ctx.rows)),
             }
