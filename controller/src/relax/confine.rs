@@ -6,6 +6,7 @@ use nalgebra::SVector;
 use super::RelaxFailure;
 use super::rows::{Keep, RowClass};
 use super::search::{Ctx, Probe};
+use crate::linalg::{columns, dot};
 use crate::qp::QpBackend;
 
 impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> {
@@ -33,13 +34,15 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
     /// tol_primal |g|`, the test of its scan).
     fn keeps_outside(&self, u: &SVector<f64, NV>) -> bool {
         let tol = self.solver.settings().tol_primal;
-        self.qp
-            .rows()
+        columns(self.qp.gt.as_slice(), NV)
+            .zip(&self.qp.h)
             .zip(self.rows)
             .zip(&self.conflict)
             .zip(&self.norms)
-            .all(|((((g, h), id), &c), &n)| {
-                c || RowClass::of(id.kind) != RowClass::Safety || g.dot(u) - h <= tol * n
+            .take(self.qp.m)
+            .all(|((((g, &h), id), &c), &n)| {
+                c || RowClass::of(id.kind) != RowClass::Safety
+                    || dot(g, u.as_slice()) - h <= tol * n
             })
     }
 
