@@ -54,17 +54,23 @@
 //! # Rows outside the conflict
 //!
 //! The least uniform relaxation `eps_safety` is proven by a Farkas
-//! certificate; the safety rows it weighs are the conflict (say a wall
-//! fragment ahead against reachability and the gait rows). Relaxing every
+//! certificate; the safety rows it weighs are in conflict (say a wall
+//! fragment ahead against reachability and the gait rows), and so are those
+//! the cycle's earlier certificates weighed (the nominal solve's, each
+//! infeasible probe's): the conflict starts as all of them. Relaxing every
 //! safety row by `eps_safety` would also let the plan use that much of the
 //! margin of rows that take no part in it (a side wall), and the cost's pull
-//! towards the goal does. So, once `eps_safety` is known, the scheme solves
-//! the same problem with only the conflict's safety rows at `h + eps_safety`
-//! and every other safety row at its nominal `h`. An infeasible solve's
-//! certificate must weigh a safety row outside the conflict (otherwise it
-//! would prove the uniform relaxation empty too), so its safety rows join the
-//! conflict and the solve is repeated: the conflict only grows, and in the
-//! worst case it becomes every safety row, the uniform relaxation. The
+//! towards the goal does. So, once `eps_safety` is known, the scheme wants
+//! the optimal plan of the same problem with only the conflict's safety rows
+//! at `h + eps_safety` and every other safety row at its nominal `h`. When
+//! the uniform relaxation's plan already keeps every row outside the
+//! conflict, that is it, with no solve (the confined feasible set lies in
+//! the uniform one and holds that plan). Otherwise it is solved; an
+//! infeasible solve's certificate must weigh a safety row outside the
+//! conflict (otherwise it would prove the uniform relaxation empty too), so
+//! its safety rows join the conflict and the check and the solve are
+//! repeated: the conflict only grows, and in the worst case it becomes every
+//! safety row, the uniform relaxation. The
 //! relaxation stays the least (relaxing fewer rows by the same amount is a
 //! smaller feasible set, and the uniform one was already the least), the
 //! gait search that follows runs under the confined relaxation, and the
@@ -325,6 +331,7 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         if !ctx.cert.is_some_and(|c| c.yh < 0.0) {
             ctx.cert = None;
             ctx.marks = [false; NC];
+            ctx.support = [false; NC];
         }
     }
     let out = run_stages(&mut ctx, gait_cap, give_way);
@@ -429,7 +436,7 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         };
         // Only the rows in conflict give way; the others keep their margin.
         let (u_s, conflict) = if eps_s > 0.0 {
-            match ctx.confine(reach.with(Soft::Safety, eps_s))? {
+            match ctx.confine(reach.with(Soft::Safety, eps_s), &u_s)? {
                 Some(u) => (u, ctx.conflict),
                 None => (u_s, safety_rows(ctx.qp, ctx.rows)),
             }
