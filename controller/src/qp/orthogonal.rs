@@ -392,8 +392,12 @@ where
 /// (and run-time sizes) over `nact` (fully unrolled, the `NV^2 / 2` tests
 /// would cost more than they save). Measured in `docs/solvers.md`.
 #[inline(always)]
-fn back_substitute<NV: Dim>(R: &OMatrix<f64, NV, NV>, d: &[f64], nact: usize, r: &mut [f64])
-where
+pub(super) fn back_substitute<NV: Dim>(
+    R: &OMatrix<f64, NV, NV>,
+    d: &[f64],
+    nact: usize,
+    r: &mut [f64],
+) where
     DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
 {
     let small = NV::try_to_usize().is_some_and(|n| n <= 8);
@@ -510,7 +514,7 @@ where
 // Inlined (as the compiler chose when the loop was written out here, on
 // x86-64 and on the Cortex-M7; out of line it costs the paper QPs 4 %).
 #[inline(always)]
-fn givens_drop<NV: Dim>(
+pub(super) fn givens_drop<NV: Dim>(
     J: &mut OMatrix<f64, NV, NV>,
     R: &mut OMatrix<f64, NV, NV>,
     nact: usize,

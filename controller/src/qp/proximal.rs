@@ -42,7 +42,10 @@
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector, U1};
 
-use super::{DenseQpOf, DualActiveSetOf, HOT_START_MIN_NV, HessianError, QpAllocator, RowNormsOf};
+use super::resolve::{Kept, ResolveStop, Resumed, resolve};
+use super::{
+    DenseQpOf, DualActiveSetOf, HOT_START_MIN_NV, HessianError, Orthogonal, QpAllocator, RowNormsOf,
+};
 use crate::active_set;
 use crate::linalg::{column_mut, copy};
 use crate::solution::{QpSolutionOf, QpStatus};
@@ -102,10 +105,17 @@ where
         prefer: &[bool],
         max_iter: u32,
     ) -> QpSolutionOf<NV, NC> {
-        let nv = self.nv();
-        let nc = qp.h.shape_generic().0;
+        solve_start!(self, qp, qp.q, hv, excluded, norms => nv, nc, m, _q, tol, me, blocked);
         let eps = self.prox;
-        let mut marks = active_set::marks(nc, prefer);
+        let hot = self.settings.hot_start;
+        let pref = active_set::marks(nc, prefer);
+        let unmarked = OVector::<bool, NC>::from_element_generic(nc, U1, false);
+        // The factor of the active rows, kept from one proximal solve to the
+        // next (`qp/resolve.rs`).
+        let mut J = self.Linv.transpose();
+        let mut R = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
+        let mut d = OVector::<f64, NV>::zeros_generic(nv, U1);
+        let mut kept: Option<Kept<NV>> = None;
         let mut xk = OVector::<f64, NV>::zeros_generic(nv, U1);
         let mut qk = qp.q.clone();
         let qmax = qp.q.as_slice().iter().fold(1.0f64, |a, v| a.max(v.abs()));
@@ -120,30 +130,91 @@ where
             {
                 *qi = q0 - eps * xi;
             }
+            let mut start = blocked.clone();
+            let x = match kept.as_mut() {
+                None => {
+                    // Unconstrained minimiser x = -L^-T L^-1 q_k.
+                    let mut x = self.linvt_mul(self.linv_mul(qk.as_slice()).as_slice());
+                    for v in x.as_mut_slice() {
+                        *v = -*v;
+                    }
+                    x
+                }
+                Some(k) => {
+                    let mut x = OVector::<f64, NV>::zeros_generic(nv, U1);
+                    let left = max_iter.saturating_sub(used);
+                    match resolve(&mut J, &mut R, hv, k, &qk, &mut x, left) {
+                        Ok(drops) => used = used.saturating_add(drops),
+                        Err(ResolveStop::Budget) => {
+                            // The last iterate, as when a solve runs out.
+                            last.status = QpStatus::IterationLimit;
+                            last.iterations = max_iter;
+                            return last;
+                        }
+                        Err(ResolveStop::Numerical) => {
+                            return active_set::stopped(nv, nc, QpStatus::NumericalError);
+                        }
+                    }
+                    // The active rows and every equality row (active, or
+                    // redundant) stay out of the scans.
+                    let s = start.as_mut_slice();
+                    for b in s.iter_mut().take(me) {
+                        *b = true;
+                    }
+                    for &a in k.act.as_slice().iter().take(k.nact) {
+                        if let Some(b) = s.get_mut(usize::from(a)) {
+                            *b = true;
+                        }
+                    }
+                    x
+                }
+            };
             let left = max_iter.saturating_sub(used);
-            let mut sol =
-                self.solve_with(qp, &qk, hv, excluded.clone(), norms, marks.as_slice(), left);
-            used = used.saturating_add(sol.iterations);
-            sol.iterations = used;
-            if sol.status != QpStatus::Solved {
-                return sol;
-            }
-            let dx = sol
-                .x
+            let marks = if kept.is_some() { &unmarked } else { &pref };
+            let mut factor = Resumed {
+                inner: Orthogonal {
+                    solver: self,
+                    rows: &qp.gt,
+                    h: hv,
+                    norm2: &norms.norm2,
+                    inv_hnorm: &mut norms.inv_hnorm,
+                    tol2: tol * tol,
+                    x,
+                    J: &mut J,
+                    R: &mut R,
+                    d: &mut d,
+                    z: OVector::zeros_generic(nv, U1),
+                    dependent: false,
+                },
+                kept: kept.as_ref(),
+            };
+            let it = active_set::iterate(&mut factor, nv, m, me, start, marks, left, hot);
+            let x = factor.inner.x;
+            let Some(it) = it else {
+                // The orthogonal factor never asks for a restart.
+                return active_set::stopped(nv, nc, QpStatus::NumericalError);
+            };
+            used = used.saturating_add(it.iters);
+            let objective = self.objective(&qp.q, &x);
+            let dx = x
                 .as_slice()
                 .iter()
                 .zip(xk.as_slice())
                 .fold(0.0f64, |a, (&u, &v)| a.max((u - v).abs()));
-            if eps * dx <= PROX_TOL * qmax {
+            copy(xk.as_mut_slice(), x.as_slice());
+            let status = it.status;
+            let (act, nact, neq) = (it.act.clone(), it.nact, it.neq);
+            let mut sol = it.solution(nc, x, objective, |_| 1.0);
+            sol.iterations = used;
+            if status != QpStatus::Solved || eps * dx <= PROX_TOL * qmax {
                 return sol;
             }
-            copy(xk.as_mut_slice(), sol.x.as_slice());
-            marks.as_mut_slice().fill(false);
-            for &a in sol.active_set() {
-                if let Some(mk) = marks.as_mut_slice().get_mut(usize::from(a)) {
-                    *mk = true;
-                }
-            }
+            kept = Some(Kept {
+                act,
+                mult: OVector::zeros_generic(nv, U1),
+                nact,
+                neq,
+            });
             last = sol;
         }
         last.status = QpStatus::IterationLimit;
