@@ -189,6 +189,7 @@ mod dense;
 mod orthogonal;
 mod proximal;
 mod resolve;
+mod spans;
 pub use backend::{OwnSolver, QpBackend};
 #[cfg(feature = "alloc")]
 pub use dense::DenseQpDyn;
@@ -730,6 +731,8 @@ where
             d: &mut d,
             z: OVector::zeros_generic(nv, U1),
             dependent: false,
+            span: None,
+            reorder: false,
         };
         // Rows left out are never scanned: they start (and stay) blocked as if
         // active, but never enter the active list.

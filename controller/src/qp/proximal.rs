@@ -43,10 +43,11 @@
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector, U1};
 
 use super::resolve::{Kept, ResolveStop, Resumed, resolve};
+use super::spans::row_spans;
 use super::{
     DenseQpOf, DualActiveSetOf, HOT_START_MIN_NV, HessianError, Orthogonal, QpAllocator, RowNormsOf,
 };
-use crate::active_set;
+use crate::active_set::{self, Iterate};
 use crate::linalg::{column_mut, copy};
 use crate::solution::{QpSolutionOf, QpStatus};
 
@@ -110,6 +111,7 @@ where
         let hot = self.settings.hot_start;
         let pref = active_set::marks(nc, prefer);
         let unmarked = OVector::<bool, NC>::from_element_generic(nc, U1, false);
+        let spans = row_spans(&qp.gt, m);
         // The factor of the active rows, kept from one proximal solve to the
         // next (`qp/resolve.rs`).
         let mut J = self.Linv.transpose();
@@ -120,8 +122,8 @@ where
         let mut qk = qp.q.clone();
         let qmax = qp.q.as_slice().iter().fold(1.0f64, |a, v| a.max(v.abs()));
         let mut used: u32 = 0;
-        let mut last = active_set::stopped(nv, nc, QpStatus::IterationLimit);
-        for _ in 0..PROX_MAX_OUTER {
+        let mut last: Option<(Iterate<NV>, OVector<f64, NV>)> = None;
+        for round in 0..PROX_MAX_OUTER {
             for ((qi, &q0), &xi) in qk
                 .as_mut_slice()
                 .iter_mut()
@@ -147,9 +149,11 @@ where
                         Ok(drops) => used = used.saturating_add(drops),
                         Err(ResolveStop::Budget) => {
                             // The last iterate, as when a solve runs out.
-                            last.status = QpStatus::IterationLimit;
-                            last.iterations = max_iter;
-                            return last;
+                            let Some((it, x)) = last.take() else {
+                                return active_set::stopped(nv, nc, QpStatus::IterationLimit);
+                            };
+                            let status = QpStatus::IterationLimit;
+                            return self.proximal_answer(qp, it, x, status, max_iter);
                         }
                         Err(ResolveStop::Numerical) => {
                             return active_set::stopped(nv, nc, QpStatus::NumericalError);
@@ -185,6 +189,8 @@ where
                     d: &mut d,
                     z: OVector::zeros_generic(nv, U1),
                     dependent: false,
+                    span: Some(&spans),
+                    reorder: true,
                 },
                 kept: kept.as_ref(),
             };
@@ -195,29 +201,49 @@ where
                 return active_set::stopped(nv, nc, QpStatus::NumericalError);
             };
             used = used.saturating_add(it.iters);
-            let objective = self.objective(&qp.q, &x);
             let dx = x
                 .as_slice()
                 .iter()
                 .zip(xk.as_slice())
                 .fold(0.0f64, |a, (&u, &v)| a.max((u - v).abs()));
             copy(xk.as_mut_slice(), x.as_slice());
-            let status = it.status;
-            let (act, nact, neq) = (it.act.clone(), it.nact, it.neq);
-            let mut sol = it.solution(nc, x, objective, |_| 1.0);
-            sol.iterations = used;
-            if status != QpStatus::Solved || eps * dx <= PROX_TOL * qmax {
-                return sol;
+            let converged = eps * dx <= PROX_TOL * qmax;
+            if it.status != QpStatus::Solved || converged || round + 1 == PROX_MAX_OUTER {
+                let status = match it.status {
+                    QpStatus::Solved if !converged => QpStatus::IterationLimit,
+                    s => s,
+                };
+                return self.proximal_answer(qp, it, x, status, used);
             }
             kept = Some(Kept {
-                act,
+                act: it.act.clone(),
                 mult: OVector::zeros_generic(nv, U1),
-                nact,
-                neq,
+                nact: it.nact,
+                neq: it.neq,
             });
-            last = sol;
+            last = Some((it, x));
         }
-        last.status = QpStatus::IterationLimit;
-        last
+        active_set::stopped(nv, nc, QpStatus::IterationLimit)
+    }
+
+    /// The answer from the iteration `it` that ended at `x`, with `status`
+    /// in place of [`QpStatus::Solved`] and `used` iterations in all; the
+    /// objective is the QP's.
+    fn proximal_answer(
+        &self,
+        qp: &DenseQpOf<NV, NC>,
+        it: Iterate<NV>,
+        x: OVector<f64, NV>,
+        status: QpStatus,
+        used: u32,
+    ) -> QpSolutionOf<NV, NC> {
+        let nc = qp.h.shape_generic().0;
+        let objective = self.objective(&qp.q, &x);
+        let mut sol = it.solution(nc, x, objective, |_| 1.0);
+        if sol.status == QpStatus::Solved {
+            sol.status = status;
+        }
+        sol.iterations = used;
+        sol
     }
 }

@@ -24,8 +24,9 @@
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
-use super::QpAllocator;
-use super::orthogonal::{back_substitute, givens_drop};
+use super::orthogonal::{Orthogonal, givens_drop, rate};
+use super::spans::unpack;
+use super::{QpAllocator, ZERO_ROW2};
 use crate::active_set::{ActiveSetFactor, AddError, remove_at};
 use crate::linalg::{column, columns, dot_d};
 
@@ -110,10 +111,45 @@ where
         *yj += cj;
     }
     mult.as_mut_slice().fill(0.0);
-    back_substitute(R, y.as_slice(), nact, mult.as_mut_slice());
+    back_substitute_by_columns(R, y.as_slice(), nact, mult.as_mut_slice());
     xs.iter()
         .chain(mult.as_slice().iter().take(nact))
         .all(|v| v.is_finite())
+}
+
+/// `r[..nact] = R^-1 d[..nact]` for the upper-triangular leading
+/// `nact x nact` block of `R`, by columns, in place in `r` (`r = d`, then
+/// from the last row up `r_i /= R_ii` and `r[..i] -= r_i R[..i, i]`: a
+/// contiguous column, independent lanes). The products of
+/// `orthogonal::back_substitute` in another order (other rounding), without
+/// its chain of dependent subtractions per row.
+pub(super) fn back_substitute_by_columns<NV: Dim>(
+    R: &OMatrix<f64, NV, NV>,
+    d: &[f64],
+    nact: usize,
+    r: &mut [f64],
+) where
+    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
+{
+    let n = R.nrows();
+    let nact = nact.min(n);
+    crate::linalg::copy(r, d.get(..nact).unwrap_or(&[]));
+    for i in (0..nact).rev() {
+        let (Some(col), Some((ri_slot, above))) = (
+            column(R.as_slice(), n, i),
+            r.get_mut(..=i).and_then(|h| h.split_last_mut()),
+        ) else {
+            continue;
+        };
+        let Some(&rii) = col.get(i) else {
+            continue;
+        };
+        let ri = *ri_slot / rii;
+        *ri_slot = ri;
+        for (wk, &rk) in above.iter_mut().zip(col) {
+            *wk -= ri * rk;
+        }
+    }
 }
 
 /// Why [`resolve`] stopped the solve.
@@ -177,26 +213,51 @@ where
     Err(ResolveStop::Numerical)
 }
 
-/// A factor for [`crate::active_set::iterate`] that, with `kept`, already
-/// holds those active rows (the iteration resumes from them,
-/// [`ActiveSetFactor::resume`]), and otherwise is `inner` itself.
-pub(super) struct Resumed<'k, F, NV: Dim>
+/// The factor of the proximal iterations' solves for
+/// [`crate::active_set::iterate`]: `inner` with its rows' spans (the scan's
+/// slack over the span, `qp/spans.rs`), and with `kept` the active rows it
+/// already holds (the iteration resumes from them,
+/// [`ActiveSetFactor::resume`]).
+pub(super) struct Resumed<'k, 'a, NV: Dim, NC: Dim>
 where
-    DefaultAllocator: nalgebra::allocator::Allocator<NV>,
+    DefaultAllocator: QpAllocator<NV, NC>,
 {
     /// The factor (holding the kept rows' factor when `kept` is given).
-    pub inner: F,
+    pub inner: Orthogonal<'a, NV, NC>,
     /// The active rows and multipliers to resume from.
     pub kept: Option<&'k Kept<NV>>,
 }
 
-impl<F: ActiveSetFactor, NV: Dim> ActiveSetFactor for Resumed<'_, F, NV>
+impl<NV: Dim, NC: Dim> ActiveSetFactor for Resumed<'_, '_, NV, NC>
 where
-    DefaultAllocator: nalgebra::allocator::Allocator<NV>,
+    DefaultAllocator: QpAllocator<NV, NC>,
 {
+    /// [`Orthogonal`]'s violation with the slack's dot product over the
+    /// row's span (the same bits).
     #[inline(always)]
     fn violation(&mut self, i: usize, blocked: bool) -> Option<f64> {
-        self.inner.violation(i, blocked)
+        let o = &mut self.inner;
+        let n = o.solver.nv().value();
+        let (Some(g), Some(&hi), Some(&n2), Some(ihn)) = (
+            column(o.rows.as_slice(), n, i),
+            o.h.as_slice().get(i),
+            o.norm2.as_slice().get(i),
+            o.inv_hnorm.as_mut_slice().get_mut(i),
+        ) else {
+            return None;
+        };
+        if blocked || n2 <= ZERO_ROW2 {
+            return None;
+        }
+        let (lo, up) = o
+            .span
+            .and_then(|sp| sp.as_slice().get(i))
+            .map_or((0, n), |&s| unpack(s));
+        let gx = dot_d::<NV>(
+            g.get(lo..up).unwrap_or(&[]),
+            o.x.as_slice().get(lo..up).unwrap_or(&[]),
+        );
+        rate(o.solver, o.tol2, g, n2, ihn, hi - gx)
     }
 
     #[inline(always)]
