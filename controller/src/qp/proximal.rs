@@ -14,8 +14,10 @@
 //! ```
 //!
 //! from `x_0 = 0`, each a strictly convex QP solved by the same dual
-//! active-set iteration, hot-started from the active set of the one before
-//! (its rows marked; the caller's marks for the first). The proximal point
+//! active-set iteration: the first from the caller's marks, each later one
+//! resumed from the factor of the active rows the one before ended with
+//! (`qp/resolve.rs`: only the linear term changes), with the rows' spans
+//! (`qp/spans.rs`) and [`Orthogonal::reorder`]. The proximal point
 //! method converges to a minimiser of the QP whenever one exists
 //! (Rockafellar 1976). After each solve `H x + q + G' lambda =
 //! eps (x_k - x_{k+1})`: the multipliers of the solve are the QP's up to
@@ -27,8 +29,9 @@
 //! objective reported is the QP's (`1/2 x'Hx + q'x`).
 //!
 //! Budget: [`QpSettings::max_iter`](super::QpSettings::max_iter) covers the
-//! adds plus drops of all the proximal solves together (each re-enters its
-//! active set, one iteration per row, the equality rows included), and at
+//! adds plus drops of all the proximal solves together (the first enters
+//! its active set, one iteration per row, the equality rows included; the
+//! drops of a resumed start count too), and at
 //! most [`PROX_MAX_OUTER`] proximal solves run; when either runs out the
 //! status is [`QpStatus::IterationLimit`] with the last iterate (as for a QP
 //! whose objective is unbounded below on the feasible set, where the
