@@ -160,13 +160,8 @@ fn the_cup_mouth_start_reaches_the_goal_with_planning() {
     assert!(!s.collision && !s.foot_collision);
 }
 
-/// The unknown-map study's sensor: 1440 rays (0.25 degree), the spacing the
-/// needles of the families need (`ldcbf_sim::sense::detect`,
-/// docs/safety.md "Thin tips and the ray spacing").
-const STUDY_RAYS: &str = "1440";
-
-/// A family layout with LiDAR, the map, planning and the study's sensor.
-fn study_run(family: &str, seed: u64, delta: &str) -> ldcbf_sim::report::Summary {
+/// A family layout with LiDAR (`rays` per scan), the map and planning.
+fn study_run(family: &str, seed: u64, delta: &str, rays: &str) -> ldcbf_sim::report::Summary {
     let sc = load(
         family,
         &LoadOptions {
@@ -175,7 +170,7 @@ fn study_run(family: &str, seed: u64, delta: &str) -> ldcbf_sim::report::Summary
                 ("perception".into(), "\"lidar\"".into()),
                 ("planner".into(), "\"rrt_star\"".into()),
                 ("delta".into(), delta.into()),
-                ("lidar.rays".into(), STUDY_RAYS.into()),
+                ("lidar.rays".into(), rays.into()),
             ],
         },
     )
@@ -188,9 +183,10 @@ fn study_run(family: &str, seed: u64, delta: &str) -> ldcbf_sim::report::Summary
 }
 
 /// Needle class: `crowded` seed 174, a 2.16 degree sliver pointing at the
-/// robot on its way, met at both deltas with the study's 0.25 degree rays
-/// (with 1 degree its tip hides 0.86 of its range between two rays, and the
-/// body touched it by 30 mm at delta = 0.05).
+/// robot on its way, met at both deltas with 0.25 degree between rays (1440
+/// rays), which `ldcbf_sim::sense::detect` requires for it (docs/safety.md,
+/// "Thin tips and the ray spacing"; with 1 degree its tip hides 0.86 of its
+/// range between two rays and the body touches it).
 #[test]
 #[cfg_attr(
     debug_assertions,
@@ -198,7 +194,7 @@ fn study_run(family: &str, seed: u64, delta: &str) -> ldcbf_sim::report::Summary
 )]
 fn the_crowded_174_needle_is_seen_in_time() {
     for delta in ["0.05", "0.0"] {
-        let s = study_run("crowded", 174, delta);
+        let s = study_run("crowded", 174, delta, "1440");
         assert!(
             s.success && !s.collision && !s.foot_collision,
             "delta {delta}: {s:#?}"
@@ -206,7 +202,7 @@ fn the_crowded_174_needle_is_seen_in_time() {
     }
 }
 
-/// 20 seeds of every layout family with LiDAR (the study's sensor), the
+/// 20 seeds of every layout family with LiDAR (the default 360 rays), the
 /// map and planning at delta = 0.05: no body or foot contact with the true
 /// map in any run.
 /// Release builds only (CI's release section runs it, on every core).
@@ -242,7 +238,7 @@ fn families_with_lidar_and_planning_keep_body_and_feet_out() {
                         let Some(&(f, seed)) = cases.get(k) else {
                             return out;
                         };
-                        let s = study_run(f, seed, "0.05");
+                        let s = study_run(f, seed, "0.05", "360");
                         let m = s.mapping.clone().expect("a LiDAR run has a map");
                         out.push(Row {
                             family: f,
