@@ -160,8 +160,51 @@ fn the_cup_mouth_start_reaches_the_goal_with_planning() {
     assert!(!s.collision && !s.foot_collision);
 }
 
-/// 20 seeds of every layout family with LiDAR, the map and planning at
-/// delta = 0.05: no body or foot contact with the true map in any run.
+/// A family layout with LiDAR (`rays` per scan), the map and planning.
+fn study_run(family: &str, seed: u64, delta: &str, rays: &str) -> ldcbf_sim::report::Summary {
+    let sc = load(
+        family,
+        &LoadOptions {
+            seed: Some(seed),
+            sets: vec![
+                ("perception".into(), "\"lidar\"".into()),
+                ("planner".into(), "\"rrt_star\"".into()),
+                ("delta".into(), delta.into()),
+                ("lidar.rays".into(), rays.into()),
+            ],
+        },
+    )
+    .unwrap();
+    let options = SimOptions {
+        record_scans: false,
+        ..SimOptions::default()
+    };
+    summarize(&run(&sc, options).unwrap())
+}
+
+/// Needle class: `crowded` seed 174, a 2.16 degree sliver pointing at the
+/// robot on its way, met at both deltas with 0.25 degree between rays (1440
+/// rays), which `ldcbf_sim::sense::detect` requires for it (docs/safety.md,
+/// "Thin tips and the ray spacing"; with 1 degree its tip hides 0.86 of its
+/// range between two rays and the body touches it).
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "release only: cargo test --release -p ldcbf-sim --test sim_unknown_maps"
+)]
+fn the_crowded_174_needle_is_seen_in_time() {
+    for delta in ["0.05", "0.0"] {
+        let s = study_run("crowded", 174, delta, "1440");
+        assert!(
+            s.success && !s.collision && !s.foot_collision,
+            "delta {delta}: {s:#?}"
+        );
+    }
+}
+
+/// 20 seeds of every layout family with LiDAR (the default 360 rays), the
+/// map and planning at delta = 0.05: no body or foot contact with the true
+/// map in any run.
 /// Release builds only (CI's release section runs it, on every core).
 #[test]
 #[cfg_attr(
@@ -195,23 +238,7 @@ fn families_with_lidar_and_planning_keep_body_and_feet_out() {
                         let Some(&(f, seed)) = cases.get(k) else {
                             return out;
                         };
-                        let sc = load(
-                            f,
-                            &LoadOptions {
-                                seed: Some(seed),
-                                sets: vec![
-                                    ("perception".into(), "\"lidar\"".into()),
-                                    ("planner".into(), "\"rrt_star\"".into()),
-                                    ("delta".into(), "0.05".into()),
-                                ],
-                            },
-                        )
-                        .unwrap();
-                        let options = SimOptions {
-                            record_scans: false,
-                            ..SimOptions::default()
-                        };
-                        let s = summarize(&run(&sc, options).unwrap());
+                        let s = study_run(f, seed, "0.05", "360");
                         let m = s.mapping.clone().expect("a LiDAR run has a map");
                         out.push(Row {
                             family: f,

@@ -98,6 +98,7 @@ use crate::world::setting::SettingError;
 use crate::world::{MAX_VERTICES, Polygon};
 
 mod dbscan;
+pub mod detect;
 mod infer;
 mod map;
 pub mod movers;
