@@ -226,6 +226,11 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         // Weights at rounding level (~1e-17 of the largest) are not
         // part of the certificate's support.
         let floor = 1e-12 * lambda.amax();
+        // The support's normals are linearly dependent (`G'y = 0`):
+        // marking all of them makes the next solve add one too many
+        // and drop it again. The lightest (least `y |g|`, the first of
+        // equals) is left out; found in the same pass.
+        let mut lightest: Option<(usize, f64)> = None;
         for (o, &y) in lambda.iter().enumerate().take(m) {
             let (Some(&h), Some(&n), Some(id)) =
                 (self.qp.h.get(o), self.norms.get(o), self.rows.get(o))
@@ -243,7 +248,11 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
                 *s = true;
             }
             c.yh += y * h;
-            c.yn += y * n;
+            let w = y * n;
+            c.yn += w;
+            if lightest.is_none_or(|(_, lw)| w < lw) {
+                lightest = Some((o, w));
+            }
             match RowClass::of(id.kind) {
                 RowClass::Gait => {
                     let capped = keep
@@ -266,17 +275,6 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
                 }
                 RowClass::Safety => c.ys += y,
                 RowClass::Reach => {}
-            }
-        }
-        // The support's normals are linearly dependent (`G'y = 0`):
-        // marking all of them makes the next solve add one too many
-        // and drop it again. Leave out the lightest.
-        let mut lightest: Option<(usize, f64)> = None;
-        for (o, &y) in lambda.iter().enumerate().take(m) {
-            let w = y * self.norms.get(o).copied().unwrap_or(0.0);
-            if self.marks.get(o).copied().unwrap_or(false) && lightest.is_none_or(|(_, lw)| w < lw)
-            {
-                lightest = Some((o, w));
             }
         }
         if let Some(mk) = lightest.and_then(|(o, _)| self.marks.get_mut(o)) {
