@@ -51,7 +51,7 @@ const TARGET_FLASH: u64 = 64 * 1024;
 const TARGET_RAM: u64 = 16 * 1024;
 /// The enforced ceiling of the walk-into pass, instructions per cycle (the
 /// target, 100,000, is not met there: firmware/README.md).
-const WALK_INTO_CEILING: u64 = 180_000;
+const WALK_INTO_CEILING: u64 = 170_000;
 /// Commands must agree with the host's to this (m, rad/s).
 const COMMAND_TOL: f64 = 1e-9;
 /// `-icount` shift: one instruction = 2^ICOUNT_SHIFT ns of virtual time.
@@ -677,6 +677,23 @@ fn firmware_matches_host_in_qemu() {
     }
     std::fs::write(&csv_path, csv)
         .unwrap_or_else(|e| panic!("cannot write {}: {e}", csv_path.display()));
+    // The third pass's counts, in the same format (index within the pass),
+    // for the fit of firmware/README.md ("where the instructions go").
+    let walk_path = workspace_root().join("firmware/target/instructions-walk-into.csv");
+    let mut walk_csv = format!("{INSTRUCTIONS_HEADER}\n");
+    for c in run.cycles.iter().filter(|c| c.index >= WALK_INTO_START) {
+        writeln!(
+            walk_csv,
+            "{},{},{},{}",
+            c.index - WALK_INTO_START,
+            c.status,
+            c.iterations,
+            instructions(c)
+        )
+        .unwrap();
+    }
+    std::fs::write(&walk_path, walk_csv)
+        .unwrap_or_else(|e| panic!("cannot write {}: {e}", walk_path.display()));
     let first_two = |c: &FirmwareCycle| c.index < WALK_INTO_START;
     let (n_all, med_all, max_all) = stats(&first_two);
     let (n_opt, med_opt, max_opt) = stats(&|c| first_two(c) && c.status == "optimal");
@@ -707,8 +724,10 @@ fn firmware_matches_host_in_qemu() {
     );
     println!("determinism: two QEMU runs (-icount shift={ICOUNT_SHIFT}) printed identical output");
     println!(
-        "wrote the instructions per cycle to {} (for `ldcbf-sim deadline --instructions`)",
-        csv_path.display()
+        "wrote the instructions per cycle to {} (for `ldcbf-sim deadline --instructions`), \
+         the third pass's to {}",
+        csv_path.display(),
+        walk_path.display()
     );
     println!(
         "instructions per cycle, first two passes: all {n_all}: median {med_all} max \

@@ -5,7 +5,7 @@ use nalgebra::SVector;
 
 use super::RelaxFailure;
 use super::rows::{Keep, RowClass};
-use super::search::{Ctx, Probe};
+use super::search::{Ctx, Probe, row_norm};
 use crate::linalg::{columns, dot};
 use crate::qp::QpBackend;
 
@@ -38,11 +38,11 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
             .zip(&self.qp.h)
             .zip(self.rows)
             .zip(&self.conflict)
-            .zip(&self.norms)
             .take(self.qp.m)
-            .all(|((((g, &h), id), &c), &n)| {
+            .enumerate()
+            .all(|(o, (((g, &h), id), &c))| {
                 c || RowClass::of(id.kind) != RowClass::Safety
-                    || dot(g, u.as_slice()) - h <= tol * n
+                    || dot(g, u.as_slice()) - h <= tol * row_norm(self.qp, o)
             })
     }
 

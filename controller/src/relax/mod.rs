@@ -296,12 +296,7 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         certificate,
         give_way,
     } = p;
-    let mut norms = [0.0f64; NC];
-    for (n, g) in norms.iter_mut().zip(qp.gt.column_iter().take(qp.m)) {
-        *n = crate::linalg::sqrt(g.norm_squared());
-    }
     let mut ctx = Ctx {
-        norms,
         solver,
         backend,
         qp,

@@ -82,11 +82,6 @@ pub fn class_violation<const NV: usize, const NC: usize>(
         gait: 0.0,
     };
     for ((g, h), id) in qp.rows().zip(rows) {
-        // A zero row (|g| = 0, i.e. |g|^2 = 0) constrains nothing; no square
-        // root needed to tell.
-        if g.norm_squared() == 0.0 {
-            continue;
-        }
         let e = g.dot(u) - h;
         let e = if e.is_nan() { f64::INFINITY } else { e };
         let slot = match RowClass::of(id.kind) {
@@ -94,7 +89,12 @@ pub fn class_violation<const NV: usize, const NC: usize>(
             RowClass::Safety => &mut v.safety,
             RowClass::Gait => &mut v.gait,
         };
-        *slot = slot.max(e);
+        // A zero row (|g| = 0, i.e. |g|^2 = 0) constrains nothing; no square
+        // root needed to tell, and no test at all unless the row would raise
+        // the class's violation.
+        if e > *slot && g.norm_squared() != 0.0 {
+            *slot = e;
+        }
     }
     v
 }

@@ -107,8 +107,6 @@ pub(super) enum Probe<const NV: usize> {
 }
 
 pub(super) struct Ctx<'a, const NV: usize, const NC: usize, B> {
-    /// Euclidean norms of the nominal rows.
-    pub(super) norms: [f64; NC],
     /// The capturability bound (`None`: off).
     pub(super) capture: Option<CaptureBounds>,
     pub(super) solver: &'a DualActiveSet<NV, NC>,
@@ -136,6 +134,19 @@ pub(super) struct Ctx<'a, const NV: usize, const NC: usize, B> {
     pub(super) conflict: [bool; NC],
     /// Whether the safety relaxation applies to the `conflict` rows only.
     pub(super) confined: bool,
+}
+
+/// The Euclidean norm of row `o` of `qp` (0 past its rows), computed where
+/// needed: only the rows of a certificate's support and the safety rows a
+/// confined plan is checked against need it, a few of a cycle's rows.
+pub(super) fn row_norm<const NV: usize, const NC: usize>(qp: &DenseQp<NV, NC>, o: usize) -> f64 {
+    if o >= qp.m {
+        return 0.0;
+    }
+    qp.gt
+        .column_iter()
+        .nth(o)
+        .map_or(0.0, |g| crate::linalg::sqrt(g.norm_squared()))
 }
 
 /// Relative and absolute padding of a probe above a proven lower bound.
@@ -226,16 +237,20 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         // Weights at rounding level (~1e-17 of the largest) are not
         // part of the certificate's support.
         let floor = 1e-12 * lambda.amax();
+        // The support's normals are linearly dependent (`G'y = 0`):
+        // marking all of them makes the next solve add one too many
+        // and drop it again. The lightest (least `y |g|`, the first of
+        // equals) is left out; found in the same pass.
+        let mut lightest: Option<(usize, f64)> = None;
         for (o, &y) in lambda.iter().enumerate().take(m) {
-            let (Some(&h), Some(&n), Some(id)) =
-                (self.qp.h.get(o), self.norms.get(o), self.rows.get(o))
-            else {
-                continue;
-            };
             // (NaN weights are skipped too.)
             if y.partial_cmp(&floor) != Some(core::cmp::Ordering::Greater) {
                 continue;
             }
+            let (Some(&h), Some(id)) = (self.qp.h.get(o), self.rows.get(o)) else {
+                continue;
+            };
+            let n = row_norm(self.qp, o);
             if let Some(mk) = self.marks.get_mut(o) {
                 *mk = true;
             }
@@ -243,7 +258,11 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
                 *s = true;
             }
             c.yh += y * h;
-            c.yn += y * n;
+            let w = y * n;
+            c.yn += w;
+            if lightest.is_none_or(|(_, lw)| w < lw) {
+                lightest = Some((o, w));
+            }
             match RowClass::of(id.kind) {
                 RowClass::Gait => {
                     let capped = keep
@@ -266,17 +285,6 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
                 }
                 RowClass::Safety => c.ys += y,
                 RowClass::Reach => {}
-            }
-        }
-        // The support's normals are linearly dependent (`G'y = 0`):
-        // marking all of them makes the next solve add one too many
-        // and drop it again. Leave out the lightest.
-        let mut lightest: Option<(usize, f64)> = None;
-        for (o, &y) in lambda.iter().enumerate().take(m) {
-            let w = y * self.norms.get(o).copied().unwrap_or(0.0);
-            if self.marks.get(o).copied().unwrap_or(false) && lightest.is_none_or(|(_, lw)| w < lw)
-            {
-                lightest = Some((o, w));
             }
         }
         if let Some(mk) = lightest.and_then(|(o, _)| self.marks.get_mut(o)) {
