@@ -182,10 +182,10 @@ fn study_run(family: &str, seed: u64, delta: &str, rays: &str) -> ldcbf_sim::rep
     summarize(&run(&sc, options).unwrap())
 }
 
-/// Needle class: `crowded` seed 174, a 2.16 degree sliver pointing at the
+/// Needle class: `crowded` seed 174, a 2.08 degree sliver pointing at the
 /// robot on its way, met at both deltas with 0.25 degree between rays (1440
 /// rays), which `ldcbf_sim::sense::detect` requires for it (docs/safety.md,
-/// "Thin tips and the ray spacing"; with 1 degree its tip hides 0.86 of its
+/// "Thin tips and the ray spacing"; with 1 degree its tip hides 0.93 of its
 /// range between two rays and the body touches it).
 #[test]
 #[cfg_attr(

@@ -76,6 +76,9 @@ pub struct RunReport {
     pub files: Vec<String>,
     /// The full result (logs in memory).
     pub result: SimResult,
+    /// What the user should know about the scenario before trusting the
+    /// run (e.g. an obstacle corner sharper than the LiDAR sees in time).
+    pub warnings: Vec<String>,
 }
 
 /// `a` and `b` name the same directory or one lies inside the other (compared
@@ -197,9 +200,40 @@ pub fn execute_run(req: &RunRequest) -> Result<RunReport> {
         .commit()
         .with_context(|| format!("cannot move the results into {}", out.display()))?;
     Ok(RunReport {
+        warnings: scenario_warnings(&scenario),
         summary,
         out_dir,
         files,
         result,
     })
+}
+
+/// The scenario's warnings: with `perception = "lidar"`, each obstacle whose
+/// sharpest corner is below the smallest tip angle the LiDAR meets in time
+/// ([`crate::sense::detect::sharp_corners`], docs/safety.md "Thin tips and
+/// the ray spacing").
+fn scenario_warnings(scenario: &crate::scenario::Scenario) -> Vec<String> {
+    if scenario.perception != crate::sense::Perception::Lidar {
+        return Vec::new();
+    }
+    let c = &scenario.config;
+    crate::sense::detect::sharp_corners(
+        &scenario.obstacles,
+        scenario.lidar.rays,
+        c.body_radius,
+        c.barrier_margin(),
+    )
+    .iter()
+    .map(|s| {
+        format!(
+            "obstacles[{}]: a corner of {:.2} degrees, sharper than the {:.2} degrees \
+             {} LiDAR rays meet in time at this margin; pointed at the robot it may \
+             touch the body (docs/safety.md, \"Thin tips and the ray spacing\")",
+            s.obstacle,
+            s.angle.to_degrees(),
+            s.limit.to_degrees(),
+            scenario.lidar.rays
+        )
+    })
+    .collect()
 }

@@ -42,6 +42,9 @@ pub(crate) fn run(args: RunArgs) -> Result<()> {
         ..RunRequest::new(&scenario)
     };
     let rep = execute_run(&req)?;
+    for w in &rep.warnings {
+        outln!("warning: {w}");
+    }
     out!("{}", crate::report::human_summary(&rep.summary));
     outln!("wrote {}/: {}", rep.out_dir.display(), rep.files.join(" "));
     if let Some(d) = export_qps {
