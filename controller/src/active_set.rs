@@ -171,7 +171,8 @@ where
 /// enter the active set together before the first scan, see [`hot_start`]),
 /// at most `max_iter` adds plus drops. `None` when [`ActiveSetFactor::add`]
 /// asked for a restart. `nv` is the number of variables, `blocked` and
-/// `prefer` have the row capacity as length.
+/// `prefer` have the row capacity as length; `marked` false says that no
+/// entry of `prefer` is set (the marks are then not scanned).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn iterate<F: ActiveSetFactor, NV: Dim, NC: Dim>(
@@ -181,6 +182,7 @@ pub(crate) fn iterate<F: ActiveSetFactor, NV: Dim, NC: Dim>(
     neq: usize,
     mut blocked: OVector<bool, NC>,
     prefer: &OVector<bool, NC>,
+    marked: bool,
     max_iter: u32,
     hot: bool,
 ) -> Option<Iterate<NV>>
@@ -239,11 +241,12 @@ where
     // all rows would choose among them alone: each choice scans the marked
     // rows first, and all rows only when none of those is violated (the same
     // choice, without the other rows' slacks).
-    let any_marked = prefer
-        .iter()
-        .zip(blocked_s.iter())
-        .take(m)
-        .any(|(&p, &b)| p && !b);
+    let any_marked = marked
+        && prefer
+            .iter()
+            .zip(blocked_s.iter())
+            .take(m)
+            .any(|(&p, &b)| p && !b);
     if stop.is_none() && hot && factor.hot_start_capable() {
         let mut start = Start {
             blocked: &mut *blocked_s,
