@@ -264,37 +264,61 @@ where
             break status;
         }
         // Step 1: the most violated row in the H^-1 metric (marked rows first).
-        let mut marked_only = any_marked;
-        let p = loop {
-            let mut best: Option<usize> = None;
-            let mut best_v = 0.0;
-            let mut best_pref: Option<usize> = None;
-            let mut best_pref_v = 0.0;
-            for i in 0..m {
-                // `m <= len` of both: no bounds checks.
-                let pref = prefer[i];
-                if marked_only && !pref {
-                    continue;
+        let p = 'choose: {
+            // Without marks the same scan without their bookkeeping (`marked` is
+            // true as a constant where that is shorter, and this loop left out).
+            if !marked {
+                let mut best: Option<usize> = None;
+                let mut best_v = 0.0;
+                for i in 0..m {
+                    let Some(s) = factor.violation(i, blocked_s[i]) else {
+                        continue;
+                    };
+                    if s.is_nan() {
+                        break 'outer QpStatus::NumericalError;
+                    }
+                    if s < best_v {
+                        best_v = s;
+                        best = Some(i);
+                    }
                 }
-                let Some(s) = factor.violation(i, blocked_s[i]) else {
-                    continue;
-                };
-                if s.is_nan() {
-                    break 'outer QpStatus::NumericalError;
-                }
-                if s < best_v {
-                    best_v = s;
-                    best = Some(i);
-                }
-                if pref && s < best_pref_v {
-                    best_pref_v = s;
-                    best_pref = Some(i);
+                match best {
+                    Some(p) => break 'choose p,
+                    None => break 'outer QpStatus::Solved,
                 }
             }
-            match best_pref.or(best) {
-                Some(p) => break p,
-                None if marked_only => marked_only = false,
-                None => break 'outer QpStatus::Solved,
+            let mut marked_only = any_marked;
+            loop {
+                let mut best: Option<usize> = None;
+                let mut best_v = 0.0;
+                let mut best_pref: Option<usize> = None;
+                let mut best_pref_v = 0.0;
+                for i in 0..m {
+                    // `m <= len` of both: no bounds checks.
+                    let pref = prefer[i];
+                    if marked_only && !pref {
+                        continue;
+                    }
+                    let Some(s) = factor.violation(i, blocked_s[i]) else {
+                        continue;
+                    };
+                    if s.is_nan() {
+                        break 'outer QpStatus::NumericalError;
+                    }
+                    if s < best_v {
+                        best_v = s;
+                        best = Some(i);
+                    }
+                    if pref && s < best_pref_v {
+                        best_pref_v = s;
+                        best_pref = Some(i);
+                    }
+                }
+                match best_pref.or(best) {
+                    Some(p) => break 'choose p,
+                    None if marked_only => marked_only = false,
+                    None => break 'outer QpStatus::Solved,
+                }
             }
         };
         adding = Some((p, 0.0));
