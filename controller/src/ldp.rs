@@ -339,8 +339,17 @@ where
             return sol;
         }
         let tol_dep = self.solver.settings().tol_dependence;
-        let mut C = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
-        let mut Ci = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
+        // Row `i` of the factors is column `i`. For run-time sizes they start
+        // with a few rows and grow as rows are added (`gram::grow`): zeroing
+        // two `n x n` matrices cost more than the rest of a solve with few
+        // active rows (n = 50).
+        let k0 = if NV::try_to_usize().is_some() {
+            nv
+        } else {
+            NV::from_usize(nv.value().min(gram::FIRST_ROWS))
+        };
+        let mut C = OMatrix::<f64, NV, NV>::zeros_generic(nv, k0);
+        let mut Ci = OMatrix::<f64, NV, NV>::zeros_generic(nv, k0);
         let pref = active_set::marks(nc, prefer);
         let n = nv.value();
         let mut factor = Gram {

@@ -211,6 +211,10 @@ where
     #[inline(always)]
     fn add(&mut self, p: usize, r: &[f64], nact: usize) -> Result<(), AddError> {
         let n = self.n();
+        if NV::try_to_usize().is_none() {
+            grow(self.C, n, nact);
+            grow(self.Ci, n, nact);
+        }
         let diag = libm::sqrt(self.z2);
         let Some(row) = column_mut(self.C.as_mut_slice(), n, nact) else {
             return Err(AddError::Numerical);
@@ -327,6 +331,28 @@ where
             }
         }
     }
+}
+
+/// Rows of the factors `C`, `C^-1` allocated at the start of a solve with
+/// run-time sizes (at most `n`); [`grow`] doubles them when needed.
+pub(super) const FIRST_ROWS: usize = 8;
+
+/// Makes row `j` (column `j` of the storage) of a factor with `n` rows of
+/// length `n` exist, doubling the rows allocated (at most `n`; the rows
+/// added are zero). Run-time sizes only: the static factors have all `n`.
+fn grow<NV: Dim>(M: &mut OMatrix<f64, NV, NV>, n: usize, j: usize)
+where
+    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
+{
+    let (nv, cols) = M.shape_generic();
+    let cols = cols.value();
+    if j < cols || j >= n {
+        return;
+    }
+    let k = cols.saturating_mul(2).max(j + 1).min(n);
+    let mut bigger = OMatrix::<f64, NV, NV>::zeros_generic(nv, NV::from_usize(k));
+    crate::linalg::copy(bigger.as_mut_slice(), M.as_slice());
+    *M = bigger;
 }
 
 /// Below this squared norm of the new row's component outside the active span
