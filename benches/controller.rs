@@ -28,6 +28,8 @@ use ldcbf_nav::fixtures::{PAPER_GOAL, RecordedInput, paper_obstacles, walk};
 
 type Poly = ConvexPolygon<8>;
 
+// `WALK_INTO` (the firmware's third pass) is not benchmarked.
+#[allow(dead_code)]
 mod moving {
     include!("../firmware/src/moving.rs");
 }

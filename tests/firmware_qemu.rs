@@ -22,9 +22,11 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use ldcbf_controller::nalgebra::Vector2;
+use ldcbf_controller::nalgebra::{SVector, Vector2};
+use ldcbf_controller::qp::{DenseQp, DualActiveSet, QpBackend, QpSolution};
 use ldcbf_controller::{
-    Config, ConvexPolygon, CycleInput, CycleStatus, PaperController, Side, constraint_capacity,
+    Config, Controller, ConvexPolygon, CycleInput, CycleStatus, PaperController, Side,
+    constraint_capacity,
 };
 use ldcbf_nav::fixtures::{PAPER_GOAL, PAPER_OBSTACLES, paper_obstacles, walk};
 use ldcbf_sim::studies::deadline::INSTRUCTIONS_HEADER;
@@ -47,6 +49,9 @@ mod moving {
 const TARGET_INSTRUCTIONS: u64 = 100_000;
 const TARGET_FLASH: u64 = 64 * 1024;
 const TARGET_RAM: u64 = 16 * 1024;
+/// The enforced ceiling of the walk-into pass, instructions per cycle (the
+/// target, 100,000, is not met there: firmware/README.md).
+const WALK_INTO_CEILING: u64 = 180_000;
 /// Commands must agree with the host's to this (m, rad/s).
 const COMMAND_TOL: f64 = 1e-9;
 /// `-icount` shift: one instruction = 2^ICOUNT_SHIFT ns of virtual time.
@@ -58,6 +63,8 @@ const QEMU_TIMEOUT: Duration = Duration::from_secs(120);
 
 /// Cycles kept in `recorded.rs`.
 const RECORDED_CYCLES: usize = 240;
+/// Index of the first cycle of the third pass (people walking into the path).
+const WALK_INTO_START: usize = 2 * RECORDED_CYCLES;
 
 type Poly = ConvexPolygon<8>;
 
@@ -104,7 +111,7 @@ fn encode(c: &CycleInput<'_, 8>) -> Row {
 /// The shared closed loop (`ldcbf_nav::fixtures::walk`, as in the benchmarks):
 /// every cycle's input and the controller's iterations for it.
 fn closed_loop(obstacles: &[Poly], goal: Vector2<f64>) -> Vec<(Row, u32)> {
-    walk::<3, 6, { constraint_capacity(3, 8, false) }, 8, 8>(obstacles, goal, 150)
+    walk::<3, 6, NC, 8, 8>(obstacles, goal, 150)
         .iter()
         .map(|(c, out)| (encode(&c.input(obstacles)), out.info.iterations))
         .collect()
@@ -145,6 +152,85 @@ fn host_replay(
             }
         })
         .collect()
+}
+
+/// A [`QpBackend`] that counts the solves of a cycle and their iterations.
+#[derive(Default)]
+struct CountSolves(Vec<u32>);
+
+const NC: usize = constraint_capacity(3, 8, false);
+
+impl QpBackend<6, NC> for CountSolves {
+    fn solve_qp(
+        &mut self,
+        solver: &DualActiveSet<6, NC>,
+        qp: &DenseQp<6, NC>,
+        prefer: &[bool; NC],
+    ) -> QpSolution<6, NC> {
+        let sol = solver.solve(qp, prefer);
+        self.0.push(sol.iterations);
+        sol
+    }
+
+    fn solve_selected(
+        &mut self,
+        solver: &DualActiveSet<6, NC>,
+        qp: &DenseQp<6, NC>,
+        h: &SVector<f64, NC>,
+        enabled: &[bool; NC],
+        prefer: &[bool; NC],
+        budget: u32,
+    ) -> QpSolution<6, NC> {
+        let sol = solver.solve_selected(qp, h, enabled, prefer, budget);
+        self.0.push(sol.iterations);
+        sol
+    }
+}
+
+/// Where the third pass's infeasible cycles spend their solves (run by hand,
+/// firmware/README.md): the host replays the walk-into pass as the firmware
+/// does and prints, per infeasible cycle, the command's source, the
+/// iterations and each solve's iterations (the nominal solve first).
+#[test]
+#[ignore = "diagnostic print-out; run by hand (firmware/README.md)"]
+fn walk_into_solves() {
+    let obstacles = paper_obstacles::<8>();
+    let goal = Vector2::from(recorded::GOAL);
+    let into = moving::WALK_INTO.map(Vector2::from);
+    let mut ctl = Controller::<3, 6, NC, 8, CountSolves>::with_backend(
+        Config::default(),
+        CountSolves::default(),
+    )
+    .expect("valid config");
+    let mut per_cycle = Vec::new();
+    for (k, r) in recorded::CYCLES.iter().enumerate() {
+        ctl.backend_mut().0.clear();
+        let input = CycleInput {
+            obstacle_velocities: &into,
+            ..decode(r, goal, &obstacles)
+        };
+        let out = ctl.step(&input, None);
+        let solves = &ctl.backend().0;
+        if out.status != CycleStatus::Optimal {
+            println!(
+                "cycle {k}: {:?} {:?}, {} iterations, {} solves {solves:?}",
+                out.status,
+                out.info.source,
+                out.info.iterations,
+                solves.len()
+            );
+            per_cycle.push((solves.len(), out.info.iterations));
+        }
+    }
+    let total: usize = per_cycle.iter().map(|(s, _)| s).sum();
+    println!(
+        "{} infeasible cycles, {total} solves (the nominal ones included)",
+        per_cycle.len()
+    );
+    assert!(
+        !per_cycle.is_empty(),
+        "the walk-into pass has infeasible cycles"
+    );
 }
 
 /// The `RECORDED_CYCLES` consecutive cycles of the closed loop with the most
@@ -506,15 +592,13 @@ fn firmware_matches_host_in_qemu() {
     // Same point sets as checked above, so the shared polygons are the firmware's.
     let obstacles = paper_obstacles::<8>();
     let goal = Vector2::from(recorded::GOAL);
-    // First pass at rest, second pass (after a reset) with moving obstacles.
-    let velocities = moving::VELOCITIES.map(Vector2::from);
+    // First pass at rest; second and third (each after a reset) with the
+    // obstacles moving away from the recorded path and walking into it.
+    let away = moving::VELOCITIES.map(Vector2::from);
+    let into = moving::WALK_INTO.map(Vector2::from);
     let mut host = host_replay(&recorded::CYCLES, goal, &obstacles, &[]);
-    host.extend(host_replay(
-        &recorded::CYCLES,
-        goal,
-        &obstacles,
-        &velocities,
-    ));
+    host.extend(host_replay(&recorded::CYCLES, goal, &obstacles, &away));
+    host.extend(host_replay(&recorded::CYCLES, goal, &obstacles, &into));
     assert_eq!(run.cycles.len(), host.len(), "cycles replayed");
     let mut worst = 0.0f64;
     let mut iteration_mismatches = 0;
@@ -575,10 +659,12 @@ fn firmware_matches_host_in_qemu() {
         };
         (v.len(), median, v.last().copied().unwrap_or(0))
     };
-    // The per-cycle counts for `ldcbf-sim deadline --instructions FILE`.
+    // The per-cycle counts for `ldcbf-sim deadline --instructions FILE`: the
+    // first two passes (the third, people walking into a robot that does not
+    // react, is reported on its own below).
     let csv_path = workspace_root().join("firmware/target/instructions.csv");
     let mut csv = format!("{INSTRUCTIONS_HEADER}\n");
-    for c in &run.cycles {
+    for c in run.cycles.iter().filter(|c| c.index < WALK_INTO_START) {
         writeln!(
             csv,
             "{},{},{},{}",
@@ -591,11 +677,15 @@ fn firmware_matches_host_in_qemu() {
     }
     std::fs::write(&csv_path, csv)
         .unwrap_or_else(|e| panic!("cannot write {}: {e}", csv_path.display()));
-    let (n_all, med_all, max_all) = stats(&|_| true);
-    let (n_opt, med_opt, max_opt) = stats(&|c| c.status == "optimal");
-    let (n_fb, med_fb, max_fb) = stats(&|c| c.status != "optimal");
+    let first_two = |c: &FirmwareCycle| c.index < WALK_INTO_START;
+    let (n_all, med_all, max_all) = stats(&first_two);
+    let (n_opt, med_opt, max_opt) = stats(&|c| first_two(c) && c.status == "optimal");
+    let (n_fb, med_fb, max_fb) = stats(&|c| first_two(c) && c.status != "optimal");
     let (n_rest, med_rest, max_rest) = stats(&|c| c.index < RECORDED_CYCLES);
-    let (n_mov, med_mov, max_mov) = stats(&|c| c.index >= RECORDED_CYCLES);
+    let (n_mov, med_mov, max_mov) = stats(&|c| c.index >= RECORDED_CYCLES && first_two(c));
+    let (n_walk, med_walk, max_walk) = stats(&|c| !first_two(c));
+    let (n_wr, med_wr, max_wr) = stats(&|c| !first_two(c) && c.status != "optimal");
+    let (n_wr_over, ..) = stats(&|c| !first_two(c) && instructions(c) > TARGET_INSTRUCTIONS);
 
     // Memory.
     let (text, data, bss, recorded_bytes) = elf_sizes(&elf, "8recorded6CYCLES");
@@ -621,12 +711,15 @@ fn firmware_matches_host_in_qemu() {
         csv_path.display()
     );
     println!(
-        "instructions per cycle: all {n_all}: median {med_all} max {max_all}; optimal \
-         {n_opt}: median {med_opt} max {max_opt}; fallback {n_fb}: median {med_fb} max {max_fb}"
+        "instructions per cycle, first two passes: all {n_all}: median {med_all} max \
+         {max_all}; optimal {n_opt}: median {med_opt} max {max_opt}; fallback {n_fb}: median \
+         {med_fb} max {max_fb}"
     );
     println!(
         "instructions per cycle by pass: obstacles at rest {n_rest}: median {med_rest} max \
-         {max_rest}; moving obstacles {n_mov}: median {med_mov} max {max_mov}"
+         {max_rest}; moving away {n_mov}: median {med_mov} max {max_mov}; walking into the \
+         path {n_walk}: median {med_walk} max {max_walk} (its {n_wr} infeasible cycles: \
+         median {med_wr} max {max_wr}; {n_wr_over} cycles above {TARGET_INSTRUCTIONS})"
     );
     println!(
         "ELF: text {text} data {data} bss {bss} (text includes the recorded cycles, \
@@ -636,7 +729,7 @@ fn firmware_matches_host_in_qemu() {
         "stack: start-up peak {}, main's frame {}, a cycle's high-water mark {cycle_stack}",
         run.startup_stack_peak, run.main_stack_depth
     );
-    let budgets = budgets(max_opt, max_all, flash, ram_loop, ram_startup);
+    let budgets = budgets(max_opt, max_all, max_walk, flash, ram_loop, ram_startup);
     println!(
         "{:<58} {:>9} {:>9} {:>9}",
         "budget", "value", "target", "ceiling"
@@ -668,8 +761,16 @@ struct Budget {
     ceiling: u64,
 }
 
-/// The enforced ceilings: the targets.
-fn budgets(max_opt: u64, max_all: u64, flash: u64, ram_loop: u64, ram_startup: u64) -> [Budget; 5] {
+/// The enforced ceilings: the targets, but for the walk-into pass (a
+/// ceiling just above today's value, so that a regression fails).
+fn budgets(
+    max_opt: u64,
+    max_all: u64,
+    max_walk: u64,
+    flash: u64,
+    ram_loop: u64,
+    ram_startup: u64,
+) -> [Budget; 6] {
     [
         Budget {
             what: "instructions, cycles with a solved QP (max)",
@@ -687,6 +788,17 @@ fn budgets(max_opt: u64, max_all: u64, flash: u64, ram_loop: u64, ram_startup: u
             value: max_all,
             target: TARGET_INSTRUCTIONS,
             ceiling: TARGET_INSTRUCTIONS,
+        },
+        Budget {
+            // The third pass: people walking into the recorded path, most
+            // cycles infeasible with a person in the conflict (confined
+            // safety relaxation and give-way: the nominal solve and two to
+            // four probes). Not met (firmware/README.md); the ceiling guards
+            // against regressions.
+            what: "instructions, people walking into the path (max)",
+            value: max_walk,
+            target: TARGET_INSTRUCTIONS,
+            ceiling: WALK_INTO_CEILING,
         },
         Budget {
             // Met since the controller has no panicking branch left (nopanic/):

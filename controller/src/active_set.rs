@@ -132,6 +132,17 @@ pub(crate) trait ActiveSetFactor {
     /// Hot start, last step: moves the iterate to the minimiser of the last
     /// [`ActiveSetFactor::hot_multipliers`].
     fn hot_move(&mut self, _act: &[u16], _nact: usize) {}
+
+    /// A factor that already holds an active set with its iterate (the
+    /// proximal iterations' resolve, `qp/resolve.rs`): writes its rows and
+    /// multipliers to `act` and `mult` and returns `(nact, neq)`, the number
+    /// of active rows and of equality rows at their head; [`iterate`] then
+    /// starts from there (no equality phase, no hot start; the caller has
+    /// marked the active rows, and every equality row, as blocked). `None`
+    /// (the default): a fresh factor.
+    fn resume(&mut self, _act: &mut [u16], _mult: &mut [f64]) -> Option<(usize, usize)> {
+        None
+    }
 }
 
 /// Where [`iterate`] stopped.
@@ -200,7 +211,12 @@ where
     let mut farkas: Option<(usize, f64, OVector<f64, NV>)> = None;
     let mut adding: Option<(usize, f64)> = None;
     let mut stop = None;
-    if neq > 0 {
+    let resumed = factor.resume(act.as_mut_slice(), mult.as_mut_slice());
+    if let Some((n, e)) = resumed {
+        nact = n.min(nvv);
+        neq_act = e.min(nact);
+    }
+    if neq > 0 && resumed.is_none() {
         if !factor.equalities_capable() {
             stop = Some(QpStatus::NumericalError);
         } else {
@@ -247,7 +263,7 @@ where
             .zip(blocked_s.iter())
             .take(m)
             .any(|(&p, &b)| p && !b);
-    if stop.is_none() && hot && factor.hot_start_capable() {
+    if stop.is_none() && hot && resumed.is_none() && factor.hot_start_capable() {
         let mut start = Start {
             blocked: &mut *blocked_s,
             act: &mut *act_s,
@@ -523,7 +539,7 @@ where
 /// Removes entry `l` of the first `n` of `s` (the entries after it move up
 /// one place; entry `n - 1` is left as it was).
 #[inline(always)]
-fn remove_at<T: Copy>(s: &mut [T], l: usize, n: usize) {
+pub(crate) fn remove_at<T: Copy>(s: &mut [T], l: usize, n: usize) {
     for i in l..n.min(s.len()).saturating_sub(1) {
         if let Some(&next) = s.get(i + 1)
             && let Some(cur) = s.get_mut(i)

@@ -96,10 +96,100 @@ use crate::linalg::{column, columns, columns_mut, dot, dot_d};
 pub use crate::solution::QpSolutionDyn;
 pub use crate::solution::{QpAllocator, QpSolution, QpSolutionOf, QpStatus};
 
+/// The checks every solve starts with, written once for
+/// `DualActiveSetOf::solve_with` and the proximal iterations
+/// (`qp/proximal.rs`): binds the names after `=>` (the variables and row
+/// capacity as dimensions, the rows used, the linear term as a slice, the
+/// primal tolerance, the equality rows at the head, 0 where they are not
+/// compiled in, and the rows blocked from the start: `excluded` and the zero
+/// equality rows), or returns the answer from the enclosing function when
+/// the solve ends there (sizes, a non-finite `q`, `h` or row, an equality
+/// row where they are not compiled in, a zero row that contradicts itself).
+/// A macro, not a function: the static instances compile exactly as with the
+/// checks written out in place.
+macro_rules! solve_start {
+    ($s:ident, $qp:ident, $qv:expr, $hv:ident, $excluded:ident, $norms:ident =>
+     $nv:ident, $nc:ident, $m:ident, $q:ident, $tol:ident, $me:ident, $blocked:ident) => {
+        let $nv = $s.nv();
+        let n = $nv.value();
+        let $nc = $qp.h.shape_generic().0;
+        let $m = $qp.m.min($nc.value());
+        let $q = $qv.as_slice();
+        let (h, norm2) = ($hv.as_slice(), $norms.norm2.as_slice());
+        if h.len() != $nc.value()
+            || norm2.len() != $nc.value()
+            || $norms.inv_hnorm.len() != $nc.value()
+        {
+            return $crate::active_set::stopped(
+                $nv,
+                $nc,
+                $crate::solution::QpStatus::NumericalError,
+            );
+        }
+        if !$norms.finite
+            || $qp.gt.nrows() != n
+            || $q.len() != n
+            || !$q.iter().all(|v| v.is_finite())
+            || !h
+                .iter()
+                .zip($excluded.as_slice().iter())
+                .take($m)
+                .all(|(v, &out)| out || v.is_finite())
+        {
+            return $crate::active_set::stopped(
+                $nv,
+                $nc,
+                $crate::solution::QpStatus::NumericalError,
+            );
+        }
+        let $tol = $s.settings.tol_primal;
+        // Equality rows only where they are compiled in (module docs): for
+        // the small static sizes `me` is the constant 0 from here on.
+        let capable = $s.equalities_capable();
+        if !capable && $qp.me > 0 {
+            return $crate::active_set::stopped(
+                $nv,
+                $nc,
+                $crate::solution::QpStatus::NumericalError,
+            );
+        }
+        let $me = if capable { $qp.me.min($m) } else { 0 };
+        let zero_infeasible = h
+            .iter()
+            .zip(norm2.iter())
+            .zip($excluded.as_slice().iter())
+            .take($m)
+            .enumerate()
+            .position(|(i, ((&hi, &n2), &out))| {
+                !out && n2 <= $crate::qp::ZERO_ROW2
+                    && $crate::active_set::zero_row_contradicts(hi, $tol, i < $me)
+            });
+        if let Some(i) = zero_infeasible {
+            // Nothing satisfies it: y = e_i (or -e_i) certifies it.
+            let hi = h.get(i).copied().unwrap_or(0.0);
+            return $crate::active_set::zero_row_infeasible($nv, $nc, i, hi);
+        }
+        let mut $blocked = $excluded;
+        // Zero rows are never added (an equality zero row holds here).
+        for (b, &n2) in $blocked
+            .as_mut_slice()
+            .iter_mut()
+            .zip(norm2.iter())
+            .take($me)
+        {
+            if n2 <= $crate::qp::ZERO_ROW2 {
+                *b = true;
+            }
+        }
+    };
+}
+
 mod backend;
 mod dense;
 mod orthogonal;
 mod proximal;
+mod resolve;
+mod spans;
 pub use backend::{OwnSolver, QpBackend};
 #[cfg(feature = "alloc")]
 pub use dense::DenseQpDyn;
@@ -618,57 +708,7 @@ where
         prefer: &[bool],
         max_iter: u32,
     ) -> QpSolutionOf<NV, NC> {
-        let nv = self.nv();
-        let n = nv.value();
-        let nc = qp.h.shape_generic().0;
-        let m = qp.m.min(nc.value());
-        let q = qv.as_slice();
-        let (h, norm2) = (hv.as_slice(), norms.norm2.as_slice());
-        if h.len() != nc.value() || norm2.len() != nc.value() || norms.inv_hnorm.len() != nc.value()
-        {
-            return active_set::stopped(nv, nc, QpStatus::NumericalError);
-        }
-        if !norms.finite
-            || qp.gt.nrows() != n
-            || q.len() != n
-            || !q.iter().all(|v| v.is_finite())
-            || !h
-                .iter()
-                .zip(excluded.as_slice().iter())
-                .take(m)
-                .all(|(v, &out)| out || v.is_finite())
-        {
-            return active_set::stopped(nv, nc, QpStatus::NumericalError);
-        }
-        let tol = self.settings.tol_primal;
-        // Equality rows only where they are compiled in (module docs): for
-        // the small static sizes `me` is the constant 0 from here on.
-        let capable = self.equalities_capable();
-        if !capable && qp.me > 0 {
-            return active_set::stopped(nv, nc, QpStatus::NumericalError);
-        }
-        let me = if capable { qp.me.min(m) } else { 0 };
-        let zero_infeasible = h
-            .iter()
-            .zip(norm2.iter())
-            .zip(excluded.as_slice().iter())
-            .take(m)
-            .enumerate()
-            .position(|(i, ((&hi, &n2), &out))| {
-                !out && n2 <= ZERO_ROW2 && active_set::zero_row_contradicts(hi, tol, i < me)
-            });
-        if let Some(i) = zero_infeasible {
-            // Nothing satisfies it: y = e_i (or -e_i) certifies it.
-            let hi = h.get(i).copied().unwrap_or(0.0);
-            return active_set::zero_row_infeasible(nv, nc, i, hi);
-        }
-        let mut blocked = excluded;
-        // Zero rows are never added (an equality zero row holds here).
-        for (b, &n2) in blocked.as_mut_slice().iter_mut().zip(norm2.iter()).take(me) {
-            if n2 <= ZERO_ROW2 {
-                *b = true;
-            }
-        }
+        solve_start!(self, qp, qv, hv, excluded, norms => nv, nc, m, q, tol, me, blocked);
         let pref = active_set::marks(nc, prefer);
         // Whether any row is marked (on hosts; on bare-metal targets the
         // iteration's own test of the marks alone, which is shorter there).
@@ -694,6 +734,8 @@ where
             d: &mut d,
             z: OVector::zeros_generic(nv, U1),
             dependent: false,
+            span: None,
+            reorder: false,
         };
         // Rows left out are never scanned: they start (and stay) blocked as if
         // active, but never enter the active list.

@@ -1,8 +1,9 @@
 //! Cortex-M7 firmware for QEMU's `mps2-an500`: replays the recorded control
 //! cycles of `recorded.rs` through the paper's controller ([`PaperController`])
-//! in order, as the host did, then once more (after a reset) with the
+//! in order, as the host did, then twice more (each after a reset) with the
 //! obstacles moving at the velocities of `moving.rs` (cycle indices `n ..
-//! 2n`), and prints over semihosting, per cycle, the
+//! 2n`: `VELOCITIES`, away from the path; `2n .. 3n`: `WALK_INTO`, into
+//! it), and prints over semihosting, per cycle, the
 //! command (exact `f64` bits in hex), the status, the solver iterations, the
 //! SysTick ticks the cycle took and its stack high-water mark. Exits QEMU
 //! through semihosting (status 0 on success, 1 on a panic, fault or a cycle too
@@ -121,7 +122,7 @@ fn main() -> ! {
 
     let mut line = Line::new();
     line.str("ldcbf-firmware cycles ")
-        .dec(2 * recorded::CYCLES.len() as u32);
+        .dec(3 * recorded::CYCLES.len() as u32);
     line.flush(&mut out);
     line.str("calibration empty_ticks ").dec(empty);
     line.str(" nop256_ticks ").dec(nop256);
@@ -131,12 +132,17 @@ fn main() -> ! {
     line.flush(&mut out);
 
     let goal = Vector2::new(recorded::GOAL[0], recorded::GOAL[1]);
-    let velocities = moving::VELOCITIES.map(|[x, y]| Vector2::new(x, y));
+    let away = moving::VELOCITIES.map(|[x, y]| Vector2::new(x, y));
+    let into = moving::WALK_INTO.map(|[x, y]| Vector2::new(x, y));
     let (mut max_ticks, mut max_stack) = (0u32, 0usize);
     let n = recorded::CYCLES.len();
-    for i in 0..2 * n {
-        let moving: &[Vector2<f64>] = if i < n { &[] } else { &velocities };
-        if i == n {
+    for i in 0..3 * n {
+        let moving: &[Vector2<f64>] = match i / n {
+            0 => &[],
+            1 => &away,
+            _ => &into,
+        };
+        if i == n || i == 2 * n {
             state.controller.reset();
         }
         let rec = &recorded::CYCLES[i % n];

@@ -698,17 +698,19 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                 backend,
                 &work.qp,
                 &work.rows,
-                self.config.max_iter,
-                self.config.max_iter_cycle.saturating_sub(sol.iterations),
-                self.config.relax_bisections,
-                self.config.max_gait_relaxation,
-                relax::CaptureBounds::new(
-                    &self.config,
-                    self.model.kappa,
-                    work.prediction.heading.omega_bar,
-                ),
-                Some(&sol.lambda),
-                give_way,
+                relax::Params {
+                    max_iter: self.config.max_iter,
+                    budget: self.config.max_iter_cycle.saturating_sub(sol.iterations),
+                    probes: self.config.relax_bisections,
+                    gait_cap: self.config.max_gait_relaxation,
+                    capture: relax::CaptureBounds::new(
+                        &self.config,
+                        self.model.kappa,
+                        work.prediction.heading.omega_bar,
+                    ),
+                    certificate: Some(&sol.lambda),
+                    give_way,
+                },
             )
         } else {
             Err(relax::RelaxError {

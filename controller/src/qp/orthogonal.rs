@@ -6,7 +6,9 @@
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
-use super::{DualActiveSetOf, QpAllocator, ZERO_ROW2};
+use super::resolve::back_substitute_by_columns;
+use super::spans::{Span, unpack};
+use super::{DualActiveSetOf, QpAllocator, ZERO_ROW2, proximal_capable};
 use crate::active_set::{ActiveSetFactor, AddError};
 use crate::linalg::{
     column, column_mut, columns, columns_in, columns_in_mut, columns_mut, dot, dot_d, givens,
@@ -53,6 +55,16 @@ where
     pub z: OVector<f64, NV>,
     /// The last row `p` was linearly dependent on the active rows.
     pub dependent: bool,
+    /// The rows' spans (`qp/spans.rs`): the scan's and the adds' dot
+    /// products run over them (the same bits); `None`: over all `NV`
+    /// entries.
+    pub span: Option<&'a OVector<Span, NC>>,
+    /// The proximal iterations' solves (`qp/proximal.rs`), whose rounding
+    /// is not tied to earlier results: the adds skip the zero entries of
+    /// the Householder vector and the direction's back substitution runs by
+    /// columns (`resolve::back_substitute_by_columns`), both faster for
+    /// large `NV`; false: the definite path's operations, bit for bit.
+    pub reorder: bool,
 }
 
 impl<'a, NV: Dim, NC: Dim> Orthogonal<'a, NV, NC>
@@ -74,10 +86,40 @@ where
         ))
     }
 
-    /// `d = J' n_p = -J' g_p`.
+    /// The span of row `i`: `None` without spans, and always (a constant)
+    /// for the static sizes without the proximal iterations.
     #[inline(always)]
-    fn project(&mut self, gp: &[f64]) {
+    fn span_of(&self, i: usize) -> Option<(usize, usize)> {
+        if !proximal_capable::<NV>() {
+            return None;
+        }
+        let s = self.span?.as_slice().get(i)?;
+        Some(unpack(*s))
+    }
+
+    /// [`Orthogonal::reorder`], a constant `false` for the static sizes
+    /// without the proximal iterations.
+    #[inline(always)]
+    fn reordered(&self) -> bool {
+        proximal_capable::<NV>() && self.reorder
+    }
+
+    /// `d = J' n_p = -J' g_p` (`g_p` row `p`).
+    #[inline(always)]
+    fn project(&mut self, gp: &[f64], p: usize) {
         let n = self.n();
+        if let Some((lo, hi)) = self.span_of(p) {
+            let g = gp.get(lo..hi).unwrap_or(&[]);
+            for (dj, col) in self
+                .d
+                .as_mut_slice()
+                .iter_mut()
+                .zip(columns(self.J.as_slice(), n))
+            {
+                *dj = -dot_d::<NV>(col.get(lo..hi).unwrap_or(&[]), g);
+            }
+            return;
+        }
         for (dj, col) in self
             .d
             .as_mut_slice()
@@ -87,6 +129,35 @@ where
             *dj = -dot_d::<NV>(col, gp);
         }
     }
+}
+
+/// The end of [`ActiveSetFactor::violation`] for row `g` (`|g|^2 = n2`, its
+/// cached `1 / |L^-1 g|` in `ihn`, 0 = not yet) with the slack `slack`:
+/// `None` when it holds to the tolerance, NaN when the slack is not finite,
+/// else the slack in the metric of `H^-1`.
+#[inline(always)]
+pub(super) fn rate<NV: Dim, NC: Dim>(
+    solver: &DualActiveSetOf<NV, NC>,
+    tol2: f64,
+    g: &[f64],
+    n2: f64,
+    ihn: &mut f64,
+    slack: f64,
+) -> Option<f64>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
+    if !slack.is_finite() {
+        return Some(f64::NAN);
+    }
+    if slack >= 0.0 || slack * slack <= tol2 * n2 {
+        return None; // satisfied to tolerance
+    }
+    if *ihn == 0.0 {
+        *ihn = solver.inv_hnorm(g, n2);
+    }
+    // Not NaN: `slack` is finite and `*ihn` positive (possibly infinite).
+    Some(slack * *ihn)
 }
 
 impl<NV: Dim, NC: Dim> ActiveSetFactor for Orthogonal<'_, NV, NC>
@@ -116,17 +187,7 @@ where
         }
         // (`dot_d`: as pairs for run-time sizes, the scan over all rows.)
         let slack = hi - dot_d::<NV>(g, self.x.as_slice());
-        if !slack.is_finite() {
-            return Some(f64::NAN);
-        }
-        if slack >= 0.0 || slack * slack <= self.tol2 * n2 {
-            return None; // satisfied to tolerance
-        }
-        if *ihn == 0.0 {
-            *ihn = self.solver.inv_hnorm(g, n2);
-        }
-        // Not NaN: `slack` is finite and `*ihn` positive (possibly infinite).
-        Some(slack * *ihn)
+        rate(self.solver, self.tol2, g, n2, ihn, slack)
     }
 
     #[inline(always)]
@@ -134,7 +195,7 @@ where
         let n = self.n();
         let (gp, hp) = self.row(p)?;
         // d = J' n_p with the GI normal n_p = -g_p (n_p'x >= -h_p).
-        self.project(gp);
+        self.project(gp, p);
         let slack_p = hp - dot(gp, self.x.as_slice()); // < 0 while violated
         // z = J2 d2: component of the step outside the active span. For the
         // static sizes on hosts accumulated in a local vector (kept in vector
@@ -165,7 +226,11 @@ where
         if let Some(l) = &local {
             crate::linalg::copy(self.z.as_mut_slice(), l.as_slice());
         }
-        back_substitute(self.R, self.d.as_slice(), nact, r);
+        if self.reordered() {
+            back_substitute_by_columns(self.R, self.d.as_slice(), nact, r);
+        } else {
+            back_substitute(self.R, self.d.as_slice(), nact, r);
+        }
         // Full (primal) step length t2.
         let dn = crate::linalg::sqrt(dot(self.d.as_slice(), self.d.as_slice()));
         let dependent = crate::linalg::sqrt(d2sq) <= self.solver.settings.tol_dependence * dn;
@@ -195,7 +260,12 @@ where
     /// Adds row `p` (see [`householder_add`]).
     #[inline(always)]
     fn add(&mut self, _p: usize, _r: &[f64], nact: usize) -> Result<(), AddError> {
-        if householder_add(self.J, self.R, nact, self.d.as_slice()) {
+        let added = if self.reordered() {
+            householder_add::<NV, true>(self.J, self.R, nact, self.d.as_slice())
+        } else {
+            householder_add::<NV, false>(self.J, self.R, nact, self.d.as_slice())
+        };
+        if added {
             Ok(())
         } else {
             Err(AddError::Numerical)
@@ -339,7 +409,7 @@ where
         let Some((gp, _)) = self.row(p) else {
             return Err(AddError::Numerical);
         };
-        self.project(gp);
+        self.project(gp, p);
         let mut d2sq = 0.0;
         for &dj in self.d.as_slice().iter().skip(nact) {
             d2sq += dj * dj;
@@ -349,7 +419,12 @@ where
         if outside.is_nan() || outside <= self.solver.settings.tol_dependence * dn {
             return Ok(false);
         }
-        if householder_add(self.J, self.R, nact, self.d.as_slice()) {
+        let added = if self.reordered() {
+            householder_add::<NV, true>(self.J, self.R, nact, self.d.as_slice())
+        } else {
+            householder_add::<NV, false>(self.J, self.R, nact, self.d.as_slice())
+        };
+        if added {
             Ok(true)
         } else {
             Err(AddError::Numerical)
@@ -410,8 +485,12 @@ where
 /// (and run-time sizes) over `nact` (fully unrolled, the `NV^2 / 2` tests
 /// would cost more than they save). Measured in `docs/solvers.md`.
 #[inline(always)]
-fn back_substitute<NV: Dim>(R: &OMatrix<f64, NV, NV>, d: &[f64], nact: usize, r: &mut [f64])
-where
+pub(super) fn back_substitute<NV: Dim>(
+    R: &OMatrix<f64, NV, NV>,
+    d: &[f64],
+    nact: usize,
+    r: &mut [f64],
+) where
     DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
 {
     let small = NV::try_to_usize().is_some_and(|n| n <= 8);
@@ -458,7 +537,7 @@ where
 /// the flops of the equivalent Givens sweep, and all of them vectorise. False
 /// when the active set is full (`nact == NV`) or the new diagonal of `R` is
 /// zero or not finite.
-fn householder_add<NV: Dim>(
+fn householder_add<NV: Dim, const SPARSE: bool>(
     J: &mut OMatrix<f64, NV, NV>,
     R: &mut OMatrix<f64, NV, NV>,
     nact: usize,
@@ -496,11 +575,17 @@ where
         let mut w = OVector::<f64, NV>::zeros_generic(nvd, nalgebra::U1);
         let v2 = v.as_slice().get(nact..).unwrap_or(&[]);
         for (col, &vj) in columns_in(J.as_slice(), n, nact, n).zip(v2) {
+            if SPARSE && vj == 0.0 {
+                continue;
+            }
             for (wk, c) in w.as_mut_slice().iter_mut().zip(col) {
                 *wk += c * vj;
             }
         }
         for (col, &vj) in columns_in_mut(J.as_mut_slice(), n, nact, n).zip(v2) {
+            if SPARSE && vj == 0.0 {
+                continue;
+            }
             let f = beta * vj;
             for (c, wk) in col.iter_mut().zip(w.as_slice().iter()) {
                 *c -= f * wk;
@@ -528,7 +613,7 @@ where
 // Inlined (as the compiler chose when the loop was written out here, on
 // x86-64 and on the Cortex-M7; out of line it costs the paper QPs 4 %).
 #[inline(always)]
-fn givens_drop<NV: Dim>(
+pub(super) fn givens_drop<NV: Dim>(
     J: &mut OMatrix<f64, NV, NV>,
     R: &mut OMatrix<f64, NV, NV>,
     nact: usize,

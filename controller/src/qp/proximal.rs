@@ -14,8 +14,10 @@
 //! ```
 //!
 //! from `x_0 = 0`, each a strictly convex QP solved by the same dual
-//! active-set iteration, hot-started from the active set of the one before
-//! (its rows marked; the caller's marks for the first). The proximal point
+//! active-set iteration: the first from the caller's marks, each later one
+//! resumed from the factor of the active rows the one before ended with
+//! (`qp/resolve.rs`: only the linear term changes), with the rows' spans
+//! (`qp/spans.rs`) and [`Orthogonal::reorder`]. The proximal point
 //! method converges to a minimiser of the QP whenever one exists
 //! (Rockafellar 1976). After each solve `H x + q + G' lambda =
 //! eps (x_k - x_{k+1})`: the multipliers of the solve are the QP's up to
@@ -27,8 +29,9 @@
 //! objective reported is the QP's (`1/2 x'Hx + q'x`).
 //!
 //! Budget: [`QpSettings::max_iter`](super::QpSettings::max_iter) covers the
-//! adds plus drops of all the proximal solves together (each re-enters its
-//! active set, one iteration per row, the equality rows included), and at
+//! adds plus drops of all the proximal solves together (the first enters
+//! its active set, one iteration per row, the equality rows included; the
+//! drops of a resumed start count too), and at
 //! most [`PROX_MAX_OUTER`] proximal solves run; when either runs out the
 //! status is [`QpStatus::IterationLimit`] with the last iterate (as for a QP
 //! whose objective is unbounded below on the feasible set, where the
@@ -42,8 +45,12 @@
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector, U1};
 
-use super::{DenseQpOf, DualActiveSetOf, HOT_START_MIN_NV, HessianError, QpAllocator, RowNormsOf};
-use crate::active_set;
+use super::resolve::{Kept, ResolveStop, Resumed, resolve};
+use super::spans::row_spans;
+use super::{
+    DenseQpOf, DualActiveSetOf, HOT_START_MIN_NV, HessianError, Orthogonal, QpAllocator, RowNormsOf,
+};
+use crate::active_set::{self, Iterate};
 use crate::linalg::{column_mut, copy};
 use crate::solution::{QpSolutionOf, QpStatus};
 
@@ -102,16 +109,24 @@ where
         prefer: &[bool],
         max_iter: u32,
     ) -> QpSolutionOf<NV, NC> {
-        let nv = self.nv();
-        let nc = qp.h.shape_generic().0;
+        solve_start!(self, qp, qp.q, hv, excluded, norms => nv, nc, m, _q, tol, me, blocked);
         let eps = self.prox;
-        let mut marks = active_set::marks(nc, prefer);
+        let hot = self.settings.hot_start;
+        let pref = active_set::marks(nc, prefer);
+        let unmarked = OVector::<bool, NC>::from_element_generic(nc, U1, false);
+        let spans = row_spans(&qp.gt, m);
+        // The factor of the active rows, kept from one proximal solve to the
+        // next (`qp/resolve.rs`).
+        let mut J = self.Linv.transpose();
+        let mut R = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
+        let mut d = OVector::<f64, NV>::zeros_generic(nv, U1);
+        let mut kept: Option<Kept<NV>> = None;
         let mut xk = OVector::<f64, NV>::zeros_generic(nv, U1);
         let mut qk = qp.q.clone();
         let qmax = qp.q.as_slice().iter().fold(1.0f64, |a, v| a.max(v.abs()));
         let mut used: u32 = 0;
-        let mut last = active_set::stopped(nv, nc, QpStatus::IterationLimit);
-        for _ in 0..PROX_MAX_OUTER {
+        let mut last: Option<(Iterate<NV>, OVector<f64, NV>)> = None;
+        for round in 0..PROX_MAX_OUTER {
             for ((qi, &q0), &xi) in qk
                 .as_mut_slice()
                 .iter_mut()
@@ -120,33 +135,118 @@ where
             {
                 *qi = q0 - eps * xi;
             }
+            let mut start = blocked.clone();
+            let x = match kept.as_mut() {
+                None => {
+                    // Unconstrained minimiser x = -L^-T L^-1 q_k.
+                    let mut x = self.linvt_mul(self.linv_mul(qk.as_slice()).as_slice());
+                    for v in x.as_mut_slice() {
+                        *v = -*v;
+                    }
+                    x
+                }
+                Some(k) => {
+                    let mut x = OVector::<f64, NV>::zeros_generic(nv, U1);
+                    let left = max_iter.saturating_sub(used);
+                    match resolve(&mut J, &mut R, hv, k, &qk, &mut x, left) {
+                        Ok(drops) => used = used.saturating_add(drops),
+                        Err(ResolveStop::Budget) => {
+                            // The last iterate, as when a solve runs out.
+                            let Some((it, x)) = last.take() else {
+                                return active_set::stopped(nv, nc, QpStatus::IterationLimit);
+                            };
+                            let status = QpStatus::IterationLimit;
+                            return self.proximal_answer(qp, it, x, status, max_iter);
+                        }
+                        Err(ResolveStop::Numerical) => {
+                            return active_set::stopped(nv, nc, QpStatus::NumericalError);
+                        }
+                    }
+                    // The active rows and every equality row (active, or
+                    // redundant) stay out of the scans.
+                    let s = start.as_mut_slice();
+                    for b in s.iter_mut().take(me) {
+                        *b = true;
+                    }
+                    for &a in k.act.as_slice().iter().take(k.nact) {
+                        if let Some(b) = s.get_mut(usize::from(a)) {
+                            *b = true;
+                        }
+                    }
+                    x
+                }
+            };
             let left = max_iter.saturating_sub(used);
-            let mut sol =
-                self.solve_with(qp, &qk, hv, excluded.clone(), norms, marks.as_slice(), left);
-            used = used.saturating_add(sol.iterations);
-            sol.iterations = used;
-            if sol.status != QpStatus::Solved {
-                return sol;
-            }
-            let dx = sol
-                .x
+            let marks = if kept.is_some() { &unmarked } else { &pref };
+            let mut factor = Resumed {
+                inner: Orthogonal {
+                    solver: self,
+                    rows: &qp.gt,
+                    h: hv,
+                    norm2: &norms.norm2,
+                    inv_hnorm: &mut norms.inv_hnorm,
+                    tol2: tol * tol,
+                    x,
+                    J: &mut J,
+                    R: &mut R,
+                    d: &mut d,
+                    z: OVector::zeros_generic(nv, U1),
+                    dependent: false,
+                    span: Some(&spans),
+                    reorder: true,
+                },
+                kept: kept.as_ref(),
+            };
+            let it = active_set::iterate(&mut factor, nv, m, me, start, marks, true, left, hot);
+            let x = factor.inner.x;
+            let Some(it) = it else {
+                // The orthogonal factor never asks for a restart.
+                return active_set::stopped(nv, nc, QpStatus::NumericalError);
+            };
+            used = used.saturating_add(it.iters);
+            let dx = x
                 .as_slice()
                 .iter()
                 .zip(xk.as_slice())
                 .fold(0.0f64, |a, (&u, &v)| a.max((u - v).abs()));
-            if eps * dx <= PROX_TOL * qmax {
-                return sol;
+            copy(xk.as_mut_slice(), x.as_slice());
+            let converged = eps * dx <= PROX_TOL * qmax;
+            if it.status != QpStatus::Solved || converged || round + 1 == PROX_MAX_OUTER {
+                let status = match it.status {
+                    QpStatus::Solved if !converged => QpStatus::IterationLimit,
+                    s => s,
+                };
+                return self.proximal_answer(qp, it, x, status, used);
             }
-            copy(xk.as_mut_slice(), sol.x.as_slice());
-            marks.as_mut_slice().fill(false);
-            for &a in sol.active_set() {
-                if let Some(mk) = marks.as_mut_slice().get_mut(usize::from(a)) {
-                    *mk = true;
-                }
-            }
-            last = sol;
+            kept = Some(Kept {
+                act: it.act.clone(),
+                mult: OVector::zeros_generic(nv, U1),
+                nact: it.nact,
+                neq: it.neq,
+            });
+            last = Some((it, x));
         }
-        last.status = QpStatus::IterationLimit;
-        last
+        active_set::stopped(nv, nc, QpStatus::IterationLimit)
+    }
+
+    /// The answer from the iteration `it` that ended at `x`, with `status`
+    /// in place of [`QpStatus::Solved`] and `used` iterations in all; the
+    /// objective is the QP's.
+    fn proximal_answer(
+        &self,
+        qp: &DenseQpOf<NV, NC>,
+        it: Iterate<NV>,
+        x: OVector<f64, NV>,
+        status: QpStatus,
+        used: u32,
+    ) -> QpSolutionOf<NV, NC> {
+        let nc = qp.h.shape_generic().0;
+        let objective = self.objective(&qp.q, &x);
+        let mut sol = it.solution(nc, x, objective, |_| 1.0);
+        if sol.status == QpStatus::Solved {
+            sol.status = status;
+        }
+        sol.iterations = used;
+        sol
     }
 }

@@ -6,11 +6,12 @@ use nalgebra::SVector;
 use super::RelaxFailure;
 use super::rows::{Keep, RowClass};
 use super::search::{Ctx, Probe};
+use crate::linalg::{columns, dot};
 use crate::qp::QpBackend;
 
 impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> {
-    /// Adds the safety rows of the last certificate's support to the
-    /// conflict; the number added.
+    /// Adds the safety rows that a certificate of this cycle weighed
+    /// ([`Ctx::support`]) to the conflict; the number added.
     fn grow_conflict(&mut self) -> u32 {
         let mut added = 0u32;
         for ((c, &s), id) in self
@@ -28,26 +29,54 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         added
     }
 
+    /// Whether the plan `u` keeps every safety row outside the conflict at
+    /// its nominal right-hand side, to the solver's tolerance (`g'u - h <=
+    /// tol_primal |g|`, the test of its scan).
+    fn keeps_outside(&self, u: &SVector<f64, NV>) -> bool {
+        let tol = self.solver.settings().tol_primal;
+        columns(self.qp.gt.as_slice(), NV)
+            .zip(&self.qp.h)
+            .zip(self.rows)
+            .zip(&self.conflict)
+            .zip(&self.norms)
+            .take(self.qp.m)
+            .all(|((((g, &h), id), &c), &n)| {
+                c || RowClass::of(id.kind) != RowClass::Safety
+                    || dot(g, u.as_slice()) - h <= tol * n
+            })
+    }
+
     /// With `keep` (its safety relaxation the least uniform one, feasible),
     /// the optimal plan when only the safety rows in conflict take that
     /// relaxation and every other safety row keeps its nominal right-hand
     /// side (the conflict is left in `self.conflict`). The conflict starts as the safety
-    /// rows of the last certificate (the one that proved the relaxation
+    /// rows that the cycle's certificates weighed (the nominal solve's and
+    /// each infeasible probe's, among them the one that proved the relaxation
     /// minimal) and grows by the safety rows of each infeasible probe's
-    /// certificate; each probe draws on the scheme's probes. `Ok(None)` (the
-    /// uniform relaxation stands, and the confinement is off again) when the
-    /// probes run out or a certificate adds no row (rounding).
+    /// certificate; each probe draws on the scheme's probes. No probe is
+    /// needed when `uniform`, the optimal plan under the uniform relaxation,
+    /// already keeps every safety row outside the conflict at its nominal
+    /// right-hand side: the confined problem's feasible set lies in the
+    /// uniform one's and holds that plan, so it is the confined optimum too,
+    /// and it is returned as it is. `Ok(None)` (the uniform relaxation
+    /// stands, and the confinement is off again) when the probes run out or
+    /// a certificate adds no row (rounding).
     ///
     /// On success the confinement stays on (for the gait search that follows
     /// under the same safety relaxation), and the last certificate stays valid
     /// for it: its safety rows are all in the conflict.
-    pub(super) fn confine(&mut self, keep: Keep) -> Result<Option<SVector<f64, NV>>, RelaxFailure> {
+    pub(super) fn confine(
+        &mut self,
+        keep: Keep,
+        uniform: &SVector<f64, NV>,
+    ) -> Result<Option<SVector<f64, NV>>, RelaxFailure> {
         self.conflict = [false; NC];
-        if self.cert.is_some() {
-            self.grow_conflict();
-        }
+        self.grow_conflict();
         self.confined = true;
         while self.probes_left > 0 {
+            if self.keeps_outside(uniform) {
+                return Ok(Some(*uniform));
+            }
             self.probes_left -= 1;
             match self.solve(keep)? {
                 Probe::Feasible(u) => return Ok(Some(u)),

@@ -54,17 +54,23 @@
 //! # Rows outside the conflict
 //!
 //! The least uniform relaxation `eps_safety` is proven by a Farkas
-//! certificate; the safety rows it weighs are the conflict (say a wall
-//! fragment ahead against reachability and the gait rows). Relaxing every
+//! certificate; the safety rows it weighs are in conflict (say a wall
+//! fragment ahead against reachability and the gait rows), and so are those
+//! the cycle's earlier certificates weighed (the nominal solve's, each
+//! infeasible probe's): the conflict starts as all of them. Relaxing every
 //! safety row by `eps_safety` would also let the plan use that much of the
 //! margin of rows that take no part in it (a side wall), and the cost's pull
-//! towards the goal does. So, once `eps_safety` is known, the scheme solves
-//! the same problem with only the conflict's safety rows at `h + eps_safety`
-//! and every other safety row at its nominal `h`. An infeasible solve's
-//! certificate must weigh a safety row outside the conflict (otherwise it
-//! would prove the uniform relaxation empty too), so its safety rows join the
-//! conflict and the solve is repeated: the conflict only grows, and in the
-//! worst case it becomes every safety row, the uniform relaxation. The
+//! towards the goal does. So, once `eps_safety` is known, the scheme wants
+//! the optimal plan of the same problem with only the conflict's safety rows
+//! at `h + eps_safety` and every other safety row at its nominal `h`. When
+//! the uniform relaxation's plan already keeps every row outside the
+//! conflict, that is it, with no solve (the confined feasible set lies in
+//! the uniform one and holds that plan). Otherwise it is solved; an
+//! infeasible solve's certificate must weigh a safety row outside the
+//! conflict (otherwise it would prove the uniform relaxation empty too), so
+//! its safety rows join the conflict and the check and the solve are
+//! repeated: the conflict only grows, and in the worst case it becomes every
+//! safety row, the uniform relaxation. The
 //! relaxation stays the least (relaxing fewer rows by the same amount is a
 //! smaller feasible set, and the uniform one was already the least), the
 //! gait search that follows runs under the confined relaxation, and the
@@ -239,39 +245,57 @@ pub enum RelaxFailure {
     Numerical,
 }
 
+/// What one run of the priority scheme may spend and relax, and what it
+/// starts from (the arguments of [`relax`] besides the problem).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Params<'a, const NC: usize> {
+    /// Solver iterations of one solve at most.
+    pub max_iter: u32,
+    /// Solver iterations left in this cycle.
+    pub budget: u32,
+    /// The largest number of solves of one search for a smallest relaxation
+    /// (the scheme makes at most `2 probes + 6` solves after the nominal one,
+    /// see the module docs).
+    pub probes: u32,
+    /// The largest relaxation of the gait rows (m/s) allowed before the
+    /// safety rows give way.
+    pub gait_cap: f64,
+    /// The capturability bound (`None`: off).
+    pub capture: Option<CaptureBounds>,
+    /// A Farkas certificate of the nominal QP (one weight per row of `qp`, as
+    /// [`crate::qp::QpSolution::lambda`] of its infeasible solve), used as the
+    /// first search's starting certificate when it proves the nominal QP
+    /// empty (`y'h < 0`); it replaces the first-step solve.
+    pub certificate: Option<&'a SVector<f64, NC>>,
+    /// A person in the conflict (docs/safety.md "The policy toward people"):
+    /// after a safety relaxation, no search for the least gait relaxation
+    /// under it; the plan of the safety search (feasible with the gait rows
+    /// at the cap, or at its own gait violation in stages 3 and 4) stands,
+    /// and that is the reported `eps_gait`. It saves that search's solves
+    /// (one to three) on the cycles where a person walks into the robot; the
+    /// cost, which then pulls away from the person, chooses the plan.
+    pub give_way: bool,
+}
+
 /// Runs the priority scheme on the nominal QP `qp` (rows identified by `rows`;
-/// each probe solves a selection of its rows in place, with no copy).
-/// `budget` is the number of solver iterations left in this cycle; `probes`
-/// the largest number of solves of one search for a smallest relaxation
-/// (the scheme makes at most `2 probes + 6` solves after the nominal one,
-/// see the module docs); `gait_cap` the largest relaxation of the gait rows
-/// (m/s) allowed before the safety rows give way; `capture` the
-/// capturability bound (`None`: off). `certificate`: a Farkas certificate of
-/// the nominal QP (one weight per row of `qp`, as
-/// [`crate::qp::QpSolution::lambda`] of its infeasible solve), used as the
-/// first search's starting certificate when it proves the nominal QP empty
-/// (`y'h < 0`); it replaces the first-step solve. `give_way` (a person in
-/// the conflict, docs/safety.md "The policy toward people"): after a safety
-/// relaxation, no search for the least gait relaxation under it; the plan of
-/// the safety search (feasible with the gait rows at the cap, or at its own
-/// gait violation in stages 3 and 4) stands, and that is the reported
-/// `eps_gait`. It saves that search's solves (one to three) on the cycles
-/// where a person walks into the robot; the cost, which then pulls away from
-/// the person, chooses the plan.
-#[allow(clippy::too_many_arguments)]
+/// each probe solves a selection of its rows in place, with no copy), within
+/// the limits of `p`.
 pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     solver: &DualActiveSet<NV, NC>,
     backend: &mut B,
     qp: &DenseQp<NV, NC>,
     rows: &[RowId; NC],
-    max_iter: u32,
-    budget: u32,
-    probes: u32,
-    gait_cap: f64,
-    capture: Option<CaptureBounds>,
-    certificate: Option<&SVector<f64, NC>>,
-    give_way: bool,
+    p: Params<'_, NC>,
 ) -> Result<Relaxed<NV, NC>, RelaxError> {
+    let Params {
+        max_iter,
+        budget,
+        probes,
+        gait_cap,
+        capture,
+        certificate,
+        give_way,
+    } = p;
     let mut norms = [0.0f64; NC];
     for (n, g) in norms.iter_mut().zip(qp.gt.column_iter().take(qp.m)) {
         *n = crate::linalg::sqrt(g.norm_squared());
@@ -307,6 +331,7 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         if !ctx.cert.is_some_and(|c| c.yh < 0.0) {
             ctx.cert = None;
             ctx.marks = [false; NC];
+            ctx.support = [false; NC];
         }
     }
     let out = run_stages(&mut ctx, gait_cap, give_way);
@@ -411,7 +436,7 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         };
         // Only the rows in conflict give way; the others keep their margin.
         let (u_s, conflict) = if eps_s > 0.0 {
-            match ctx.confine(reach.with(Soft::Safety, eps_s))? {
+            match ctx.confine(reach.with(Soft::Safety, eps_s), &u_s)? {
                 Some(u) => (u, ctx.conflict),
                 None => (u_s, safety_rows(ctx.qp, ctx.rows)),
             }

@@ -127,8 +127,9 @@ pub(super) struct Ctx<'a, const NV: usize, const NC: usize, B> {
     /// Rows of the nominal QP in the support of the last certificate: the rows
     /// that are tight at the smallest relaxation, tried first by the next solve.
     pub(super) marks: [bool; NC],
-    /// Rows of the nominal QP in the support of the last certificate (all of
-    /// them, unlike `marks`).
+    /// Rows of the nominal QP in the support of any certificate of this
+    /// cycle (the nominal solve's, when it proves the nominal QP empty, and
+    /// each infeasible probe's): every row some certificate weighed.
     pub(super) support: [bool; NC],
     /// While `confined`: the safety rows that take the safety relaxation (the
     /// conflict); every other safety row keeps its nominal right-hand side.
@@ -208,8 +209,9 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
     }
 
     /// Keeps the Farkas certificate `lambda` (one weight per nominal row) of an
-    /// infeasible solve of the problem `keep`: its sums in [`Ctx::cert`] and its
-    /// support (but the lightest row) in [`Ctx::marks`].
+    /// infeasible solve of the problem `keep`: its sums in [`Ctx::cert`], its
+    /// support (but the lightest row) in [`Ctx::marks`], and its support added
+    /// to [`Ctx::support`].
     pub(super) fn take_certificate(&mut self, lambda: &SVector<f64, NC>, keep: Keep) {
         let mut c = Certificate {
             yh: 0.0,
@@ -220,7 +222,6 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
             yn: 0.0,
         };
         self.marks = [false; NC];
-        self.support = [false; NC];
         let m = self.qp.m.min(NC);
         // Weights at rounding level (~1e-17 of the largest) are not
         // part of the certificate's support.

@@ -6,6 +6,24 @@ use crate::qp::QpStatus;
 use crate::{Assembly, Config, ConvexPolygon, CycleInput, PaperController, Side};
 use nalgebra::Vector2;
 
+/// The scheme's limits in these tests: 64 iterations a solve, 2,048 a cycle,
+/// 12 probes a search, no give-way.
+fn params<'a, const NC: usize>(
+    gait_cap: f64,
+    capture: Option<CaptureBounds>,
+    certificate: Option<&'a nalgebra::SVector<f64, NC>>,
+) -> Params<'a, NC> {
+    Params {
+        max_iter: 64,
+        budget: 2048,
+        probes: 12,
+        gait_cap,
+        capture,
+        certificate,
+        give_way: false,
+    }
+}
+
 const NC: usize = crate::constraint_capacity(3, 8, false);
 /// Random cycles (about 4 in 5 are infeasible).
 const CASES: usize = 1000;
@@ -178,13 +196,7 @@ fn relaxations_are_minimal_in_priority_order() {
             &mut count,
             &asm.qp,
             &asm.rows,
-            64,
-            2048,
-            12,
-            cap,
-            cb,
-            certificate,
-            false,
+            params(cap, cb, certificate),
         )
         .unwrap_or_else(|e| panic!("case {case}: {e:?}"));
         solves[count.0.min(31)] += 1;
@@ -486,13 +498,7 @@ fn a_conflict_ahead_leaves_the_side_wall_its_margin() {
         &mut count,
         &asm.qp,
         &asm.rows,
-        64,
-        2048,
-        12,
-        cap,
-        cb,
-        Some(&nominal.lambda),
-        false,
+        params(cap, cb, Some(&nominal.lambda)),
     )
     .unwrap();
     assert_eq!(r.level, RelaxLevel::Safety, "{r:?}");

@@ -1,8 +1,8 @@
 //! The command line's room, the top one (it may use every other room): the
-//! `ldcbf-sim` binary's arguments ([`args`], clap), one function per
-//! subcommand returning `anyhow::Result` ([`run`], [`batch`], [`studies`],
-//! [`qp`]), what it prints and its exit status ([`output`]), and the `run`
-//! pipeline ([`app`]). `src/main.rs` only calls [`main`].
+//! `ldcbf-sim` binary's arguments (`args`, clap), one function per
+//! subcommand returning `anyhow::Result` (`run`, `batch`, `studies`, `qp`),
+//! what it prints and its exit status (`output`), and the `run` pipeline
+//! ([`app`]). `src/main.rs` only calls [`main`].
 
 pub mod app;
 mod args;

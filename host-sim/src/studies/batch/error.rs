@@ -198,24 +198,10 @@ pub enum BatchError {
         /// Field `meta.runs`.
         runs: usize,
     },
-    /// `merge` without directories.
-    #[error("merge needs at least one batch directory")]
-    NoInputs,
-    /// A directory to merge is of another study than the first.
-    #[error(
-        "{}: not the same study as {} (family, seeds, planner, perception, overrides, solver, rate and shard count must agree)",
-        dir.display(),
-        first.display()
-    )]
-    OtherStudy {
-        /// The directory.
-        dir: PathBuf,
-        /// The first directory given.
-        first: PathBuf,
-    },
-    /// A shard is given twice to `merge`.
+    /// The directories do not merge: none, of another study, or a shard
+    /// twice.
     #[error(transparent)]
-    ShardTwice(#[from] crate::studies::shards::ShardTwice),
+    Merge(#[from] crate::studies::shards::MergeError),
     /// A seed appears in two merged directories.
     #[error("seed {0} appears twice")]
     SeedTwice(u64),

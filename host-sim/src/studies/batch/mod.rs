@@ -28,7 +28,7 @@
 //! merged study can still be summarised). Timings from different machines are
 //! comparable only as far as the machines are.
 
-use crate::studies::shards::add_shards;
+use crate::studies::shards::{MergeError, add_shards, missing_shards};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
@@ -675,7 +675,7 @@ pub fn read_dir(dir: &Path) -> Result<(BatchMeta, Aggregate, Vec<RunRow>)> {
 /// runs it holds).
 pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<BatchReport> {
     if inputs.is_empty() {
-        return Err(BatchError::NoInputs);
+        return Err(MergeError::NoInputs { study: "batch" }.into());
     }
     let mut parts = Vec::new();
     for d in inputs {
@@ -687,10 +687,12 @@ pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Batc
     let mut wall = 0.0;
     for ((meta, _, r), dir) in parts.iter().zip(inputs) {
         if meta.study_key() != key {
-            return Err(BatchError::OtherStudy {
+            return Err(MergeError::OtherStudy {
                 dir: dir.clone(),
                 first: inputs[0].clone(),
-            });
+                agree: "family, seeds, planner, perception, overrides, solver, rate and shard count",
+            }
+            .into());
         }
         add_shards(
             &mut shards,
@@ -710,10 +712,7 @@ pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Batc
     let expected = m0.seeds.len();
     if !allow_partial && (rows.len() as u64) < expected {
         shards.sort_unstable();
-        let missing: Vec<String> = (1..=m0.shard.count)
-            .filter(|s| !shards.contains(s))
-            .map(|s| format!("{s}/{}", m0.shard.count))
-            .collect();
+        let missing = missing_shards(&shards, m0.shard.count);
         return Err(BatchError::Incomplete {
             runs: rows.len(),
             expected,

@@ -171,24 +171,10 @@ pub enum RobustnessError {
         /// What is wrong.
         error: String,
     },
-    /// `merge` without directories.
-    #[error("merge needs at least one robustness directory")]
-    NoInputs,
-    /// A directory to merge is of another study than the first.
-    #[error(
-        "{}: not the same study as {} (cases, random seeds, conditions, deltas, overrides and shard count must agree)",
-        dir.display(),
-        first.display()
-    )]
-    OtherStudy {
-        /// The directory.
-        dir: PathBuf,
-        /// The first directory given.
-        first: PathBuf,
-    },
-    /// A shard is given twice to `merge`.
+    /// The directories do not merge: none, of another study, or a shard
+    /// twice.
     #[error(transparent)]
-    ShardTwice(#[from] crate::studies::shards::ShardTwice),
+    Merge(#[from] crate::studies::shards::MergeError),
     /// Shards are missing and `--allow-partial` was not given.
     #[error(
         "incomplete study: {runs} of {expected} runs (missing shards: {missing}); pass --allow-partial to merge anyway"

@@ -2,7 +2,7 @@
 //! merging shards, and `runs.csv`.
 
 use super::*;
-use crate::studies::shards::add_shards;
+use crate::studies::shards::{MergeError, add_shards, missing_shards};
 
 /// Writes `runs.csv`, `table.md` and `summary.json` into `out` (atomically).
 pub(super) fn write_dir(out: &Path, rep: &RobustnessReport) -> Result<PathBuf> {
@@ -233,7 +233,10 @@ fn parse_run(
 /// whole study (nothing on error).
 pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<RobustnessReport> {
     if inputs.is_empty() {
-        return Err(RobustnessError::NoInputs);
+        return Err(MergeError::NoInputs {
+            study: "robustness",
+        }
+        .into());
     }
     let mut parts = Vec::new();
     for d in inputs {
@@ -246,10 +249,12 @@ pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Robu
     let mut wall = 0.0;
     for ((meta, r), dir) in parts.into_iter().zip(inputs) {
         if meta.study_key() != key {
-            return Err(RobustnessError::OtherStudy {
+            return Err(MergeError::OtherStudy {
                 dir: dir.clone(),
                 first: inputs[0].clone(),
-            });
+                agree: "cases, random seeds, conditions, deltas, overrides and shard count",
+            }
+            .into());
         }
         add_shards(
             &mut shards,
@@ -264,10 +269,7 @@ pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Robu
     shards.sort_unstable();
     runs.sort_by_key(|(k, _)| *k);
     if !allow_partial && runs.len() < m0.study_runs {
-        let missing: Vec<String> = (1..=m0.shard_count)
-            .filter(|s| !shards.contains(s))
-            .map(|s| format!("{s}/{}", m0.shard_count))
-            .collect();
+        let missing = missing_shards(&shards, m0.shard_count);
         return Err(RobustnessError::Incomplete {
             runs: runs.len(),
             expected: m0.study_runs,

@@ -1,0 +1,324 @@
+//! The proximal iterations after the first (`qp/proximal.rs`) keep the
+//! active set's factor: the Hessian `H + eps I` and the rows are the same in
+//! every proximal solve, only the linear term `q_k = q - eps x_k` changes, so
+//! the orthogonal factor `J = L^-T Q`, `R` of the last solve's active rows
+//! still holds. As DAQP between its proximal iterations (it keeps its LDL'
+//! factor and only updates the linear term), the next solve starts from it:
+//!
+//! * [`minimiser_on`]: the minimiser on the active rows held as equalities
+//!   for the new linear term and its multipliers, from the factor alone
+//!   (`O(NV^2)`, no add);
+//! * [`resolve`]: while an inequality row's multiplier is negative, the row
+//!   with the most negative one is dropped (Givens rotations, as a drop of
+//!   the iteration) and the minimiser formed again. That is a pair the dual
+//!   method starts from (Goldfarb & Idnani's S-pair: `x` optimal on the
+//!   active rows, multipliers `>= 0`);
+//! * [`Resumed`]: the factor handed to [`crate::active_set::iterate`], which
+//!   continues from that pair with its normal scans, adds and drops (only
+//!   where a row is violated).
+//!
+//! With `J' H J = I` and `J' N = [R; 0]` (`N` the active normals `n_j =
+//! -g_j`, `N'x = b`, `b_j = -h_j`), `x = J y` solves `H x + q = N u`,
+//! `N'x = b` with `R' y_1 = b`, `y_2 = -J_2' q` and `u = R^-1 (y_1 + J_1'
+//! q)`.
+
+use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
+
+use super::orthogonal::{Orthogonal, givens_drop, rate};
+use super::spans::unpack;
+use super::{QpAllocator, ZERO_ROW2};
+use crate::active_set::{ActiveSetFactor, AddError, remove_at};
+use crate::linalg::{column, columns, dot_d};
+
+/// The active rows a proximal solve ended with (the order of the factor's
+/// columns), `nact` of them, the first `neq` equality rows.
+pub(super) struct Kept<NV: Dim>
+where
+    DefaultAllocator: nalgebra::allocator::Allocator<NV>,
+{
+    /// Active rows (first `nact` valid).
+    pub act: OVector<u16, NV>,
+    /// Their multipliers at the start of the next solve (formed by
+    /// [`resolve`]).
+    pub mult: OVector<f64, NV>,
+    /// Number of active rows.
+    pub nact: usize,
+    /// Number of equality rows at their head.
+    pub neq: usize,
+}
+
+/// The minimiser on the `nact` active rows `act` held as equalities, for the
+/// linear term `q`, from the factor `J`, `R` of those rows (module docs):
+/// written to `x`, its multipliers (in the units of `G`, either sign) to
+/// `mult[..nact]`. `h` is the right-hand side. False when a number is not
+/// finite.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn minimiser_on<NV: Dim, NC: Dim>(
+    J: &OMatrix<f64, NV, NV>,
+    R: &OMatrix<f64, NV, NV>,
+    h: &OVector<f64, NC>,
+    act: &[u16],
+    nact: usize,
+    q: &OVector<f64, NV>,
+    x: &mut OVector<f64, NV>,
+    mult: &mut OVector<f64, NV>,
+) -> bool
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
+    let nv = J.shape_generic().0;
+    let n = nv.value();
+    let nact = nact.min(n);
+    // c = J' q.
+    let mut c = OVector::<f64, NV>::zeros_generic(nv, nalgebra::U1);
+    for (cj, col) in c.as_mut_slice().iter_mut().zip(columns(J.as_slice(), n)) {
+        *cj = dot_d::<NV>(col, q.as_slice());
+    }
+    // y_1 = R^-T b (forward substitution), y_2 = -c_2.
+    let mut y = OVector::<f64, NV>::zeros_generic(nv, nalgebra::U1);
+    for j in 0..nact {
+        let Some(&a) = act.get(j) else {
+            return false;
+        };
+        let Some(&ha) = h.as_slice().get(usize::from(a)) else {
+            return false;
+        };
+        let Some(rcol) = column(R.as_slice(), n, j) else {
+            return false;
+        };
+        let mut acc = -ha;
+        for (&rij, &yi) in rcol.iter().zip(y.as_slice()).take(j) {
+            acc -= rij * yi;
+        }
+        let (Some(&rjj), Some(yj)) = (rcol.get(j), y.as_mut_slice().get_mut(j)) else {
+            return false;
+        };
+        *yj = acc / rjj;
+    }
+    for (yj, &cj) in y.as_mut_slice().iter_mut().zip(c.as_slice()).skip(nact) {
+        *yj = -cj;
+    }
+    // x = J y.
+    let xs = x.as_mut_slice();
+    xs.fill(0.0);
+    for (col, &yj) in columns(J.as_slice(), n).zip(y.as_slice()) {
+        for (xk, &jk) in xs.iter_mut().zip(col) {
+            *xk += jk * yj;
+        }
+    }
+    // u = R^-1 (y_1 + c_1).
+    for (yj, &cj) in y.as_mut_slice().iter_mut().zip(c.as_slice()).take(nact) {
+        *yj += cj;
+    }
+    mult.as_mut_slice().fill(0.0);
+    back_substitute_by_columns(R, y.as_slice(), nact, mult.as_mut_slice());
+    xs.iter()
+        .chain(mult.as_slice().iter().take(nact))
+        .all(|v| v.is_finite())
+}
+
+/// `r[..nact] = R^-1 d[..nact]` for the upper-triangular leading
+/// `nact x nact` block of `R`, by columns, in place in `r` (`r = d`, then
+/// from the last row up `r_i /= R_ii` and `r[..i] -= r_i R[..i, i]`: a
+/// contiguous column, independent lanes). The products of
+/// `orthogonal::back_substitute` in another order (other rounding), without
+/// its chain of dependent subtractions per row.
+pub(super) fn back_substitute_by_columns<NV: Dim>(
+    R: &OMatrix<f64, NV, NV>,
+    d: &[f64],
+    nact: usize,
+    r: &mut [f64],
+) where
+    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
+{
+    let n = R.nrows();
+    let nact = nact.min(n);
+    crate::linalg::copy(r, d.get(..nact).unwrap_or(&[]));
+    for i in (0..nact).rev() {
+        let (Some(col), Some((ri_slot, above))) = (
+            column(R.as_slice(), n, i),
+            r.get_mut(..=i).and_then(|h| h.split_last_mut()),
+        ) else {
+            continue;
+        };
+        let Some(&rii) = col.get(i) else {
+            continue;
+        };
+        let ri = *ri_slot / rii;
+        *ri_slot = ri;
+        for (wk, &rk) in above.iter_mut().zip(col) {
+            *wk -= ri * rk;
+        }
+    }
+}
+
+/// Why [`resolve`] stopped the solve.
+pub(super) enum ResolveStop {
+    /// A number was not finite.
+    Numerical,
+    /// The budget ran out with a negative multiplier left.
+    Budget,
+}
+
+/// The start of a proximal solve after the first: the minimiser on the kept
+/// active rows for the linear term `q` ([`minimiser_on`], into `x` and
+/// `kept.mult`), then, while an inequality row's multiplier is negative, the
+/// row with the most negative one dropped (from `J`, `R` and `kept`) and the
+/// minimiser formed again, at most `budget` drops. Returns the drops made.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn resolve<NV: Dim, NC: Dim>(
+    J: &mut OMatrix<f64, NV, NV>,
+    R: &mut OMatrix<f64, NV, NV>,
+    h: &OVector<f64, NC>,
+    kept: &mut Kept<NV>,
+    q: &OVector<f64, NV>,
+    x: &mut OVector<f64, NV>,
+    budget: u32,
+) -> Result<u32, ResolveStop>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
+    let n = J.nrows();
+    // At most `n` drops (the active rows), then one more minimiser.
+    for drops in 0..=(n as u32) {
+        let nact = kept.nact.min(n);
+        if !minimiser_on(J, R, h, kept.act.as_slice(), nact, q, x, &mut kept.mult) {
+            return Err(ResolveStop::Numerical);
+        }
+        let mut worst: Option<usize> = None;
+        let mut worst_u = 0.0;
+        for (j, &u) in kept
+            .mult
+            .as_slice()
+            .iter()
+            .enumerate()
+            .take(nact)
+            .skip(kept.neq)
+        {
+            if u < worst_u {
+                worst_u = u;
+                worst = Some(j);
+            }
+        }
+        let Some(l) = worst else {
+            return Ok(drops);
+        };
+        if drops >= budget {
+            return Err(ResolveStop::Budget);
+        }
+        givens_drop(J, R, nact, l);
+        remove_at(kept.act.as_mut_slice(), l, nact);
+        kept.nact = nact - 1;
+    }
+    Err(ResolveStop::Numerical)
+}
+
+/// The factor of the proximal iterations' solves for
+/// [`crate::active_set::iterate`]: `inner` with its rows' spans (the scan's
+/// slack over the span, `qp/spans.rs`), and with `kept` the active rows it
+/// already holds (the iteration resumes from them,
+/// [`ActiveSetFactor::resume`]).
+pub(super) struct Resumed<'k, 'a, NV: Dim, NC: Dim>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
+    /// The factor (holding the kept rows' factor when `kept` is given).
+    pub inner: Orthogonal<'a, NV, NC>,
+    /// The active rows and multipliers to resume from.
+    pub kept: Option<&'k Kept<NV>>,
+}
+
+impl<NV: Dim, NC: Dim> ActiveSetFactor for Resumed<'_, '_, NV, NC>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
+    /// [`Orthogonal`]'s violation with the slack's dot product over the
+    /// row's span (the same bits).
+    #[inline(always)]
+    fn violation(&mut self, i: usize, blocked: bool) -> Option<f64> {
+        let o = &mut self.inner;
+        let n = o.solver.nv().value();
+        let (Some(g), Some(&hi), Some(&n2), Some(ihn)) = (
+            column(o.rows.as_slice(), n, i),
+            o.h.as_slice().get(i),
+            o.norm2.as_slice().get(i),
+            o.inv_hnorm.as_mut_slice().get_mut(i),
+        ) else {
+            return None;
+        };
+        if blocked || n2 <= ZERO_ROW2 {
+            return None;
+        }
+        let (lo, up) = o
+            .span
+            .and_then(|sp| sp.as_slice().get(i))
+            .map_or((0, n), |&s| unpack(s));
+        let gx = dot_d::<NV>(
+            g.get(lo..up).unwrap_or(&[]),
+            o.x.as_slice().get(lo..up).unwrap_or(&[]),
+        );
+        rate(o.solver, o.tol2, g, n2, ihn, hi - gx)
+    }
+
+    #[inline(always)]
+    fn direction(&mut self, p: usize, act: &[u16], nact: usize, r: &mut [f64]) -> Option<f64> {
+        self.inner.direction(p, act, nact, r)
+    }
+
+    #[inline(always)]
+    fn advance(&mut self, p: usize, t: f64, r: &[f64], act: &[u16], nact: usize) {
+        self.inner.advance(p, t, r, act, nact);
+    }
+
+    #[inline(always)]
+    fn add(&mut self, p: usize, r: &[f64], nact: usize) -> Result<(), AddError> {
+        self.inner.add(p, r, nact)
+    }
+
+    #[inline(always)]
+    fn drop(&mut self, l: usize, nact: usize) {
+        self.inner.drop(l, nact);
+    }
+
+    #[inline(always)]
+    fn hot_start_capable(&self) -> bool {
+        self.inner.hot_start_capable()
+    }
+
+    #[inline(always)]
+    fn equalities_capable(&self) -> bool {
+        self.inner.equalities_capable()
+    }
+
+    #[inline(always)]
+    fn slack(&self, i: usize) -> (f64, f64) {
+        self.inner.slack(i)
+    }
+
+    fn hot_guess(&mut self, act: &[u16], k: usize, mult: &mut [f64], blocked: &[bool]) -> bool {
+        self.inner.hot_guess(act, k, mult, blocked)
+    }
+
+    fn hot_add(&mut self, p: usize, act: &[u16], nact: usize) -> Result<bool, AddError> {
+        self.inner.hot_add(p, act, nact)
+    }
+
+    fn hot_multipliers(&mut self, act: &[u16], nact: usize, mult: &mut [f64]) -> bool {
+        self.inner.hot_multipliers(act, nact, mult)
+    }
+
+    fn hot_move(&mut self, act: &[u16], nact: usize) {
+        self.inner.hot_move(act, nact);
+    }
+
+    fn resume(&mut self, act: &mut [u16], mult: &mut [f64]) -> Option<(usize, usize)> {
+        let kept = self.kept?;
+        for (a, &k) in act.iter_mut().zip(kept.act.as_slice()) {
+            *a = k;
+        }
+        for (u, &k) in mult.iter_mut().zip(kept.mult.as_slice()) {
+            *u = k;
+        }
+        Some((kept.nact, kept.neq))
+    }
+}
