@@ -182,7 +182,8 @@ where
 /// enter the active set together before the first scan, see [`hot_start`]),
 /// at most `max_iter` adds plus drops. `None` when [`ActiveSetFactor::add`]
 /// asked for a restart. `nv` is the number of variables, `blocked` and
-/// `prefer` have the row capacity as length.
+/// `prefer` have the row capacity as length; `marked` false says that no
+/// entry of `prefer` is set (the marks are then not scanned).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn iterate<F: ActiveSetFactor, NV: Dim, NC: Dim>(
@@ -192,6 +193,7 @@ pub(crate) fn iterate<F: ActiveSetFactor, NV: Dim, NC: Dim>(
     neq: usize,
     mut blocked: OVector<bool, NC>,
     prefer: &OVector<bool, NC>,
+    marked: bool,
     max_iter: u32,
     hot: bool,
 ) -> Option<Iterate<NV>>
@@ -255,11 +257,12 @@ where
     // all rows would choose among them alone: each choice scans the marked
     // rows first, and all rows only when none of those is violated (the same
     // choice, without the other rows' slacks).
-    let any_marked = prefer
-        .iter()
-        .zip(blocked_s.iter())
-        .take(m)
-        .any(|(&p, &b)| p && !b);
+    let any_marked = marked
+        && prefer
+            .iter()
+            .zip(blocked_s.iter())
+            .take(m)
+            .any(|(&p, &b)| p && !b);
     if stop.is_none() && hot && resumed.is_none() && factor.hot_start_capable() {
         let mut start = Start {
             blocked: &mut *blocked_s,
@@ -277,37 +280,61 @@ where
             break status;
         }
         // Step 1: the most violated row in the H^-1 metric (marked rows first).
-        let mut marked_only = any_marked;
-        let p = loop {
-            let mut best: Option<usize> = None;
-            let mut best_v = 0.0;
-            let mut best_pref: Option<usize> = None;
-            let mut best_pref_v = 0.0;
-            for i in 0..m {
-                // `m <= len` of both: no bounds checks.
-                let pref = prefer[i];
-                if marked_only && !pref {
-                    continue;
+        let p = 'choose: {
+            // Without marks the same scan without their bookkeeping (`marked` is
+            // true as a constant where that is shorter, and this loop left out).
+            if !marked {
+                let mut best: Option<usize> = None;
+                let mut best_v = 0.0;
+                for i in 0..m {
+                    let Some(s) = factor.violation(i, blocked_s[i]) else {
+                        continue;
+                    };
+                    if s.is_nan() {
+                        break 'outer QpStatus::NumericalError;
+                    }
+                    if s < best_v {
+                        best_v = s;
+                        best = Some(i);
+                    }
                 }
-                let Some(s) = factor.violation(i, blocked_s[i]) else {
-                    continue;
-                };
-                if s.is_nan() {
-                    break 'outer QpStatus::NumericalError;
-                }
-                if s < best_v {
-                    best_v = s;
-                    best = Some(i);
-                }
-                if pref && s < best_pref_v {
-                    best_pref_v = s;
-                    best_pref = Some(i);
+                match best {
+                    Some(p) => break 'choose p,
+                    None => break 'outer QpStatus::Solved,
                 }
             }
-            match best_pref.or(best) {
-                Some(p) => break p,
-                None if marked_only => marked_only = false,
-                None => break 'outer QpStatus::Solved,
+            let mut marked_only = any_marked;
+            loop {
+                let mut best: Option<usize> = None;
+                let mut best_v = 0.0;
+                let mut best_pref: Option<usize> = None;
+                let mut best_pref_v = 0.0;
+                for i in 0..m {
+                    // `m <= len` of both: no bounds checks.
+                    let pref = prefer[i];
+                    if marked_only && !pref {
+                        continue;
+                    }
+                    let Some(s) = factor.violation(i, blocked_s[i]) else {
+                        continue;
+                    };
+                    if s.is_nan() {
+                        break 'outer QpStatus::NumericalError;
+                    }
+                    if s < best_v {
+                        best_v = s;
+                        best = Some(i);
+                    }
+                    if pref && s < best_pref_v {
+                        best_pref_v = s;
+                        best_pref = Some(i);
+                    }
+                }
+                match best_pref.or(best) {
+                    Some(p) => break 'choose p,
+                    None if marked_only => marked_only = false,
+                    None => break 'outer QpStatus::Solved,
+                }
             }
         };
         adding = Some((p, 0.0));

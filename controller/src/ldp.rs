@@ -16,7 +16,7 @@
 //! minimise 1/2 |u|^2  s.t.  M u <= d,   M = G L^-T,  d = h + M v,
 //! ```
 //!
-//! with `x = L^-T (u - v)` and objective `1/2 |u|^2 - 1/2 |v|^2`. Three stages:
+//! with `x = L^-T (u - v)` (`= x_unc + L^-T u`, `x_unc = -H^-1 q`) and objective `1/2 |u|^2 - 1/2 |v|^2`. Three stages:
 //!
 //! * [`LdpSolver::prepare`] (once per `G`): the rows `m_i = L^-1 g_i` scaled to
 //!   unit norm, their Gram matrix `K = M M'` (`NC x NC`), the violation
@@ -95,6 +95,11 @@ where
     /// Column `i`: `m_i / |m_i|` with `m_i = L^-1 g_i` (dimensionless; zero
     /// for zero rows).
     mhat: OMatrix<f64, NV, NC>,
+    /// Column `i`: `L^-T mhat_i = H^-1 g_i / |m_i|` (units of `x` per unit of
+    /// the scaled multiplier; zero for zero rows): `x` moves by `-lambda_i`
+    /// times it when the scaled multiplier of row `i` is `lambda_i`, so the
+    /// solve recovers `x` from the active rows alone.
+    dx: OMatrix<f64, NV, NC>,
     /// Gram matrix of the scaled rows, `K_ij = mhat_i . mhat_j` (unit diagonal
     /// for non-zero rows); rows and columns `m..NC` are zero.
     K: OMatrix<f64, NC, NC>,
@@ -131,6 +136,9 @@ where
     v: OVector<f64, NV>,
     /// `|v|^2`: the objective is `1/2 |u|^2 - 1/2 |v|^2`.
     vv: f64,
+    /// The unconstrained minimiser `x_unc = -L^-T v = -H^-1 q` (the `x` of
+    /// `u = 0`).
+    xu: OVector<f64, NV>,
     /// Scaled slacks at `u = 0`: `d_i / |m_i| = (h_i - g_i x_unc) / |m_i|`
     /// with `x_unc = -H^-1 q` (0 for zero rows).
     s0: OVector<f64, NC>,
@@ -175,6 +183,7 @@ where
             norms: solver.prepare_rows(&rows),
             qp: rows,
             mhat: OMatrix::zeros_generic(nv, nc),
+            dx: OMatrix::zeros_generic(nv, nc),
             K: OMatrix::zeros_generic(nc, nc),
             inv_mnorm: OVector::zeros_generic(nc, U1),
             thr: OVector::zeros_generic(nc, U1),
@@ -198,6 +207,10 @@ where
             if let Some(col) = column_mut(p.mhat.as_mut_slice(), n, i) {
                 for (a, b) in col.iter_mut().zip(mi.as_slice().iter()) {
                     *a = b * inv;
+                }
+                let d = solver.linvt_mul(col);
+                if let Some(dcol) = column_mut(p.dx.as_mut_slice(), n, i) {
+                    crate::linalg::copy(dcol, d.as_slice());
                 }
             }
             p.inv_mnorm[i] = inv;
@@ -241,11 +254,16 @@ where
         let tol = self.solver.settings().tol_primal;
         let n = self.solver.nv().value();
         let v = self.solver.linv_mul(q.as_slice());
+        let mut xu = self.solver.linvt_mul(v.as_slice());
+        for a in xu.as_mut_slice() {
+            *a = -*a;
+        }
         let nc = self.inv_mnorm.shape_generic().0;
         let mut ld = LdpLoadedOf {
             q: q.clone(),
             h: h.clone(),
             vv: dot_d::<NV>(v.as_slice(), v.as_slice()),
+            xu,
             v,
             s0: OVector::zeros_generic(nc, U1),
             zero_infeasible: None,
@@ -321,8 +339,17 @@ where
             return sol;
         }
         let tol_dep = self.solver.settings().tol_dependence;
-        let mut C = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
-        let mut Ci = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
+        // Row `i` of the factors is column `i`. For run-time sizes they start
+        // with a few rows and grow as rows are added (`gram::grow`): zeroing
+        // two `n x n` matrices cost more than the rest of a solve with few
+        // active rows (n = 50).
+        let k0 = if NV::try_to_usize().is_some() {
+            nv
+        } else {
+            NV::from_usize(nv.value().min(gram::FIRST_ROWS))
+        };
+        let mut C = OMatrix::<f64, NV, NV>::zeros_generic(nv, k0);
+        let mut Ci = OMatrix::<f64, NV, NV>::zeros_generic(nv, k0);
         let pref = active_set::marks(nc, prefer);
         let n = nv.value();
         let mut factor = Gram {
@@ -350,15 +377,29 @@ where
             me,
             self.zero.clone(),
             &pref,
+            prefer.iter().any(|&p| p),
             max_iter,
             false,
         ) else {
             // The normal equations would lose too much accuracy.
             return self.fallback(loaded, prefer);
         };
-        // u = -M_A' lambda_A - u_new m_p (scaled rows, scaled multipliers).
+        // u = -M_A' lambda_A - u_new m_p (scaled rows, scaled multipliers),
+        // and x = x_unc + L^-T u from the same weights on the columns of
+        // `dx` (`L^-T mhat_i`).
         let mut u = OVector::<f64, NV>::zeros_generic(nv, U1);
-        let mhat = self.mhat.as_slice();
+        let mut x = loaded.xu.clone();
+        let (mhat, dx) = (self.mhat.as_slice(), self.dx.as_slice());
+        let mut add = |a: usize, la: f64| {
+            if let (Some(ma), Some(da)) = (column(mhat, n, a), column(dx, n, a)) {
+                for (uk, mk) in u.as_mut_slice().iter_mut().zip(ma) {
+                    *uk -= la * mk;
+                }
+                for (xk, dk) in x.as_mut_slice().iter_mut().zip(da) {
+                    *xk -= la * dk;
+                }
+            }
+        };
         for (&a, &la) in it
             .act
             .as_slice()
@@ -366,36 +407,24 @@ where
             .zip(it.mult.as_slice().iter())
             .take(it.nact)
         {
-            if let Some(ma) = column(mhat, n, usize::from(a)) {
-                for (uk, mk) in u.as_mut_slice().iter_mut().zip(ma) {
-                    *uk -= la * mk;
-                }
-            }
+            add(usize::from(a), la);
         }
-        if let Some((p, un)) = it.adding
-            && let Some(mp) = column(mhat, n, p)
-        {
-            for (uk, mk) in u.as_mut_slice().iter_mut().zip(mp) {
-                *uk -= un * mk;
-            }
+        if let Some((p, un)) = it.adding {
+            add(p, un);
         }
-        self.finish(it, &u, loaded)
+        self.finish(it, x, &u, loaded)
     }
 
-    /// The answer from the iteration's end `it` and the LDP's primal `u`:
-    /// `x = L^-T (u - v)`, the objective `1/2 |u|^2 - 1/2 |v|^2`, the
-    /// multipliers in the units of `G` (`lambda_i = lambda_hat_i / |m_i|`).
+    /// The answer from the iteration's end `it`, its `x` and the LDP's
+    /// primal `u`: the objective `1/2 |u|^2 - 1/2 |v|^2`, the multipliers in
+    /// the units of `G` (`lambda_i = lambda_hat_i / |m_i|`).
     fn finish(
         &self,
         it: active_set::Iterate<NV>,
+        x: OVector<f64, NV>,
         u: &OVector<f64, NV>,
         loaded: &LdpLoadedOf<NV, NC>,
     ) -> QpSolutionOf<NV, NC> {
-        let mut uv = u.clone();
-        for (a, b) in uv.as_mut_slice().iter_mut().zip(loaded.v.as_slice().iter()) {
-            *a -= b;
-        }
-        let x = self.solver.linvt_mul(uv.as_slice());
         let objective = 0.5 * (dot_d::<NV>(u.as_slice(), u.as_slice()) - loaded.vv);
         let nc = self.inv_mnorm.shape_generic().0;
         it.solution(nc, x, objective, |i| {
@@ -407,7 +436,7 @@ where
     /// any factor is set up: when no row is violated there (the test of the
     /// iteration's scan), the unconstrained minimiser `x = -L^-T v` is the
     /// solution, with no active row, as DAQP returns it from its setup.
-    /// Bit for bit what the iteration would return. `None` otherwise (or on
+    /// What the iteration would return. `None` otherwise (or on
     /// a non-finite slack, which the iteration reports).
     #[inline]
     fn unconstrained(&self, loaded: &LdpLoadedOf<NV, NC>) -> Option<QpSolutionOf<NV, NC>> {
@@ -424,6 +453,7 @@ where
         let nv = self.solver.nv();
         Some(self.finish(
             active_set::Iterate::unconstrained(nv),
+            loaded.xu.clone(),
             &OVector::zeros_generic(nv, U1),
             loaded,
         ))

@@ -710,6 +710,9 @@ where
     ) -> QpSolutionOf<NV, NC> {
         solve_start!(self, qp, qv, hv, excluded, norms => nv, nc, m, q, tol, me, blocked);
         let pref = active_set::marks(nc, prefer);
+        // Whether any row is marked (on hosts; on bare-metal targets the
+        // iteration's own test of the marks alone, which is shorter there).
+        let marked = cfg!(target_os = "none") || prefer.iter().any(|&p| p);
         // Unconstrained minimiser x = -J0 J0' q = -L^-T L^-1 q.
         let mut x = self.linvt_mul(self.linv_mul(q).as_slice());
         for v in x.as_mut_slice() {
@@ -742,9 +745,19 @@ where
         // and drops from the first active row (host: 3-5 % per `step` at
         // N = 10, 20).
         let it = if me == 0 {
-            active_set::iterate(&mut factor, nv, m, 0, blocked, &pref, max_iter, hot)
+            active_set::iterate(&mut factor, nv, m, 0, blocked, &pref, marked, max_iter, hot)
         } else {
-            active_set::iterate(&mut factor, nv, m, me, blocked, &pref, max_iter, hot)
+            active_set::iterate(
+                &mut factor,
+                nv,
+                m,
+                me,
+                blocked,
+                &pref,
+                marked,
+                max_iter,
+                hot,
+            )
         };
         let Some(it) = it else {
             // The orthogonal factor never asks for a restart.

@@ -50,7 +50,8 @@ where
     pub(super) w: OVector<f64, NV>,
     /// Scratch: the right-hand side of the solves.
     pub(super) b: OVector<f64, NV>,
-    /// Scratch: the component of the new row outside the active span.
+    /// Scratch for run-time sizes: the component of the new row outside
+    /// the active span (a local of `direction` for the static sizes).
     pub(super) z: OVector<f64, NV>,
     /// Scratch: the second projection's `w` and `r`.
     pub(super) w2: OVector<f64, NV>,
@@ -65,6 +66,19 @@ where
     pub(super) z2: f64,
     /// The last row was linearly dependent on the active rows.
     pub(super) dependent: bool,
+}
+
+impl<NV: Dim, NC: Dim> Gram<'_, NV, NC>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
+    /// The number of variables: the constant for the static sizes (the
+    /// stored field is not seen as one, and the column access would divide
+    /// by it).
+    #[inline(always)]
+    fn n(&self) -> usize {
+        NV::try_to_usize().unwrap_or(self.n)
+    }
 }
 
 impl<NV: Dim, NC: Dim> ActiveSetFactor for Gram<'_, NV, NC>
@@ -90,7 +104,7 @@ where
     #[inline(always)]
     fn direction(&mut self, p: usize, act: &[u16], nact: usize, r: &mut [f64]) -> Option<f64> {
         let ldp = self.ldp;
-        let n = self.n;
+        let n = self.n();
         let mhat = ldp.mhat.as_slice();
         let nc = ldp.K.nrows();
         let (Some(mp), Some(kp), Some(&sp)) = (
@@ -109,7 +123,16 @@ where
         self.w.as_mut_slice().fill(0.0);
         chol_solve(self.Ci, self.b.as_slice(), nact, self.w.as_mut_slice(), r);
         // z = m_p - M_A' r: the component of m_p outside the active span.
-        let z = self.z.as_mut_slice();
+        // For the static sizes a local (kept in registers; as a field it was
+        // stored after every active row), for run-time sizes the field (no
+        // allocation per direction).
+        let mut local;
+        let z: &mut [f64] = if NV::try_to_usize().is_some() {
+            local = OVector::<f64, NV>::zeros_generic(self.w.shape_generic().0, U1);
+            local.as_mut_slice()
+        } else {
+            self.z.as_mut_slice()
+        };
         crate::linalg::copy(z, mp);
         sub_active(mhat, n, z, act, r, nact);
         let mut z2 = dot_d::<NV>(z, z);
@@ -187,7 +210,11 @@ where
     /// asks for a restart when `|z| <` [`PIVOT_FALLBACK`].
     #[inline(always)]
     fn add(&mut self, p: usize, r: &[f64], nact: usize) -> Result<(), AddError> {
-        let n = self.n;
+        let n = self.n();
+        if NV::try_to_usize().is_none() {
+            grow(self.C, n, nact);
+            grow(self.Ci, n, nact);
+        }
         let diag = libm::sqrt(self.z2);
         let Some(row) = column_mut(self.C.as_mut_slice(), n, nact) else {
             return Err(AddError::Numerical);
@@ -259,7 +286,7 @@ where
     /// `u = M_A' (M_A M_A')^-1 d_A` (scaled rows; it does not depend on the
     /// iterate), has the multipliers `-(M_A M_A')^-1 d_A`.
     fn hot_multipliers(&mut self, act: &[u16], nact: usize, mult: &mut [f64]) -> bool {
-        let n = nact.min(self.n);
+        let n = nact.min(self.n());
         self.b.as_mut_slice().fill(0.0);
         for (bi, &a) in self.b.as_mut_slice().iter_mut().zip(act).take(n) {
             *bi = self.s0.get(usize::from(a)).copied().unwrap_or(f64::NAN);
@@ -306,6 +333,28 @@ where
     }
 }
 
+/// Rows of the factors `C`, `C^-1` allocated at the start of a solve with
+/// run-time sizes (at most `n`); [`grow`] doubles them when needed.
+pub(super) const FIRST_ROWS: usize = 8;
+
+/// Makes row `j` (column `j` of the storage) of a factor with `n` rows of
+/// length `n` exist, doubling the rows allocated (at most `n`; the rows
+/// added are zero). Run-time sizes only: the static factors have all `n`.
+fn grow<NV: Dim>(M: &mut OMatrix<f64, NV, NV>, n: usize, j: usize)
+where
+    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
+{
+    let (nv, cols) = M.shape_generic();
+    let cols = cols.value();
+    if j < cols || j >= n {
+        return;
+    }
+    let k = cols.saturating_mul(2).max(j + 1).min(n);
+    let mut bigger = OMatrix::<f64, NV, NV>::zeros_generic(nv, NV::from_usize(k));
+    crate::linalg::copy(bigger.as_mut_slice(), M.as_slice());
+    *M = bigger;
+}
+
 /// Below this squared norm of the new row's component outside the active span
 /// (the rows have unit norm: `|z| < 0.1`), the component is projected a second
 /// time.
@@ -324,7 +373,7 @@ fn chol_solve<NV: Dim>(
     w: &mut [f64],
     r: &mut [f64],
 ) where
-    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
+    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV> + nalgebra::allocator::Allocator<NV>,
 {
     let n = Ci.nrows();
     if NV::try_to_usize().is_none() {
@@ -348,11 +397,15 @@ fn chol_solve<NV: Dim>(
     for (wi, row) in w.iter_mut().zip(columns(Ci.as_slice(), n)).take(nact) {
         *wi = dot(row, b);
     }
+    // Accumulated in a local vector (kept in vector registers), then
+    // stored: accumulating into `r` itself stored all of it after every row.
+    let mut acc = OVector::<f64, NV>::zeros_generic(Ci.shape_generic().0, U1);
     for (&wi, row) in w.iter().zip(columns(Ci.as_slice(), n)).take(nact) {
-        for (rk, c) in r.iter_mut().zip(row) {
+        for (rk, c) in acc.as_mut_slice().iter_mut().zip(row) {
             *rk += wi * c;
         }
     }
+    crate::linalg::copy(r, acc.as_slice());
 }
 
 /// Removes row `l` (of `nact`) from the Cholesky factor `C` of `M_A M_A'`

@@ -197,7 +197,21 @@ where
         // d = J' n_p with the GI normal n_p = -g_p (n_p'x >= -h_p).
         self.project(gp, p);
         let slack_p = hp - dot(gp, self.x.as_slice()); // < 0 while violated
-        // z = J2 d2: component of the step outside the active span.
+        // z = J2 d2: component of the step outside the active span. For the
+        // static sizes on hosts accumulated in a local vector (kept in vector
+        // registers) and stored after the loop: accumulated in the field, all
+        // of `z` was stored after every column. Run-time sizes (no allocation
+        // per direction) and bare-metal targets (whose scalar code this does
+        // not shorten) accumulate in the field.
+        #[cfg(not(target_os = "none"))]
+        let mut local = NV::try_to_usize()
+            .map(|_| OVector::<f64, NV>::zeros_generic(self.solver.nv(), nalgebra::U1));
+        #[cfg(not(target_os = "none"))]
+        let z = match local.as_mut() {
+            Some(l) => l.as_mut_slice(),
+            None => self.z.as_mut_slice(),
+        };
+        #[cfg(target_os = "none")]
         let z = self.z.as_mut_slice();
         z.fill(0.0);
         let mut d2sq = 0.0;
@@ -207,6 +221,10 @@ where
                 *zk += c * dj; // column j of J, j >= nact
             }
             d2sq += dj * dj;
+        }
+        #[cfg(not(target_os = "none"))]
+        if let Some(l) = &local {
+            crate::linalg::copy(self.z.as_mut_slice(), l.as_slice());
         }
         if self.reordered() {
             back_substitute_by_columns(self.R, self.d.as_slice(), nact, r);

@@ -197,7 +197,7 @@ where
                 },
                 kept: kept.as_ref(),
             };
-            let it = active_set::iterate(&mut factor, nv, m, me, start, marks, left, hot);
+            let it = active_set::iterate(&mut factor, nv, m, me, start, marks, true, left, hot);
             let x = factor.inner.x;
             let Some(it) = it else {
                 // The orthogonal factor never asks for a restart.
