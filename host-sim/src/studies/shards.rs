@@ -39,6 +39,38 @@ pub enum MergeError {
     },
 }
 
+/// Checks the directories of a merge, read into `parts` (one per `inputs`
+/// entry, same order): at least one, each of the first one's study (`head`
+/// gives a part's study key, shard index, merged shards and shard count; a
+/// mismatch names `agree`, what defines the `study`), no shard twice.
+/// Returns the shards they hold, sorted.
+pub fn merged_shards<T, K: PartialEq>(
+    study: &'static str,
+    agree: &'static str,
+    inputs: &[PathBuf],
+    parts: &[T],
+    head: impl Fn(&T) -> (K, u32, &[u32], u32),
+) -> Result<Vec<u32>, MergeError> {
+    let (Some(first), Some(first_dir)) = (parts.first(), inputs.first()) else {
+        return Err(MergeError::NoInputs { study });
+    };
+    let key = head(first).0;
+    let mut shards = Vec::new();
+    for (part, dir) in parts.iter().zip(inputs) {
+        let (k, index, merged, count) = head(part);
+        if k != key {
+            return Err(MergeError::OtherStudy {
+                dir: dir.clone(),
+                first: first_dir.clone(),
+                agree,
+            });
+        }
+        add_shards(&mut shards, dir, index, merged, count)?;
+    }
+    shards.sort_unstable();
+    Ok(shards)
+}
+
 /// The shards of `1..=count` not in `seen`, as `"s/count"`.
 pub fn missing_shards(seen: &[u32], count: u32) -> Vec<String> {
     (1..=count)
@@ -50,7 +82,7 @@ pub fn missing_shards(seen: &[u32], count: u32) -> Vec<String> {
 /// Adds to `seen` the shards directory `dir` holds: its `merged` shards when
 /// it is itself a merge, else its own `index` (of `count`). Fails on a shard
 /// already in `seen`.
-pub fn add_shards(
+fn add_shards(
     seen: &mut Vec<u32>,
     dir: &Path,
     index: u32,
@@ -84,6 +116,29 @@ mod tests {
         let err = add_shards(&mut seen, Path::new("c"), 3, &[], 4).unwrap_err();
         assert_eq!(err.to_string(), "c: shard 3/4 given twice");
         assert_eq!(missing_shards(&seen, 4), ["2/4"]);
+    }
+
+    #[test]
+    fn a_merge_needs_one_study_and_each_shard_once() {
+        let dirs: Vec<PathBuf> = ["a", "b", "c"].iter().map(PathBuf::from).collect();
+        // (study key, shard index, merged shards)
+        let parts = [(1, 2, vec![]), (1, 0, vec![3, 1]), (1, 4, vec![])];
+        fn head(p: &(i32, u32, Vec<u32>)) -> (i32, u32, &[u32], u32) {
+            (p.0, p.1, &p.2[..], 4)
+        }
+        let all = merged_shards("batch", "the key", &dirs, &parts, head).unwrap();
+        assert_eq!(all, [1, 2, 3, 4]);
+        let none = merged_shards("batch", "the key", &[], &parts[..0], head);
+        assert!(matches!(none, Err(MergeError::NoInputs { study: "batch" })));
+        let other = [(1, 1, vec![]), (2, 2, vec![])];
+        let err = merged_shards("batch", "the key", &dirs[..2], &other, head).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            "b: not the same study as a (the key must agree)"
+        );
+        let twice = [(1, 1, vec![]), (1, 0, vec![2, 1])];
+        let err = merged_shards("batch", "the key", &dirs[..2], &twice, head).unwrap_err();
+        assert_eq!(err.to_string(), "b: shard 1/4 given twice");
     }
 
     #[test]

@@ -28,7 +28,7 @@
 //! merged study can still be summarised). Timings from different machines are
 //! comparable only as far as the machines are.
 
-use crate::studies::shards::{MergeError, add_shards, missing_shards};
+use crate::studies::shards::{merged_shards, missing_shards};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
@@ -674,36 +674,29 @@ pub fn read_dir(dir: &Path) -> Result<(BatchMeta, Aggregate, Vec<RunRow>)> {
 /// With `allow_partial`, missing seeds are allowed (the summary says how many
 /// runs it holds).
 pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<BatchReport> {
-    if inputs.is_empty() {
-        return Err(MergeError::NoInputs { study: "batch" }.into());
-    }
     let mut parts = Vec::new();
     for d in inputs {
         parts.push(read_dir(d)?);
     }
-    let key = parts[0].0.study_key();
-    let mut shards: Vec<u32> = Vec::new();
-    let mut rows: Vec<RunRow> = Vec::new();
-    let mut wall = 0.0;
-    for ((meta, _, r), dir) in parts.iter().zip(inputs) {
-        if meta.study_key() != key {
-            return Err(MergeError::OtherStudy {
-                dir: dir.clone(),
-                first: inputs[0].clone(),
-                agree: "family, seeds, planner, perception, overrides, solver, rate and shard count",
-            }
-            .into());
-        }
-        add_shards(
-            &mut shards,
-            dir,
-            meta.shard.index,
-            &meta.merged_shards,
-            meta.shard.count,
-        )?;
-        wall += meta.wall_time_s;
-        rows.extend(r.iter().cloned());
-    }
+    let shards = merged_shards(
+        "batch",
+        "family, seeds, planner, perception, overrides, solver, rate and shard count",
+        inputs,
+        &parts,
+        |(m, _, _)| {
+            (
+                m.study_key(),
+                m.shard.index,
+                &m.merged_shards[..],
+                m.shard.count,
+            )
+        },
+    )?;
+    let wall = parts.iter().fold(0.0, |w, (m, _, _)| w + m.wall_time_s);
+    let mut rows: Vec<RunRow> = parts
+        .iter()
+        .flat_map(|(_, _, r)| r.iter().cloned())
+        .collect();
     rows.sort_by_key(|r| r.seed);
     if let Some(w) = rows.windows(2).find(|w| w[0].seed == w[1].seed) {
         return Err(BatchError::SeedTwice(w[0].seed));
@@ -711,7 +704,6 @@ pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Batc
     let m0 = &parts[0].0;
     let expected = m0.seeds.len();
     if !allow_partial && (rows.len() as u64) < expected {
-        shards.sort_unstable();
         let missing = missing_shards(&shards, m0.shard.count);
         return Err(BatchError::Incomplete {
             runs: rows.len(),
@@ -723,7 +715,6 @@ pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<Batc
             },
         });
     }
-    shards.sort_unstable();
     let meta = BatchMeta {
         shard: Shard::ALL,
         merged_shards: shards,

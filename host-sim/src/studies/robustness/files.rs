@@ -2,7 +2,7 @@
 //! merging shards, and `runs.csv`.
 
 use super::*;
-use crate::studies::shards::{MergeError, add_shards, missing_shards};
+use crate::studies::shards::{merged_shards, missing_shards};
 
 /// Writes `runs.csv`, `table.md` and `summary.json` into `out` (atomically).
 pub(super) fn write_dir(out: &Path, rep: &RobustnessReport) -> Result<PathBuf> {
@@ -232,41 +232,27 @@ fn parse_run(
 /// `allow_partial`, that every shard is there; writes the three files of the
 /// whole study (nothing on error).
 pub fn merge(inputs: &[PathBuf], out: &Path, allow_partial: bool) -> Result<RobustnessReport> {
-    if inputs.is_empty() {
-        return Err(MergeError::NoInputs {
-            study: "robustness",
-        }
-        .into());
-    }
     let mut parts = Vec::new();
     for d in inputs {
         parts.push(read_dir(d)?);
     }
+    let shards = merged_shards(
+        "robustness",
+        "cases, random seeds, conditions, deltas, overrides and shard count",
+        inputs,
+        &parts,
+        |(m, _)| {
+            (
+                m.study_key(),
+                m.shard.index,
+                &m.merged_shards[..],
+                m.shard_count,
+            )
+        },
+    )?;
     let m0 = parts[0].0.clone();
-    let key = m0.study_key();
-    let mut shards: Vec<u32> = Vec::new();
-    let mut runs: Vec<(usize, RobustRun)> = Vec::new();
-    let mut wall = 0.0;
-    for ((meta, r), dir) in parts.into_iter().zip(inputs) {
-        if meta.study_key() != key {
-            return Err(MergeError::OtherStudy {
-                dir: dir.clone(),
-                first: inputs[0].clone(),
-                agree: "cases, random seeds, conditions, deltas, overrides and shard count",
-            }
-            .into());
-        }
-        add_shards(
-            &mut shards,
-            dir,
-            meta.shard.index,
-            &meta.merged_shards,
-            meta.shard_count,
-        )?;
-        wall += meta.wall_time_s;
-        runs.extend(r);
-    }
-    shards.sort_unstable();
+    let wall = parts.iter().fold(0.0, |w, (m, _)| w + m.wall_time_s);
+    let mut runs: Vec<(usize, RobustRun)> = parts.into_iter().flat_map(|(_, r)| r).collect();
     runs.sort_by_key(|(k, _)| *k);
     if !allow_partial && runs.len() < m0.study_runs {
         let missing = missing_shards(&shards, m0.shard_count);
