@@ -5,7 +5,7 @@ use nalgebra::SVector;
 
 use super::RelaxFailure;
 use super::rows::{Keep, RowClass};
-use super::search::{Ctx, Probe, row_norm};
+use super::search::{Ctx, Probe};
 use crate::linalg::{columns, dot};
 use crate::qp::QpBackend;
 
@@ -39,10 +39,9 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
             .zip(self.rows)
             .zip(&self.conflict)
             .take(self.qp.m)
-            .enumerate()
-            .all(|(o, (((g, &h), id), &c))| {
+            .all(|(((g, &h), id), &c)| {
                 c || RowClass::of(id.kind) != RowClass::Safety
-                    || dot(g, u.as_slice()) - h <= tol * row_norm(self.qp, o)
+                    || dot(g, u.as_slice()) - h <= tol * crate::linalg::sqrt(dot(g, g))
             })
     }
 
