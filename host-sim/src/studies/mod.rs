@@ -14,6 +14,7 @@
 
 pub mod batch;
 pub mod deadline;
+pub mod output;
 pub mod qpbench;
 pub mod replay;
 pub mod robustness;

@@ -38,8 +38,7 @@ pub enum BatchError {
         /// The study's seeds.
         seeds: SeedRange,
     },
-    /// The output directory cannot be created (checked before the runs, and
-    /// when writing).
+    /// The output directory cannot be created (checked before the runs).
     #[error("--out {}", path.display())]
     Out {
         /// The `--out` path.
@@ -66,25 +65,12 @@ pub enum BatchError {
         /// Why.
         source: SimError,
     },
-    /// A file of the output directory could not be written.
-    #[error("{}: {error}", path.display())]
-    Write {
-        /// The file.
-        path: PathBuf,
-        /// Why.
-        error: std::io::Error,
-    },
+    /// The output directory could not be written (nothing of it is left).
+    #[error(transparent)]
+    Write(#[from] crate::studies::output::WriteError),
     /// The summary could not be serialised.
     #[error(transparent)]
     Json(#[from] serde_json::Error),
-    /// The finished directory could not be moved into place.
-    #[error("cannot move the results into {}", path.display())]
-    Commit {
-        /// The `--out` path.
-        path: PathBuf,
-        /// Why.
-        source: std::io::Error,
-    },
     /// The path given to read is a file.
     #[error(
         "{}: is a file, not a batch directory (give the directory written by `batch` or `merge`)",

@@ -28,6 +28,7 @@
 //! merged study can still be summarised). Timings from different machines are
 //! comparable only as far as the machines are.
 
+use crate::studies::output::write_files;
 use crate::studies::shards::{merged_shards, missing_shards};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -370,26 +371,16 @@ struct SummaryFile {
 }
 
 fn write_dir(out: &Path, meta: &BatchMeta, rows: &[RunRow], agg: &Aggregate) -> Result<PathBuf> {
-    let dir = OutputDir::create(out).map_err(|source| BatchError::Out {
-        path: out.to_path_buf(),
-        source,
-    })?;
-    let write = |name: &str, text: String| {
-        let path = dir.path().join(name);
-        std::fs::write(&path, text).map_err(|error| BatchError::Write { path, error })
-    };
     let mut csv = String::from(CSV_HEADER);
     csv.push('\n');
     for r in rows {
         csv += &r.csv();
         csv.push('\n');
     }
-    write("runs.csv", csv)?;
     let json = serde_json::to_string_pretty(&SummaryFile {
         meta: meta.clone(),
         aggregate: agg.clone(),
     })?;
-    write("summary.json", json + "\n")?;
     let mut md = format!(
         "# {} seeds {} (shard {}), {} runs\n\nplanner {}, perception {}, overrides {:?}; wall time {:.1} s\n\n",
         meta.scenario,
@@ -402,11 +393,12 @@ fn write_dir(out: &Path, meta: &BatchMeta, rows: &[RunRow], agg: &Aggregate) -> 
         meta.wall_time_s
     );
     md += &markdown_table(&[(label(meta), agg.clone())]);
-    write("summary.md", md)?;
-    dir.commit().map_err(|source| BatchError::Commit {
-        path: out.to_path_buf(),
-        source,
-    })
+    let files = [
+        ("runs.csv", csv),
+        ("summary.json", json + "\n"),
+        ("summary.md", md),
+    ];
+    Ok(write_files(out, &files)?)
 }
 
 /// Runs a batch (see the module docs). Nothing is written unless every run

@@ -60,15 +60,10 @@ pub enum RobustnessError {
         /// Why.
         source: SimError,
     },
-    /// The output directory could not be created.
-    #[error("cannot create output directory {}", path.display())]
-    Create {
-        /// The `--out` path.
-        path: PathBuf,
-        /// Why.
-        source: std::io::Error,
-    },
-    /// A file could not be written or read.
+    /// The output directory could not be written (nothing of it is left).
+    #[error(transparent)]
+    Write(#[from] crate::studies::output::WriteError),
+    /// A file could not be read.
     #[error("{}: {error}", path.display())]
     File {
         /// The file.
@@ -79,14 +74,6 @@ pub enum RobustnessError {
     /// The summary could not be serialised.
     #[error(transparent)]
     Json(#[from] serde_json::Error),
-    /// The finished directory could not be moved into place.
-    #[error("cannot move the results into {}", path.display())]
-    Commit {
-        /// The `--out` path.
-        path: PathBuf,
-        /// Why.
-        source: std::io::Error,
-    },
     /// The path given to read is not a directory.
     #[error(
         "{}: no such robustness directory (give the directory written by `robustness --out` or `merge`)",

@@ -2,26 +2,18 @@
 //! merging shards, and `runs.csv`.
 
 use super::*;
+use crate::studies::output::write_files;
 use crate::studies::shards::{merged_shards, missing_shards};
 
 /// Writes `runs.csv`, `table.md` and `summary.json` into `out` (atomically).
 pub(super) fn write_dir(out: &Path, rep: &RobustnessReport) -> Result<PathBuf> {
-    let dir = OutputDir::create(out).map_err(|source| RobustnessError::Create {
-        path: out.to_path_buf(),
-        source,
-    })?;
-    let write = |name: &str, text: String| {
-        let path = dir.path().join(name);
-        std::fs::write(&path, text).map_err(|error| RobustnessError::File { path, error })
-    };
-    write("runs.csv", runs_csv(rep))?;
-    write("table.md", markdown(rep))?;
     let json = serde_json::to_string_pretty(&RobustnessMeta::of(rep))?;
-    write("summary.json", json + "\n")?;
-    dir.commit().map_err(|source| RobustnessError::Commit {
-        path: out.to_path_buf(),
-        source,
-    })
+    let files = [
+        ("runs.csv", runs_csv(rep)),
+        ("table.md", markdown(rep)),
+        ("summary.json", json + "\n"),
+    ];
+    Ok(write_files(out, &files)?)
 }
 
 /// Whether `dir` holds a `summary.json` written by `robustness --out` (so
