@@ -101,6 +101,9 @@ pub(super) struct Mapper {
     /// With `lidar.track_moving`: the people kept out of the map
     /// ([`crate::sense::movers`]) and what the last scan showed of them.
     movers: Option<(Movers, MoverScan)>,
+    /// The controller's pendulum, for the capture-step speed cap
+    /// ([`Mapper::capture_cap`]; built once from the scenario's config).
+    pendulum: ldcbf_controller::Lip,
 }
 
 impl Mapper {
@@ -127,6 +130,7 @@ impl Mapper {
                     MoverScan::default(),
                 )
             }),
+            pendulum: capture::pendulum(&scenario.config),
         })
     }
 
@@ -181,9 +185,9 @@ impl Mapper {
             return ldcbf_controller::NO_SPEED_CAP;
         }
         let tau = config.step_duration - input.time_in_step;
-        let lip = capture::pendulum(config);
+        let lip = &self.pendulum;
         let (p0, v0) = capture::end_of_step(
-            &lip,
+            lip,
             input.com_position,
             input.com_velocity,
             input.stance_foot,
@@ -191,7 +195,7 @@ impl Mapper {
         );
         let map = &self.log.map;
         let s0 = (p0 - input.com_position).norm();
-        let max = capture::march_length(config, &lip, s0, v0.norm(), map.resolution);
+        let max = capture::march_length(config, lip, s0, v0.norm(), map.resolution);
         let free = capture::free_distance(
             map,
             &capture::travel_path(input.com_position, subgoals),
@@ -199,7 +203,7 @@ impl Mapper {
             config.body_radius,
             max,
         );
-        capture::capture_cap(config, &lip, input.com_position, (p0, v0), free)
+        capture::capture_cap(config, lip, input.com_position, (p0, v0), free)
     }
 
     /// With `lidar.track_moving`, the last scan's people (hulls, world frame)
