@@ -193,7 +193,7 @@ pub use rows::{CaptureBounds, ClassViolation, RowClass, class_violation};
 use nalgebra::SVector;
 
 use crate::constraints::RowId;
-use crate::qp::{DenseQp, DualActiveSet, QpBackend};
+use crate::qp::{DenseQp, DualActiveSet, QpBackend, Reprobe};
 use rows::{Keep, Soft};
 use search::{Ctx, Probe};
 
@@ -279,13 +279,18 @@ pub(crate) struct Params<'a, const NC: usize> {
 
 /// Runs the priority scheme on the nominal QP `qp` (rows identified by `rows`;
 /// each probe solves a selection of its rows in place, with no copy), within
-/// the limits of `p`.
+/// the limits of `p`. The probes share `reprobe`
+/// ([`QpBackend::solve_reprobe`]: the row norms, and the factor of the
+/// active rows each probe continues from): the state of the nominal solve
+/// of `qp`'s rows (whose factor the first probe continues from), or a new
+/// one.
 pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     solver: &DualActiveSet<NV, NC>,
     backend: &mut B,
     qp: &DenseQp<NV, NC>,
     rows: &[RowId; NC],
     p: Params<'_, NC>,
+    reprobe: &mut Reprobe<NV, NC>,
 ) -> Result<Relaxed<NV, NC>, RelaxError> {
     let Params {
         max_iter,
@@ -307,11 +312,11 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         probes,
         probes_left: probes.saturating_mul(2),
         cert: None,
-        marks: [false; NC],
         support: [false; NC],
         conflict: [false; NC],
         confined: false,
         capture,
+        reprobe,
     };
     if let Some(y) = certificate {
         // The nominal QP is the first probe's problem (stage 1 at no
@@ -320,12 +325,10 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
             safety: Some(0.0),
             gait: Some(0.0),
             capture: capture.map(|_| 0.0),
-            first_step: false,
         };
         ctx.take_certificate(y, nominal);
         if !ctx.cert.is_some_and(|c| c.yh < 0.0) {
             ctx.cert = None;
-            ctx.marks = [false; NC];
             ctx.support = [false; NC];
         }
     }
@@ -361,7 +364,6 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         safety: Some(0.0),
         gait: None,
         capture: capture0,
-        first_step: false,
     };
     if let Some((u, eps)) = ctx.minimal(safe, Soft::Gait, gait_cap, None)? {
         return Ok(Relaxed {
@@ -394,7 +396,6 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
                 safety: None,
                 gait: None,
                 capture: Some(0.0),
-                first_step: false,
             };
             ctx.probes_left -= 1;
             match ctx.solve(free)? {
@@ -412,7 +413,6 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
                 safety: None,
                 gait: None,
                 capture: None,
-                first_step: false,
             };
             let Some((u_c, eps_c)) = ctx.minimal(free, Soft::Capture, f64::INFINITY, None)? else {
                 break;
@@ -424,7 +424,6 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
             safety: None,
             gait: if cap.is_finite() { Some(cap) } else { None },
             capture,
-            first_step: false,
         };
         let Some((u_s, eps_s)) = ctx.minimal(reach, Soft::Safety, f64::INFINITY, known_s)? else {
             continue;
@@ -442,7 +441,6 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
             safety: Some(eps_s),
             gait: None,
             capture,
-            first_step: false,
         };
         // The plan just found is feasible with the gait rows at the cap (or
         // without them: then at its own gait violation).
