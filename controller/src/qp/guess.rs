@@ -4,8 +4,8 @@
 //! triangular, formed over the rows' spans.
 //!
 //! The controller's rows have short or one-sided spans (a velocity or
-//! reachability row of step `k` touches the variables of steps `0..=k`, an
-//! obstacle row those of steps `k - 1..=k + 1`), so most entries of `K` are
+//! reachability row of step `k` touches the variables `0..2k + 2`, an
+//! obstacle row `2k - 2..2k + 2`), so most entries of `K` are
 //! dot products over a part of the rows, and many are zero. Every product
 //! left out is an exact zero (`0 * x` for a finite `x`) that would leave its
 //! sum as it is (a sum that starts at +0 never becomes -0), so the factor
@@ -18,6 +18,9 @@
 //!   `i`'s (the entries of `K` before it are zero, and by induction so are
 //!   those of `C`): the entries before `f_i` are not formed, and the sums of
 //!   products of two rows start at `max(f_i, f_j)`.
+//!
+//! The unit tests below compare the factor with the one formed entry by
+//! entry over all entries, bit for bit.
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector, U1};
 
@@ -112,21 +115,59 @@ where
         let Some(ti) = rest.get_mut(..n) else {
             return false;
         };
-        for j in fi..i {
+        // With the spans two entries at a time: their sums are independent
+        // chains up to the last product of the second, which needs the first
+        // (a sum started before its row's `max(f_i, f_j)` only takes exact
+        // zeros more). Below `SPANS_FROM`, one at a time (fewer instructions
+        // for the fully unrolled short rows, the same time).
+        let mut j = fi;
+        while j < i {
             let (Some(tj), Some(mj)) = (column(done, n, j), column(ms, n, j)) else {
                 return false;
             };
             let mut s = gram(mi, i, mj, j);
+            let pair = match (column(done, n, j + 1), column(ms, n, j + 1)) {
+                (Some(t1), Some(m1)) if spans && j + 1 < i => Some((t1, gram(mi, i, m1, j + 1))),
+                _ => None,
+            };
             let l0 = fi.max(fst(j));
-            if let (Some(a), Some(b)) = (ti.get(l0..j), tj.get(l0..j)) {
-                for (x, y) in a.iter().zip(b) {
-                    s -= x * y;
+            match pair {
+                Some((t1, mut s1)) => {
+                    let l0 = l0.min(fi.max(fst(j + 1)));
+                    if let (Some(a), Some(b), Some(b1)) =
+                        (ti.get(l0..j), tj.get(l0..j), t1.get(l0..j))
+                    {
+                        for ((x, y), y1) in a.iter().zip(b).zip(b1) {
+                            s -= x * y;
+                            s1 -= x * y1;
+                        }
+                    }
+                    let (Some(&cjj), Some(&c1j), Some(&c11)) =
+                        (tj.get(j), t1.get(j), t1.get(j + 1))
+                    else {
+                        return false;
+                    };
+                    let cij = s / cjj;
+                    s1 -= cij * c1j;
+                    if let Some([e0, e1]) = ti.get_mut(j..j + 2) {
+                        *e0 = cij;
+                        *e1 = s1 / c11;
+                    }
+                    j += 2;
+                }
+                None => {
+                    if let (Some(a), Some(b)) = (ti.get(l0..j), tj.get(l0..j)) {
+                        for (x, y) in a.iter().zip(b) {
+                            s -= x * y;
+                        }
+                    }
+                    let (Some(&cjj), Some(cij)) = (tj.get(j), ti.get_mut(j)) else {
+                        return false;
+                    };
+                    *cij = s / cjj;
+                    j += 1;
                 }
             }
-            let (Some(&cjj), Some(cij)) = (tj.get(j), ti.get_mut(j)) else {
-                return false;
-            };
-            *cij = s / cjj;
         }
         let sii = gram(mi, i, mi, i);
         let mut s = sii;
