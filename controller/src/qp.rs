@@ -25,7 +25,10 @@
 //! first time it is found violated, and per add or drop `O(m NV + NV^2)`. When `G`
 //! is the same over many solves (only `q` and `h` change), the row norms can be
 //! computed once with [`DualActiveSet::prepare_rows`] and passed to
-//! [`DualActiveSet::solve_prepared`]. The kernels run over slices whose
+//! [`DualActiveSet::solve_prepared`]; a series of solves of the same rows
+//! with other right-hand sides (the relaxation's probes) shares them and
+//! continues each from the last one's factor with
+//! [`DualActiveSet::solve_reprobe`] (`qp/reprobe.rs`). The kernels run over slices whose
 //! lengths are the dimensions (the constants `NV`, `NC` for the static
 //! sizes), so the compiler unrolls and vectorises them without bounds checks
 //! there; see `docs/solvers.md` for the measurements that chose them.
