@@ -189,6 +189,7 @@ macro_rules! solve_start {
 
 mod backend;
 mod dense;
+mod guess;
 mod orthogonal;
 mod proximal;
 mod reprobe;
