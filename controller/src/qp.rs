@@ -605,7 +605,7 @@ where
         if self.proximal() {
             return self.solve_proximal(qp, &qp.h, excluded, &mut rows, prefer, max_iter);
         }
-        let mut carry = Carry::fresh(self.nv());
+        let mut carry = Carry::scratch(self);
         self.solve_with(
             qp, &qp.q, &qp.h, excluded, &mut rows, prefer, max_iter, &mut carry,
         )
@@ -641,7 +641,7 @@ where
         if self.proximal() {
             return self.solve_proximal(qp, h, excluded, &mut rows, prefer, max_iter);
         }
-        let mut carry = Carry::fresh(self.nv());
+        let mut carry = Carry::scratch(self);
         self.solve_with(
             qp, &qp.q, h, excluded, &mut rows, prefer, max_iter, &mut carry,
         )
@@ -687,7 +687,7 @@ where
         if self.proximal() {
             return self.solve_proximal(qp, &qp.h, excluded, &mut rows, prefer, max_iter);
         }
-        let mut carry = Carry::fresh(self.nv());
+        let mut carry = Carry::scratch(self);
         self.solve_with(
             qp, &qp.q, &qp.h, excluded, &mut rows, prefer, max_iter, &mut carry,
         )
@@ -738,7 +738,9 @@ where
             Ok(start) => start,
             Err(status) => return active_set::stopped(nv, nc, status),
         };
-        let Carry { J, R, kept, valid } = &mut *carry;
+        let Carry {
+            J, R, kept, valid, ..
+        } = &mut *carry;
         let mut d = OVector::<f64, NV>::zeros_generic(nv, U1);
         let mut factor = Resumed {
             inner: Orthogonal {

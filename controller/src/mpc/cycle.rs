@@ -532,7 +532,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         let (prefer, warm) = self.warm_start(memory, shift, work);
         // The probes of an infeasible cycle's relaxation continue from this
         // solve's factor (`reprobe`).
-        let mut reprobe = Reprobe::new(&work.qp);
+        let mut reprobe = Reprobe::for_solver(&self.solver, &work.qp);
         let sol = backend.solve_reprobe(
             &self.solver,
             &work.qp,

@@ -53,6 +53,9 @@ where
     /// `J`, `R` and `kept` hold the factor of a finished solve (solved or
     /// proven infeasible); else the next solve starts from scratch.
     pub valid: bool,
+    /// `J = L^-T` and `R = 0` already (a start from scratch need not set
+    /// them again).
+    pub pristine: bool,
 }
 
 impl<NV: Dim> Carry<NV>
@@ -71,6 +74,32 @@ where
                 neq: 0,
             },
             valid: false,
+            pristine: false,
+        }
+    }
+
+    /// Storage holding the start from scratch of `solver`'s solves (`J =
+    /// L^-T`, `R = 0`), so that the first solve need not set it again (on
+    /// hosts; on bare-metal targets [`Carry::fresh`], one start in flash).
+    pub(super) fn scratch<NC: Dim>(solver: &DualActiveSetOf<NV, NC>) -> Self
+    where
+        DefaultAllocator: QpAllocator<NV, NC>,
+    {
+        let nv = solver.nv();
+        if cfg!(target_os = "none") {
+            return Carry::fresh(nv);
+        }
+        Carry {
+            J: solver.Linv.transpose(),
+            R: OMatrix::zeros_generic(nv, nv),
+            kept: Kept {
+                act: OVector::zeros_generic(nv, U1),
+                mult: OVector::zeros_generic(nv, U1),
+                nact: 0,
+                neq: 0,
+            },
+            valid: false,
+            pristine: true,
         }
     }
 
@@ -103,8 +132,11 @@ where
             self.valid = false;
         }
         if !self.valid {
-            self.J = solver.Linv.transpose();
-            self.R.fill(0.0);
+            if !self.pristine {
+                self.J = solver.Linv.transpose();
+                self.R.fill(0.0);
+            }
+            self.pristine = false;
             // Unconstrained minimiser x = -J0 J0' q = -L^-T L^-1 q.
             let mut x = solver.linvt_mul(solver.linv_mul(q.as_slice()).as_slice());
             for v in x.as_mut_slice() {
@@ -183,6 +215,16 @@ where
         ReprobeOf {
             norms: RowNormsOf::euclidean(qp),
             carry: Carry::fresh(qp.gt.shape_generic().0),
+        }
+    }
+
+    /// [`ReprobeOf::new`] with the factor already at the start from scratch
+    /// of `solver`'s solves (`J = L^-T`, `R = 0`): the first probe does not
+    /// set it again.
+    pub fn for_solver(solver: &DualActiveSetOf<NV, NC>, qp: &DenseQpOf<NV, NC>) -> Self {
+        ReprobeOf {
+            norms: RowNormsOf::euclidean(qp),
+            carry: Carry::scratch(solver),
         }
     }
 

@@ -261,6 +261,12 @@ where
     /// row's span (the same bits).
     #[inline(always)]
     fn violation(&mut self, i: usize, blocked: bool) -> Option<f64> {
+        // Without spans (every solve but the proximal ones) on hosts the
+        // iteration's own scan: a constant-length dot product for the static
+        // sizes (bare-metal targets: the code below, one copy in flash).
+        if cfg!(not(target_os = "none")) && self.inner.span.is_none() {
+            return self.inner.violation(i, blocked);
+        }
         let o = &mut self.inner;
         let n = o.solver.nv().value();
         let (Some(g), Some(&hi), Some(&n2), Some(ihn)) = (
