@@ -472,7 +472,10 @@ where
 /// test `< nact` inside, which the compiler unrolls fully; for larger `NV`
 /// (and run-time sizes) over `nact` (fully unrolled, the `NV^2 / 2` tests
 /// would cost more than they save). Measured in `docs/solvers.md`.
-#[inline(always)]
+/// Inlined on hosts; one out-of-line copy on bare-metal targets, shared
+/// with the resumed solves (`qp/resolve.rs`), for flash.
+#[cfg_attr(not(target_os = "none"), inline(always))]
+#[cfg_attr(target_os = "none", inline(never))]
 pub(super) fn back_substitute<NV: Dim>(
     R: &OMatrix<f64, NV, NV>,
     d: &[f64],
@@ -598,9 +601,12 @@ where
 
 /// Removes active row `l` (of `nact`): deletes column `l` of `R` and
 /// restores the triangle with Givens rotations, applied to `J` as well.
-// Inlined (as the compiler chose when the loop was written out here, on
-// x86-64 and on the Cortex-M7; out of line it costs the paper QPs 4 %).
-#[inline(always)]
+// Inlined on hosts (as the compiler chose when the loop was written out
+// here; out of line it costs the paper QPs 4 %); one out-of-line copy on
+// bare-metal targets, shared by the iteration's drops and the resumed
+// solves' (`qp/resolve.rs`), for flash.
+#[cfg_attr(not(target_os = "none"), inline(always))]
+#[cfg_attr(target_os = "none", inline(never))]
 pub(super) fn givens_drop<NV: Dim>(
     J: &mut OMatrix<f64, NV, NV>,
     R: &mut OMatrix<f64, NV, NV>,
