@@ -110,7 +110,11 @@ where
         if si >= 0.0 || blocked || slack_holds(si, thr[i]) {
             return None;
         }
-        Some(if si.is_finite() { si } else { f64::NAN })
+        // Negative here, or NaN (returned as it is): not finite only as -inf.
+        if si == f64::NEG_INFINITY {
+            return Some(f64::NAN);
+        }
+        Some(si)
     }
 
     #[inline(always)]
@@ -204,14 +208,38 @@ where
             return;
         };
         // u moves by -t z: slack_i grows by t mhat_i . z
-        // = t (K_ip - sum_j r_j K_i,A_j).
-        for (si, &k) in s.iter_mut().zip(kp) {
+        // = t (K_ip - sum_j r_j K_i,A_j), each slack summed in that order.
+        // One pass over the slacks, in blocks of `BLOCK` held in registers
+        // while the active rows' columns are subtracted (a pass per column
+        // loaded and stored every slack again).
+        let mut blocks = s.chunks_exact_mut(BLOCK);
+        for (lo, sb) in (0..).step_by(BLOCK).zip(blocks.by_ref()) {
+            let mut acc = [0.0; BLOCK];
+            if let Some(kb) = kp.get(lo..lo + BLOCK) {
+                for ((a, &si), &k) in acc.iter_mut().zip(sb.iter()).zip(kb) {
+                    *a = si + t * k;
+                }
+            }
+            for (&a, &rj) in act.iter().zip(r).take(nact) {
+                let f = t * rj;
+                let start = usize::from(a) * nc + lo;
+                if let Some(kb) = K.get(start..start + BLOCK) {
+                    for (a, &k) in acc.iter_mut().zip(kb) {
+                        *a -= f * k;
+                    }
+                }
+            }
+            crate::linalg::copy(sb, &acc);
+        }
+        let lo = m - m % BLOCK;
+        let rest = blocks.into_remainder();
+        for (si, &k) in rest.iter_mut().zip(kp.get(lo..).unwrap_or(&[])) {
             *si += t * k;
         }
         for (&a, &rj) in act.iter().zip(r).take(nact) {
             if let Some(ka) = column(K, nc, usize::from(a)) {
                 let f = t * rj;
-                for (si, &k) in s.iter_mut().zip(ka) {
+                for (si, &k) in rest.iter_mut().zip(ka.get(lo..).unwrap_or(&[])) {
                     *si -= f * k;
                 }
             }
@@ -231,11 +259,18 @@ where
         let Some(row) = column_mut(self.C.as_mut_slice(), n, nact) else {
             return Err(AddError::Numerical);
         };
-        if !(diag > 0.0 && diag.is_finite()) {
-            return Err(AddError::Numerical);
+        // A pivot below the threshold: restart; zero or NaN: an error (as an
+        // infinite one). Two compares (a test for positive and finite is
+        // compiled as a classification of the bits).
+        if diag < PIVOT_FALLBACK || diag.is_nan() {
+            return Err(if diag > 0.0 {
+                AddError::Restart
+            } else {
+                AddError::Numerical
+            });
         }
-        if diag < PIVOT_FALLBACK {
-            return Err(AddError::Restart);
+        if diag == f64::INFINITY {
+            return Err(AddError::Numerical);
         }
         // Entries `nact + 1..` of the row are zero already (rows past the
         // active ones are zero: zeroed at the start and by `chol_drop`).
@@ -344,6 +379,10 @@ where
         }
     }
 }
+
+/// Slacks updated together by [`ActiveSetFactor::advance`] (kept in
+/// registers: eight SSE2 registers on x86-64).
+const BLOCK: usize = 16;
 
 /// Rows of the factors `C`, `C^-1` allocated at the start of a solve with
 /// run-time sizes (at most `n`); [`grow`] doubles them when needed.
