@@ -418,6 +418,7 @@ where
     /// The answer from the iteration's end `it`, its `x` and the LDP's
     /// primal `u`: the objective `1/2 |u|^2 - 1/2 |v|^2`, the multipliers in
     /// the units of `G` (`lambda_i = lambda_hat_i / |m_i|`).
+    #[inline(always)]
     fn finish(
         &self,
         it: active_set::Iterate<NV>,

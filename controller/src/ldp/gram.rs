@@ -72,6 +72,18 @@ impl<NV: Dim, NC: Dim> Gram<'_, NV, NC>
 where
     DefaultAllocator: QpAllocator<NV, NC>,
 {
+    /// The full (primal) step length `t2` for a new row with scaled slack
+    /// `sp` and `|z|^2 = z2` (`|mhat_p| = 1`), infinite when the row depends
+    /// on the `nact` active ones; keeps `z2` and that verdict for the add.
+    #[inline(always)]
+    fn step(&mut self, sp: f64, z2: f64, nact: usize) -> f64 {
+        // With NV rows active (independent) the span is everything.
+        let dependent = z2 <= self.tol_dep2 || nact >= self.n();
+        self.z2 = z2;
+        self.dependent = dependent;
+        if dependent { f64::INFINITY } else { -sp / z2 }
+    }
+
     /// The number of variables: the constant for the static sizes (the
     /// stored field is not seen as one, and the column access would divide
     /// by it).
@@ -98,7 +110,11 @@ where
         if si >= 0.0 || blocked || slack_holds(si, thr[i]) {
             return None;
         }
-        Some(if si.is_finite() { si } else { f64::NAN })
+        // Negative here, or NaN (returned as it is): not finite only as -inf.
+        if si == f64::NEG_INFINITY {
+            return Some(f64::NAN);
+        }
+        Some(si)
     }
 
     #[inline(always)]
@@ -120,6 +136,15 @@ where
             *bi = kp.get(usize::from(a)).copied().unwrap_or(0.0);
         }
         chol_solve(self.Ci, self.b.as_slice(), nact, self.w.as_mut_slice(), r);
+        // |z|^2 = |m_p|^2 - |w|^2 (the new diagonal entry of the factor, as in
+        // an update of Cholesky or LDL' factors), with no pass over the `n`
+        // entries of `m_p`, where that difference does not cancel.
+        let kpp = kp.get(p).copied().unwrap_or(f64::NAN);
+        let w = self.w.as_slice().get(..nact).unwrap_or(&[]);
+        let c2 = kpp - dot_d::<NV>(w, w);
+        if c2 >= DIRECT2 {
+            return Some(self.step(sp, c2, nact));
+        }
         // z = m_p - M_A' r: the component of m_p outside the active span.
         // For the static sizes a local (kept in registers; as a field it was
         // stored after every active row), for run-time sizes the field (no
@@ -166,13 +191,7 @@ where
             }
             z2 = dot_d::<NV>(z, z);
         }
-        // Full (primal) step length t2 (|mhat_p| = 1).
-        // With NV rows active (independent) the span is everything.
-        let dependent = z2 <= self.tol_dep2 || nact >= n;
-        let t2 = if dependent { f64::INFINITY } else { -sp / z2 };
-        self.z2 = z2;
-        self.dependent = dependent;
-        Some(t2)
+        Some(self.step(sp, z2, nact))
     }
 
     #[inline(always)]
@@ -189,14 +208,38 @@ where
             return;
         };
         // u moves by -t z: slack_i grows by t mhat_i . z
-        // = t (K_ip - sum_j r_j K_i,A_j).
-        for (si, &k) in s.iter_mut().zip(kp) {
+        // = t (K_ip - sum_j r_j K_i,A_j), each slack summed in that order.
+        // One pass over the slacks, in blocks of `BLOCK` held in registers
+        // while the active rows' columns are subtracted (a pass per column
+        // loaded and stored every slack again).
+        let mut blocks = s.chunks_exact_mut(BLOCK);
+        for (lo, sb) in (0..).step_by(BLOCK).zip(blocks.by_ref()) {
+            let mut acc = [0.0; BLOCK];
+            if let Some(kb) = kp.get(lo..lo + BLOCK) {
+                for ((a, &si), &k) in acc.iter_mut().zip(sb.iter()).zip(kb) {
+                    *a = si + t * k;
+                }
+            }
+            for (&a, &rj) in act.iter().zip(r).take(nact) {
+                let f = t * rj;
+                let start = usize::from(a) * nc + lo;
+                if let Some(kb) = K.get(start..start + BLOCK) {
+                    for (a, &k) in acc.iter_mut().zip(kb) {
+                        *a -= f * k;
+                    }
+                }
+            }
+            crate::linalg::copy(sb, &acc);
+        }
+        let lo = m - m % BLOCK;
+        let rest = blocks.into_remainder();
+        for (si, &k) in rest.iter_mut().zip(kp.get(lo..).unwrap_or(&[])) {
             *si += t * k;
         }
         for (&a, &rj) in act.iter().zip(r).take(nact) {
             if let Some(ka) = column(K, nc, usize::from(a)) {
                 let f = t * rj;
-                for (si, &k) in s.iter_mut().zip(ka) {
+                for (si, &k) in rest.iter_mut().zip(ka.get(lo..).unwrap_or(&[])) {
                     *si -= f * k;
                 }
             }
@@ -216,11 +259,18 @@ where
         let Some(row) = column_mut(self.C.as_mut_slice(), n, nact) else {
             return Err(AddError::Numerical);
         };
-        if !(diag > 0.0 && diag.is_finite()) {
-            return Err(AddError::Numerical);
+        // A pivot below the threshold: restart; zero or NaN: an error (as an
+        // infinite one). Two compares (a test for positive and finite is
+        // compiled as a classification of the bits).
+        if diag < PIVOT_FALLBACK || diag.is_nan() {
+            return Err(if diag > 0.0 {
+                AddError::Restart
+            } else {
+                AddError::Numerical
+            });
         }
-        if diag < PIVOT_FALLBACK {
-            return Err(AddError::Restart);
+        if diag == f64::INFINITY {
+            return Err(AddError::Numerical);
         }
         // Entries `nact + 1..` of the row are zero already (rows past the
         // active ones are zero: zeroed at the start and by `chol_drop`).
@@ -330,6 +380,10 @@ where
     }
 }
 
+/// Slacks updated together by [`ActiveSetFactor::advance`] (kept in
+/// registers: eight SSE2 registers on x86-64).
+const BLOCK: usize = 16;
+
 /// Rows of the factors `C`, `C^-1` allocated at the start of a solve with
 /// run-time sizes (at most `n`); [`grow`] doubles them when needed.
 pub(super) const FIRST_ROWS: usize = 8;
@@ -356,6 +410,12 @@ where
 /// (the rows have unit norm: `|z| < 0.1`), the component is projected a second
 /// time.
 const REFINE2: f64 = 1e-2;
+
+/// From this value of `|m_p|^2 - |w|^2` on, it is taken as `|z|^2`: the
+/// difference keeps all but about 5 bits of its terms' accuracy
+/// (`|m_p|^2 = 1`); below it, `z` is formed (and projected again below
+/// [`REFINE2`]).
+const DIRECT2: f64 = 3e-2;
 
 /// `w = C^-1 b` and `r = C^-T w = (C C')^-1 b` on the leading `nact x nact`
 /// block, from the inverse factor `Ci = C^-1` (lower triangular, zeros above
