@@ -185,12 +185,16 @@ macro_rules! solve_start {
 }
 
 mod backend;
+mod bounds;
 mod dense;
 mod orthogonal;
 mod proximal;
 mod resolve;
 mod spans;
 pub use backend::{OwnSolver, QpBackend};
+#[cfg(feature = "alloc")]
+pub use bounds::SimpleBoundsDyn;
+pub use bounds::{SimpleBounds, SimpleBoundsOf};
 #[cfg(feature = "alloc")]
 pub use dense::DenseQpDyn;
 pub use dense::{DenseQp, DenseQpOf};
@@ -246,6 +250,20 @@ where
     where
         DefaultAllocator: Allocator<NV> + Allocator<NV, NC>,
     {
+        Self::euclidean_except::<NV, false>(qp, None)
+    }
+
+    /// [`RowNormsOf::euclidean`] with `|g_i|^2 = 1` for the bound rows of
+    /// `bounds` (read with `B` only): no dot product.
+    #[inline(always)]
+    fn euclidean_except<NV: Dim, const B: bool>(
+        qp: &DenseQpOf<NV, NC>,
+        bounds: Option<&OVector<u32, NC>>,
+    ) -> Self
+    where
+        DefaultAllocator: Allocator<NV> + Allocator<NV, NC>,
+    {
+        let bounds = if B { bounds } else { None };
         let nc = qp.h.shape_generic().0;
         let m = qp.m.min(nc.value());
         let mut rows = RowNormsOf {
@@ -254,6 +272,19 @@ where
             m,
             finite: true,
         };
+        if let Some(codes) = bounds {
+            for ((g, n2), &c) in columns(qp.gt.as_slice(), qp.gt.nrows())
+                .zip(rows.norm2.as_mut_slice().iter_mut())
+                .zip(codes.as_slice())
+                .take(m)
+            {
+                *n2 = if c != 0 { 1.0 } else { dot_d::<NV>(g, g) };
+                if !n2.is_finite() {
+                    rows.finite = false;
+                }
+            }
+            return rows;
+        }
         for (g, n2) in columns(qp.gt.as_slice(), qp.gt.nrows())
             .zip(rows.norm2.as_mut_slice().iter_mut())
             .take(m)
@@ -595,9 +626,43 @@ where
         let excluded = OVector::<bool, NC>::from_element_generic(nc, U1, false);
         let max_iter = self.settings.max_iter;
         if self.proximal() {
-            return self.solve_proximal(qp, &qp.h, excluded, &mut rows, prefer, max_iter);
+            return self
+                .solve_proximal::<false>(qp, &qp.h, excluded, &mut rows, None, prefer, max_iter);
         }
-        self.solve_with(qp, &qp.q, &qp.h, excluded, &mut rows, prefer, max_iter)
+        self.solve_with::<false>(
+            qp, &qp.q, &qp.h, excluded, &mut rows, None, prefer, max_iter,
+        )
+    }
+
+    /// [`DualActiveSetOf::solve`] with the rows `bounds` (detected from a QP
+    /// with the same rows of `G` by [`SimpleBoundsOf::detect`]) handled as
+    /// simple bounds (`qp/bounds.rs`): no norm, no dot product and no
+    /// product with `L^-1` for them, `J' g_p` of an added bound read off a
+    /// row of `J`. The same result as `solve`, bit for bit (status,
+    /// iterations, active set, `x`, multipliers or certificate, objective).
+    /// `bounds` detected for another number of rows gives
+    /// [`QpStatus::NumericalError`].
+    pub fn solve_bounded(
+        &self,
+        qp: &DenseQpOf<NV, NC>,
+        bounds: &SimpleBoundsOf<NC>,
+        prefer: &[bool],
+    ) -> QpSolutionOf<NV, NC> {
+        let nc = qp.h.shape_generic().0;
+        let codes = Some(&bounds.code);
+        let mut rows = RowNormsOf::euclidean_except::<NV, true>(qp, codes);
+        if bounds.m != qp.m.min(nc.value()) || bounds.code.len() != nc.value() {
+            rows.finite = false;
+        }
+        let excluded = OVector::<bool, NC>::from_element_generic(nc, U1, false);
+        let max_iter = self.settings.max_iter;
+        if self.proximal() {
+            return self
+                .solve_proximal::<true>(qp, &qp.h, excluded, &mut rows, codes, prefer, max_iter);
+        }
+        self.solve_with::<true>(
+            qp, &qp.q, &qp.h, excluded, &mut rows, codes, prefer, max_iter,
+        )
     }
 
     /// [`DualActiveSetOf::solve`] on a selection of `qp`'s rows with other
@@ -628,9 +693,10 @@ where
         let mut rows = RowNormsOf::euclidean(qp);
         let max_iter = budget.min(self.settings.max_iter);
         if self.proximal() {
-            return self.solve_proximal(qp, h, excluded, &mut rows, prefer, max_iter);
+            return self
+                .solve_proximal::<false>(qp, h, excluded, &mut rows, None, prefer, max_iter);
         }
-        self.solve_with(qp, &qp.q, h, excluded, &mut rows, prefer, max_iter)
+        self.solve_with::<false>(qp, &qp.q, h, excluded, &mut rows, None, prefer, max_iter)
     }
 
     /// The per-row data of `qp`'s constraint matrix that [`DualActiveSetOf::solve`]
@@ -671,9 +737,12 @@ where
         let excluded = OVector::<bool, NC>::from_element_generic(nc, U1, false);
         let max_iter = self.settings.max_iter;
         if self.proximal() {
-            return self.solve_proximal(qp, &qp.h, excluded, &mut rows, prefer, max_iter);
+            return self
+                .solve_proximal::<false>(qp, &qp.h, excluded, &mut rows, None, prefer, max_iter);
         }
-        self.solve_with(qp, &qp.q, &qp.h, excluded, &mut rows, prefer, max_iter)
+        self.solve_with::<false>(
+            qp, &qp.q, &qp.h, excluded, &mut rows, None, prefer, max_iter,
+        )
     }
 
     /// `1 / |L^-1 g|` for a row with `|g|^2 = n2 > 0`.
@@ -692,19 +761,32 @@ where
         }
     }
 
+    /// `1 / |L^-1 e_j|`, the norm of column `j` of `L^-1`: the bits of
+    /// [`DualActiveSetOf::inv_hnorm`] for the row `+-e_j` (the products
+    /// with its zero entries are exact zeros).
+    #[inline(always)]
+    fn inv_hnorm_unit(&self, j: usize) -> f64 {
+        let n = self.nv().value();
+        let col = column(self.Linv.as_slice(), n, j).unwrap_or(&[]);
+        let hn = crate::linalg::sqrt(dot_d::<NV>(col, col));
+        if hn > 0.0 { 1.0 / hn } else { 1.0 }
+    }
+
     /// The solve proper, with the linear term `q` (`qp.q`, or the proximal
     /// iteration's; the objective is the one of `qp.q`), the right-hand side
     /// `h` (`qp.h` or another), the rows `excluded[i]` left out, the
     /// Euclidean row norms in `rows` and the H^-1 norms there or computed on
-    /// demand (0 = not yet).
+    /// demand (0 = not yet), and with `B` the bound rows `bounds`
+    /// (`qp/bounds.rs`).
     #[allow(clippy::too_many_arguments)]
-    fn solve_with(
+    fn solve_with<const B: bool>(
         &self,
         qp: &DenseQpOf<NV, NC>,
         qv: &OVector<f64, NV>,
         hv: &OVector<f64, NC>,
         excluded: OVector<bool, NC>,
         norms: &mut RowNormsOf<NC>,
+        bounds: Option<&OVector<u32, NC>>,
         prefer: &[bool],
         max_iter: u32,
     ) -> QpSolutionOf<NV, NC> {
@@ -721,7 +803,7 @@ where
         let mut J = self.Linv.transpose();
         let mut R = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
         let mut d = OVector::<f64, NV>::zeros_generic(nv, U1);
-        let mut factor = Orthogonal {
+        let mut factor = Orthogonal::<_, _, B> {
             solver: self,
             rows: &qp.gt,
             h: hv,
@@ -736,6 +818,7 @@ where
             dependent: false,
             span: None,
             reorder: false,
+            bounds: if B { bounds } else { None },
         };
         // Rows left out are never scanned: they start (and stay) blocked as if
         // active, but never enter the active list.

@@ -99,13 +99,16 @@ where
 {
     /// The proximal-point iterations (module docs) on `qp` with the
     /// right-hand side `hv`, the rows `excluded` left out and at most
-    /// `max_iter` adds plus drops in all.
-    pub(super) fn solve_proximal(
+    /// `max_iter` adds plus drops in all; with `B` the bound rows `bounds`
+    /// (`qp/bounds.rs`).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn solve_proximal<const B: bool>(
         &self,
         qp: &DenseQpOf<NV, NC>,
         hv: &OVector<f64, NC>,
         excluded: OVector<bool, NC>,
         norms: &mut RowNormsOf<NC>,
+        bounds: Option<&OVector<u32, NC>>,
         prefer: &[bool],
         max_iter: u32,
     ) -> QpSolutionOf<NV, NC> {
@@ -114,7 +117,9 @@ where
         let hot = self.settings.hot_start;
         let pref = active_set::marks(nc, prefer);
         let unmarked = OVector::<bool, NC>::from_element_generic(nc, U1, false);
-        let spans = row_spans(&qp.gt, m);
+        let bounds = if B { bounds } else { None };
+        // (Bound rows have no span: theirs is never read.)
+        let spans = row_spans(&qp.gt, m, bounds);
         // The factor of the active rows, kept from one proximal solve to the
         // next (`qp/resolve.rs`).
         let mut J = self.Linv.transpose();
@@ -178,7 +183,7 @@ where
             };
             let left = max_iter.saturating_sub(used);
             let marks = if kept.is_some() { &unmarked } else { &pref };
-            let mut factor = Resumed {
+            let mut factor = Resumed::<_, _, B> {
                 inner: Orthogonal {
                     solver: self,
                     rows: &qp.gt,
@@ -194,6 +199,7 @@ where
                     dependent: false,
                     span: Some(&spans),
                     reorder: true,
+                    bounds,
                 },
                 kept: kept.as_ref(),
             };
