@@ -250,20 +250,6 @@ where
     where
         DefaultAllocator: Allocator<NV> + Allocator<NV, NC>,
     {
-        Self::euclidean_except::<NV, false>(qp, None)
-    }
-
-    /// [`RowNormsOf::euclidean`] with `|g_i|^2 = 1` for the bound rows of
-    /// `bounds` (read with `B` only): no dot product.
-    #[inline(always)]
-    fn euclidean_except<NV: Dim, const B: bool>(
-        qp: &DenseQpOf<NV, NC>,
-        bounds: Option<&OVector<u32, NC>>,
-    ) -> Self
-    where
-        DefaultAllocator: Allocator<NV> + Allocator<NV, NC>,
-    {
-        let bounds = if B { bounds } else { None };
         let nc = qp.h.shape_generic().0;
         let m = qp.m.min(nc.value());
         let mut rows = RowNormsOf {
@@ -272,19 +258,6 @@ where
             m,
             finite: true,
         };
-        if let Some(codes) = bounds {
-            for ((g, n2), &c) in columns(qp.gt.as_slice(), qp.gt.nrows())
-                .zip(rows.norm2.as_mut_slice().iter_mut())
-                .zip(codes.as_slice())
-                .take(m)
-            {
-                *n2 = if c != 0 { 1.0 } else { dot_d::<NV>(g, g) };
-                if !n2.is_finite() {
-                    rows.finite = false;
-                }
-            }
-            return rows;
-        }
         for (g, n2) in columns(qp.gt.as_slice(), qp.gt.nrows())
             .zip(rows.norm2.as_mut_slice().iter_mut())
             .take(m)
@@ -293,6 +266,33 @@ where
             // A NaN or infinite entry makes `n2` non-finite, and so does a row
             // whose squared norm overflows (|g| > ~1e154): both are numerical
             // errors.
+            if !n2.is_finite() {
+                rows.finite = false;
+            }
+        }
+        rows
+    }
+
+    /// [`RowNormsOf::euclidean`] with `|g_i|^2 = 1` for the bound rows of
+    /// `bounds` (row codes of [`SimpleBoundsOf`]): no dot product for them.
+    fn euclidean_except<NV: Dim>(qp: &DenseQpOf<NV, NC>, bounds: &SimpleBoundsOf<NC>) -> Self
+    where
+        DefaultAllocator: Allocator<NV> + Allocator<NV, NC>,
+    {
+        let nc = qp.h.shape_generic().0;
+        let m = qp.m.min(nc.value());
+        let mut rows = RowNormsOf {
+            norm2: OVector::zeros_generic(nc, U1),
+            inv_hnorm: OVector::zeros_generic(nc, U1),
+            m,
+            finite: true,
+        };
+        for ((g, n2), &c) in columns(qp.gt.as_slice(), qp.gt.nrows())
+            .zip(rows.norm2.as_mut_slice().iter_mut())
+            .zip(bounds.code.as_slice())
+            .take(m)
+        {
+            *n2 = if c != 0 { 1.0 } else { dot_d::<NV>(g, g) };
             if !n2.is_finite() {
                 rows.finite = false;
             }
@@ -626,12 +626,9 @@ where
         let excluded = OVector::<bool, NC>::from_element_generic(nc, U1, false);
         let max_iter = self.settings.max_iter;
         if self.proximal() {
-            return self
-                .solve_proximal::<false>(qp, &qp.h, excluded, &mut rows, None, prefer, max_iter);
+            return self.solve_proximal(qp, &qp.h, excluded, &mut rows, (), prefer, max_iter);
         }
-        self.solve_with::<false>(
-            qp, &qp.q, &qp.h, excluded, &mut rows, None, prefer, max_iter,
-        )
+        self.solve_with(qp, &qp.q, &qp.h, excluded, &mut rows, (), prefer, max_iter)
     }
 
     /// [`DualActiveSetOf::solve`] with the rows `bounds` (detected from a QP
@@ -649,18 +646,17 @@ where
         prefer: &[bool],
     ) -> QpSolutionOf<NV, NC> {
         let nc = qp.h.shape_generic().0;
-        let codes = Some(&bounds.code);
-        let mut rows = RowNormsOf::euclidean_except::<NV, true>(qp, codes);
+        let codes = &bounds.code;
+        let mut rows = RowNormsOf::euclidean_except(qp, bounds);
         if bounds.m != qp.m.min(nc.value()) || bounds.code.len() != nc.value() {
             rows.finite = false;
         }
         let excluded = OVector::<bool, NC>::from_element_generic(nc, U1, false);
         let max_iter = self.settings.max_iter;
         if self.proximal() {
-            return self
-                .solve_proximal::<true>(qp, &qp.h, excluded, &mut rows, codes, prefer, max_iter);
+            return self.solve_proximal(qp, &qp.h, excluded, &mut rows, codes, prefer, max_iter);
         }
-        self.solve_with::<true>(
+        self.solve_with(
             qp, &qp.q, &qp.h, excluded, &mut rows, codes, prefer, max_iter,
         )
     }
@@ -693,10 +689,9 @@ where
         let mut rows = RowNormsOf::euclidean(qp);
         let max_iter = budget.min(self.settings.max_iter);
         if self.proximal() {
-            return self
-                .solve_proximal::<false>(qp, h, excluded, &mut rows, None, prefer, max_iter);
+            return self.solve_proximal(qp, h, excluded, &mut rows, (), prefer, max_iter);
         }
-        self.solve_with::<false>(qp, &qp.q, h, excluded, &mut rows, None, prefer, max_iter)
+        self.solve_with(qp, &qp.q, h, excluded, &mut rows, (), prefer, max_iter)
     }
 
     /// The per-row data of `qp`'s constraint matrix that [`DualActiveSetOf::solve`]
@@ -737,12 +732,9 @@ where
         let excluded = OVector::<bool, NC>::from_element_generic(nc, U1, false);
         let max_iter = self.settings.max_iter;
         if self.proximal() {
-            return self
-                .solve_proximal::<false>(qp, &qp.h, excluded, &mut rows, None, prefer, max_iter);
+            return self.solve_proximal(qp, &qp.h, excluded, &mut rows, (), prefer, max_iter);
         }
-        self.solve_with::<false>(
-            qp, &qp.q, &qp.h, excluded, &mut rows, None, prefer, max_iter,
-        )
+        self.solve_with(qp, &qp.q, &qp.h, excluded, &mut rows, (), prefer, max_iter)
     }
 
     /// `1 / |L^-1 g|` for a row with `|g|^2 = n2 > 0`.
@@ -776,17 +768,17 @@ where
     /// iteration's; the objective is the one of `qp.q`), the right-hand side
     /// `h` (`qp.h` or another), the rows `excluded[i]` left out, the
     /// Euclidean row norms in `rows` and the H^-1 norms there or computed on
-    /// demand (0 = not yet), and with `B` the bound rows `bounds`
-    /// (`qp/bounds.rs`).
+    /// demand (0 = not yet), and the bound rows `bounds` (`qp/bounds.rs`;
+    /// `()` for none).
     #[allow(clippy::too_many_arguments)]
-    fn solve_with<const B: bool>(
+    fn solve_with<Bd: bounds::BoundRows>(
         &self,
         qp: &DenseQpOf<NV, NC>,
         qv: &OVector<f64, NV>,
         hv: &OVector<f64, NC>,
         excluded: OVector<bool, NC>,
         norms: &mut RowNormsOf<NC>,
-        bounds: Option<&OVector<u32, NC>>,
+        bounds: Bd,
         prefer: &[bool],
         max_iter: u32,
     ) -> QpSolutionOf<NV, NC> {
@@ -803,7 +795,7 @@ where
         let mut J = self.Linv.transpose();
         let mut R = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
         let mut d = OVector::<f64, NV>::zeros_generic(nv, U1);
-        let mut factor = Orthogonal::<_, _, B> {
+        let mut factor = Orthogonal {
             solver: self,
             rows: &qp.gt,
             h: hv,
@@ -818,7 +810,7 @@ where
             dependent: false,
             span: None,
             reorder: false,
-            bounds: if B { bounds } else { None },
+            bounds,
         };
         // Rows left out are never scanned: they start (and stay) blocked as if
         // active, but never enter the active list.

@@ -107,3 +107,30 @@ pub(super) fn unit(c: u32) -> Option<(usize, f64)> {
     let s = if c & 1 == 1 { -1.0 } else { 1.0 };
     Some(((c >> 1) as usize, s))
 }
+
+/// The bound rows as an [`Orthogonal`](super::orthogonal::Orthogonal) factor
+/// reads them: `()` for a solve without bounds (a zero-size type, so those
+/// solves compile as they would without this module), the row codes of a
+/// [`SimpleBoundsOf`] otherwise.
+pub(super) trait BoundRows: Copy {
+    /// Row `i` as a bound `(j, s)` (the row `s e_j`), `None` for a general
+    /// row.
+    fn bound(&self, i: usize) -> Option<(usize, f64)>;
+}
+
+impl BoundRows for () {
+    #[inline(always)]
+    fn bound(&self, _i: usize) -> Option<(usize, f64)> {
+        None
+    }
+}
+
+impl<NC: Dim> BoundRows for &OVector<u32, NC>
+where
+    DefaultAllocator: Allocator<NC>,
+{
+    #[inline(always)]
+    fn bound(&self, i: usize) -> Option<(usize, f64)> {
+        unit(*self.as_slice().get(i)?)
+    }
+}

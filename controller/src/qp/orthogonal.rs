@@ -6,7 +6,7 @@
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
-use super::bounds::unit;
+use super::bounds::BoundRows;
 use super::resolve::back_substitute_by_columns;
 use super::spans::{Span, unpack};
 use super::{DualActiveSetOf, QpAllocator, ZERO_ROW2, proximal_capable};
@@ -18,7 +18,7 @@ use crate::linalg::{
 /// The orthogonal factor of the active set, the iterate and the rows, for one
 /// solve. Slices of length `NV` or `NC` as named (constants for the static
 /// sizes).
-pub(super) struct Orthogonal<'a, NV: Dim, NC: Dim, const B: bool>
+pub(super) struct Orthogonal<'a, NV: Dim, NC: Dim, Bd: BoundRows>
 where
     DefaultAllocator: QpAllocator<NV, NC>,
 {
@@ -66,13 +66,12 @@ where
     /// columns (`resolve::back_substitute_by_columns`), both faster for
     /// large `NV`; false: the definite path's operations, bit for bit.
     pub reorder: bool,
-    /// The rows that are simple bounds (`qp/bounds.rs`: codes of
-    /// [`super::SimpleBoundsOf`]), read only with `B` (a constant: the solves
-    /// without bounds compile without a test); `None`: no bound.
-    pub bounds: Option<&'a OVector<u32, NC>>,
+    /// The rows that are simple bounds (`qp/bounds.rs`): `()` without
+    /// (a zero-size type: the solves without bounds compile without a test).
+    pub bounds: Bd,
 }
 
-impl<'a, NV: Dim, NC: Dim, const B: bool> Orthogonal<'a, NV, NC, B>
+impl<'a, NV: Dim, NC: Dim, Bd: BoundRows> Orthogonal<'a, NV, NC, Bd>
 where
     DefaultAllocator: QpAllocator<NV, NC>,
 {
@@ -110,13 +109,10 @@ where
     }
 
     /// Row `i` as a simple bound `(j, s)` (the row `s e_j`): always `None`
-    /// without `B`.
+    /// without bounds.
     #[inline(always)]
     pub(super) fn bound(&self, i: usize) -> Option<(usize, f64)> {
-        if !B {
-            return None;
-        }
-        unit(*self.bounds?.as_slice().get(i)?)
+        self.bounds.bound(i)
     }
 
     /// `g_i'x` of the bound row `s e_j`: `s x_j`, as the dot product over
@@ -125,6 +121,29 @@ where
     #[inline(always)]
     pub(super) fn bound_dot(&self, j: usize, s: f64) -> f64 {
         0.0 + s * self.x.as_slice().get(j).copied().unwrap_or(f64::NAN)
+    }
+
+    /// [`ActiveSetFactor::violation`] of row `i` when it is a bound (one
+    /// subtraction, `|g_i|^2 = 1`, `1 / |L^-1 g_i|` from column `j` of
+    /// `L^-1`); `None` for a general row (always without bounds).
+    #[inline(always)]
+    pub(super) fn bound_violation(&mut self, i: usize, blocked: bool) -> Option<Option<f64>> {
+        let (j, s) = self.bound(i)?;
+        let gx = self.bound_dot(j, s);
+        let solver = self.solver;
+        let (Some(&hi), Some(&n2), Some(ihn)) = (
+            self.h.as_slice().get(i),
+            self.norm2.as_slice().get(i),
+            self.inv_hnorm.as_mut_slice().get_mut(i),
+        ) else {
+            return Some(None);
+        };
+        if blocked || n2 <= ZERO_ROW2 {
+            return Some(None);
+        }
+        Some(rate_by(self.tol2, n2, ihn, hi - gx, || {
+            solver.inv_hnorm_unit(j)
+        }))
     }
 
     /// `d = J' n_p = -J' g_p` (`g_p` row `p`).
@@ -179,7 +198,17 @@ pub(super) fn rate<NV: Dim, NC: Dim>(
 where
     DefaultAllocator: QpAllocator<NV, NC>,
 {
-    rate_by(tol2, n2, ihn, slack, || solver.inv_hnorm(g, n2))
+    if !slack.is_finite() {
+        return Some(f64::NAN);
+    }
+    if slack >= 0.0 || slack * slack <= tol2 * n2 {
+        return None; // satisfied to tolerance
+    }
+    if *ihn == 0.0 {
+        *ihn = solver.inv_hnorm(g, n2);
+    }
+    // Not NaN: `slack` is finite and `*ihn` positive (possibly infinite).
+    Some(slack * *ihn)
 }
 
 /// [`rate`] with the `1 / |L^-1 g|` of the row from `inv_hnorm` (called
@@ -205,7 +234,7 @@ pub(super) fn rate_by(
     Some(slack * *ihn)
 }
 
-impl<NV: Dim, NC: Dim, const B: bool> ActiveSetFactor for Orthogonal<'_, NV, NC, B>
+impl<NV: Dim, NC: Dim, Bd: BoundRows> ActiveSetFactor for Orthogonal<'_, NV, NC, Bd>
 where
     DefaultAllocator: QpAllocator<NV, NC>,
 {
@@ -218,10 +247,10 @@ where
     // root as `slack < 0` and `slack^2 > tol^2 |g|^2`.
     #[inline(always)]
     fn violation(&mut self, i: usize, blocked: bool) -> Option<f64> {
+        if let Some(v) = self.bound_violation(i, blocked) {
+            return v;
+        }
         let n = self.n();
-        // A bound: `j` and `g_i'x` (nothing without `B`).
-        let bound = self.bound(i).map(|(j, s)| (j, self.bound_dot(j, s)));
-        let solver = self.solver;
         let (Some(g), Some(&hi), Some(&n2), Some(ihn)) = (
             column(self.rows.as_slice(), n, i),
             self.h.as_slice().get(i),
@@ -232,9 +261,6 @@ where
         };
         if blocked || n2 <= ZERO_ROW2 {
             return None;
-        }
-        if let Some((j, gx)) = bound {
-            return rate_by(self.tol2, n2, ihn, hi - gx, || solver.inv_hnorm_unit(j));
         }
         // (`dot_d`: as pairs for run-time sizes, the scan over all rows.)
         let slack = hi - dot_d::<NV>(g, self.x.as_slice());

@@ -45,6 +45,7 @@
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector, U1};
 
+use super::bounds::BoundRows;
 use super::resolve::{Kept, ResolveStop, Resumed, resolve};
 use super::spans::row_spans;
 use super::{
@@ -99,16 +100,16 @@ where
 {
     /// The proximal-point iterations (module docs) on `qp` with the
     /// right-hand side `hv`, the rows `excluded` left out and at most
-    /// `max_iter` adds plus drops in all; with `B` the bound rows `bounds`
-    /// (`qp/bounds.rs`).
+    /// `max_iter` adds plus drops in all, the bound rows `bounds`
+    /// (`qp/bounds.rs`; `()` for none).
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn solve_proximal<const B: bool>(
+    pub(super) fn solve_proximal<Bd: BoundRows>(
         &self,
         qp: &DenseQpOf<NV, NC>,
         hv: &OVector<f64, NC>,
         excluded: OVector<bool, NC>,
         norms: &mut RowNormsOf<NC>,
-        bounds: Option<&OVector<u32, NC>>,
+        bounds: Bd,
         prefer: &[bool],
         max_iter: u32,
     ) -> QpSolutionOf<NV, NC> {
@@ -117,7 +118,6 @@ where
         let hot = self.settings.hot_start;
         let pref = active_set::marks(nc, prefer);
         let unmarked = OVector::<bool, NC>::from_element_generic(nc, U1, false);
-        let bounds = if B { bounds } else { None };
         // (Bound rows have no span: theirs is never read.)
         let spans = row_spans(&qp.gt, m, bounds);
         // The factor of the active rows, kept from one proximal solve to the
@@ -183,7 +183,7 @@ where
             };
             let left = max_iter.saturating_sub(used);
             let marks = if kept.is_some() { &unmarked } else { &pref };
-            let mut factor = Resumed::<_, _, B> {
+            let mut factor = Resumed {
                 inner: Orthogonal {
                     solver: self,
                     rows: &qp.gt,

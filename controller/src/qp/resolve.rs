@@ -24,7 +24,8 @@
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
-use super::orthogonal::{Orthogonal, givens_drop, rate, rate_by};
+use super::bounds::BoundRows;
+use super::orthogonal::{Orthogonal, givens_drop, rate};
 use super::spans::unpack;
 use super::{QpAllocator, ZERO_ROW2};
 use crate::active_set::{ActiveSetFactor, AddError, remove_at};
@@ -218,17 +219,17 @@ where
 /// slack over the span, `qp/spans.rs`), and with `kept` the active rows it
 /// already holds (the iteration resumes from them,
 /// [`ActiveSetFactor::resume`]).
-pub(super) struct Resumed<'k, 'a, NV: Dim, NC: Dim, const B: bool>
+pub(super) struct Resumed<'k, 'a, NV: Dim, NC: Dim, Bd: BoundRows>
 where
     DefaultAllocator: QpAllocator<NV, NC>,
 {
     /// The factor (holding the kept rows' factor when `kept` is given).
-    pub inner: Orthogonal<'a, NV, NC, B>,
+    pub inner: Orthogonal<'a, NV, NC, Bd>,
     /// The active rows and multipliers to resume from.
     pub kept: Option<&'k Kept<NV>>,
 }
 
-impl<NV: Dim, NC: Dim, const B: bool> ActiveSetFactor for Resumed<'_, '_, NV, NC, B>
+impl<NV: Dim, NC: Dim, Bd: BoundRows> ActiveSetFactor for Resumed<'_, '_, NV, NC, Bd>
 where
     DefaultAllocator: QpAllocator<NV, NC>,
 {
@@ -237,10 +238,10 @@ where
     #[inline(always)]
     fn violation(&mut self, i: usize, blocked: bool) -> Option<f64> {
         let o = &mut self.inner;
+        if let Some(v) = o.bound_violation(i, blocked) {
+            return v;
+        }
         let n = o.solver.nv().value();
-        // A bound: `j` and `g_i'x` (nothing without `B`).
-        let bound = o.bound(i).map(|(j, s)| (j, o.bound_dot(j, s)));
-        let solver = o.solver;
         let (Some(g), Some(&hi), Some(&n2), Some(ihn)) = (
             column(o.rows.as_slice(), n, i),
             o.h.as_slice().get(i),
@@ -251,9 +252,6 @@ where
         };
         if blocked || n2 <= ZERO_ROW2 {
             return None;
-        }
-        if let Some((j, gx)) = bound {
-            return rate_by(o.tol2, n2, ihn, hi - gx, || solver.inv_hnorm_unit(j));
         }
         let (lo, up) = o
             .span

@@ -10,6 +10,7 @@
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector, U1};
 
+use super::bounds::BoundRows;
 use crate::linalg::columns;
 
 /// The packed span of a row: `lo | hi << 16` (`n <= u16::MAX`).
@@ -17,12 +18,12 @@ pub(super) type Span = u32;
 
 /// The spans of the first `m` rows of `G` (the columns of `gt`, `NV x NC`):
 /// `lo` (even) and `hi` bound every entry that is not `+-0` (NaN included);
-/// a zero row has the span `0..0`, and so has a row with a non-zero code in
-/// `skip` (the bound rows of `qp/bounds.rs`, whose spans are not used).
+/// a zero row has the span `0..0`, and so has a bound row of `skip`
+/// (`qp/bounds.rs`; their spans are not used).
 pub(super) fn row_spans<NV: Dim, NC: Dim>(
     gt: &OMatrix<f64, NV, NC>,
     m: usize,
-    skip: Option<&OVector<u32, NC>>,
+    skip: impl BoundRows,
 ) -> OVector<Span, NC>
 where
     DefaultAllocator: nalgebra::allocator::Allocator<NV, NC> + nalgebra::allocator::Allocator<NC>,
@@ -35,10 +36,7 @@ where
         .take(m)
         .enumerate()
     {
-        if skip
-            .and_then(|c| c.as_slice().get(i))
-            .is_some_and(|&c| c != 0)
-        {
+        if skip.bound(i).is_some() {
             continue;
         }
         let lo = g.iter().position(|&v| v != 0.0);
