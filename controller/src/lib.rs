@@ -87,7 +87,8 @@ pub use mpc::{
 };
 pub use qp::{
     DenseQp, DenseQpOf, DualActiveSet, DualActiveSetOf, HessianError, OwnSolver, QpAllocator,
-    QpBackend, QpSettings, QpSolution, QpSolutionOf, QpStatus, RowNorms, RowNormsOf,
+    QpBackend, QpSettings, QpSolution, QpSolutionOf, QpStatus, RowNorms, RowNormsOf, SimpleBounds,
+    SimpleBoundsOf,
 };
 #[cfg(feature = "alloc")]
-pub use qp::{DenseQpDyn, DualActiveSetDyn, QpSolutionDyn, RowNormsDyn};
+pub use qp::{DenseQpDyn, DualActiveSetDyn, QpSolutionDyn, RowNormsDyn, SimpleBoundsDyn};

@@ -188,6 +188,7 @@ macro_rules! solve_start {
 }
 
 mod backend;
+mod bounds;
 mod dense;
 mod guess;
 mod orthogonal;
@@ -196,6 +197,9 @@ mod reprobe;
 mod resolve;
 mod spans;
 pub use backend::{OwnSolver, QpBackend};
+#[cfg(feature = "alloc")]
+pub use bounds::SimpleBoundsDyn;
+pub use bounds::{SimpleBounds, SimpleBoundsOf};
 #[cfg(feature = "alloc")]
 pub use dense::DenseQpDyn;
 pub use dense::{DenseQp, DenseQpOf};
@@ -270,6 +274,33 @@ where
             // A NaN or infinite entry makes `n2` non-finite, and so does a row
             // whose squared norm overflows (|g| > ~1e154): both are numerical
             // errors.
+            if !n2.is_finite() {
+                rows.finite = false;
+            }
+        }
+        rows
+    }
+
+    /// [`RowNormsOf::euclidean`] with `|g_i|^2 = 1` for the bound rows of
+    /// `bounds` (row codes of [`SimpleBoundsOf`]): no dot product for them.
+    fn euclidean_except<NV: Dim>(qp: &DenseQpOf<NV, NC>, bounds: &SimpleBoundsOf<NC>) -> Self
+    where
+        DefaultAllocator: Allocator<NV> + Allocator<NV, NC>,
+    {
+        let nc = qp.h.shape_generic().0;
+        let m = qp.m.min(nc.value());
+        let mut rows = RowNormsOf {
+            norm2: OVector::zeros_generic(nc, U1),
+            inv_hnorm: OVector::zeros_generic(nc, U1),
+            m,
+            finite: true,
+        };
+        for ((g, n2), &c) in columns(qp.gt.as_slice(), qp.gt.nrows())
+            .zip(rows.norm2.as_mut_slice().iter_mut())
+            .zip(bounds.code.as_slice())
+            .take(m)
+        {
+            *n2 = if c != 0 { 1.0 } else { dot_d::<NV>(g, g) };
             if !n2.is_finite() {
                 rows.finite = false;
             }
@@ -603,11 +634,50 @@ where
         let excluded = OVector::<bool, NC>::from_element_generic(nc, U1, false);
         let max_iter = self.settings.max_iter;
         if self.proximal() {
-            return self.solve_proximal(qp, &qp.h, excluded, &mut rows, prefer, max_iter);
+            return self.solve_proximal(qp, &qp.h, excluded, &mut rows, (), prefer, max_iter);
         }
         let mut carry = Carry::scratch(self);
         self.solve_with(
-            qp, &qp.q, &qp.h, excluded, &mut rows, prefer, max_iter, &mut carry,
+            qp,
+            &qp.q,
+            &qp.h,
+            excluded,
+            &mut rows,
+            (),
+            prefer,
+            max_iter,
+            &mut carry,
+        )
+    }
+
+    /// [`DualActiveSetOf::solve`] with the rows `bounds` (detected from a QP
+    /// with the same rows of `G` by [`SimpleBoundsOf::detect`]) handled as
+    /// simple bounds (`qp/bounds.rs`): no norm, no dot product and no
+    /// product with `L^-1` for them, `J' g_p` of an added bound read off a
+    /// row of `J`. The same result as `solve`, bit for bit (status,
+    /// iterations, active set, `x`, multipliers or certificate, objective).
+    /// `bounds` detected for another number of rows gives
+    /// [`QpStatus::NumericalError`].
+    pub fn solve_bounded(
+        &self,
+        qp: &DenseQpOf<NV, NC>,
+        bounds: &SimpleBoundsOf<NC>,
+        prefer: &[bool],
+    ) -> QpSolutionOf<NV, NC> {
+        let nc = qp.h.shape_generic().0;
+        let codes = &bounds.code;
+        let mut rows = RowNormsOf::euclidean_except(qp, bounds);
+        if bounds.m != qp.m.min(nc.value()) || bounds.code.len() != nc.value() {
+            rows.finite = false;
+        }
+        let excluded = OVector::<bool, NC>::from_element_generic(nc, U1, false);
+        let max_iter = self.settings.max_iter;
+        if self.proximal() {
+            return self.solve_proximal(qp, &qp.h, excluded, &mut rows, codes, prefer, max_iter);
+        }
+        let mut carry = Carry::fresh(self.nv());
+        self.solve_with(
+            qp, &qp.q, &qp.h, excluded, &mut rows, codes, prefer, max_iter, &mut carry,
         )
     }
 
@@ -639,11 +709,19 @@ where
         let mut rows = RowNormsOf::euclidean(qp);
         let max_iter = budget.min(self.settings.max_iter);
         if self.proximal() {
-            return self.solve_proximal(qp, h, excluded, &mut rows, prefer, max_iter);
+            return self.solve_proximal(qp, h, excluded, &mut rows, (), prefer, max_iter);
         }
         let mut carry = Carry::scratch(self);
         self.solve_with(
-            qp, &qp.q, h, excluded, &mut rows, prefer, max_iter, &mut carry,
+            qp,
+            &qp.q,
+            h,
+            excluded,
+            &mut rows,
+            (),
+            prefer,
+            max_iter,
+            &mut carry,
         )
     }
 
@@ -685,11 +763,19 @@ where
         let excluded = OVector::<bool, NC>::from_element_generic(nc, U1, false);
         let max_iter = self.settings.max_iter;
         if self.proximal() {
-            return self.solve_proximal(qp, &qp.h, excluded, &mut rows, prefer, max_iter);
+            return self.solve_proximal(qp, &qp.h, excluded, &mut rows, (), prefer, max_iter);
         }
         let mut carry = Carry::scratch(self);
         self.solve_with(
-            qp, &qp.q, &qp.h, excluded, &mut rows, prefer, max_iter, &mut carry,
+            qp,
+            &qp.q,
+            &qp.h,
+            excluded,
+            &mut rows,
+            (),
+            prefer,
+            max_iter,
+            &mut carry,
         )
     }
 
@@ -709,21 +795,33 @@ where
         }
     }
 
+    /// `1 / |L^-1 e_j|`, the norm of column `j` of `L^-1`: the bits of
+    /// [`DualActiveSetOf::inv_hnorm`] for the row `+-e_j` (the products
+    /// with its zero entries are exact zeros).
+    #[inline(always)]
+    fn inv_hnorm_unit(&self, j: usize) -> f64 {
+        let n = self.nv().value();
+        let col = column(self.Linv.as_slice(), n, j).unwrap_or(&[]);
+        let hn = crate::linalg::sqrt(dot_d::<NV>(col, col));
+        if hn > 0.0 { 1.0 / hn } else { 1.0 }
+    }
+
     /// The solve proper, with the linear term `q` (`qp.q`, or the proximal
     /// iteration's; the objective is the one of `qp.q`), the right-hand side
     /// `h` (`qp.h` or another), the rows `excluded[i]` left out, the
     /// Euclidean row norms in `rows` and the H^-1 norms there or computed on
-    /// demand (0 = not yet), the factor in `carry` (from scratch, or from
-    /// the active rows of the solve before, `qp/reprobe.rs`; left there for
-    /// the next).
+    /// demand (0 = not yet), the bound rows `bounds` (`qp/bounds.rs`; `()`
+    /// for none), the factor in `carry` (from scratch, or from the active
+    /// rows of the solve before, `qp/reprobe.rs`; left there for the next).
     #[allow(clippy::too_many_arguments)]
-    fn solve_with(
+    fn solve_with<Bd: bounds::BoundRows>(
         &self,
         qp: &DenseQpOf<NV, NC>,
         qv: &OVector<f64, NV>,
         hv: &OVector<f64, NC>,
         excluded: OVector<bool, NC>,
         norms: &mut RowNormsOf<NC>,
+        bounds: Bd,
         prefer: &[bool],
         max_iter: u32,
         carry: &mut Carry<NV>,
@@ -758,6 +856,7 @@ where
                 dependent: false,
                 span: None,
                 reorder: false,
+                bounds,
             },
             kept: if *valid { Some(&*kept) } else { None },
         };

@@ -2,7 +2,7 @@
 //! run-time sized.
 
 use ldcbf_controller::nalgebra::{Const, DefaultAllocator, Dim, Dyn};
-use ldcbf_controller::{DualActiveSetOf, QpAllocator, QpSettings, QpStatus};
+use ldcbf_controller::{DualActiveSetOf, QpAllocator, QpSettings, QpStatus, SimpleBoundsOf};
 use ldcbf_reference::DenseProblem;
 use numpy::PyArray1;
 use pyo3::prelude::*;
@@ -146,7 +146,10 @@ where
     // The reference's one conversion into the solver's types.
     let (hess, qp) = d.to_qp(nv, nc).map_err(|e| e.to_string())?;
     let solver = DualActiveSetOf::<V, C>::new(&hess, settings).map_err(|e| e.to_string())?;
-    let sol = solver.solve(&qp, &[]);
+    // The bound rows (`lb`, `ub`) as simple bounds (the same answer as the
+    // rows, bit for bit).
+    let bounds = SimpleBoundsOf::detect(&qp);
+    let sol = solver.solve_bounded(&qp, &bounds, &[]);
     Ok(QpOut {
         x: sol.x.iter().copied().collect(),
         lambda: sol.lambda.iter().take(d.m).copied().collect(),

@@ -2,7 +2,9 @@
 //! [`DenseProblem`], its agreement with Clarabel's (docs/maths.md §3) and the KKT
 //! residuals of a primal-dual pair.
 
-use ldcbf_controller::{DualActiveSet, DualActiveSetDyn, QpSettings, QpSolution, QpSolutionDyn};
+use ldcbf_controller::{
+    DualActiveSet, DualActiveSetDyn, QpSettings, QpSolution, QpSolutionDyn, SimpleBoundsDyn,
+};
 
 use crate::check::{Candidate, compare_stacked, kkt_rows};
 use crate::clarabel_solve::RefSolution;
@@ -24,11 +26,13 @@ pub fn solve_own<const NV: usize, const NC: usize>(
 }
 
 /// Solves with the run-time-sized instance of our solver (any `n`, any
-/// number of rows, equality rows held as equalities), cold start.
+/// number of rows, equality rows held as equalities, the bound rows of `lb`
+/// and `ub` as simple bounds: `solve_bounded`), cold start.
 pub fn solve_own_dyn(p: &DenseProblem, max_iter: u32) -> Result<QpSolutionDyn, ProblemError> {
     let (H, qp) = p.to_dyn()?;
     let solver = DualActiveSetDyn::new(&H, settings(max_iter)).map_err(ProblemError::Hessian)?;
-    Ok(solver.solve(&qp, &[]))
+    let bounds = SimpleBoundsDyn::detect(&qp);
+    Ok(solver.solve_bounded(&qp, &bounds, &[]))
 }
 
 /// The default settings with the iteration limit `max_iter`.

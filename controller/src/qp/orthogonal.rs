@@ -6,6 +6,7 @@
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
+use super::bounds::BoundRows;
 use super::resolve::back_substitute_by_columns;
 use super::spans::{Span, unpack};
 use super::{DualActiveSetOf, QpAllocator, ZERO_ROW2, proximal_capable};
@@ -17,7 +18,7 @@ use crate::linalg::{
 /// The orthogonal factor of the active set, the iterate and the rows, for one
 /// solve. Slices of length `NV` or `NC` as named (constants for the static
 /// sizes).
-pub(super) struct Orthogonal<'a, NV: Dim, NC: Dim>
+pub(super) struct Orthogonal<'a, NV: Dim, NC: Dim, Bd: BoundRows>
 where
     DefaultAllocator: QpAllocator<NV, NC>,
 {
@@ -65,9 +66,12 @@ where
     /// columns (`resolve::back_substitute_by_columns`), both faster for
     /// large `NV`; false: the definite path's operations, bit for bit.
     pub reorder: bool,
+    /// The rows that are simple bounds (`qp/bounds.rs`): `()` without
+    /// (a zero-size type: the solves without bounds compile without a test).
+    pub bounds: Bd,
 }
 
-impl<'a, NV: Dim, NC: Dim> Orthogonal<'a, NV, NC>
+impl<'a, NV: Dim, NC: Dim, Bd: BoundRows> Orthogonal<'a, NV, NC, Bd>
 where
     DefaultAllocator: QpAllocator<NV, NC>,
 {
@@ -104,10 +108,57 @@ where
         proximal_capable::<NV>() && self.reorder
     }
 
+    /// Row `i` as a simple bound `(j, s)` (the row `s e_j`): always `None`
+    /// without bounds.
+    #[inline(always)]
+    pub(super) fn bound(&self, i: usize) -> Option<(usize, f64)> {
+        self.bounds.bound(i)
+    }
+
+    /// `g_i'x` of the bound row `s e_j`: `s x_j`, as the dot product over
+    /// the row gives it (the other products are exact zeros; `0.0 +` turns
+    /// a `-0` into the `+0` the sum of the partial sums gives).
+    #[inline(always)]
+    pub(super) fn bound_dot(&self, j: usize, s: f64) -> f64 {
+        0.0 + s * self.x.as_slice().get(j).copied().unwrap_or(f64::NAN)
+    }
+
+    /// [`ActiveSetFactor::violation`] of row `i` when it is a bound (one
+    /// subtraction, `|g_i|^2 = 1`, `1 / |L^-1 g_i|` from column `j` of
+    /// `L^-1`); `None` for a general row (always without bounds).
+    #[inline(always)]
+    pub(super) fn bound_violation(&mut self, i: usize, blocked: bool) -> Option<Option<f64>> {
+        let (j, s) = self.bound(i)?;
+        let gx = self.bound_dot(j, s);
+        let solver = self.solver;
+        let (Some(&hi), Some(&n2), Some(ihn)) = (
+            self.h.as_slice().get(i),
+            self.norm2.as_slice().get(i),
+            self.inv_hnorm.as_mut_slice().get_mut(i),
+        ) else {
+            return Some(None);
+        };
+        if blocked || n2 <= ZERO_ROW2 {
+            return Some(None);
+        }
+        Some(rate_by(self.tol2, n2, ihn, hi - gx, || {
+            solver.inv_hnorm_unit(j)
+        }))
+    }
+
     /// `d = J' n_p = -J' g_p` (`g_p` row `p`).
     #[inline(always)]
     fn project(&mut self, gp: &[f64], p: usize) {
         let n = self.n();
+        if let Some((j, s)) = self.bound(p) {
+            // Row j of J (column-major): entry (j, k) of column k.
+            let js = self.J.as_slice();
+            for (k, dk) in self.d.as_mut_slice().iter_mut().enumerate() {
+                let jk = k.checked_mul(n).and_then(|a| js.get(a + j)).copied();
+                *dk = -(0.0 + s * jk.unwrap_or(f64::NAN));
+            }
+            return;
+        }
         if let Some((lo, hi)) = self.span_of(p) {
             let g = gp.get(lo..hi).unwrap_or(&[]);
             for (dj, col) in self
@@ -160,7 +211,30 @@ where
     Some(slack * *ihn)
 }
 
-impl<NV: Dim, NC: Dim> ActiveSetFactor for Orthogonal<'_, NV, NC>
+/// [`rate`] with the `1 / |L^-1 g|` of the row from `inv_hnorm` (called
+/// when not cached yet).
+#[inline(always)]
+pub(super) fn rate_by(
+    tol2: f64,
+    n2: f64,
+    ihn: &mut f64,
+    slack: f64,
+    inv_hnorm: impl FnOnce() -> f64,
+) -> Option<f64> {
+    if !slack.is_finite() {
+        return Some(f64::NAN);
+    }
+    if slack >= 0.0 || slack * slack <= tol2 * n2 {
+        return None; // satisfied to tolerance
+    }
+    if *ihn == 0.0 {
+        *ihn = inv_hnorm();
+    }
+    // Not NaN: `slack` is finite and `*ihn` positive (possibly infinite).
+    Some(slack * *ihn)
+}
+
+impl<NV: Dim, NC: Dim, Bd: BoundRows> ActiveSetFactor for Orthogonal<'_, NV, NC, Bd>
 where
     DefaultAllocator: QpAllocator<NV, NC>,
 {
@@ -173,6 +247,9 @@ where
     // root as `slack < 0` and `slack^2 > tol^2 |g|^2`.
     #[inline(always)]
     fn violation(&mut self, i: usize, blocked: bool) -> Option<f64> {
+        if let Some(v) = self.bound_violation(i, blocked) {
+            return v;
+        }
         let n = self.n();
         let (Some(g), Some(&hi), Some(&n2), Some(ihn)) = (
             column(self.rows.as_slice(), n, i),
@@ -196,7 +273,11 @@ where
         let (gp, hp) = self.row(p)?;
         // d = J' n_p with the GI normal n_p = -g_p (n_p'x >= -h_p).
         self.project(gp, p);
-        let slack_p = hp - dot(gp, self.x.as_slice()); // < 0 while violated
+        // < 0 while violated
+        let slack_p = match self.bound(p) {
+            Some((j, s)) => hp - self.bound_dot(j, s),
+            None => hp - dot(gp, self.x.as_slice()),
+        };
         // z = J2 d2: component of the step outside the active span. For the
         // static sizes on hosts accumulated in a local vector (kept in vector
         // registers) and stored after the loop: accumulated in the field, all

@@ -45,6 +45,7 @@
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector, U1};
 
+use super::bounds::BoundRows;
 use super::resolve::{Kept, ResolveStop, Resumed, resolve};
 use super::spans::row_spans;
 use super::{
@@ -99,13 +100,16 @@ where
 {
     /// The proximal-point iterations (module docs) on `qp` with the
     /// right-hand side `hv`, the rows `excluded` left out and at most
-    /// `max_iter` adds plus drops in all.
-    pub(super) fn solve_proximal(
+    /// `max_iter` adds plus drops in all, the bound rows `bounds`
+    /// (`qp/bounds.rs`; `()` for none).
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn solve_proximal<Bd: BoundRows>(
         &self,
         qp: &DenseQpOf<NV, NC>,
         hv: &OVector<f64, NC>,
         excluded: OVector<bool, NC>,
         norms: &mut RowNormsOf<NC>,
+        bounds: Bd,
         prefer: &[bool],
         max_iter: u32,
     ) -> QpSolutionOf<NV, NC> {
@@ -114,7 +118,8 @@ where
         let hot = self.settings.hot_start;
         let pref = active_set::marks(nc, prefer);
         let unmarked = OVector::<bool, NC>::from_element_generic(nc, U1, false);
-        let spans = row_spans(&qp.gt, m);
+        // (Bound rows have no span: theirs is never read.)
+        let spans = row_spans(&qp.gt, m, bounds);
         // The factor of the active rows, kept from one proximal solve to the
         // next (`qp/resolve.rs`).
         let mut J = self.Linv.transpose();
@@ -194,6 +199,7 @@ where
                     dependent: false,
                     span: Some(&spans),
                     reorder: true,
+                    bounds,
                 },
                 kept: kept.as_ref(),
             };

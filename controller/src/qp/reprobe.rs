@@ -271,7 +271,7 @@ where
         }
         let max_iter = budget.min(self.settings.max_iter);
         if self.proximal() {
-            return self.solve_proximal(qp, h, excluded, &mut state.norms, prefer, max_iter);
+            return self.solve_proximal(qp, h, excluded, &mut state.norms, (), prefer, max_iter);
         }
         self.solve_with(
             qp,
@@ -279,6 +279,7 @@ where
             h,
             excluded,
             &mut state.norms,
+            (),
             prefer,
             max_iter,
             &mut state.carry,

@@ -24,6 +24,7 @@
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
+use super::bounds::BoundRows;
 use super::orthogonal::{Orthogonal, back_substitute, givens_drop, rate};
 use super::spans::unpack;
 use super::{QpAllocator, ZERO_ROW2, proximal_capable};
@@ -243,17 +244,17 @@ where
 /// slack over the span, `qp/spans.rs`), and with `kept` the active rows it
 /// already holds (the iteration resumes from them,
 /// [`ActiveSetFactor::resume`]).
-pub(super) struct Resumed<'k, 'a, NV: Dim, NC: Dim>
+pub(super) struct Resumed<'k, 'a, NV: Dim, NC: Dim, Bd: BoundRows>
 where
     DefaultAllocator: QpAllocator<NV, NC>,
 {
     /// The factor (holding the kept rows' factor when `kept` is given).
-    pub inner: Orthogonal<'a, NV, NC>,
+    pub inner: Orthogonal<'a, NV, NC, Bd>,
     /// The active rows and multipliers to resume from.
     pub kept: Option<&'k Kept<NV>>,
 }
 
-impl<NV: Dim, NC: Dim> ActiveSetFactor for Resumed<'_, '_, NV, NC>
+impl<NV: Dim, NC: Dim, Bd: BoundRows> ActiveSetFactor for Resumed<'_, '_, NV, NC, Bd>
 where
     DefaultAllocator: QpAllocator<NV, NC>,
 {
@@ -268,6 +269,9 @@ where
             return self.inner.violation(i, blocked);
         }
         let o = &mut self.inner;
+        if let Some(v) = o.bound_violation(i, blocked) {
+            return v;
+        }
         let n = o.solver.nv().value();
         let (Some(g), Some(&hi), Some(&n2), Some(ihn)) = (
             column(o.rows.as_slice(), n, i),

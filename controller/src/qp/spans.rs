@@ -10,6 +10,7 @@
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector, U1};
 
+use super::bounds::BoundRows;
 use crate::linalg::columns;
 
 /// The packed span of a row: `lo | hi << 16` (`n <= u16::MAX`).
@@ -17,18 +18,27 @@ pub(super) type Span = u32;
 
 /// The spans of the first `m` rows of `G` (the columns of `gt`, `NV x NC`):
 /// `lo` (even) and `hi` bound every entry that is not `+-0` (NaN included);
-/// a zero row has the span `0..0`.
-pub(super) fn row_spans<NV: Dim, NC: Dim>(gt: &OMatrix<f64, NV, NC>, m: usize) -> OVector<Span, NC>
+/// a zero row has the span `0..0`, and so has a bound row of `skip`
+/// (`qp/bounds.rs`; their spans are not used).
+pub(super) fn row_spans<NV: Dim, NC: Dim>(
+    gt: &OMatrix<f64, NV, NC>,
+    m: usize,
+    skip: impl BoundRows,
+) -> OVector<Span, NC>
 where
     DefaultAllocator: nalgebra::allocator::Allocator<NV, NC> + nalgebra::allocator::Allocator<NC>,
 {
     let (nv, nc) = gt.shape_generic();
     let n = nv.value();
     let mut out = OVector::<Span, NC>::zeros_generic(nc, U1);
-    for (g, s) in columns(gt.as_slice(), n)
+    for (i, (g, s)) in columns(gt.as_slice(), n)
         .zip(out.as_mut_slice().iter_mut())
         .take(m)
+        .enumerate()
     {
+        if skip.bound(i).is_some() {
+            continue;
+        }
         let lo = g.iter().position(|&v| v != 0.0);
         let hi = g.iter().rposition(|&v| v != 0.0);
         if let (Some(lo), Some(hi)) = (lo, hi) {

@@ -3,6 +3,7 @@
 use super::*;
 use nalgebra::{Matrix2, SVector, Vector2};
 
+mod bounds;
 mod equalities;
 mod hot_start;
 mod proximal;

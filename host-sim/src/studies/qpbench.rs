@@ -51,7 +51,8 @@ use std::time::Instant;
 
 use ldcbf_controller::nalgebra::{Const, DefaultAllocator, Dim, Dyn};
 use ldcbf_controller::{
-    DualActiveSetOf, HessianError, LdpSolverOf, QpAllocator, QpSettings, QpSolutionOf, QpStatus,
+    DenseQpOf, DualActiveSetOf, HessianError, LdpSolverOf, QpAllocator, QpSettings, QpSolutionOf,
+    QpStatus, SimpleBoundsOf,
 };
 use ldcbf_reference::{Candidate, DenseProblem, ProblemError, compare_stacked, solve_clarabel};
 
@@ -93,6 +94,17 @@ pub enum QpBenchError {
         solve: QpStatus,
         /// `solve_prepared`'s status.
         prepared: QpStatus,
+    },
+    /// `solve` and `solve_bounded` (the unit rows as simple bounds) do not
+    /// give the same answer bit for bit.
+    #[error("{}: solve and solve_bounded disagree ({solve:?} vs {bounded:?})", file.display())]
+    Bounded {
+        /// The file.
+        file: PathBuf,
+        /// `solve`'s status.
+        solve: QpStatus,
+        /// `solve_bounded`'s status.
+        bounded: QpStatus,
     },
     /// `solve` and the LDP solve disagree on the status.
     #[error(
@@ -238,6 +250,21 @@ impl QpRow {
     }
 }
 
+/// The same answer bit for bit: status, iterations, active set, `x`,
+/// multipliers (or certificate) and objective.
+fn same_answer<V: Dim, C: Dim>(a: &QpSolutionOf<V, C>, b: &QpSolutionOf<V, C>) -> bool
+where
+    DefaultAllocator: QpAllocator<V, C>,
+{
+    let bits = |x: &[f64], y: &[f64]| x.iter().zip(y).all(|(u, v)| u.to_bits() == v.to_bits());
+    a.status == b.status
+        && a.iterations == b.iterations
+        && a.active_set() == b.active_set()
+        && bits(a.x.as_slice(), b.x.as_slice())
+        && bits(a.lambda.as_slice(), b.lambda.as_slice())
+        && a.objective.to_bits() == b.objective.to_bits()
+}
+
 /// Solves and times one file with the instance of dimensions `(nv, nc)`
 /// (static or dynamic: the same code).
 fn solve_sized<V: Dim, C: Dim>(
@@ -266,6 +293,17 @@ where
         })?;
     let prefer: &[bool] = &[];
     let rows = solver.prepare_rows(&qp);
+    // The bound rows (`lb`, `ub`), known from the format, found once per
+    // G (outside the timing): with any, the timed `solve` is
+    // `solve_bounded`, checked against `solve` bit for bit first.
+    let bounds = SimpleBoundsOf::detect(&qp);
+    let timed = |qp: &DenseQpOf<V, C>| {
+        if bounds.count() > 0 {
+            solver.solve_bounded(qp, &bounds, prefer)
+        } else {
+            solver.solve(qp, prefer)
+        }
+    };
     let (mut best, mut best_prepared) = (u64::MAX, u64::MAX);
     let (mut best_ldp, mut best_load, mut best_prep) = (u64::MAX, u64::MAX, u64::MAX);
     let mut sol = solver.solve(&qp, prefer);
@@ -282,6 +320,14 @@ where
             prepared: prepared.status,
         });
     }
+    let bounded = timed(&qp);
+    if !same_answer(&sol, &bounded) {
+        return Err(QpBenchError::Bounded {
+            file: file.to_path_buf(),
+            solve: sol.status,
+            bounded: bounded.status,
+        });
+    }
     // The LDP path: `ldp` per G, `loaded` per (q, h), both outside the timing.
     let ldp = Box::new(LdpSolverOf::prepare(&solver, &qp));
     let loaded = ldp.load(&qp.q, &qp.h);
@@ -290,7 +336,7 @@ where
     let ns = |t0: Instant| u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX);
     for _ in 0..repeat.max(1) {
         let t0 = Instant::now();
-        sol = std::hint::black_box(solver.solve(std::hint::black_box(&qp), prefer));
+        sol = std::hint::black_box(timed(std::hint::black_box(&qp)));
         best = best.min(ns(t0));
         let t0 = Instant::now();
         std::hint::black_box(solver.solve_prepared(std::hint::black_box(&qp), &rows, prefer));
