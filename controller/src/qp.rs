@@ -867,20 +867,26 @@ where
         // compiled with `me = 0` as a constant: no equality phase, ratio test
         // and drops from the first active row (host: 3-5 % per `step` at
         // N = 10, 20).
-        let it = if me == 0 {
-            active_set::iterate(&mut factor, nv, m, 0, blocked, &pref, marked, max_iter, hot)
+        macro_rules! iterate {
+            ($factor:expr) => {
+                if me == 0 {
+                    active_set::iterate($factor, nv, m, 0, blocked, &pref, marked, max_iter, hot)
+                } else {
+                    active_set::iterate($factor, nv, m, me, blocked, &pref, marked, max_iter, hot)
+                }
+            };
+        }
+        // On hosts, from 16 variables on, a start from scratch (every solve
+        // but a resumed probe) iterates on the plain factor: no resume hook
+        // and no test for spans in its scan (3 % of `solve` on LIPMWALK); the
+        // same bits. Smaller sizes (no spans compiled in; a second copy of
+        // the iteration cost the N = 3 step 2 %) and bare-metal targets: one
+        // compiled iteration.
+        let plain = cfg!(not(target_os = "none")) && proximal_capable::<NV>();
+        let it = if plain && factor.kept.is_none() {
+            iterate!(&mut factor.inner)
         } else {
-            active_set::iterate(
-                &mut factor,
-                nv,
-                m,
-                me,
-                blocked,
-                &pref,
-                marked,
-                max_iter,
-                hot,
-            )
+            iterate!(&mut factor)
         };
         let x = factor.inner.x;
         let Some(it) = it else {
