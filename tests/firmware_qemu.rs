@@ -22,7 +22,7 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use ldcbf_controller::nalgebra::{SVector, Vector2};
-use ldcbf_controller::qp::{DenseQp, DualActiveSet, QpBackend, QpSolution};
+use ldcbf_controller::qp::{DenseQp, DualActiveSet, QpBackend, QpSolution, Reprobe};
 use ldcbf_controller::{
     Config, Controller, ConvexPolygon, CycleInput, CycleStatus, PaperController, Side,
     constraint_capacity,
@@ -54,7 +54,7 @@ const TARGET_FLASH: u64 = 64 * 1024;
 const TARGET_RAM: u64 = 16 * 1024;
 /// The enforced ceiling of the walk-into pass, instructions per cycle (the
 /// target, 100,000, is not met there: firmware/README.md).
-const WALK_INTO_CEILING: u64 = 170_000;
+const WALK_INTO_CEILING: u64 = 120_000;
 /// Commands must agree with the host's to this (m, rad/s).
 const COMMAND_TOL: f64 = 1e-9;
 /// `-icount` shift: one instruction = 2^ICOUNT_SHIFT ns of virtual time.
@@ -185,6 +185,21 @@ impl QpBackend<6, NC> for CountSolves {
         budget: u32,
     ) -> QpSolution<6, NC> {
         let sol = solver.solve_selected(qp, h, enabled, prefer, budget);
+        self.0.push(sol.iterations);
+        sol
+    }
+
+    fn solve_reprobe(
+        &mut self,
+        solver: &DualActiveSet<6, NC>,
+        qp: &DenseQp<6, NC>,
+        h: &SVector<f64, NC>,
+        enabled: &[bool; NC],
+        prefer: &[bool; NC],
+        budget: u32,
+        state: &mut Reprobe<6, NC>,
+    ) -> QpSolution<6, NC> {
+        let sol = solver.solve_reprobe(qp, h, enabled, prefer, budget, state);
         self.0.push(sol.iterations);
         sol
     }

@@ -81,8 +81,9 @@ pub use ldp::{LdpLoadedDyn, LdpSolverDyn};
 pub use lip::Lip;
 pub use mpc::{
     ActiveObstacle, Assembly, CommandSource, Config, ConfigError, Controller, CycleInfo,
-    CycleInput, CycleOutput, CycleStatus, InputError, LipState, NO_SPEED_CAP, ObstacleQuery,
-    PaperController, Plan, Prediction, RecordedInput, RobotController, Side, constraint_capacity,
+    CycleInput, CycleOutput, CycleStatus, FieldError, FieldValue, InputError, LipState,
+    NO_SPEED_CAP, ObstacleQuery, PaperController, Plan, Prediction, RecordedInput, RobotController,
+    Side, constraint_capacity,
 };
 pub use qp::{
     DenseQp, DenseQpOf, DualActiveSet, DualActiveSetOf, HessianError, OwnSolver, QpAllocator,

@@ -25,7 +25,10 @@
 //! first time it is found violated, and per add or drop `O(m NV + NV^2)`. When `G`
 //! is the same over many solves (only `q` and `h` change), the row norms can be
 //! computed once with [`DualActiveSet::prepare_rows`] and passed to
-//! [`DualActiveSet::solve_prepared`]. The kernels run over slices whose
+//! [`DualActiveSet::solve_prepared`]; a series of solves of the same rows
+//! with other right-hand sides (the relaxation's probes) shares them and
+//! continues each from the last one's factor with
+//! [`DualActiveSet::solve_reprobe`] (`qp/reprobe.rs`). The kernels run over slices whose
 //! lengths are the dimensions (the constants `NV`, `NC` for the static
 //! sizes), so the compiler unrolls and vectorises them without bounds checks
 //! there; see `docs/solvers.md` for the measurements that chose them.
@@ -186,8 +189,10 @@ macro_rules! solve_start {
 
 mod backend;
 mod dense;
+mod guess;
 mod orthogonal;
 mod proximal;
+mod reprobe;
 mod resolve;
 mod spans;
 pub use backend::{OwnSolver, QpBackend};
@@ -196,6 +201,9 @@ pub use dense::DenseQpDyn;
 pub use dense::{DenseQp, DenseQpOf};
 use orthogonal::Orthogonal;
 use proximal::proximal_capable;
+use reprobe::Carry;
+pub use reprobe::{Reprobe, ReprobeOf};
+use resolve::Resumed;
 mod settings;
 pub use proximal::{PROX_EPS, PROX_MAX_OUTER, PROX_TOL};
 pub use settings::{HessianError, QpSettings};
@@ -597,7 +605,10 @@ where
         if self.proximal() {
             return self.solve_proximal(qp, &qp.h, excluded, &mut rows, prefer, max_iter);
         }
-        self.solve_with(qp, &qp.q, &qp.h, excluded, &mut rows, prefer, max_iter)
+        let mut carry = Carry::fresh(self.nv());
+        self.solve_with(
+            qp, &qp.q, &qp.h, excluded, &mut rows, prefer, max_iter, &mut carry,
+        )
     }
 
     /// [`DualActiveSetOf::solve`] on a selection of `qp`'s rows with other
@@ -630,7 +641,10 @@ where
         if self.proximal() {
             return self.solve_proximal(qp, h, excluded, &mut rows, prefer, max_iter);
         }
-        self.solve_with(qp, &qp.q, h, excluded, &mut rows, prefer, max_iter)
+        let mut carry = Carry::fresh(self.nv());
+        self.solve_with(
+            qp, &qp.q, h, excluded, &mut rows, prefer, max_iter, &mut carry,
+        )
     }
 
     /// The per-row data of `qp`'s constraint matrix that [`DualActiveSetOf::solve`]
@@ -673,7 +687,10 @@ where
         if self.proximal() {
             return self.solve_proximal(qp, &qp.h, excluded, &mut rows, prefer, max_iter);
         }
-        self.solve_with(qp, &qp.q, &qp.h, excluded, &mut rows, prefer, max_iter)
+        let mut carry = Carry::fresh(self.nv());
+        self.solve_with(
+            qp, &qp.q, &qp.h, excluded, &mut rows, prefer, max_iter, &mut carry,
+        )
     }
 
     /// `1 / |L^-1 g|` for a row with `|g|^2 = n2 > 0`.
@@ -696,7 +713,9 @@ where
     /// iteration's; the objective is the one of `qp.q`), the right-hand side
     /// `h` (`qp.h` or another), the rows `excluded[i]` left out, the
     /// Euclidean row norms in `rows` and the H^-1 norms there or computed on
-    /// demand (0 = not yet).
+    /// demand (0 = not yet), the factor in `carry` (from scratch, or from
+    /// the active rows of the solve before, `qp/reprobe.rs`; left there for
+    /// the next).
     #[allow(clippy::too_many_arguments)]
     fn solve_with(
         &self,
@@ -707,35 +726,38 @@ where
         norms: &mut RowNormsOf<NC>,
         prefer: &[bool],
         max_iter: u32,
+        carry: &mut Carry<NV>,
     ) -> QpSolutionOf<NV, NC> {
-        solve_start!(self, qp, qv, hv, excluded, norms => nv, nc, m, q, tol, me, blocked);
+        solve_start!(self, qp, qv, hv, excluded, norms => nv, nc, m, _q, tol, me, blocked);
         let pref = active_set::marks(nc, prefer);
         // Whether any row is marked (on hosts; on bare-metal targets the
         // iteration's own test of the marks alone, which is shorter there).
         let marked = cfg!(target_os = "none") || prefer.iter().any(|&p| p);
-        // Unconstrained minimiser x = -J0 J0' q = -L^-T L^-1 q.
-        let mut x = self.linvt_mul(self.linv_mul(q).as_slice());
-        for v in x.as_mut_slice() {
-            *v = -*v;
-        }
-        let mut J = self.Linv.transpose();
-        let mut R = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
+        // From scratch, or from the factor `carry` holds (`qp/reprobe.rs`).
+        let (x, resumed_drops) = match carry.start(self, qv, hv, &mut blocked, me, max_iter) {
+            Ok(start) => start,
+            Err(status) => return active_set::stopped(nv, nc, status),
+        };
+        let Carry { J, R, kept, valid } = &mut *carry;
         let mut d = OVector::<f64, NV>::zeros_generic(nv, U1);
-        let mut factor = Orthogonal {
-            solver: self,
-            rows: &qp.gt,
-            h: hv,
-            norm2: &norms.norm2,
-            inv_hnorm: &mut norms.inv_hnorm,
-            tol2: tol * tol,
-            x,
-            J: &mut J,
-            R: &mut R,
-            d: &mut d,
-            z: OVector::zeros_generic(nv, U1),
-            dependent: false,
-            span: None,
-            reorder: false,
+        let mut factor = Resumed {
+            inner: Orthogonal {
+                solver: self,
+                rows: &qp.gt,
+                h: hv,
+                norm2: &norms.norm2,
+                inv_hnorm: &mut norms.inv_hnorm,
+                tol2: tol * tol,
+                x,
+                J,
+                R,
+                d: &mut d,
+                z: OVector::zeros_generic(nv, U1),
+                dependent: false,
+                span: None,
+                reorder: false,
+            },
+            kept: if *valid { Some(&*kept) } else { None },
         };
         // Rows left out are never scanned: they start (and stay) blocked as if
         // active, but never enter the active list.
@@ -759,13 +781,17 @@ where
                 hot,
             )
         };
+        let x = factor.inner.x;
         let Some(it) = it else {
             // The orthogonal factor never asks for a restart.
+            carry.valid = false;
             return active_set::stopped(nv, nc, QpStatus::NumericalError);
         };
-        let x = factor.x;
+        carry.keep(&it);
         let objective = self.objective(&qp.q, &x);
-        it.solution(nc, x, objective, |_| 1.0)
+        let mut sol = it.solution(nc, x, objective, |_| 1.0);
+        sol.iterations = sol.iterations.saturating_add(resumed_drops);
+        sol
     }
 }
 

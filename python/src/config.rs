@@ -1,7 +1,7 @@
 //! The controller settings as a Python dict: `default_config`,
 //! `humanoid_config`, and a dict of overrides read into a [`Config`].
 
-use ldcbf_controller::Config;
+use ldcbf_controller::{Config, FieldValue};
 use ldcbf_sim::world::robot::RobotParams;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyInt, PyString};
@@ -12,54 +12,19 @@ use crate::errors::*;
 /// Names of the [`Config`] fields, in declaration order.
 pub(crate) const CONFIG_FIELDS: [&str; 25] = Config::FIELDS;
 
-/// The `f64` fields of [`Config`], as `(name, accessor)` pairs, written once.
-macro_rules! f64_fields {
-    ($m:ident) => {
-        $m!(
-            gravity,
-            com_height,
-            step_duration,
-            vx_min,
-            vx_max,
-            vy_min,
-            vy_max,
-            l_max,
-            alpha,
-            omega_max,
-            gamma,
-            delta,
-            r_active,
-            body_radius,
-            foot_length,
-            foot_width,
-            heading_freeze_radius,
-            max_gait_relaxation,
-            tol_primal
-        )
-    };
-}
-
-/// `config` as a dict of all its fields (`None` for the options that are off).
+/// `config` as a dict of all its fields, in declaration order (`None` for the
+/// options that are off).
 pub(crate) fn config_dict<'py>(py: Python<'py>, c: &Config) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    macro_rules! put {
-        ($($f:ident),*) => { $( d.set_item(stringify!($f), c.$f)?; )* };
-    }
-    f64_fields!(put);
-    d.set_item("foot_clearance", c.foot_clearance)?;
-    d.set_item("capture_fraction", c.capture_fraction)?;
-    d.set_item("max_iter", c.max_iter)?;
-    d.set_item("max_iter_cycle", c.max_iter_cycle)?;
-    d.set_item("relax_bisections", c.relax_bisections)?;
-    d.set_item("warm_start", c.warm_start)?;
-    // Same keys, same order as the Rust struct.
-    let ordered = PyDict::new(py);
-    for k in CONFIG_FIELDS {
-        if let Some(v) = d.get_item(k)? {
-            ordered.set_item(k, v)?;
+    for (name, value) in c.field_values() {
+        match value {
+            FieldValue::Real(v) => d.set_item(name, v)?,
+            FieldValue::Count(v) => d.set_item(name, v)?,
+            FieldValue::Flag(v) => d.set_item(name, v)?,
+            FieldValue::Optional(v) => d.set_item(name, v)?,
         }
     }
-    Ok(ordered)
+    Ok(d)
 }
 
 /// A non-negative integer that fits `u32` (not a bool).
@@ -104,50 +69,29 @@ pub(crate) fn config_from(
             v.extract::<f64>()
                 .or_arg(|_| config_err(py, field, "must be a number"))
         };
-        macro_rules! set_f64 {
-            ($($f:ident),*) => {
-                match key.as_str() {
-                    $( stringify!($f) => { c.$f = num(stringify!($f))?; continue; } )*
-                    _ => {}
-                }
-            };
-        }
-        f64_fields!(set_f64);
-        match key.as_str() {
-            "foot_clearance" => {
-                c.foot_clearance = if v.is_none() {
-                    None
-                } else {
-                    Some(num("foot_clearance")?)
-                };
-            }
-            "capture_fraction" => {
-                c.capture_fraction = if v.is_none() {
-                    None
-                } else {
-                    Some(num("capture_fraction")?)
-                };
-            }
-            "max_iter" => c.max_iter = uint(&v, "max_iter")?,
-            "max_iter_cycle" => c.max_iter_cycle = uint(&v, "max_iter_cycle")?,
-            "relax_bisections" => c.relax_bisections = uint(&v, "relax_bisections")?,
-            "warm_start" => {
-                c.warm_start = v
-                    .cast::<PyBool>()
-                    .map_err(|_| config_err(py, "warm_start", "must be True or False"))?
-                    .is_true();
-            }
-            other => {
-                return Err(config_err(
-                    py,
-                    other,
-                    &format!(
-                        "unknown controller setting (known: {})",
-                        CONFIG_FIELDS.join(", ")
-                    ),
-                ));
-            }
-        }
+        let Some(&(field, kind)) = c.field_values().iter().find(|(name, _)| *name == key) else {
+            return Err(config_err(
+                py,
+                &key,
+                &format!(
+                    "unknown controller setting (known: {})",
+                    CONFIG_FIELDS.join(", ")
+                ),
+            ));
+        };
+        let value = match kind {
+            FieldValue::Real(_) => FieldValue::Real(num(field)?),
+            FieldValue::Optional(_) if v.is_none() => FieldValue::Optional(None),
+            FieldValue::Optional(_) => FieldValue::Optional(Some(num(field)?)),
+            FieldValue::Count(_) => FieldValue::Count(uint(&v, field)?),
+            FieldValue::Flag(_) => FieldValue::Flag(
+                v.cast::<PyBool>()
+                    .map_err(|_| config_err(py, field, "must be True or False"))?
+                    .is_true(),
+            ),
+        };
+        c.set_field(field, value)
+            .map_err(|_| config_err(py, field, "cannot be set"))?;
     }
     c.validate()
         .map_err(|e| config_err(py, e.field, e.requirement))?;

@@ -6,7 +6,7 @@ use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector, U1};
 
 use super::{LdpSolverOf, PIVOT_FALLBACK, slack_holds};
 use crate::active_set::{ActiveSetFactor, AddError};
-use crate::linalg::{column, column_mut, columns, dot, dot_d, givens};
+use crate::linalg::{column, column_mut, columns, dot_d, givens};
 use crate::qp::QpAllocator;
 
 /// `z -= M_A' r` over the first `nact` active rows (scaled rows `mhat`,
@@ -114,13 +114,11 @@ where
         ) else {
             return None;
         };
-        // w = C^-1 M_A m_p, r = C^-T w = (M_A M_A')^-1 M_A m_p.
-        self.b.as_mut_slice().fill(0.0);
+        // w = C^-1 M_A m_p, r = C^-T w = (M_A M_A')^-1 M_A m_p (entries
+        // `..nact` of `b` and `w`; `add` copies `w[..nact]` into `C`).
         for (bi, &a) in self.b.as_mut_slice().iter_mut().zip(act).take(nact) {
             *bi = kp.get(usize::from(a)).copied().unwrap_or(0.0);
         }
-        // Zero beyond `nact`: `w` becomes a row of the triangle `C`.
-        self.w.as_mut_slice().fill(0.0);
         chol_solve(self.Ci, self.b.as_slice(), nact, self.w.as_mut_slice(), r);
         // z = m_p - M_A' r: the component of m_p outside the active span.
         // For the static sizes a local (kept in registers; as a field it was
@@ -140,13 +138,11 @@ where
             // Cancellation: z carries rounding of order eps cond(M_A)^2.
             // Project it once more (Gram-Schmidt "twice is enough"),
             // r2 = (M_A M_A')^-1 M_A z, z -= M_A' r2, r += r2.
-            self.b.as_mut_slice().fill(0.0);
             for (bi, &a) in self.b.as_mut_slice().iter_mut().zip(act).take(nact) {
                 if let Some(ma) = column(mhat, n, usize::from(a)) {
                     *bi = dot_d::<NV>(ma, z);
                 }
             }
-            self.w2.as_mut_slice().fill(0.0);
             self.r2.as_mut_slice().fill(0.0);
             chol_solve(
                 self.Ci,
@@ -156,7 +152,7 @@ where
                 self.r2.as_mut_slice(),
             );
             sub_active(mhat, n, z, act, self.r2.as_slice(), nact);
-            for (ri, r2i) in r.iter_mut().zip(self.r2.as_slice().iter()) {
+            for (ri, r2i) in r.iter_mut().zip(self.r2.as_slice().iter()).take(nact) {
                 *ri += r2i;
             }
             for (wi, w2i) in self
@@ -164,6 +160,7 @@ where
                 .as_mut_slice()
                 .iter_mut()
                 .zip(self.w2.as_slice().iter())
+                .take(nact)
             {
                 *wi += w2i;
             }
@@ -225,14 +222,16 @@ where
         if diag < PIVOT_FALLBACK {
             return Err(AddError::Restart);
         }
-        crate::linalg::copy(row, self.w.as_slice());
+        // Entries `nact + 1..` of the row are zero already (rows past the
+        // active ones are zero: zeroed at the start and by `chol_drop`).
+        crate::linalg::copy(row, self.w.as_slice().get(..nact).unwrap_or(&[]));
         if let Some(c) = row.get_mut(nact) {
             *c = diag;
         }
         // C^-1 gains the row [-(C^-T w)' / |z|, 1 / |z|] = [-r', 1] / |z|.
         if let Some(ci) = column_mut(self.Ci.as_mut_slice(), n, nact) {
             let inv = 1.0 / diag;
-            for (c, rk) in ci.iter_mut().zip(r) {
+            for (c, rk) in ci.iter_mut().zip(r).take(nact) {
                 *c = -rk * inv;
             }
             if let Some(c) = ci.get_mut(nact) {
@@ -287,11 +286,9 @@ where
     /// iterate), has the multipliers `-(M_A M_A')^-1 d_A`.
     fn hot_multipliers(&mut self, act: &[u16], nact: usize, mult: &mut [f64]) -> bool {
         let n = nact.min(self.n());
-        self.b.as_mut_slice().fill(0.0);
         for (bi, &a) in self.b.as_mut_slice().iter_mut().zip(act).take(n) {
             *bi = self.s0.get(usize::from(a)).copied().unwrap_or(f64::NAN);
         }
-        self.w2.as_mut_slice().fill(0.0);
         self.r2.as_mut_slice().fill(0.0);
         chol_solve(
             self.Ci,
@@ -363,8 +360,13 @@ const REFINE2: f64 = 1e-2;
 /// `w = C^-1 b` and `r = C^-T w = (C C')^-1 b` on the leading `nact x nact`
 /// block, from the inverse factor `Ci = C^-1` (lower triangular, zeros above
 /// the diagonal, row `i` stored as column `i`): two matrix-vector products,
-/// no chain of dependent divisions or dot products as in substitution. `r`
-/// must come zeroed; entries `nact..` of `w` are left as they are.
+/// no chain of dependent divisions or dot products as in substitution. Only
+/// `b[..nact]` is read; entries `..nact` of `w` are written and of `r`
+/// accumulated into, which must come zeroed there; the rest are left as they
+/// are. Row `i` of `Ci` is read over its non-zero entries `..=i` alone: the
+/// products skipped are exact zeros (the rows of `C^-1` finite), which leave
+/// the sums as they are (they start at +0 and never become -0), so the bits
+/// are those of full-length products.
 #[inline(always)]
 fn chol_solve<NV: Dim>(
     Ci: &OMatrix<f64, NV, NV>,
@@ -376,36 +378,31 @@ fn chol_solve<NV: Dim>(
     DefaultAllocator: nalgebra::allocator::Allocator<NV, NV> + nalgebra::allocator::Allocator<NV>,
 {
     let n = Ci.nrows();
-    if NV::try_to_usize().is_none() {
-        // Run-time sizes: the leading `nact` entries only. The products
-        // skipped are exact zeros (`b` and `r` are zero beyond `nact`, the
-        // rows of `C^-1` finite), which leave the sums as they are (they
-        // start at +0 and never become -0): the bits of the loops below.
-        let (Some(b), Some(r)) = (b.get(..nact), r.get_mut(..nact)) else {
-            return;
-        };
-        for (wi, row) in w.iter_mut().zip(columns(Ci.as_slice(), n)).take(nact) {
-            *wi = dot_d::<NV>(row.get(..nact).unwrap_or(row), b);
-        }
-        for (&wi, row) in w.iter().zip(columns(Ci.as_slice(), n)).take(nact) {
-            for (rk, c) in r.iter_mut().zip(row) {
-                *rk += wi * c;
-            }
-        }
+    let (Some(b), Some(r)) = (b.get(..nact), r.get_mut(..nact)) else {
         return;
+    };
+    for (i, (wi, row)) in w
+        .iter_mut()
+        .zip(columns(Ci.as_slice(), n))
+        .take(nact)
+        .enumerate()
+    {
+        // Equal lengths: `dot_d` pairs the entries of each.
+        if let (Some(row), Some(b)) = (row.get(..=i), b.get(..=i)) {
+            *wi = dot_d::<NV>(row, b);
+        }
     }
-    for (wi, row) in w.iter_mut().zip(columns(Ci.as_slice(), n)).take(nact) {
-        *wi = dot(row, b);
-    }
-    // Accumulated in a local vector (kept in vector registers), then
-    // stored: accumulating into `r` itself stored all of it after every row.
-    let mut acc = OVector::<f64, NV>::zeros_generic(Ci.shape_generic().0, U1);
-    for (&wi, row) in w.iter().zip(columns(Ci.as_slice(), n)).take(nact) {
-        for (rk, c) in acc.as_mut_slice().iter_mut().zip(row) {
+    for (i, (&wi, row)) in w
+        .iter()
+        .zip(columns(Ci.as_slice(), n))
+        .take(nact)
+        .enumerate()
+    {
+        let row = row.get(..=i).unwrap_or(row);
+        for (rk, c) in r.iter_mut().zip(row) {
             *rk += wi * c;
         }
     }
-    crate::linalg::copy(r, acc.as_slice());
 }
 
 /// Removes row `l` (of `nact`) from the Cholesky factor `C` of `M_A M_A'`

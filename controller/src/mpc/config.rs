@@ -1,7 +1,6 @@
 //! The controller's settings: [`Config`] (the paper's Table I by default),
-//! the names of its fields ([`Config::FIELDS`]), its validation
-//! ([`Config::validate`], [`ConfigError`]) and the margins derived from it
-//! ([`Config::barrier_margin`], [`Config::foot_margin`]).
+//! its validation ([`Config::validate`], [`ConfigError`]) and the margins
+//! derived from it ([`Config::barrier_margin`], [`Config::foot_margin`]).
 
 use crate::qp::QpSettings;
 use nalgebra::Vector2;
@@ -190,36 +189,6 @@ impl Config {
             ..self
         }
     }
-
-    /// The names of every field, in declaration order (for hosts that read or
-    /// set them by name: the scenario files, the Python package).
-    pub const FIELDS: [&'static str; 25] = [
-        "gravity",
-        "com_height",
-        "step_duration",
-        "vx_min",
-        "vx_max",
-        "vy_min",
-        "vy_max",
-        "l_max",
-        "alpha",
-        "omega_max",
-        "gamma",
-        "delta",
-        "r_active",
-        "foot_clearance",
-        "body_radius",
-        "foot_length",
-        "foot_width",
-        "heading_freeze_radius",
-        "max_iter",
-        "max_iter_cycle",
-        "relax_bisections",
-        "max_gait_relaxation",
-        "capture_fraction",
-        "warm_start",
-        "tol_primal",
-    ];
 
     /// The margin of the step-end LDCBF rows, m: `h(p) = eta'(p - c) - margin`.
     ///

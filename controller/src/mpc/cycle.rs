@@ -19,7 +19,7 @@ use crate::constraints::{
 };
 use crate::geometry::{ConvexPolygon, MAX_COORDINATE};
 use crate::heading::{plan_heading, wrap_angle};
-use crate::qp::{QpBackend, QpSolution, QpStatus};
+use crate::qp::{QpBackend, QpSolution, QpStatus, Reprobe};
 use crate::relax;
 
 /// The input of one recorded control cycle, owned: a [`CycleInput`] whose
@@ -530,7 +530,18 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         // stance side changed.
         let shift = usize::from(memory.has_plan && memory.stance != input.stance_side);
         let (prefer, warm) = self.warm_start(memory, shift, work);
-        let sol = backend.solve_qp(&self.solver, &work.qp, &prefer);
+        // The probes of an infeasible cycle's relaxation continue from this
+        // solve's factor (`reprobe`).
+        let mut reprobe = Reprobe::new(&work.qp);
+        let sol = backend.solve_reprobe(
+            &self.solver,
+            &work.qp,
+            &work.qp.h,
+            &[true; NC],
+            &prefer,
+            self.solver.settings().max_iter,
+            &mut reprobe,
+        );
         let mut info = self.info(&sol, work, warm);
         // `z`: this cycle's decision vector (positions); `feet`: set for the
         // fallbacks, which are defined by their footsteps.
@@ -541,7 +552,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             }
             _ => {
                 memory.n_active = 0;
-                self.recover(memory, backend, work, &sol, shift, &mut info)
+                self.recover(memory, backend, work, &sol, shift, &mut info, &mut reprobe)
             }
         };
         let pred = &work.prediction;
@@ -668,6 +679,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
     /// iterations and relaxations in `info`.
     // Inlined: one call site on the cycle path (firmware instructions).
     #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
     fn recover<const NOBS: usize, B: QpBackend<NV, NC>>(
         &self,
         memory: &mut Memory<NV>,
@@ -676,6 +688,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         sol: &QpSolution<NV, NC>,
         shift: usize,
         info: &mut CycleInfo,
+        reprobe: &mut Reprobe<NV, NC>,
     ) -> (SVector<f64, NV>, Option<SVector<f64, NV>>, CycleStatus) {
         let status = match sol.status {
             QpStatus::Infeasible => CycleStatus::Infeasible,
@@ -711,6 +724,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                     certificate: Some(&sol.lambda),
                     give_way,
                 },
+                reprobe,
             )
         } else {
             Err(relax::RelaxError {

@@ -55,7 +55,8 @@
 //!
 //! ## Files
 //!
-//! * `config`: [`Config`], its field names and validation;
+//! * `config`: [`Config`] and its validation;
+//! * `fields`: [`Config`]'s fields by name ([`FieldValue`]);
 //! * `plan`: the plan, status, diagnostics and assembly types of a cycle;
 //! * `select`: obstacle selection and [`ObstacleQuery`];
 //! * `cycle`: the cycle itself ([`Controller::step`], [`Controller::assemble`]);
@@ -67,6 +68,7 @@
 mod config;
 mod cycle;
 mod fallback;
+mod fields;
 mod give_way;
 mod plan;
 mod select;
@@ -75,6 +77,7 @@ mod tests;
 
 pub use config::{Config, ConfigError};
 pub use cycle::{CycleInput, InputError, MAX_RATE, NO_SPEED_CAP, RecordedInput};
+pub use fields::{FieldError, FieldValue};
 pub use plan::{
     Assembly, CommandSource, CycleInfo, CycleOutput, CycleStatus, LipState, Plan, Prediction, Side,
 };

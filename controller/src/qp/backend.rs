@@ -4,7 +4,7 @@
 
 use nalgebra::SVector;
 
-use super::{DenseQp, DualActiveSet, QpSolution};
+use super::{DenseQp, DualActiveSet, QpSolution, Reprobe};
 
 /// Something that solves the controller's QPs: the type parameter `B` of
 /// [`Controller`](crate::Controller), [`OwnSolver`] (the dual active-set
@@ -69,6 +69,25 @@ pub trait QpBackend<const NV: usize, const NC: usize> {
         }
         out
     }
+
+    /// [`QpBackend::solve_selected`] as one of a series of probes of the same
+    /// QP's rows (same `H` and `G`) that share `state`
+    /// ([`DualActiveSet::solve_reprobe`]: each continues from the active rows
+    /// of the one before). The provided method ignores `state` and calls
+    /// `solve_selected`; [`OwnSolver`] resumes.
+    #[allow(clippy::too_many_arguments)]
+    fn solve_reprobe(
+        &mut self,
+        solver: &DualActiveSet<NV, NC>,
+        qp: &DenseQp<NV, NC>,
+        h: &SVector<f64, NC>,
+        enabled: &[bool; NC],
+        prefer: &[bool; NC],
+        budget: u32,
+        _state: &mut Reprobe<NV, NC>,
+    ) -> QpSolution<NV, NC> {
+        self.solve_selected(solver, qp, h, enabled, prefer, budget)
+    }
 }
 
 /// The built-in backend: [`DualActiveSet::solve`].
@@ -95,5 +114,18 @@ impl<const NV: usize, const NC: usize> QpBackend<NV, NC> for OwnSolver {
         budget: u32,
     ) -> QpSolution<NV, NC> {
         solver.solve_selected(qp, h, enabled, prefer, budget)
+    }
+
+    fn solve_reprobe(
+        &mut self,
+        solver: &DualActiveSet<NV, NC>,
+        qp: &DenseQp<NV, NC>,
+        h: &SVector<f64, NC>,
+        enabled: &[bool; NC],
+        prefer: &[bool; NC],
+        budget: u32,
+        state: &mut Reprobe<NV, NC>,
+    ) -> QpSolution<NV, NC> {
+        solver.solve_reprobe(qp, h, enabled, prefer, budget, state)
     }
 }

@@ -321,52 +321,40 @@ where
             *cj = dot(g, self.x.as_slice()) - ha;
         }
         let Ms = M.as_slice();
-        // K = C C' (lower C, `C[(i, j)]`, j <= i). Checked access
-        // throughout (nopanic/: the optimiser does not see every bound).
-        let mut C = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
-        let at =
-            |C: &OMatrix<f64, NV, NV>, i: usize, j: usize| C.get((i, j)).copied().unwrap_or(0.0);
-        for i in 0..k {
-            for j in 0..=i {
-                let (Some(mi), Some(mj)) = (column(Ms, n, i), column(Ms, n, j)) else {
-                    return false;
-                };
-                let mut s = dot(mi, mj);
-                for l in 0..j {
-                    s -= at(&C, i, l) * at(&C, j, l);
-                }
-                let v = if i == j {
-                    if s.is_nan() || s <= 1e-10 * dot(mi, mi) {
-                        return false;
-                    }
-                    crate::linalg::sqrt(s)
-                } else {
-                    s / at(&C, j, j)
-                };
-                if let Some(cij) = C.get_mut((i, j)) {
-                    *cij = v;
-                }
-            }
+        // K = C C' (lower C; `T = C'`, `qp/guess.rs`).
+        let mut T = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
+        if !super::guess::factor_gram(&M, k, &mut T) {
+            return false;
         }
-        // C y = c, C' lambda = y.
+        let Ts = T.as_slice();
+        let diag = |i: usize| {
+            column(Ts, n, i)
+                .and_then(|t| t.get(i))
+                .copied()
+                .unwrap_or(0.0)
+        };
+        // C y = c (row `i` of `C` is column `i` of `T`).
         let mut y = OVector::<f64, NV>::zeros_generic(nv, nalgebra::U1);
-        for i in 0..k {
+        for (i, ti) in columns(Ts, n).enumerate().take(k) {
             let mut s = c.get(i).copied().unwrap_or(0.0);
-            for l in 0..i {
-                s -= at(&C, i, l) * y.get(l).copied().unwrap_or(0.0);
+            for (a, yl) in ti.iter().zip(y.as_slice()).take(i) {
+                s -= a * yl;
             }
             if let Some(yi) = y.get_mut(i) {
-                *yi = s / at(&C, i, i);
+                *yi = s / diag(i);
             }
         }
+        // C' lambda = y (column `i` of `C` is entry `i` of the columns of
+        // `T` after `i`).
         let mut lambda = OVector::<f64, NV>::zeros_generic(nv, nalgebra::U1);
         for i in (0..k).rev() {
             let mut s = y.get(i).copied().unwrap_or(0.0);
-            for l in (i + 1)..k {
-                s -= at(&C, l, i) * lambda.get(l).copied().unwrap_or(0.0);
+            let after = lambda.as_slice().get(i + 1..k).unwrap_or(&[]);
+            for (tl, ll) in columns_in(Ts, n, i + 1, k).zip(after) {
+                s -= tl.get(i).copied().unwrap_or(0.0) * ll;
             }
             if let Some(li) = lambda.get_mut(i) {
-                *li = s / at(&C, i, i);
+                *li = s / diag(i);
             }
         }
         if !lambda.as_slice().iter().all(|&l| l >= 0.0 && l.is_finite()) {
@@ -484,7 +472,10 @@ where
 /// test `< nact` inside, which the compiler unrolls fully; for larger `NV`
 /// (and run-time sizes) over `nact` (fully unrolled, the `NV^2 / 2` tests
 /// would cost more than they save). Measured in `docs/solvers.md`.
-#[inline(always)]
+/// Inlined on hosts; one out-of-line copy on bare-metal targets, shared
+/// with the resumed solves (`qp/resolve.rs`), for flash.
+#[cfg_attr(not(target_os = "none"), inline(always))]
+#[cfg_attr(target_os = "none", inline(never))]
 pub(super) fn back_substitute<NV: Dim>(
     R: &OMatrix<f64, NV, NV>,
     d: &[f64],
@@ -610,9 +601,12 @@ where
 
 /// Removes active row `l` (of `nact`): deletes column `l` of `R` and
 /// restores the triangle with Givens rotations, applied to `J` as well.
-// Inlined (as the compiler chose when the loop was written out here, on
-// x86-64 and on the Cortex-M7; out of line it costs the paper QPs 4 %).
-#[inline(always)]
+// Inlined on hosts (as the compiler chose when the loop was written out
+// here; out of line it costs the paper QPs 4 %); one out-of-line copy on
+// bare-metal targets, shared by the iteration's drops and the resumed
+// solves' (`qp/resolve.rs`), for flash.
+#[cfg_attr(not(target_os = "none"), inline(always))]
+#[cfg_attr(target_os = "none", inline(never))]
 pub(super) fn givens_drop<NV: Dim>(
     J: &mut OMatrix<f64, NV, NV>,
     R: &mut OMatrix<f64, NV, NV>,

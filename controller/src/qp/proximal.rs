@@ -148,7 +148,7 @@ where
                 Some(k) => {
                     let mut x = OVector::<f64, NV>::zeros_generic(nv, U1);
                     let left = max_iter.saturating_sub(used);
-                    match resolve(&mut J, &mut R, hv, k, &qk, &mut x, left) {
+                    match resolve(&mut J, &mut R, hv, k, &qk, &mut x, left, |_| false) {
                         Ok(drops) => used = used.saturating_add(drops),
                         Err(ResolveStop::Budget) => {
                             // The last iterate, as when a solve runs out.

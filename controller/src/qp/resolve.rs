@@ -24,9 +24,9 @@
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
-use super::orthogonal::{Orthogonal, givens_drop, rate};
+use super::orthogonal::{Orthogonal, back_substitute, givens_drop, rate};
 use super::spans::unpack;
-use super::{QpAllocator, ZERO_ROW2};
+use super::{QpAllocator, ZERO_ROW2, proximal_capable};
 use crate::active_set::{ActiveSetFactor, AddError, remove_at};
 use crate::linalg::{column, columns, dot_d};
 
@@ -111,7 +111,13 @@ where
         *yj += cj;
     }
     mult.as_mut_slice().fill(0.0);
-    back_substitute_by_columns(R, y.as_slice(), nact, mult.as_mut_slice());
+    if proximal_capable::<NV>() {
+        back_substitute_by_columns(R, y.as_slice(), nact, mult.as_mut_slice());
+    } else {
+        // The small static sizes (the relaxation's probes, `qp/reprobe.rs`):
+        // the iteration's own back substitution, one copy in flash.
+        back_substitute(R, y.as_slice(), nact, mult.as_mut_slice());
+    }
     xs.iter()
         .chain(mult.as_slice().iter().take(nact))
         .all(|v| v.is_finite())
@@ -160,11 +166,14 @@ pub(super) enum ResolveStop {
     Budget,
 }
 
-/// The start of a proximal solve after the first: the minimiser on the kept
-/// active rows for the linear term `q` ([`minimiser_on`], into `x` and
-/// `kept.mult`), then, while an inequality row's multiplier is negative, the
-/// row with the most negative one dropped (from `J`, `R` and `kept`) and the
-/// minimiser formed again, at most `budget` drops. Returns the drops made.
+/// The start of a proximal solve after the first (and of a probe resumed
+/// from the one before, `qp/reprobe.rs`): the kept rows with `leave(row)`
+/// dropped first (from `J`, `R` and `kept`; rows the solve leaves out),
+/// then the minimiser on the kept active rows for the linear term `q`
+/// ([`minimiser_on`], into `x` and `kept.mult`), then, while an inequality
+/// row's multiplier is negative, the row with the most negative one dropped
+/// and the minimiser formed again, at most `budget` drops in all. Returns
+/// the drops made.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn resolve<NV: Dim, NC: Dim>(
     J: &mut OMatrix<f64, NV, NV>,
@@ -174,6 +183,7 @@ pub(super) fn resolve<NV: Dim, NC: Dim>(
     q: &OVector<f64, NV>,
     x: &mut OVector<f64, NV>,
     budget: u32,
+    leave: impl Fn(u16) -> bool,
 ) -> Result<u32, ResolveStop>
 where
     DefaultAllocator: QpAllocator<NV, NC>,
@@ -182,26 +192,41 @@ where
     // At most `n` drops (the active rows), then one more minimiser.
     for drops in 0..=(n as u32) {
         let nact = kept.nact.min(n);
-        if !minimiser_on(J, R, h, kept.act.as_slice(), nact, q, x, &mut kept.mult) {
-            return Err(ResolveStop::Numerical);
-        }
-        let mut worst: Option<usize> = None;
-        let mut worst_u = 0.0;
-        for (j, &u) in kept
-            .mult
+        // (Equality rows stay.)
+        let left_out = kept
+            .act
             .as_slice()
             .iter()
-            .enumerate()
             .take(nact)
             .skip(kept.neq)
-        {
-            if u < worst_u {
-                worst_u = u;
-                worst = Some(j);
+            .position(|&a| leave(a))
+            .map(|j| j + kept.neq);
+        let l = match left_out {
+            Some(l) => l,
+            None => {
+                if !minimiser_on(J, R, h, kept.act.as_slice(), nact, q, x, &mut kept.mult) {
+                    return Err(ResolveStop::Numerical);
+                }
+                let mut worst: Option<usize> = None;
+                let mut worst_u = 0.0;
+                for (j, &u) in kept
+                    .mult
+                    .as_slice()
+                    .iter()
+                    .enumerate()
+                    .take(nact)
+                    .skip(kept.neq)
+                {
+                    if u < worst_u {
+                        worst_u = u;
+                        worst = Some(j);
+                    }
+                }
+                let Some(l) = worst else {
+                    return Ok(drops);
+                };
+                l
             }
-        }
-        let Some(l) = worst else {
-            return Ok(drops);
         };
         if drops >= budget {
             return Err(ResolveStop::Budget);
@@ -249,8 +274,11 @@ where
         if blocked || n2 <= ZERO_ROW2 {
             return None;
         }
+        // (Spans only where the proximal iterations are compiled in: a
+        // constant full range for the small static sizes.)
         let (lo, up) = o
             .span
+            .filter(|_| proximal_capable::<NV>())
             .and_then(|sp| sp.as_slice().get(i))
             .map_or((0, n), |&s| unpack(s));
         let gx = dot_d::<NV>(

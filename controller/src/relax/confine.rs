@@ -35,13 +35,14 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
     fn keeps_outside(&self, u: &SVector<f64, NV>) -> bool {
         let tol = self.solver.settings().tol_primal;
         columns(self.qp.gt.as_slice(), NV)
-            .zip(&self.qp.h)
+            .zip(self.qp.h.as_slice())
             .zip(self.rows)
             .zip(&self.conflict)
+            .enumerate()
             .take(self.qp.m)
-            .all(|(((g, &h), id), &c)| {
+            .all(|(i, (((g, &h), id), &c))| {
                 c || RowClass::of(id.kind) != RowClass::Safety
-                    || dot(g, u.as_slice()) - h <= tol * crate::linalg::sqrt(dot(g, g))
+                    || dot(g, u.as_slice()) - h <= tol * self.reprobe.norm(i)
             })
     }
 

@@ -133,27 +133,35 @@
 //! runs from below:
 //!
 //! * the last certificate gives a lower bound `b` on `t` (in the first search
-//!   the nominal solve's, which the controller hands over; without one its
-//!   first solve is the unrelaxed problem restricted to the
-//!   rows of the first step, `k = 0`, which is usually already infeasible and
-//!   about a third of the rows; a certificate of a subset of the rows is one
-//!   of all of them; only if it is feasible is the whole unrelaxed problem
-//!   solved);
-//! * the next solve goes just above the bound, at `b (1 + 1e-9) + 1e-9`, with
-//!   the certificate's rows marked as the warm start (they are the tight rows
-//!   at the minimum); the first feasible solve ends the search with the
-//!   optimal plan under that relaxation; an infeasible one brings a new
-//!   certificate and a higher bound;
+//!   the nominal solve's, which the controller hands over; without one the
+//!   first probe is the unrelaxed problem itself);
+//! * the next solve goes just above the bound, at `b (1 + 1e-9) + 1e-9`; the
+//!   first feasible solve ends the search with the optimal plan under that
+//!   relaxation; an infeasible one brings a new certificate and a higher
+//!   bound;
 //! * a bound that proves every `t` (up to the cap) infeasible ends the stage
 //!   without a solve: stage 2 starts from the certificate stage 1 ended with,
 //!   and its gait search from the one its safety search ended with, which
 //!   usually proves at once that less than the cap is infeasible.
 //!
+//! Every probe solves the same rows `G` with the same Hessian (and, within
+//! one run, the same `q`); only the right-hand sides and which classes are
+//! left out change. So the probes share one [`Reprobe`]
+//! ([`QpBackend::solve_reprobe`], `qp/reprobe.rs`): the row norms are
+//! computed once per cycle, and each probe continues from the factor of the
+//! active rows the solve before it ended with (the nominal solve's, for the
+//! first), as DAQP's parametric hot start: the minimiser on those rows for
+//! the new right-hand sides, the rows with negative multipliers (and those
+//! the probe leaves out) dropped, then the dual iteration as usual. A probe
+//! whose bound moved a little takes 0 to 2 iterations instead of rebuilding
+//! its active set from the unconstrained minimiser (6 to 14 on the
+//! firmware's walk-into cycles); the optimum is the same, the rounding and
+//! which certificate an infeasible probe returns may differ.
+//!
 //! On the firmware's recorded infeasible cycles (all stage 1) this is two
 //! solves per cycle, the nominal one included: the nominal certificate proves
-//! the bound, and the solve just above it is feasible (three when the first
-//! certificate came from the first-step solve, 4 or 15 with the bisection this
-//! replaces); see `docs/fallback.md`.
+//! the bound, and the solve just above it is feasible; see
+//! `docs/fallback.md`.
 //!
 //! Tolerance: a reported `eps` is at most `b (1 + 1e-9) + 1e-9`, `b` the lower
 //! bound its certificate proves (up to rounding in `y'h`). At a degenerate
@@ -193,7 +201,7 @@ pub use rows::{CaptureBounds, ClassViolation, RowClass, class_violation};
 use nalgebra::SVector;
 
 use crate::constraints::RowId;
-use crate::qp::{DenseQp, DualActiveSet, QpBackend};
+use crate::qp::{DenseQp, DualActiveSet, QpBackend, Reprobe};
 use rows::{Keep, Soft};
 use search::{Ctx, Probe};
 
@@ -265,7 +273,7 @@ pub(crate) struct Params<'a, const NC: usize> {
     /// A Farkas certificate of the nominal QP (one weight per row of `qp`, as
     /// [`crate::qp::QpSolution::lambda`] of its infeasible solve), used as the
     /// first search's starting certificate when it proves the nominal QP
-    /// empty (`y'h < 0`); it replaces the first-step solve.
+    /// empty (`y'h < 0`); it spares the first probe.
     pub certificate: Option<&'a SVector<f64, NC>>,
     /// A person in the conflict (docs/safety.md "The policy toward people"):
     /// after a safety relaxation, no search for the least gait relaxation
@@ -279,13 +287,18 @@ pub(crate) struct Params<'a, const NC: usize> {
 
 /// Runs the priority scheme on the nominal QP `qp` (rows identified by `rows`;
 /// each probe solves a selection of its rows in place, with no copy), within
-/// the limits of `p`.
+/// the limits of `p`. The probes share `reprobe`
+/// ([`QpBackend::solve_reprobe`]: the row norms, and the factor of the
+/// active rows each probe continues from): the state of the nominal solve
+/// of `qp`'s rows (whose factor the first probe continues from), or a new
+/// one.
 pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     solver: &DualActiveSet<NV, NC>,
     backend: &mut B,
     qp: &DenseQp<NV, NC>,
     rows: &[RowId; NC],
     p: Params<'_, NC>,
+    reprobe: &mut Reprobe<NV, NC>,
 ) -> Result<Relaxed<NV, NC>, RelaxError> {
     let Params {
         max_iter,
@@ -307,25 +320,23 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         probes,
         probes_left: probes.saturating_mul(2),
         cert: None,
-        marks: [false; NC],
         support: [false; NC],
         conflict: [false; NC],
         confined: false,
         capture,
+        reprobe,
     };
     if let Some(y) = certificate {
         // The nominal QP is the first probe's problem (stage 1 at no
-        // relaxation) without the first-step restriction.
+        // relaxation).
         let nominal = Keep {
             safety: Some(0.0),
             gait: Some(0.0),
             capture: capture.map(|_| 0.0),
-            first_step: false,
         };
         ctx.take_certificate(y, nominal);
         if !ctx.cert.is_some_and(|c| c.yh < 0.0) {
             ctx.cert = None;
-            ctx.marks = [false; NC];
             ctx.support = [false; NC];
         }
     }
@@ -361,7 +372,6 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         safety: Some(0.0),
         gait: None,
         capture: capture0,
-        first_step: false,
     };
     if let Some((u, eps)) = ctx.minimal(safe, Soft::Gait, gait_cap, None)? {
         return Ok(Relaxed {
@@ -394,7 +404,6 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
                 safety: None,
                 gait: None,
                 capture: Some(0.0),
-                first_step: false,
             };
             ctx.probes_left -= 1;
             match ctx.solve(free)? {
@@ -412,7 +421,6 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
                 safety: None,
                 gait: None,
                 capture: None,
-                first_step: false,
             };
             let Some((u_c, eps_c)) = ctx.minimal(free, Soft::Capture, f64::INFINITY, None)? else {
                 break;
@@ -424,7 +432,6 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
             safety: None,
             gait: if cap.is_finite() { Some(cap) } else { None },
             capture,
-            first_step: false,
         };
         let Some((u_s, eps_s)) = ctx.minimal(reach, Soft::Safety, f64::INFINITY, known_s)? else {
             continue;
@@ -442,7 +449,6 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
             safety: Some(eps_s),
             gait: None,
             capture,
-            first_step: false,
         };
         // The plan just found is feasible with the gait rows at the cap (or
         // without them: then at its own gait violation).

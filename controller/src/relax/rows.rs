@@ -159,16 +159,14 @@ pub(super) enum Soft {
 }
 
 /// Which rows a relaxed problem keeps, and by how much each class is relaxed
-/// (`None`: the class is left out); `first_step`: only the rows of the first
-/// step (`k = 0`). A gait row's right-hand side is `h + min(gait, headroom +
-/// capture)` (each term only when present; the row is left out when neither
-/// is).
+/// (`None`: the class is left out). A gait row's right-hand side is `h +
+/// min(gait, headroom + capture)` (each term only when present; the row is
+/// left out when neither is).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Keep {
     pub(super) safety: Option<f64>,
     pub(super) gait: Option<f64>,
     pub(super) capture: Option<f64>,
-    pub(super) first_step: bool,
 }
 
 impl Keep {

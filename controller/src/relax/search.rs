@@ -8,7 +8,7 @@ use nalgebra::SVector;
 use super::RelaxFailure;
 use super::rows::{CaptureBounds, Keep, RowClass, Soft, class_violation};
 use crate::constraints::RowId;
-use crate::qp::{DenseQp, DualActiveSet, QpBackend, QpStatus};
+use crate::qp::{DenseQp, DualActiveSet, QpBackend, QpStatus, Reprobe};
 
 /// The sums of a Farkas certificate `y` (`y >= 0`, `G'y = 0`) that matter for
 /// every relaxation of the same rows: with the gait rows at `h + e_g` and
@@ -122,9 +122,6 @@ pub(super) struct Ctx<'a, const NV: usize, const NC: usize, B> {
     pub(super) probes_left: u32,
     /// The certificate of the last infeasible probe.
     pub(super) cert: Option<Certificate>,
-    /// Rows of the nominal QP in the support of the last certificate: the rows
-    /// that are tight at the smallest relaxation, tried first by the next solve.
-    pub(super) marks: [bool; NC],
     /// Rows of the nominal QP in the support of any certificate of this
     /// cycle (the nominal solve's, when it proves the nominal QP empty, and
     /// each infeasible probe's): every row some certificate weighed.
@@ -134,19 +131,10 @@ pub(super) struct Ctx<'a, const NV: usize, const NC: usize, B> {
     pub(super) conflict: [bool; NC],
     /// Whether the safety relaxation applies to the `conflict` rows only.
     pub(super) confined: bool,
-}
-
-/// The Euclidean norm of row `o` of `qp` (0 past its rows), computed where
-/// needed: only the rows of a certificate's support and the safety rows a
-/// confined plan is checked against need it, a few of a cycle's rows.
-pub(super) fn row_norm<const NV: usize, const NC: usize>(qp: &DenseQp<NV, NC>, o: usize) -> f64 {
-    if o >= qp.m {
-        return 0.0;
-    }
-    qp.gt
-        .column_iter()
-        .nth(o)
-        .map_or(0.0, |g| crate::linalg::sqrt(g.norm_squared()))
+    /// What the probes share: the row norms and the factor of the last
+    /// probe's active rows, which the next continues from
+    /// ([`QpBackend::solve_reprobe`]).
+    pub(super) reprobe: &'a mut Reprobe<NV, NC>,
 }
 
 /// Relative and absolute padding of a probe above a proven lower bound.
@@ -154,10 +142,10 @@ const PAD: f64 = 1e-9;
 
 impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> {
     /// Solves the problem `keep`: the nominal QP's rows that `keep` keeps, with
-    /// its right-hand sides, in place ([`QpBackend::solve_selected`]: no copy of
-    /// the rows), the marked rows first. An infeasible solve leaves its
-    /// certificate in `self.cert` and its support in `self.marks`. Not inlined:
-    /// one copy of the solver call in flash.
+    /// its right-hand sides, in place ([`QpBackend::solve_reprobe`]: no copy of
+    /// the rows), continuing from the active rows of the solve before. An
+    /// infeasible solve leaves its certificate in `self.cert` and its support
+    /// in `self.support`. Not inlined: one copy of the solver call in flash.
     #[inline(never)]
     pub(super) fn solve(&mut self, keep: Keep) -> Result<Probe<NV>, RelaxFailure> {
         let left = self.budget.saturating_sub(self.used);
@@ -166,46 +154,34 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         }
         let mut h = SVector::<f64, NC>::zeros();
         let mut enabled = [false; NC];
-        for (((&h0, id), hi), on) in self
+        for ((((&h0, id), hi), on), &c) in self
             .qp
             .h
+            .as_slice()
             .iter()
             .zip(self.rows)
-            .zip(h.iter_mut())
+            .zip(h.as_mut_slice().iter_mut())
             .zip(&mut enabled)
+            .zip(&self.conflict)
             .take(self.qp.m)
         {
-            if keep.first_step && id.k != 0 {
-                continue;
-            }
             if let Some((rhs, _)) = keep.rhs(id.kind, h0, self.capture.as_ref()) {
-                *hi = rhs;
+                // While confined, safety rows outside the conflict keep their
+                // full margin.
+                let outside = self.confined && !c && RowClass::of(id.kind) == RowClass::Safety;
+                *hi = if outside { h0 } else { rhs };
                 *on = true;
             }
         }
-        if self.confined {
-            // Safety rows outside the conflict keep their full margin.
-            for (((&h0, id), hi), &c) in self
-                .qp
-                .h
-                .iter()
-                .zip(self.rows)
-                .zip(h.iter_mut())
-                .zip(&self.conflict)
-                .take(self.qp.m)
-            {
-                if !c && RowClass::of(id.kind) == RowClass::Safety {
-                    *hi = h0;
-                }
-            }
-        }
-        let sol = self.backend.solve_selected(
+        // No marks: the probe continues from the last one's active rows.
+        let sol = self.backend.solve_reprobe(
             self.solver,
             self.qp,
             &h,
             &enabled,
-            &self.marks,
+            &[false; NC],
             self.max_iter.min(left),
+            self.reprobe,
         );
         self.used = self.used.saturating_add(sol.iterations);
         match sol.status {
@@ -220,9 +196,8 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
     }
 
     /// Keeps the Farkas certificate `lambda` (one weight per nominal row) of an
-    /// infeasible solve of the problem `keep`: its sums in [`Ctx::cert`], its
-    /// support (but the lightest row) in [`Ctx::marks`], and its support added
-    /// to [`Ctx::support`].
+    /// infeasible solve of the problem `keep`: its sums in [`Ctx::cert`], and
+    /// its support added to [`Ctx::support`].
     pub(super) fn take_certificate(&mut self, lambda: &SVector<f64, NC>, keep: Keep) {
         let mut c = Certificate {
             yh: 0.0,
@@ -232,37 +207,27 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
             yo: 0.0,
             yn: 0.0,
         };
-        self.marks = [false; NC];
         let m = self.qp.m.min(NC);
+        let lambda = lambda.as_slice();
         // Weights at rounding level (~1e-17 of the largest) are not
         // part of the certificate's support.
-        let floor = 1e-12 * lambda.amax();
-        // The support's normals are linearly dependent (`G'y = 0`):
-        // marking all of them makes the next solve add one too many
-        // and drop it again. The lightest (least `y |g|`, the first of
-        // equals) is left out; found in the same pass.
-        let mut lightest: Option<(usize, f64)> = None;
-        for (o, &y) in lambda.iter().enumerate().take(m) {
+        let floor = 1e-12 * lambda.iter().fold(0.0f64, |a, y| a.max(y.abs()));
+        for (o, ((&y, &h), id)) in lambda
+            .iter()
+            .zip(self.qp.h.as_slice())
+            .zip(self.rows)
+            .enumerate()
+            .take(m)
+        {
             // (NaN weights are skipped too.)
             if y.partial_cmp(&floor) != Some(core::cmp::Ordering::Greater) {
                 continue;
-            }
-            let (Some(&h), Some(id)) = (self.qp.h.get(o), self.rows.get(o)) else {
-                continue;
-            };
-            let n = row_norm(self.qp, o);
-            if let Some(mk) = self.marks.get_mut(o) {
-                *mk = true;
             }
             if let Some(s) = self.support.get_mut(o) {
                 *s = true;
             }
             c.yh += y * h;
-            let w = y * n;
-            c.yn += w;
-            if lightest.is_none_or(|(_, lw)| w < lw) {
-                lightest = Some((o, w));
-            }
+            c.yn += y * self.reprobe.norm(o);
             match RowClass::of(id.kind) {
                 RowClass::Gait => {
                     let capped = keep
@@ -286,9 +251,6 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
                 RowClass::Safety => c.ys += y,
                 RowClass::Reach => {}
             }
-        }
-        if let Some(mk) = lightest.and_then(|(o, _)| self.marks.get_mut(o)) {
-            *mk = false;
         }
         self.cert = (c.yh.is_finite() && c.yn.is_finite()).then_some(c);
     }
@@ -358,22 +320,6 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
                 break;
             }
             self.probes_left -= 1;
-            if self.cert.is_none() && eps == 0.0 {
-                // No certificate yet: the rows of the first step alone are
-                // often already infeasible, and any certificate of a subset
-                // is one of the whole; a smaller problem is cheaper to solve.
-                let first = Keep {
-                    first_step: true,
-                    ..with(0.0)
-                };
-                if let Probe::Infeasible = self.solve(first)? {
-                    continue;
-                }
-                if self.probes_left == 0 {
-                    break;
-                }
-                self.probes_left -= 1;
-            }
             if let Probe::Feasible(u) = self.solve(with(eps))? {
                 return Ok(Some((u, eps)));
             }

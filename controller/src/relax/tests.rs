@@ -40,6 +40,20 @@ impl QpBackend<6, NC> for Counting {
         self.0 += 1;
         solver.solve(qp, prefer)
     }
+
+    fn solve_reprobe(
+        &mut self,
+        solver: &DualActiveSet<6, NC>,
+        qp: &DenseQp<6, NC>,
+        h: &SVector<f64, NC>,
+        enabled: &[bool; NC],
+        prefer: &[bool; NC],
+        budget: u32,
+        state: &mut Reprobe<6, NC>,
+    ) -> crate::qp::QpSolution<6, NC> {
+        self.0 += 1;
+        solver.solve_reprobe(qp, h, enabled, prefer, budget, state)
+    }
 }
 
 /// Deterministic uniform numbers in [0, 1) (64-bit LCG, top bits).
@@ -74,7 +88,6 @@ fn certified_empty(
         safety,
         gait,
         capture: capture.map(|c| c.1),
-        first_step: false,
     };
     let bounds = capture.map(|c| c.0);
     let mut qp = DenseQp::<6, NC>::with_q(asm.qp.q);
@@ -167,7 +180,17 @@ fn relaxations_are_minimal_in_priority_order() {
         };
         ctl.assemble(&input, None, &mut asm).unwrap();
         let solver = ctl.solver();
-        let nominal = solver.with_max_iter(64).solve(&asm.qp, &[false; NC]);
+        // The nominal solve leaves its factor in `state` (as the
+        // controller's does) for the probes of the cases that hand it over.
+        let mut state = Reprobe::new(&asm.qp);
+        let nominal = solver.with_max_iter(64).solve_reprobe(
+            &asm.qp,
+            &asm.qp.h,
+            &[true; NC],
+            &[false; NC],
+            64,
+            &mut state,
+        );
         if !nominal.status.is_infeasible() {
             continue;
         }
@@ -188,6 +211,10 @@ fn relaxations_are_minimal_in_priority_order() {
         let yh: f64 = (0..m).map(|i| y[i] * asm.qp.h[i]).sum();
         assert!(yh < 0.0, "case {case}: y'h = {yh}");
         let certificate = (case % 2 == 0).then_some(y);
+        if case % 4 == 3 {
+            // Some probes start from scratch.
+            state = Reprobe::new(&asm.qp);
+        }
         let cb = CaptureBounds::new(ctl.config(), kappa, asm.prediction.heading.omega_bar);
         assert_eq!(cb.is_some(), capture_fraction.is_some());
         let mut count = Counting(0);
@@ -197,6 +224,7 @@ fn relaxations_are_minimal_in_priority_order() {
             &asm.qp,
             &asm.rows,
             params(cap, cb, certificate),
+            &mut state,
         )
         .unwrap_or_else(|e| panic!("case {case}: {e:?}"));
         solves[count.0.min(31)] += 1;
@@ -499,6 +527,7 @@ fn a_conflict_ahead_leaves_the_side_wall_its_margin() {
         &asm.qp,
         &asm.rows,
         params(cap, cb, Some(&nominal.lambda)),
+        &mut Reprobe::new(&asm.qp),
     )
     .unwrap();
     assert_eq!(r.level, RelaxLevel::Safety, "{r:?}");
@@ -545,7 +574,6 @@ fn a_conflict_ahead_leaves_the_side_wall_its_margin() {
         safety: Some(r.eps_safety),
         gait: Some(r.eps_gait),
         capture: cb.map(|_| 0.0),
-        first_step: false,
     };
     let mut qp = DenseQp::<6, NC>::with_q(asm.qp.q);
     for ((g, h), id) in asm.qp.rows().zip(&asm.rows) {

@@ -4,7 +4,7 @@
 
 use std::collections::BTreeMap;
 
-use ldcbf_controller::{Config, Side};
+use ldcbf_controller::{Config, FieldValue, Side};
 use serde::{Deserialize, Serialize};
 
 /// Foot side as written in a file.
@@ -109,43 +109,23 @@ impl ControllerOverrides {
     }
 }
 
-/// The configuration as a JSON map (field -> value).
+/// The configuration as a JSON map (field -> value; `null` for an option that
+/// is off).
 pub fn config_map(c: &Config) -> BTreeMap<String, serde_json::Value> {
-    let mut m = BTreeMap::new();
-    let mut put = |k: &str, v: serde_json::Value| {
-        m.insert(k.to_string(), v);
-    };
-    put("gravity", c.gravity.into());
-    put("com_height", c.com_height.into());
-    put("step_duration", c.step_duration.into());
-    put("vx_min", c.vx_min.into());
-    put("vx_max", c.vx_max.into());
-    put("vy_min", c.vy_min.into());
-    put("vy_max", c.vy_max.into());
-    put("l_max", c.l_max.into());
-    put("alpha", c.alpha.into());
-    put("omega_max", c.omega_max.into());
-    put("gamma", c.gamma.into());
-    put("delta", c.delta.into());
-    put("r_active", c.r_active.into());
-    put(
-        "foot_clearance",
-        c.foot_clearance.map_or(serde_json::Value::Null, Into::into),
-    );
-    put("heading_freeze_radius", c.heading_freeze_radius.into());
-    put("max_iter", c.max_iter.into());
-    put("max_iter_cycle", c.max_iter_cycle.into());
-    put("relax_bisections", c.relax_bisections.into());
-    put("max_gait_relaxation", c.max_gait_relaxation.into());
-    put(
-        "capture_fraction",
-        c.capture_fraction
-            .map_or(serde_json::Value::Null, Into::into),
-    );
-    put("warm_start", c.warm_start.into());
-    put("tol_primal", c.tol_primal.into());
-    m
+    c.field_values()
+        .into_iter()
+        .map(|(name, value)| {
+            let json = match value {
+                FieldValue::Real(v) | FieldValue::Optional(Some(v)) => v.into(),
+                FieldValue::Count(v) => v.into(),
+                FieldValue::Flag(v) => v.into(),
+                FieldValue::Optional(None) => serde_json::Value::Null,
+            };
+            (name.to_string(), json)
+        })
+        .collect()
 }
+
 /// Summary of the overrides that differ from the defaults, `field -> value`
 /// (for logs).
 pub fn overrides_map(o: &ControllerOverrides) -> BTreeMap<String, serde_json::Value> {

@@ -1,0 +1,245 @@
+//! Solves that continue from the factor of the solve before them: the
+//! probes of the relaxation scheme ([`crate::relax`]) solve the same QP
+//! (same `H`, rows `G` and `q`) again and again, each with other right-hand
+//! sides `h` and a selection of its rows. As DAQP's parametric hot start,
+//! each probe starts from the active rows the last one ended with, not from
+//! the unconstrained minimiser:
+//!
+//! * the Euclidean row norms are computed once for all the probes of a QP,
+//!   and the `H^-1` norms once per row, when a probe first finds it
+//!   violated ([`ReprobeOf`]);
+//! * the factor `J`, `R` of the last probe's active rows (after a feasible
+//!   solve its optimal active set; after an infeasible one the rows active
+//!   at its Farkas certificate) is kept ([`Carry`]); rows the next probe
+//!   leaves out are dropped from it (Givens rotations, as a drop of the
+//!   iteration);
+//! * the next probe forms the minimiser on the kept rows held as equalities
+//!   for its `h` and their multipliers, drops the row with the most negative
+//!   multiplier until none is negative (`qp/resolve.rs`, as between the
+//!   proximal iterations), and the dual iteration continues from that pair
+//!   (Goldfarb & Idnani's S-pair: `x` optimal on the active rows,
+//!   multipliers `>= 0`) with its usual scans, adds and drops.
+//!
+//! Any such pair is a valid start of the dual method, so each probe ends at
+//! the same optimum (unique, `H` definite) or proves the same emptiness as a
+//! solve from scratch; the path, hence the rounding and which Farkas
+//! certificate an infeasible probe returns, may differ. The drops made when
+//! resuming count as iterations.
+//!
+//! [`Carry`] is also the storage of the factor of every other solve
+//! (`DualActiveSetOf::solve_with`), which then starts from scratch: one
+//! compiled copy of the iteration serves both.
+
+use nalgebra::allocator::Allocator;
+use nalgebra::{Const, DefaultAllocator, Dim, OMatrix, OVector, U1};
+
+use super::resolve::{Kept, ResolveStop, resolve};
+use super::{DenseQpOf, DualActiveSetOf, QpAllocator, RowNormsOf};
+use crate::active_set::Iterate;
+use crate::solution::{QpSolutionOf, QpStatus};
+
+/// The factor of a solve's active rows: storage for the solve, and what it
+/// leaves for the next one of the same QP's rows (module docs).
+pub(super) struct Carry<NV: Dim>
+where
+    DefaultAllocator: Allocator<NV> + Allocator<NV, NV>,
+{
+    /// `J = L^-T Q` of the active rows `kept` (when `valid`).
+    pub J: OMatrix<f64, NV, NV>,
+    /// Upper-triangular `R` of the active rows `kept` (when `valid`).
+    pub R: OMatrix<f64, NV, NV>,
+    /// The active rows the last solve ended with.
+    pub kept: Kept<NV>,
+    /// `J`, `R` and `kept` hold the factor of a finished solve (solved or
+    /// proven infeasible); else the next solve starts from scratch.
+    pub valid: bool,
+}
+
+impl<NV: Dim> Carry<NV>
+where
+    DefaultAllocator: Allocator<NV> + Allocator<NV, NV>,
+{
+    /// Empty storage: the solve starts from scratch.
+    pub(super) fn fresh(nv: NV) -> Self {
+        Carry {
+            J: OMatrix::zeros_generic(nv, nv),
+            R: OMatrix::zeros_generic(nv, nv),
+            kept: Kept {
+                act: OVector::zeros_generic(nv, U1),
+                mult: OVector::zeros_generic(nv, U1),
+                nact: 0,
+                neq: 0,
+            },
+            valid: false,
+        }
+    }
+
+    /// The start of a solve with the linear term `q`, the right-hand side
+    /// `h` and the rows `blocked` left out (the first `me` rows equalities):
+    /// from scratch (`J = L^-T`, `R = 0`, the unconstrained minimiser), or,
+    /// when `valid` and no equality row is left out, from the kept active
+    /// rows (module docs: those `blocked` dropped, then [`resolve`] within
+    /// `max_iter` drops; the kept rows and the equality rows are marked in
+    /// `blocked`). The starting
+    /// iterate and the drops made, or the status that ends the solve.
+    pub(super) fn start<NC: Dim>(
+        &mut self,
+        solver: &DualActiveSetOf<NV, NC>,
+        q: &OVector<f64, NV>,
+        h: &OVector<f64, NC>,
+        blocked: &mut OVector<bool, NC>,
+        me: usize,
+        max_iter: u32,
+    ) -> Result<(OVector<f64, NV>, u32), QpStatus>
+    where
+        DefaultAllocator: QpAllocator<NV, NC>,
+    {
+        let nv = solver.nv();
+        let n = nv.value();
+        // Equality rows stay in the factor: one left out (or a zero one)
+        // means a start from scratch (`me` is 0 where they are not compiled
+        // in).
+        if blocked.as_slice().iter().take(me).any(|&b| b) {
+            self.valid = false;
+        }
+        if !self.valid {
+            self.J = solver.Linv.transpose();
+            self.R.fill(0.0);
+            // Unconstrained minimiser x = -J0 J0' q = -L^-T L^-1 q.
+            let mut x = solver.linvt_mul(solver.linv_mul(q.as_slice()).as_slice());
+            for v in x.as_mut_slice() {
+                *v = -*v;
+            }
+            return Ok((x, 0));
+        }
+        // Kept rows this solve leaves out are dropped first.
+        let kept = &mut self.kept;
+        let b = blocked.as_mut_slice();
+        let mut x = OVector::<f64, NV>::zeros_generic(nv, U1);
+        let leave = |a: u16| b.get(usize::from(a)).copied().unwrap_or(true);
+        let drops = match resolve(
+            &mut self.J,
+            &mut self.R,
+            h,
+            kept,
+            q,
+            &mut x,
+            max_iter,
+            leave,
+        ) {
+            Ok(drops) => drops,
+            Err(ResolveStop::Budget) => return Err(QpStatus::IterationLimit),
+            Err(ResolveStop::Numerical) => return Err(QpStatus::NumericalError),
+        };
+        // The kept rows and every equality row (active, or redundant) stay
+        // out of the scans.
+        for v in b.iter_mut().take(me) {
+            *v = true;
+        }
+        for &a in kept.act.as_slice().iter().take(kept.nact.min(n)) {
+            if let Some(v) = b.get_mut(usize::from(a)) {
+                *v = true;
+            }
+        }
+        Ok((x, drops))
+    }
+
+    /// Keeps the active rows the iteration `it` ended with; the factor is
+    /// valid for the next solve when it solved the QP or proved it empty.
+    pub(super) fn keep(&mut self, it: &Iterate<NV>) {
+        self.kept.act.clone_from(&it.act);
+        self.kept.nact = it.nact;
+        self.kept.neq = it.neq;
+        self.valid = matches!(it.status, QpStatus::Solved | QpStatus::Infeasible);
+    }
+}
+
+/// What the probes of one QP share (module docs): its row norms and the
+/// factor of the last probe's active rows. Build one per QP with
+/// [`ReprobeOf::new`] and pass it to every
+/// [`DualActiveSetOf::solve_reprobe`] of that QP's `H` and rows `G` (`q`
+/// and `h` may differ from solve to solve).
+pub struct ReprobeOf<NV: Dim, NC: Dim>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
+    /// Euclidean row norms of the QP and the `H^-1` norms found so far.
+    norms: RowNormsOf<NC>,
+    /// The factor of the last probe.
+    carry: Carry<NV>,
+}
+
+/// [`ReprobeOf`] with the sizes as constants (stack only, `no_std`).
+pub type Reprobe<const NV: usize, const NC: usize> = ReprobeOf<Const<NV>, Const<NC>>;
+
+impl<NV: Dim, NC: Dim> ReprobeOf<NV, NC>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
+    /// The shared state of the probes of `qp`'s rows: their squared
+    /// Euclidean norms, and no factor yet (the first probe starts from
+    /// scratch).
+    pub fn new(qp: &DenseQpOf<NV, NC>) -> Self {
+        ReprobeOf {
+            norms: RowNormsOf::euclidean(qp),
+            carry: Carry::fresh(qp.gt.shape_generic().0),
+        }
+    }
+
+    /// The Euclidean norm `|g_i|` of row `i` (0 past the rows).
+    pub(crate) fn norm(&self, i: usize) -> f64 {
+        // (0 past the rows: `RowNormsOf::euclidean` leaves them so.)
+        self.norms
+            .norm2
+            .as_slice()
+            .get(i)
+            .map_or(0.0, |&n2| crate::linalg::sqrt(n2))
+    }
+}
+
+impl<NV: Dim, NC: Dim> DualActiveSetOf<NV, NC>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
+    /// [`DualActiveSetOf::solve_selected`] (the rows `enabled` of `qp` with
+    /// the right-hand side `h`, at most `budget` adds plus drops) as one of
+    /// a series of probes of the same QP that share `state` (module docs):
+    /// the row norms are computed once, by [`ReprobeOf::new`], and each probe
+    /// after the first continues from the factor of the active rows the one
+    /// before ended with. The same optimum, or the same proof of emptiness
+    /// (a Farkas certificate, possibly another one), as `solve_selected`; the
+    /// marks `prefer` choose among violated rows as there. `state` must
+    /// have been built for this `qp`'s rows `G` (and `m`) and used only with
+    /// this solver's `H`.
+    /// Where the proximal iterations run (a semidefinite `H`), each probe is
+    /// `solve_selected` with the shared row norms.
+    pub fn solve_reprobe(
+        &self,
+        qp: &DenseQpOf<NV, NC>,
+        h: &OVector<f64, NC>,
+        enabled: &[bool],
+        prefer: &[bool],
+        budget: u32,
+        state: &mut ReprobeOf<NV, NC>,
+    ) -> QpSolutionOf<NV, NC> {
+        let nc = qp.h.shape_generic().0;
+        let mut excluded = OVector::<bool, NC>::from_element_generic(nc, U1, true);
+        for (x, &on) in excluded.as_mut_slice().iter_mut().zip(enabled) {
+            *x = !on;
+        }
+        let max_iter = budget.min(self.settings.max_iter);
+        if self.proximal() {
+            return self.solve_proximal(qp, h, excluded, &mut state.norms, prefer, max_iter);
+        }
+        self.solve_with(
+            qp,
+            &qp.q,
+            h,
+            excluded,
+            &mut state.norms,
+            prefer,
+            max_iter,
+            &mut state.carry,
+        )
+    }
+}
