@@ -202,6 +202,40 @@ fn the_crowded_174_needle_is_seen_in_time() {
     }
 }
 
+/// Noise-band class: `corridor` seeds 101, 109, 141 and 157 draw 0.7 m
+/// corridors (the narrowest the family draws, 5.9 cm of slack a side at
+/// delta = 0). With the single-hit rule a wall is seen up to two cells in
+/// front of its face (noise hits in the 3.5 cm its rays never clear), the
+/// cycles turn infeasible and the body touches a side wall; with the faces
+/// fitted (`ldcbf_sim::sense::faces`, docs/safety.md) each run reaches the
+/// goal without contact.
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "release only: cargo test --release -p ldcbf-sim --test sim_unknown_maps"
+)]
+fn narrow_corridors_at_delta_0_keep_off_the_walls() {
+    for seed in [101, 109, 141, 157] {
+        let s = study_run("corridor", seed, "0.0", "360");
+        assert!(
+            s.success && !s.collision && !s.foot_collision,
+            "seed {seed}: {s:#?}"
+        );
+    }
+}
+
+/// The same class with 0.25 degree between rays (1440 rays, four times the
+/// noise hits per wall cell): `corridor` seed 119 at delta = 0.05.
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "release only: cargo test --release -p ldcbf-sim --test sim_unknown_maps"
+)]
+fn corridor_119_with_1440_rays_keeps_off_the_walls() {
+    let s = study_run("corridor", 119, "0.05", "1440");
+    assert!(s.success && !s.collision && !s.foot_collision, "{s:#?}");
+}
+
 /// 20 seeds of every layout family with LiDAR (the default 360 rays), the
 /// map and planning at delta = 0.05: no body or foot contact with the true
 /// map in any run.

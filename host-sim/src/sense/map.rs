@@ -21,6 +21,10 @@
 //! hit; a ray that hit nothing gives a miss to every cell up to `range`. A cell
 //! gets at most one update per scan, and a hit wins over a miss of the same
 //! scan (a thin obstacle between two rays is not erased by its neighbours).
+//! [`OccupancyMap::update_scan`] takes each ray's marked point and free
+//! length instead: the simulator gives it those of the face fitted to each
+//! ray's neighbours ([`crate::sense::faces`]), which let a ray clear up to
+//! 1.6 cm (instead of 3.5 cm) in front of a wall.
 //! Log-odds `L += log(p / (1 - p))` with `p = p_hit` or `p_miss`, clamped to
 //! `[logit(clamp_min), logit(clamp_max)]` (OctoMap's clamping: a cell never
 //! gets so sure that it cannot change within a few scans). With `decay > 0`
@@ -292,6 +296,26 @@ impl OccupancyMap {
         dt: f64,
         kept_out: &[bool],
     ) {
+        let free: Vec<f64> = rays
+            .iter()
+            .map(|p| p.map_or(range, |p| (p - origin).norm() - tol))
+            .collect();
+        self.update_scan(origin, heading, rays, &free, dt, kept_out);
+    }
+
+    /// [`OccupancyMap::update_keeping_out`] with each ray's free length
+    /// given: ray `k` gives a miss to every cell it passes through up to
+    /// `free[k]` (m) from `origin` (a missing length: none), e.g. from
+    /// [`crate::sense::faces::free_lengths`].
+    pub fn update_scan(
+        &mut self,
+        origin: Vector2<f64>,
+        heading: f64,
+        rays: &[Option<Vector2<f64>>],
+        free: &[f64],
+        dt: f64,
+        kept_out: &[bool],
+    ) {
         if self.params.decay > 0.0 && dt > 0.0 {
             let f = (-self.params.decay * dt).exp() as f32;
             for l in &mut self.log_odds {
@@ -315,12 +339,9 @@ impl OccupancyMap {
             }
         }
         let n = rays.len();
-        for (k, ray) in rays.iter().enumerate() {
+        for k in 0..n {
             let d = crate::sense::ray_direction(heading, k, n);
-            let len = match ray {
-                Some(p) => (p - origin).norm() - tol,
-                None => range,
-            };
+            let len = free.get(k).copied().unwrap_or(0.0);
             if len > 0.0 {
                 self.traverse(origin, d, len, |map, c| {
                     if map.stamp[c] != scan {

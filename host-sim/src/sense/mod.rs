@@ -99,6 +99,7 @@ use crate::world::{MAX_VERTICES, Polygon};
 
 mod dbscan;
 pub mod detect;
+pub mod faces;
 mod infer;
 mod map;
 pub mod movers;

@@ -37,7 +37,7 @@ use crate::plan::on_map::{CellMap, plan_on_map};
 use crate::scenario::Scenario;
 use crate::sense::movers::{MoverScan, Movers};
 use crate::sense::track::TrackParams;
-use crate::sense::{CellState, Lidar, OccupancyMap, free_tolerance};
+use crate::sense::{CellState, Lidar, OccupancyMap, faces};
 use crate::world::Polygon;
 use crate::world::grid::OccupancyGrid;
 
@@ -146,7 +146,7 @@ impl Mapper {
     ) -> Vec<Vector2<f64>> {
         let rays = self.lidar.scan_rays(origin, heading, obstacles);
         let p = self.lidar.params();
-        let (range, tol) = (p.range, free_tolerance(p));
+        let (marks, free) = faces::fit_scan(&rays, origin, heading, p);
         let dt = self.last_update.map_or(0.0, |t| time - t);
         self.last_update = Some(time);
         let kept_out: &[bool] = match self.movers.as_mut() {
@@ -159,7 +159,7 @@ impl Mapper {
         let t0 = Instant::now();
         self.log
             .map
-            .update_keeping_out(origin, heading, &rays, range, tol, dt, kept_out);
+            .update_scan(origin, heading, &marks, &free, dt, kept_out);
         if let Some((_, scan)) = &self.movers {
             let r = self.log.map.resolution;
             for hull in &scan.obstacles {
