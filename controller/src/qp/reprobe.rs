@@ -64,18 +64,7 @@ where
 {
     /// Empty storage: the solve starts from scratch.
     pub(super) fn fresh(nv: NV) -> Self {
-        Carry {
-            J: OMatrix::zeros_generic(nv, nv),
-            R: OMatrix::zeros_generic(nv, nv),
-            kept: Kept {
-                act: OVector::zeros_generic(nv, U1),
-                mult: OVector::zeros_generic(nv, U1),
-                nact: 0,
-                neq: 0,
-            },
-            valid: false,
-            pristine: false,
-        }
+        Self::holding(OMatrix::zeros_generic(nv, nv), false)
     }
 
     /// Storage holding the start from scratch of `solver`'s solves (`J =
@@ -85,12 +74,17 @@ where
     where
         DefaultAllocator: QpAllocator<NV, NC>,
     {
-        let nv = solver.nv();
         if cfg!(target_os = "none") {
-            return Carry::fresh(nv);
+            return Carry::fresh(solver.nv());
         }
+        Self::holding(solver.Linv.transpose(), true)
+    }
+
+    /// `J`, `R = 0`, no kept rows; `pristine` as given.
+    fn holding(J: OMatrix<f64, NV, NV>, pristine: bool) -> Self {
+        let nv = J.shape_generic().0;
         Carry {
-            J: solver.Linv.transpose(),
+            J,
             R: OMatrix::zeros_generic(nv, nv),
             kept: Kept {
                 act: OVector::zeros_generic(nv, U1),
@@ -99,7 +93,7 @@ where
                 neq: 0,
             },
             valid: false,
-            pristine: true,
+            pristine,
         }
     }
 
