@@ -30,6 +30,10 @@
 //! gets so sure that it cannot change within a few scans). With `decay > 0`
 //! every known cell's log-odds shrinks by the factor `exp(-decay dt)` per
 //! update (forgetting, for a world that changes; 0 = a static world).
+//! The map's outermost ring of cells is never cleared (a hit still marks
+//! it): nothing is known beyond the map's box, so free space seen up to the
+//! box's edge ends in a frontier there, and a wall just beyond the box
+//! (which the map cannot hold) is not walked into unseen.
 //! A cell is *occupied* when `L > 0` (p > 0.5, OctoMap's occupancy
 //! threshold), *free* when `L < 0`, *unknown* when never updated (or decayed
 //! back to `|L| < 1e-3`).
@@ -238,6 +242,13 @@ impl OccupancyMap {
         self.log_odds[j * self.width + i]
     }
 
+    /// Whether cell index `k` (`j * width + i`) is in the map's outermost
+    /// ring, which no ray clears (module docs).
+    fn on_edge(&self, k: usize) -> bool {
+        let (i, j) = (k % self.width, k / self.width);
+        i == 0 || j == 0 || i + 1 >= self.width || j + 1 >= self.height
+    }
+
     /// The state of cell `(i, j)` (module docs).
     pub fn state(&self, i: usize, j: usize) -> CellState {
         let l = self.log_odds[j * self.width + i];
@@ -344,7 +355,7 @@ impl OccupancyMap {
             let len = free.get(k).copied().unwrap_or(0.0);
             if len > 0.0 {
                 self.traverse(origin, d, len, |map, c| {
-                    if map.stamp[c] != scan {
+                    if map.stamp[c] != scan && !map.on_edge(c) {
                         map.stamp[c] = scan;
                         map.log_odds[c] = (map.log_odds[c] + map.miss).clamp(map.lo, map.hi);
                     }
@@ -394,6 +405,7 @@ impl OccupancyMap {
             for i in i0..=i1 {
                 let k = j * self.width + i;
                 if self.log_odds[k] > 0.0
+                    && !self.on_edge(k)
                     && ldcbf_controller::closest_point_point_polygon(&self.centre(i, j), poly)
                         .signed_distance
                         <= margin
@@ -602,6 +614,38 @@ mod tests {
         let mut n = 0;
         m.traverse(v(-3.0, 0.1), v(1.0, 0.0), 10.0, |_, _| n += 1);
         assert_eq!(n, m.width);
+    }
+
+    /// Rays that run off the map clear up to its outermost ring, which stays
+    /// unknown: a frontier piece stands at the box's edge (where a wall
+    /// beyond the box would be), and none covers a cell seen free.
+    #[test]
+    fn the_map_ends_in_a_frontier_at_its_edge() {
+        let mut m = map(MapParams {
+            resolution: 0.1,
+            padding: 0.0,
+            unknown_radius: 1.0,
+            ..MapParams::default()
+        });
+        // At (1.45, 0.05), 0.55 m from the map's edge x = 2; 8 rays, none hits.
+        let o = v(1.45, 0.05);
+        m.update(o, 0.0, &[None; 8], 3.0, 0.03, 0.0);
+        let last = m.width - 1;
+        let (_, j) = m.cell_of(o).unwrap();
+        assert_eq!(m.state(last, j), CellState::Unknown);
+        assert_eq!(m.state(last - 1, j), CellState::Free);
+        let pieces = m.pieces(o, 1.0);
+        let edge = m.centre(last, j);
+        assert!(
+            pieces.iter().any(|p| {
+                ldcbf_controller::closest_point_point_polygon(&edge, p).signed_distance <= 0.0
+            }),
+            "no piece at the edge: {pieces:?}"
+        );
+        let inner = m.centre(last - 1, j);
+        assert!(pieces.iter().all(|p| {
+            ldcbf_controller::closest_point_point_polygon(&inner, p).signed_distance > 0.0
+        }));
     }
 
     #[test]
