@@ -701,28 +701,10 @@ where
         prefer: &[bool],
         budget: u32,
     ) -> QpSolutionOf<NV, NC> {
-        let nc = qp.h.shape_generic().0;
-        let mut excluded = OVector::<bool, NC>::from_element_generic(nc, U1, true);
-        for (x, &on) in excluded.as_mut_slice().iter_mut().zip(enabled) {
-            *x = !on;
-        }
-        let mut rows = RowNormsOf::euclidean(qp);
-        let max_iter = budget.min(self.settings.max_iter);
-        if self.proximal() {
-            return self.solve_proximal(qp, h, excluded, &mut rows, (), prefer, max_iter);
-        }
-        let mut carry = Carry::scratch(self);
-        self.solve_with(
-            qp,
-            &qp.q,
-            h,
-            excluded,
-            &mut rows,
-            (),
-            prefer,
-            max_iter,
-            &mut carry,
-        )
+        // A single probe: the row norms and the start from scratch of
+        // `qp/reprobe.rs`, with nothing carried before it.
+        let mut state = ReprobeOf::for_solver(self, qp);
+        self.solve_reprobe(qp, h, enabled, prefer, budget, &mut state)
     }
 
     /// The per-row data of `qp`'s constraint matrix that [`DualActiveSetOf::solve`]
