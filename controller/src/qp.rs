@@ -630,24 +630,7 @@ where
         // The H^-1 norms are left to the solve, which computes them only for
         // rows found violated.
         let mut rows = RowNormsOf::euclidean(qp);
-        let nc = qp.h.shape_generic().0;
-        let excluded = OVector::<bool, NC>::from_element_generic(nc, U1, false);
-        let max_iter = self.settings.max_iter;
-        if self.proximal() {
-            return self.solve_proximal(qp, &qp.h, excluded, &mut rows, (), prefer, max_iter);
-        }
-        let mut carry = Carry::scratch(self);
-        self.solve_with(
-            qp,
-            &qp.q,
-            &qp.h,
-            excluded,
-            &mut rows,
-            (),
-            prefer,
-            max_iter,
-            &mut carry,
-        )
+        self.solve_all_rows(qp, &mut rows, prefer)
     }
 
     /// [`DualActiveSetOf::solve`] with the rows `bounds` (detected from a QP
@@ -742,10 +725,23 @@ where
         if rows.m != qp.m.min(nc.value()) || rows.norm2.len() != nc.value() {
             rows.finite = false;
         }
+        self.solve_all_rows(qp, &mut rows, prefer)
+    }
+
+    /// `solve` and `solve_prepared` with the row norms `rows`: every row of
+    /// `qp` with its `h`, from scratch, at most [`QpSettings::max_iter`].
+    #[inline(always)]
+    fn solve_all_rows(
+        &self,
+        qp: &DenseQpOf<NV, NC>,
+        rows: &mut RowNormsOf<NC>,
+        prefer: &[bool],
+    ) -> QpSolutionOf<NV, NC> {
+        let nc = qp.h.shape_generic().0;
         let excluded = OVector::<bool, NC>::from_element_generic(nc, U1, false);
         let max_iter = self.settings.max_iter;
         if self.proximal() {
-            return self.solve_proximal(qp, &qp.h, excluded, &mut rows, (), prefer, max_iter);
+            return self.solve_proximal(qp, &qp.h, excluded, rows, (), prefer, max_iter);
         }
         let mut carry = Carry::scratch(self);
         self.solve_with(
@@ -753,7 +749,7 @@ where
             &qp.q,
             &qp.h,
             excluded,
-            &mut rows,
+            rows,
             (),
             prefer,
             max_iter,
