@@ -182,23 +182,28 @@ fn study_run(family: &str, seed: u64, delta: &str, rays: &str) -> ldcbf_sim::rep
     summarize(&run(&sc, options).unwrap())
 }
 
-/// Needle class: `crowded` seed 174, a 2.08 degree sliver pointing at the
-/// robot on its way, met at both deltas with 0.25 degree between rays (1440
-/// rays), which `ldcbf_sim::sense::detect` requires for it (docs/safety.md,
-/// "Thin tips and the ray spacing"; with 1 degree its tip hides 0.93 of its
-/// range between two rays and the body touches it).
+/// Needle class: `crowded` seed 174, a 0.73 m sliver of 2.08 degrees whose
+/// tip points at the robot on its way, met at both deltas with the SPEC's 1
+/// degree between rays (360) and with 0.25 degree (1440). With 1 degree the
+/// needle is hit by one to three rays a scan, close to its tip, but its
+/// cells had been cleared by the rays beside it and one hit a scan left them
+/// free: the body touched it (-27 mm at delta = 0.05). A hit now makes its
+/// cell occupied whatever misses came before (`lidar.map.hit_overrides_misses`,
+/// docs/safety.md, "A hit is an obstacle now").
 #[test]
 #[cfg_attr(
     debug_assertions,
     ignore = "release only: cargo test --release -p ldcbf-sim --test sim_unknown_maps"
 )]
 fn the_crowded_174_needle_is_seen_in_time() {
-    for delta in ["0.05", "0.0"] {
-        let s = study_run("crowded", 174, delta, "1440");
-        assert!(
-            s.success && !s.collision && !s.foot_collision,
-            "delta {delta}: {s:#?}"
-        );
+    for rays in ["360", "1440"] {
+        for delta in ["0.05", "0.0"] {
+            let s = study_run("crowded", 174, delta, rays);
+            assert!(
+                s.success && !s.collision && !s.foot_collision,
+                "{rays} rays, delta {delta}: {s:#?}"
+            );
+        }
     }
 }
 

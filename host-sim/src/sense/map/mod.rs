@@ -22,6 +22,20 @@
 //! hit; a ray that hit nothing gives a miss to every cell up to `range`. A cell
 //! gets at most one update per scan, and a hit wins over a miss of the same
 //! scan (a thin obstacle between two rays is not erased by its neighbours).
+//! With `hit_overrides_misses` (the default) a hit also wins over the misses
+//! of earlier scans: the cell of a hit is occupied after the scan (its
+//! log-odds at least one hit's) however often rays passed through it before.
+//! A cell is 2.5 cm wide and a ray proves free only its own line through
+//! it: a needle's tip or a thin wall seen at a grazing angle fills a sliver
+//! of its cells, rays beside it clear them scan after scan, and the hits,
+//! which slide along the object as the robot walks, each land in a cell
+//! with many misses, which one hit (`+logit(p_hit)` against a clamped
+//! `logit(clamp_min)`) never turned occupied: the needle of `crowded` seed
+//! 174 was hit in nearly every scan and stayed free in the map until the
+//! body touched it. Nav2's obstacle layer does the same (the clearing
+//! observations are ray-traced first, then every point of the marking
+//! observations sets its cell lethal). Later misses clear the cell as
+//! before (three scans from one hit).
 //! [`OccupancyMap::update_scan`] takes each ray's marked point and free
 //! length instead: the simulator gives it those of the face fitted to each
 //! ray's neighbours ([`crate::sense::faces`]), which let a ray clear up to

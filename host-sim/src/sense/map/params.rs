@@ -39,6 +39,21 @@ pub struct MapParams {
     /// speed cap lets the robot stop inside the space seen free along its
     /// planned way (default false: docs/safety.md gives its measured cost).
     pub capture_speed_limit: bool,
+    /// A hit makes its cell occupied whatever misses the cell had before
+    /// (its log-odds becomes at least one hit's, `logit(p_hit)`), as Nav2's
+    /// obstacle layer marks a cell lethal for every point of the current
+    /// scan, unless a cell within `hit_noise_band` of it is occupied already
+    /// (the hit may then be a noise hit of that obstacle's face). A miss
+    /// proves free only its ray's line through a cell, so the misses of rays
+    /// beside a thin obstacle (a needle's tip, narrower than a cell) do not
+    /// outvote the ray that hits it (default true; docs/safety.md, "A hit is
+    /// an obstacle now").
+    pub hit_overrides_misses: bool,
+    /// With `hit_overrides_misses`: a hit with an occupied cell within this
+    /// many metres (rounded up to whole cells, along each axis) counts as
+    /// usual (m; default 0.03, three times the default LiDAR's
+    /// `noise_sigma`: a noise hit lands within it of its face).
+    pub hit_noise_band: f64,
 }
 
 impl Default for MapParams {
@@ -55,6 +70,8 @@ impl Default for MapParams {
             decay: 0.0,
             unknown_radius: 1.0,
             capture_speed_limit: false,
+            hit_overrides_misses: true,
+            hit_noise_band: 0.03,
         }
     }
 }
@@ -95,6 +112,12 @@ impl MapParams {
             return Err(SettingError::new(
                 "map.unknown_radius",
                 "must be finite and >= 0",
+            ));
+        }
+        if !(self.hit_noise_band.is_finite() && (0.0..=1.0).contains(&self.hit_noise_band)) {
+            return Err(SettingError::new(
+                "map.hit_noise_band",
+                "must be in [0, 1] m",
             ));
         }
         Ok(())

@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::sense::{Lidar, LidarParams, free_tolerance};
-use crate::world::square;
+use crate::world::{Polygon, square};
 
 fn v(x: f64, y: f64) -> Vector2<f64> {
     Vector2::new(x, y)
@@ -364,4 +364,79 @@ fn at_its_bound_the_map_keeps_its_box_or_grows_exactly() {
         ..MapParams::default()
     };
     assert_eq!(bad.validate().unwrap_err().field, "map.max_cells");
+}
+
+/// `hit_overrides_misses`: a cell cleared to the clamp by many scans is
+/// occupied after one scan that hits it (without the rule one hit leaves it
+/// free), and three scans of misses clear it again.
+#[test]
+fn a_hit_is_occupied_whatever_misses_came_before() {
+    for overrides in [true, false] {
+        let mut m = map(MapParams {
+            resolution: 0.1,
+            hit_overrides_misses: overrides,
+            ..MapParams::default()
+        });
+        let o = v(0.05, 0.05);
+        let cell = v(1.05, 0.05);
+        // Ten scans whose ray 0 passes through the cell to a wall at 1.85 m.
+        let far = [Some(v(1.85, 0.05)), None, None, None];
+        for _ in 0..10 {
+            m.update(o, 0.0, &far, 2.0, 0.03, 0.0);
+        }
+        let (i, j) = m.cell_of(cell).unwrap();
+        assert!(m.log_odds(i, j) <= logit(0.1192) + 1e-6, "clamped free");
+        // One scan hits something in it.
+        m.update(o, 0.0, &[Some(cell), None, None, None], 2.0, 0.03, 0.0);
+        let expect = if overrides {
+            CellState::Occupied
+        } else {
+            CellState::Free
+        };
+        assert_eq!(m.state_at(cell), expect, "overrides = {overrides}");
+        if overrides {
+            assert!((m.log_odds(i, j) - logit(0.7)).abs() < 1e-6);
+            for scans in 1..=3 {
+                m.update(o, 0.0, &far, 2.0, 0.03, 0.0);
+                let want = if scans < 3 {
+                    CellState::Occupied
+                } else {
+                    CellState::Free
+                };
+                assert_eq!(m.state_at(cell), want, "after {scans} misses");
+            }
+        }
+    }
+}
+
+/// The exception of `hit_overrides_misses`: a hit within `hit_noise_band`
+/// of an occupied cell (a noise hit in front of a wall's face) counts as
+/// usual, so a cell cleared to the clamp stays free after it.
+#[test]
+fn a_hit_next_to_an_occupied_cell_counts_as_usual() {
+    let mut m = map(MapParams {
+        resolution: 0.025,
+        ..MapParams::default()
+    });
+    let o = v(0.0125, 0.0125);
+    // A wall cell at x = 1.0125 (hit in three scans), and the cell two in
+    // front of it cleared to the clamp by rays ending at the wall.
+    let wall = [Some(v(1.0125, 0.0125)), None, None, None];
+    for _ in 0..10 {
+        m.update(o, 0.0, &wall, 2.0, 0.03, 0.0);
+    }
+    let ghost = v(0.9625, 0.0125);
+    assert_eq!(m.state_at(ghost), CellState::Free);
+    // A noise hit lands in it (3 cm band = 2 cells): it stays free.
+    m.update(o, 0.0, &[Some(ghost), None, None, None], 2.0, 0.03, 0.0);
+    assert_eq!(m.state_at(ghost), CellState::Free);
+    // Three cells in front, beyond the band: the hit is an obstacle.
+    let far = v(0.9375, 0.0125);
+    m.update(o, 0.0, &[Some(far), None, None, None], 2.0, 0.03, 0.0);
+    assert_eq!(m.state_at(far), CellState::Occupied);
+    let bad = MapParams {
+        hit_noise_band: -0.1,
+        ..MapParams::default()
+    };
+    assert_eq!(bad.validate().unwrap_err().field, "map.hit_noise_band");
 }

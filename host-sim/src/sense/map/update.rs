@@ -78,7 +78,14 @@ impl OccupancyMap {
                 let k = j * self.width + i;
                 if self.stamp[k] != scan {
                     self.stamp[k] = scan;
-                    self.log_odds[k] = (self.log_odds[k] + self.hit).clamp(self.lo, self.hi);
+                    // The misses before are of other lines through the
+                    // cell (`hit_overrides_misses`, module docs).
+                    let before = if self.params.hit_overrides_misses && !self.near_occupied(i, j) {
+                        self.log_odds[k].max(0.0)
+                    } else {
+                        self.log_odds[k]
+                    };
+                    self.log_odds[k] = (before + self.hit).clamp(self.lo, self.hi);
                 }
             }
         }
@@ -95,6 +102,16 @@ impl OccupancyMap {
                 });
             }
         }
+    }
+
+    /// Whether a cell other than `(i, j)` within `hit_noise_band` of it
+    /// (whole cells along each axis) is occupied.
+    fn near_occupied(&self, i: usize, j: usize) -> bool {
+        let reach = (self.params.hit_noise_band / self.resolution).ceil() as usize;
+        let (i0, i1) = (i.saturating_sub(reach), (i + reach).min(self.width - 1));
+        let (j0, j1) = (j.saturating_sub(reach), (j + reach).min(self.height - 1));
+        (j0..=j1)
+            .any(|b| (i0..=i1).any(|a| (a, b) != (i, j) && self.log_odds[b * self.width + a] > 0.0))
     }
 
     /// Clears the occupied cells whose centre is within `margin` (m) of
