@@ -26,9 +26,8 @@
 //! certificate an infeasible probe returns, may differ. The drops made when
 //! resuming count as iterations.
 //!
-//! [`Carry`] is also the storage of the factor of every other solve
-//! (`DualActiveSetOf::solve_with`), which then starts from scratch: one
-//! compiled copy of the iteration serves both.
+//! A single solve (`solve`, `solve_prepared`, `solve_bounded`) keeps its
+//! factor in its own frame instead (`qp/store.rs`).
 
 use nalgebra::allocator::Allocator;
 use nalgebra::{Const, DefaultAllocator, Dim, OMatrix, OVector, U1};
@@ -131,12 +130,7 @@ where
                 self.R.fill(0.0);
             }
             self.pristine = false;
-            // Unconstrained minimiser x = -J0 J0' q = -L^-T L^-1 q.
-            let mut x = solver.linvt_mul(solver.linv_mul(q.as_slice()).as_slice());
-            for v in x.as_mut_slice() {
-                *v = -*v;
-            }
-            return Ok((x, 0));
+            return Ok((solver.unconstrained_minimiser(q), 0));
         }
         // Kept rows this solve leaves out are dropped first.
         let kept = &mut self.kept;

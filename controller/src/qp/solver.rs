@@ -218,6 +218,17 @@ where
         0.5 * xhx + dot(q, x)
     }
 
+    /// The unconstrained minimiser `x = -H^-1 q = -L^-T L^-1 q`, where every
+    /// solve from scratch starts.
+    #[inline(always)]
+    pub(super) fn unconstrained_minimiser(&self, q: &OVector<f64, NV>) -> OVector<f64, NV> {
+        let mut x = self.linvt_mul(self.linv_mul(q.as_slice()).as_slice());
+        for v in x.as_mut_slice() {
+            *v = -*v;
+        }
+        x
+    }
+
     /// `L^-1 g` (`= J0' g`) as column axpys (no reductions);
     /// `NV` products when `H` is diagonal. Entries of `g` beyond `NV` are
     /// not read; a shorter `g` gives 0.
