@@ -85,7 +85,7 @@ where
         DefaultAllocator: QpAllocator<NV, NC>,
     {
         let nv = solver.nv();
-        (solver.Linv.transpose(), OMatrix::zeros_generic(nv, nv))
+        (solver.J0.clone(), OMatrix::zeros_generic(nv, nv))
     }
 
     #[inline(always)]
