@@ -106,6 +106,7 @@ mod settings;
 mod solve;
 mod solver;
 mod spans;
+mod store;
 pub use backend::{OwnSolver, QpBackend};
 #[cfg(feature = "alloc")]
 pub use bounds::SimpleBoundsDyn;

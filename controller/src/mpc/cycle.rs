@@ -295,10 +295,11 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize, B: QpB
             core,
             memory,
             work,
+            probes,
             backend,
         } = self;
         match core.assemble(input, obstacles, work) {
-            Ok(()) => core.solve_assembled(memory, input, work, backend),
+            Ok(()) => core.solve_assembled(memory, input, work, probes, backend),
             Err(e) => hold(memory, input, e),
         }
     }
@@ -524,6 +525,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         memory: &mut Memory<NV>,
         input: &CycleInput<'_, V>,
         work: &mut Assembly<N, NV, NC, NOBS>,
+        reprobe: &mut Reprobe<NV, NC>,
         backend: &mut B,
     ) -> CycleOutput<N> {
         // Shift of the horizon since the last plan: a new step began when the
@@ -532,7 +534,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         let (prefer, warm) = self.warm_start(memory, shift, work);
         // The probes of an infeasible cycle's relaxation continue from this
         // solve's factor (`reprobe`).
-        let mut reprobe = Reprobe::for_solver(&self.solver, &work.qp);
+        reprobe.restart(&self.solver, &work.qp);
         let sol = backend.solve_reprobe(
             &self.solver,
             &work.qp,
@@ -540,7 +542,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             &[true; NC],
             &prefer,
             self.solver.settings().max_iter,
-            &mut reprobe,
+            reprobe,
         );
         let mut info = self.info(&sol, work, warm);
         // `z`: this cycle's decision vector (positions); `feet`: set for the
@@ -552,7 +554,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             }
             _ => {
                 memory.n_active = 0;
-                self.recover(memory, backend, work, &sol, shift, &mut info, &mut reprobe)
+                self.recover(memory, backend, work, &sol, shift, &mut info, reprobe)
             }
         };
         let pred = &work.prediction;

@@ -45,26 +45,34 @@ where
         DefaultAllocator: Allocator<NV> + Allocator<NV, NC>,
     {
         let nc = qp.h.shape_generic().0;
-        let m = qp.m.min(nc.value());
         let mut rows = RowNormsOf {
             norm2: OVector::zeros_generic(nc, U1),
             inv_hnorm: OVector::zeros_generic(nc, U1),
-            m,
+            m: qp.m.min(nc.value()),
             finite: true,
         };
-        for (g, n2) in columns(qp.gt.as_slice(), qp.gt.nrows())
-            .zip(rows.norm2.as_mut_slice().iter_mut())
-            .take(m)
-        {
-            *n2 = dot_d::<NV>(g, g);
-            // A NaN or infinite entry makes `n2` non-finite, and so does a row
-            // whose squared norm overflows (|g| > ~1e154): both are numerical
-            // errors.
-            if !n2.is_finite() {
-                rows.finite = false;
-            }
-        }
+        rows.finite = squared_norms(qp, rows.norm2.as_mut_slice(), rows.m);
         rows
+    }
+
+    /// [`RowNormsOf::euclidean`] in place, in storage of `qp`'s capacity
+    /// (the controller's, kept from cycle to cycle): no new storage moved
+    /// into place.
+    pub(super) fn set_euclidean<NV: Dim>(&mut self, qp: &DenseQpOf<NV, NC>)
+    where
+        DefaultAllocator: Allocator<NV> + Allocator<NV, NC>,
+    {
+        let nc = qp.h.shape_generic().0.value();
+        let m = qp.m.min(nc);
+        let sized = self.norm2.len() == nc && self.inv_hnorm.len() == nc;
+        self.inv_hnorm.as_mut_slice().fill(0.0);
+        let norm2 = self.norm2.as_mut_slice();
+        if let Some(past) = norm2.get_mut(m..) {
+            past.fill(0.0);
+        }
+        let finite = squared_norms(qp, norm2, m);
+        self.m = m;
+        self.finite = sized && finite;
     }
 
     /// [`RowNormsOf::euclidean`] with `|g_i|^2 = 1` for the bound rows of
@@ -152,4 +160,27 @@ where
         let hn = crate::linalg::sqrt(dot_d::<NV>(col, col));
         if hn > 0.0 { 1.0 / hn } else { 1.0 }
     }
+}
+
+/// `norm2[i] = |g_i|^2` for the rows `i < m` of `qp`; whether all are
+/// finite.
+#[inline(always)]
+fn squared_norms<NV: Dim, NC: Dim>(qp: &DenseQpOf<NV, NC>, norm2: &mut [f64], m: usize) -> bool
+where
+    DefaultAllocator: Allocator<NV> + Allocator<NC> + Allocator<NV, NC>,
+{
+    let mut finite = true;
+    for (g, n2) in columns(qp.gt.as_slice(), qp.gt.nrows())
+        .zip(norm2.iter_mut())
+        .take(m)
+    {
+        *n2 = dot_d::<NV>(g, g);
+        // A NaN or infinite entry makes `n2` non-finite, and so does a row
+        // whose squared norm overflows (|g| > ~1e154): both are numerical
+        // errors.
+        if !n2.is_finite() {
+            finite = false;
+        }
+    }
+    finite
 }

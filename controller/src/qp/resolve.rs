@@ -34,6 +34,7 @@ use crate::linalg::{column, columns, dot_d};
 
 /// The active rows a proximal solve ended with (the order of the factor's
 /// columns), `nact` of them, the first `neq` equality rows.
+#[derive(Clone, Debug)]
 pub(super) struct Kept<NV: Dim>
 where
     DefaultAllocator: nalgebra::allocator::Allocator<NV>,

@@ -8,8 +8,8 @@ use nalgebra::{DefaultAllocator, Dim, OVector, U1};
 
 use super::orthogonal::Orthogonal;
 use super::proximal::proximal_capable;
-use super::reprobe::Carry;
 use super::resolve::Resumed;
+use super::store::{Local, Store};
 use super::{
     DenseQpOf, DualActiveSetOf, QpAllocator, QpSolutionOf, QpStatus, ReprobeOf, RowNormsOf,
     SimpleBoundsOf, bounds,
@@ -72,9 +72,8 @@ where
         if self.proximal() {
             return self.solve_proximal(qp, &qp.h, excluded, &mut rows, codes, prefer, max_iter);
         }
-        let mut carry = Carry::fresh(self.nv());
         self.solve_with(
-            qp, &qp.q, &qp.h, excluded, &mut rows, codes, prefer, max_iter, &mut carry,
+            qp, &qp.q, &qp.h, excluded, &mut rows, codes, prefer, max_iter, Local,
         )
     }
 
@@ -137,7 +136,6 @@ where
         if self.proximal() {
             return self.solve_proximal(qp, &qp.h, excluded, rows, (), prefer, max_iter);
         }
-        let mut carry = Carry::scratch(self);
         self.solve_with(
             qp,
             &qp.q,
@@ -147,7 +145,7 @@ where
             (),
             prefer,
             max_iter,
-            &mut carry,
+            Local,
         )
     }
 
@@ -159,7 +157,7 @@ where
     /// for none), the factor in `carry` (from scratch, or from the active
     /// rows of the solve before, `qp/reprobe.rs`; left there for the next).
     #[allow(clippy::too_many_arguments)]
-    pub(super) fn solve_with<Bd: bounds::BoundRows>(
+    pub(super) fn solve_with<Bd: bounds::BoundRows, S: Store<NV>>(
         &self,
         qp: &DenseQpOf<NV, NC>,
         qv: &OVector<f64, NV>,
@@ -169,21 +167,21 @@ where
         bounds: Bd,
         prefer: &[bool],
         max_iter: u32,
-        carry: &mut Carry<NV>,
+        mut store: S,
     ) -> QpSolutionOf<NV, NC> {
         solve_start!(self, qp, qv, hv, excluded, norms => nv, nc, m, _q, tol, me, blocked);
         let pref = active_set::marks(nc, prefer);
         // Whether any row is marked (on hosts; on bare-metal targets the
         // iteration's own test of the marks alone, which is shorter there).
         let marked = cfg!(target_os = "none") || prefer.iter().any(|&p| p);
-        // From scratch, or from the factor `carry` holds (`qp/reprobe.rs`).
-        let (x, resumed_drops) = match carry.start(self, qv, hv, &mut blocked, me, max_iter) {
+        // From scratch, or from the factor a carry holds (`qp/store.rs`).
+        let mut own = store.own(self);
+        let start = store.start(&mut own, self, qv, hv, &mut blocked, me, max_iter);
+        let (x, resumed_drops) = match start {
             Ok(start) => start,
             Err(status) => return active_set::stopped(nv, nc, status),
         };
-        let Carry {
-            J, R, kept, valid, ..
-        } = &mut *carry;
+        let (J, R, kept) = store.parts(&mut own);
         let mut d = OVector::<f64, NV>::zeros_generic(nv, U1);
         let mut factor = Resumed {
             inner: Orthogonal {
@@ -203,7 +201,7 @@ where
                 reorder: false,
                 bounds,
             },
-            kept: if *valid { Some(&*kept) } else { None },
+            kept,
         };
         // Rows left out are never scanned: they start (and stay) blocked as if
         // active, but never enter the active list.
@@ -221,14 +219,16 @@ where
                 }
             };
         }
-        // On hosts, from 16 variables on, a start from scratch (every solve
-        // but a resumed probe) iterates on the plain factor: no resume hook
-        // and no test for spans in its scan (3 % of `solve` on LIPMWALK); the
-        // same bits. Smaller sizes (no spans compiled in; a second copy of
-        // the iteration cost the N = 3 step 2 %) and bare-metal targets: one
-        // compiled iteration.
+        // A single solve iterates on the plain factor (nothing to resume, no
+        // spans). A probe does too on hosts from 16 variables on when it
+        // starts from scratch (the controller's first solve of a cycle): no
+        // resume hook and no test for spans in its scan; the same bits
+        // (iterating on the resumed factor instead: `step` +1.4 % instructions
+        // at N = 10, +0.5 % at N = 20). Smaller sizes (no spans compiled in; a
+        // second copy of the iteration cost the N = 3 step 2 %) and bare-metal
+        // targets: one compiled iteration per instance.
         let plain = cfg!(not(target_os = "none")) && proximal_capable::<NV>();
-        let it = if plain && factor.kept.is_none() {
+        let it = if !S::RESUMES || (plain && factor.kept.is_none()) {
             iterate!(&mut factor.inner)
         } else {
             iterate!(&mut factor)
@@ -236,10 +236,10 @@ where
         let x = factor.inner.x;
         let Some(it) = it else {
             // The orthogonal factor never asks for a restart.
-            carry.valid = false;
+            store.keep(None);
             return active_set::stopped(nv, nc, QpStatus::NumericalError);
         };
-        carry.keep(&it);
+        store.keep(Some(&it));
         let objective = self.objective(&qp.q, &x);
         let mut sol = it.solution(nc, x, objective, |_| 1.0);
         sol.iterations = sol.iterations.saturating_add(resumed_drops);

@@ -23,8 +23,11 @@ where
 {
     pub(super) H: OMatrix<f64, NV, NV>,
     /// `L^-1` with `H = L L'`: lower triangular, entries above the diagonal
-    /// exactly zero. Its transpose `J0 = L^-T` starts `J` in every solve.
+    /// exactly zero.
     pub(super) Linv: OMatrix<f64, NV, NV>,
+    /// Its transpose `J0 = L^-T`, where `J` starts in every solve from
+    /// scratch: copied (one `memcpy`), not transposed, by each.
+    pub(super) J0: OMatrix<f64, NV, NV>,
     /// `L^-1` (so `H`) is diagonal: products with `L^-1` and `L^-T` cost `NV`
     /// instead of `NV^2`.
     pub(super) linv_diag: bool,
@@ -56,6 +59,7 @@ impl<const NV: usize, const NC: usize> DualActiveSetOf<Const<NV>, Const<NC>> {
     pub const PLACEHOLDER: Self = DualActiveSetOf {
         H: SMatrix::from_array_storage(ArrayStorage([[0.0; NV]; NV])),
         Linv: SMatrix::from_array_storage(ArrayStorage([[0.0; NV]; NV])),
+        J0: SMatrix::from_array_storage(ArrayStorage([[0.0; NV]; NV])),
         linv_diag: false,
         settings: QpSettings {
             tol_primal: 0.0,
@@ -122,19 +126,20 @@ where
         {
             return Err(HessianError::NotPositiveDefinite);
         }
-        // L^-1 with exact zeros above the diagonal.
-        let mut Linv = J0.transpose();
-        for (j, col) in columns_mut(Linv.as_mut_slice(), n).enumerate() {
-            for v in col.iter_mut().take(j) {
+        // J0 = L^-T with exact zeros below the diagonal, L^-1 its transpose.
+        for (j, col) in columns_mut(J0.as_mut_slice(), n).enumerate() {
+            for v in col.iter_mut().skip(j + 1) {
                 *v = 0.0;
             }
         }
+        let Linv = J0.transpose();
         let linv_diag = columns(Linv.as_slice(), n)
             .enumerate()
             .all(|(j, col)| col.iter().enumerate().all(|(k, &v)| k == j || v == 0.0));
         Ok(DualActiveSetOf {
             H: H.clone(),
             Linv,
+            J0,
             linv_diag,
             settings,
             prox,
@@ -216,6 +221,17 @@ where
             xhx += xj * dot(col, x);
         }
         0.5 * xhx + dot(q, x)
+    }
+
+    /// The unconstrained minimiser `x = -H^-1 q = -L^-T L^-1 q`, where every
+    /// solve from scratch starts.
+    #[inline(always)]
+    pub(super) fn unconstrained_minimiser(&self, q: &OVector<f64, NV>) -> OVector<f64, NV> {
+        let mut x = self.linvt_mul(self.linv_mul(q.as_slice()).as_slice());
+        for v in x.as_mut_slice() {
+            *v = -*v;
+        }
+        x
     }
 
     /// `L^-1 g` (`= J0' g`) as column axpys (no reductions);
