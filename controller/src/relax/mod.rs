@@ -282,7 +282,11 @@ pub(crate) struct Params<'a, const NC: usize> {
     /// and that is the reported `eps_gait`. It saves that search's solves
     /// (one to three) on the cycles where a person walks into the robot; the
     /// cost, which then pulls away from the person, chooses the plan.
-    pub give_way: bool,
+    /// `Some(marks)`: the first probe starts from scratch (the give-way goal
+    /// changed the cost, so the nominal solve's factor is a poor start),
+    /// adding the rows `marks` first (the warm start: the rows active at the
+    /// last cycle's relaxed plan).
+    pub give_way: Option<&'a [bool; NC]>,
 }
 
 /// Runs the priority scheme on the nominal QP `qp` (rows identified by `rows`;
@@ -325,6 +329,7 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         confined: false,
         capture,
         reprobe,
+        prefer: give_way.unwrap_or(&[false; NC]),
     };
     if let Some(y) = certificate {
         // The nominal QP is the first probe's problem (stage 1 at no
@@ -340,7 +345,12 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
             ctx.support = [false; NC];
         }
     }
-    let out = run_stages(&mut ctx, gait_cap, give_way);
+    if give_way.is_some() {
+        // The give-way goal changed the cost: the factor of the nominal
+        // solve's active rows is a poor start (docs/fallback.md).
+        ctx.reprobe.restart();
+    }
+    let out = run_stages(&mut ctx, gait_cap, give_way.is_some());
     out.map_err(|kind| RelaxError {
         kind,
         iterations: ctx.used,

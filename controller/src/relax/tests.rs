@@ -20,7 +20,7 @@ fn params<'a, const NC: usize>(
         gait_cap,
         capture,
         certificate,
-        give_way: false,
+        give_way: None,
     }
 }
 
