@@ -153,10 +153,14 @@
 //! first), as DAQP's parametric hot start: the minimiser on those rows for
 //! the new right-hand sides, the rows with negative multipliers (and those
 //! the probe leaves out) dropped, then the dual iteration as usual. A probe
-//! whose bound moved a little takes 0 to 2 iterations instead of rebuilding
-//! its active set from the unconstrained minimiser (6 to 14 on the
-//! firmware's walk-into cycles); the optimum is the same, the rounding and
-//! which certificate an infeasible probe returns may differ.
+//! whose bound moved a little takes 0 to 3 iterations instead of rebuilding
+//! its active set from the unconstrained minimiser; the optimum is the same,
+//! the rounding and which certificate an infeasible probe returns may
+//! differ. On a cycle that gives way to a person ([`Params::give_way`]) the
+//! cost is another one than the nominal solve's, whose active rows are then
+//! a poor start: the first probe starts from scratch, adding the marked rows
+//! (the warm start: the rows active at the last cycle's relaxed plan) first
+//! among those it finds violated (`docs/fallback.md`).
 //!
 //! On the firmware's recorded infeasible cycles (all stage 1) this is two
 //! solves per cycle, the nominal one included: the nominal certificate proves
