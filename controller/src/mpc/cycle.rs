@@ -549,12 +549,20 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         // fallbacks, which are defined by their footsteps.
         let (z, fallback_feet, status) = match sol.status {
             QpStatus::Solved => {
-                remember_active(memory, &sol, work);
+                remember_active(memory, sol.active_set(), work);
                 (sol.x, None, CycleStatus::Optimal)
             }
             _ => {
                 memory.n_active = 0;
-                self.recover(memory, backend, work, &sol, shift, &mut info, reprobe)
+                self.recover(
+                    memory,
+                    backend,
+                    work,
+                    (&sol, &prefer),
+                    shift,
+                    &mut info,
+                    reprobe,
+                )
             }
         };
         let pred = &work.prediction;
@@ -687,7 +695,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         memory: &mut Memory<NV>,
         backend: &mut B,
         work: &mut Assembly<N, NV, NC, NOBS>,
-        sol: &QpSolution<NV, NC>,
+        (sol, prefer): (&QpSolution<NV, NC>, &[bool; NC]),
         shift: usize,
         info: &mut CycleInfo,
         reprobe: &mut Reprobe<NV, NC>,
@@ -700,12 +708,14 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         // A person in the conflict: the relaxation plans away from them
         // (`give_way`); the nominal cost is restored after it.
         let nominal_q = work.qp.q;
-        let mut give_way = false;
+        let mut give_way = None;
         if sol.status == QpStatus::Infeasible
             && let Some(goal) = self.give_way_goal(work, &sol.lambda)
         {
             work.qp.q = self.model.gradient::<NV>(&goal).0;
-            give_way = true;
+            // Its first probe starts from scratch, adding the rows of the
+            // warm start (`prefer`) first.
+            give_way = Some(prefer);
         }
         let relaxed = if sol.status == QpStatus::Infeasible {
             relax::relax(
@@ -737,6 +747,12 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         work.qp.q = nominal_q;
         match relaxed {
             Ok(r) => {
+                if give_way.is_some() {
+                    // The next cycle's warm start: the rows active at this
+                    // relaxed plan's solve, for its nominal solve and, when
+                    // it gives way too, its first probe.
+                    remember_active(memory, reprobe.active(), work);
+                }
                 info.iterations = info.iterations.saturating_add(r.iterations);
                 info.relax_gait = r.eps_gait;
                 info.relax_safety = r.eps_safety;
@@ -781,13 +797,15 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
     }
 }
 
+/// Remembers the rows `active` (indices into `work`'s rows) as the next
+/// cycle's warm start.
 fn remember_active<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>(
     memory: &mut Memory<NV>,
-    sol: &QpSolution<NV, NC>,
+    active: &[u16],
     work: &Assembly<N, NV, NC, NOBS>,
 ) {
-    let n = sol.n_active.min(NV);
-    for (dst, &row) in memory.active.iter_mut().zip(sol.active_set()) {
+    let n = active.len().min(NV);
+    for (dst, &row) in memory.active.iter_mut().zip(active) {
         *dst = work.rows.get(row as usize).copied().unwrap_or_default();
     }
     memory.n_active = n;

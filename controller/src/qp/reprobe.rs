@@ -284,6 +284,22 @@ where
         self.carry.restart(solver);
     }
 
+    /// The rows (indices into the QP's rows) the last probe ended with
+    /// active: its optimal active set, or the rows active at its Farkas
+    /// certificate; empty when no probe left a factor (none ran, or the last
+    /// one stopped on its budget or a numerical error).
+    pub fn active(&self) -> &[u16] {
+        let kept = &self.carry.kept;
+        let n = if self.carry.valid { kept.nact } else { 0 };
+        kept.act.as_slice().get(..n).unwrap_or(&[])
+    }
+
+    /// Forgets the factor of the last probe: the next one starts from
+    /// scratch (the unconstrained minimiser), with the row norms kept.
+    pub fn forget(&mut self) {
+        self.carry.valid = false;
+    }
+
     /// The Euclidean norm `|g_i|` of row `i` (0 past the rows).
     pub(crate) fn norm(&self, i: usize) -> f64 {
         // (0 past the rows: `RowNormsOf::euclidean` leaves them so.)
