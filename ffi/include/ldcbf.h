@@ -51,7 +51,7 @@
  * aarch64 and thumbv7em in CI; [`ldcbf_controller_size`] gives the exact
  * figure of this build).
  */
-#define LDCBF_CONTROLLER_SIZE 40960
+#define LDCBF_CONTROLLER_SIZE 45056
 
 /**
  * Alignment, in bytes, the controller's storage needs (at least the

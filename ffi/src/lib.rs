@@ -118,7 +118,7 @@ pub const LDCBF_MAX_POINTS: usize = 1024;
 /// (checked at compile time on every target the library is built for: x86-64,
 /// aarch64 and thumbv7em in CI; [`ldcbf_controller_size`] gives the exact
 /// figure of this build).
-pub const LDCBF_CONTROLLER_SIZE: usize = 40_960;
+pub const LDCBF_CONTROLLER_SIZE: usize = 45_056;
 
 /// Alignment, in bytes, the controller's storage needs (at least the
 /// controller's alignment on every supported target;

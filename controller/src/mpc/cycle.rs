@@ -295,10 +295,11 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize, B: QpB
             core,
             memory,
             work,
+            probes,
             backend,
         } = self;
         match core.assemble(input, obstacles, work) {
-            Ok(()) => core.solve_assembled(memory, input, work, backend),
+            Ok(()) => core.solve_assembled(memory, input, work, probes, backend),
             Err(e) => hold(memory, input, e),
         }
     }
@@ -524,6 +525,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         memory: &mut Memory<NV>,
         input: &CycleInput<'_, V>,
         work: &mut Assembly<N, NV, NC, NOBS>,
+        reprobe: &mut Reprobe<NV, NC>,
         backend: &mut B,
     ) -> CycleOutput<N> {
         // Shift of the horizon since the last plan: a new step began when the
@@ -532,7 +534,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         let (prefer, warm) = self.warm_start(memory, shift, work);
         // The probes of an infeasible cycle's relaxation continue from this
         // solve's factor (`reprobe`).
-        let mut reprobe = Reprobe::for_solver(&self.solver, &work.qp);
+        reprobe.restart(&self.solver, &work.qp);
         let sol = backend.solve_reprobe(
             &self.solver,
             &work.qp,
@@ -540,19 +542,27 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             &[true; NC],
             &prefer,
             self.solver.settings().max_iter,
-            &mut reprobe,
+            reprobe,
         );
         let mut info = self.info(&sol, work, warm);
         // `z`: this cycle's decision vector (positions); `feet`: set for the
         // fallbacks, which are defined by their footsteps.
         let (z, fallback_feet, status) = match sol.status {
             QpStatus::Solved => {
-                remember_active(memory, &sol, work);
+                remember_active(memory, sol.active_set(), work);
                 (sol.x, None, CycleStatus::Optimal)
             }
             _ => {
                 memory.n_active = 0;
-                self.recover(memory, backend, work, &sol, shift, &mut info, &mut reprobe)
+                self.recover(
+                    memory,
+                    backend,
+                    work,
+                    (&sol, &prefer),
+                    shift,
+                    &mut info,
+                    reprobe,
+                )
             }
         };
         let pred = &work.prediction;
@@ -685,7 +695,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         memory: &mut Memory<NV>,
         backend: &mut B,
         work: &mut Assembly<N, NV, NC, NOBS>,
-        sol: &QpSolution<NV, NC>,
+        (sol, prefer): (&QpSolution<NV, NC>, &[bool; NC]),
         shift: usize,
         info: &mut CycleInfo,
         reprobe: &mut Reprobe<NV, NC>,
@@ -698,12 +708,14 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         // A person in the conflict: the relaxation plans away from them
         // (`give_way`); the nominal cost is restored after it.
         let nominal_q = work.qp.q;
-        let mut give_way = false;
+        let mut give_way = None;
         if sol.status == QpStatus::Infeasible
             && let Some(goal) = self.give_way_goal(work, &sol.lambda)
         {
             work.qp.q = self.model.gradient::<NV>(&goal).0;
-            give_way = true;
+            // Its first probe starts from scratch, adding the rows of the
+            // warm start (`prefer`) first.
+            give_way = Some(prefer);
         }
         let relaxed = if sol.status == QpStatus::Infeasible {
             relax::relax(
@@ -735,6 +747,12 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         work.qp.q = nominal_q;
         match relaxed {
             Ok(r) => {
+                if give_way.is_some() {
+                    // The next cycle's warm start: the rows active at this
+                    // relaxed plan's solve, for its nominal solve and, when
+                    // it gives way too, its first probe.
+                    remember_active(memory, reprobe.active(), work);
+                }
                 info.iterations = info.iterations.saturating_add(r.iterations);
                 info.relax_gait = r.eps_gait;
                 info.relax_safety = r.eps_safety;
@@ -779,13 +797,15 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
     }
 }
 
+/// Remembers the rows `active` (indices into `work`'s rows) as the next
+/// cycle's warm start.
 fn remember_active<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>(
     memory: &mut Memory<NV>,
-    sol: &QpSolution<NV, NC>,
+    active: &[u16],
     work: &Assembly<N, NV, NC, NOBS>,
 ) {
-    let n = sol.n_active.min(NV);
-    for (dst, &row) in memory.active.iter_mut().zip(sol.active_set()) {
+    let n = active.len().min(NV);
+    for (dst, &row) in memory.active.iter_mut().zip(active) {
         *dst = work.rows.get(row as usize).copied().unwrap_or_default();
     }
     memory.n_active = n;

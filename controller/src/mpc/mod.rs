@@ -87,7 +87,7 @@ use nalgebra::{ArrayStorage, SVector, Vector2};
 
 use crate::constraints::{Condensed, RowId};
 use crate::lip::Lip;
-use crate::qp::{DualActiveSet, OwnSolver, QpBackend};
+use crate::qp::{DualActiveSet, OwnSolver, QpBackend, Reprobe};
 
 /// Row capacity needed for horizon `n`, `nobs` obstacles, with or without the
 /// foot-clearance rows: `8 n + n nobs (x2 with foot clearance)`.
@@ -145,6 +145,9 @@ pub struct Controller<
     core: Core<N, NV, NC>,
     memory: Memory<NV>,
     work: Assembly<N, NV, NC, NOBS>,
+    /// The row norms and the factor the cycle's solve and its relaxation's
+    /// probes share (`qp/reprobe.rs`), set in place every cycle.
+    probes: Reprobe<NV, NC>,
     backend: B,
 }
 
@@ -201,6 +204,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
         core: Core::UNCONFIGURED,
         memory: Memory::EMPTY,
         work: Assembly::EMPTY,
+        probes: Reprobe::EMPTY,
         backend: OwnSolver,
     };
 
@@ -234,6 +238,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize, B: QpB
             core: Core::UNCONFIGURED,
             memory: Memory::EMPTY,
             work: Assembly::EMPTY,
+            probes: Reprobe::EMPTY,
             backend,
         };
         controller.configure(config)?;

@@ -7,9 +7,10 @@
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
 use super::bounds::BoundRows;
+use super::proximal::proximal_capable;
 use super::resolve::back_substitute_by_columns;
 use super::spans::{Span, unpack};
-use super::{DualActiveSetOf, QpAllocator, ZERO_ROW2, proximal_capable};
+use super::{DualActiveSetOf, QpAllocator, ZERO_ROW2};
 use crate::active_set::{ActiveSetFactor, AddError};
 use crate::linalg::{
     column, column_mut, columns, columns_in, columns_in_mut, columns_mut, dot, dot_d, givens,

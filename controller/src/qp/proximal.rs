@@ -46,11 +46,10 @@
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector, U1};
 
 use super::bounds::BoundRows;
+use super::orthogonal::Orthogonal;
 use super::resolve::{Kept, ResolveStop, Resumed, resolve};
 use super::spans::row_spans;
-use super::{
-    DenseQpOf, DualActiveSetOf, HOT_START_MIN_NV, HessianError, Orthogonal, QpAllocator, RowNormsOf,
-};
+use super::{DenseQpOf, DualActiveSetOf, HOT_START_MIN_NV, HessianError, QpAllocator, RowNormsOf};
 use crate::active_set::{self, Iterate};
 use crate::linalg::{column_mut, copy};
 use crate::solution::{QpSolutionOf, QpStatus};

@@ -26,12 +26,13 @@
 //! certificate an infeasible probe returns, may differ. The drops made when
 //! resuming count as iterations.
 //!
-//! [`Carry`] is also the storage of the factor of every other solve
-//! (`DualActiveSetOf::solve_with`), which then starts from scratch: one
-//! compiled copy of the iteration serves both.
+//! A single solve (`solve`, `solve_prepared`, `solve_bounded`) keeps its
+//! factor in its own frame instead (`qp/store.rs`).
 
 use nalgebra::allocator::Allocator;
-use nalgebra::{Const, DefaultAllocator, Dim, OMatrix, OVector, U1};
+use nalgebra::{
+    ArrayStorage, Const, DefaultAllocator, Dim, OMatrix, OVector, SMatrix, SVector, U1,
+};
 
 use super::resolve::{Kept, ResolveStop, resolve};
 use super::{DenseQpOf, DualActiveSetOf, QpAllocator, RowNormsOf};
@@ -40,6 +41,7 @@ use crate::solution::{QpSolutionOf, QpStatus};
 
 /// The factor of a solve's active rows: storage for the solve, and what it
 /// leaves for the next one of the same QP's rows (module docs).
+#[derive(Clone, Debug)]
 pub(super) struct Carry<NV: Dim>
 where
     DefaultAllocator: Allocator<NV> + Allocator<NV, NV>,
@@ -77,7 +79,35 @@ where
         if cfg!(target_os = "none") {
             return Carry::fresh(solver.nv());
         }
-        Self::holding(solver.Linv.transpose(), true)
+        Self::holding(solver.J0.clone(), true)
+    }
+
+    /// [`Carry::scratch`] in place: the storage set to the start from
+    /// scratch of `solver`'s solves (on hosts `J = L^-T`, `R = 0`, written
+    /// where they are; on bare-metal targets left to the first solve, as
+    /// [`Carry::fresh`]), nothing kept.
+    pub(super) fn restart<NC: Dim>(&mut self, solver: &DualActiveSetOf<NV, NC>)
+    where
+        DefaultAllocator: QpAllocator<NV, NC>,
+    {
+        self.valid = false;
+        self.kept.nact = 0;
+        self.kept.neq = 0;
+        if cfg!(target_os = "none") {
+            self.pristine = false;
+            return;
+        }
+        if self.J.shape() != solver.J0.shape() {
+            // Storage of another size (run-time sizes): new storage.
+            *self = Carry::scratch(solver);
+            return;
+        }
+        // Slices (a `memcpy` and a `memset`), not nalgebra's entry loops.
+        for (j, &j0) in self.J.as_mut_slice().iter_mut().zip(solver.J0.as_slice()) {
+            *j = j0;
+        }
+        self.R.as_mut_slice().fill(0.0);
+        self.pristine = true;
     }
 
     /// `J`, `R = 0`, no kept rows; `pristine` as given.
@@ -127,16 +157,11 @@ where
         }
         if !self.valid {
             if !self.pristine {
-                self.J = solver.Linv.transpose();
+                self.J.clone_from(&solver.J0);
                 self.R.fill(0.0);
             }
             self.pristine = false;
-            // Unconstrained minimiser x = -J0 J0' q = -L^-T L^-1 q.
-            let mut x = solver.linvt_mul(solver.linv_mul(q.as_slice()).as_slice());
-            for v in x.as_mut_slice() {
-                *v = -*v;
-            }
-            return Ok((x, 0));
+            return Ok((solver.unconstrained_minimiser(q), 0));
         }
         // Kept rows this solve leaves out are dropped first.
         let kept = &mut self.kept;
@@ -185,6 +210,7 @@ where
 /// [`ReprobeOf::new`] and pass it to every
 /// [`DualActiveSetOf::solve_reprobe`] of that QP's `H` and rows `G` (`q`
 /// and `h` may differ from solve to solve).
+#[derive(Clone, Debug)]
 pub struct ReprobeOf<NV: Dim, NC: Dim>
 where
     DefaultAllocator: QpAllocator<NV, NC>,
@@ -197,6 +223,32 @@ where
 
 /// [`ReprobeOf`] with the sizes as constants (stack only, `no_std`).
 pub type Reprobe<const NV: usize, const NC: usize> = ReprobeOf<Const<NV>, Const<NC>>;
+
+impl<const NV: usize, const NC: usize> ReprobeOf<Const<NV>, Const<NC>> {
+    /// All storage zero, nothing carried, no rows: for `const` and `static`
+    /// initialisers (the controller's, set for each QP with
+    /// [`ReprobeOf::restart`]).
+    pub const EMPTY: Self = ReprobeOf {
+        norms: RowNormsOf {
+            norm2: SVector::from_array_storage(ArrayStorage([[0.0; NC]; 1])),
+            inv_hnorm: SVector::from_array_storage(ArrayStorage([[0.0; NC]; 1])),
+            m: 0,
+            finite: false,
+        },
+        carry: Carry {
+            J: SMatrix::from_array_storage(ArrayStorage([[0.0; NV]; NV])),
+            R: SMatrix::from_array_storage(ArrayStorage([[0.0; NV]; NV])),
+            kept: Kept {
+                act: SVector::from_array_storage(ArrayStorage([[0; NV]; 1])),
+                mult: SVector::from_array_storage(ArrayStorage([[0.0; NV]; 1])),
+                nact: 0,
+                neq: 0,
+            },
+            valid: false,
+            pristine: false,
+        },
+    };
+}
 
 impl<NV: Dim, NC: Dim> ReprobeOf<NV, NC>
 where
@@ -220,6 +272,32 @@ where
             norms: RowNormsOf::euclidean(qp),
             carry: Carry::scratch(solver),
         }
+    }
+
+    /// [`ReprobeOf::for_solver`] in place, for the probes of `qp`'s rows:
+    /// the storage of a `state` kept from one QP to the next (the
+    /// controller's, cycle to cycle) is written where it is, instead of a new
+    /// one built and moved into place (the factor alone is `2 NV^2` numbers).
+    /// `qp` must have the capacity `state` was built for.
+    pub fn restart(&mut self, solver: &DualActiveSetOf<NV, NC>, qp: &DenseQpOf<NV, NC>) {
+        self.norms.set_euclidean(qp);
+        self.carry.restart(solver);
+    }
+
+    /// The rows (indices into the QP's rows) the last probe ended with
+    /// active: its optimal active set, or the rows active at its Farkas
+    /// certificate; empty when no probe left a factor (none ran, or the last
+    /// one stopped on its budget or a numerical error).
+    pub fn active(&self) -> &[u16] {
+        let kept = &self.carry.kept;
+        let n = if self.carry.valid { kept.nact } else { 0 };
+        kept.act.as_slice().get(..n).unwrap_or(&[])
+    }
+
+    /// Forgets the factor of the last probe: the next one starts from
+    /// scratch (the unconstrained minimiser), with the row norms kept.
+    pub fn forget(&mut self) {
+        self.carry.valid = false;
     }
 
     /// The Euclidean norm `|g_i|` of row `i` (0 past the rows).

@@ -26,13 +26,15 @@ use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
 use super::bounds::BoundRows;
 use super::orthogonal::{Orthogonal, back_substitute, givens_drop, rate};
+use super::proximal::proximal_capable;
 use super::spans::unpack;
-use super::{QpAllocator, ZERO_ROW2, proximal_capable};
+use super::{QpAllocator, ZERO_ROW2};
 use crate::active_set::{ActiveSetFactor, AddError, remove_at};
 use crate::linalg::{column, columns, dot_d};
 
 /// The active rows a proximal solve ended with (the order of the factor's
 /// columns), `nact` of them, the first `neq` equality rows.
+#[derive(Clone, Debug)]
 pub(super) struct Kept<NV: Dim>
 where
     DefaultAllocator: nalgebra::allocator::Allocator<NV>,

@@ -1,7 +1,7 @@
 //! Unit tests of the dual active-set solver.
 
 use super::*;
-use nalgebra::{Matrix2, SVector, Vector2};
+use nalgebra::{Matrix2, SMatrix, SVector, Vector2};
 
 mod bounds;
 mod equalities;

@@ -153,10 +153,14 @@
 //! first), as DAQP's parametric hot start: the minimiser on those rows for
 //! the new right-hand sides, the rows with negative multipliers (and those
 //! the probe leaves out) dropped, then the dual iteration as usual. A probe
-//! whose bound moved a little takes 0 to 2 iterations instead of rebuilding
-//! its active set from the unconstrained minimiser (6 to 14 on the
-//! firmware's walk-into cycles); the optimum is the same, the rounding and
-//! which certificate an infeasible probe returns may differ.
+//! whose bound moved a little takes 0 to 3 iterations instead of rebuilding
+//! its active set from the unconstrained minimiser; the optimum is the same,
+//! the rounding and which certificate an infeasible probe returns may
+//! differ. On a cycle that gives way to a person ([`Params::give_way`]) the
+//! cost is another one than the nominal solve's, whose active rows are then
+//! a poor start: the first probe starts from scratch, adding the marked rows
+//! (the warm start: the rows active at the last cycle's relaxed plan) first
+//! among those it finds violated (`docs/fallback.md`).
 //!
 //! On the firmware's recorded infeasible cycles (all stage 1) this is two
 //! solves per cycle, the nominal one included: the nominal certificate proves
@@ -282,7 +286,11 @@ pub(crate) struct Params<'a, const NC: usize> {
     /// and that is the reported `eps_gait`. It saves that search's solves
     /// (one to three) on the cycles where a person walks into the robot; the
     /// cost, which then pulls away from the person, chooses the plan.
-    pub give_way: bool,
+    /// `Some(marks)`: the first probe starts from scratch (the give-way goal
+    /// changed the cost, so the nominal solve's factor is a poor start),
+    /// adding the rows `marks` first (the warm start: the rows active at the
+    /// last cycle's relaxed plan).
+    pub give_way: Option<&'a [bool; NC]>,
 }
 
 /// Runs the priority scheme on the nominal QP `qp` (rows identified by `rows`;
@@ -325,6 +333,7 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         confined: false,
         capture,
         reprobe,
+        prefer: give_way.unwrap_or(&[false; NC]),
     };
     if let Some(y) = certificate {
         // The nominal QP is the first probe's problem (stage 1 at no
@@ -340,7 +349,12 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
             ctx.support = [false; NC];
         }
     }
-    let out = run_stages(&mut ctx, gait_cap, give_way);
+    if give_way.is_some() {
+        // The give-way goal changed the cost: the factor of the nominal
+        // solve's active rows is a poor start (docs/fallback.md).
+        ctx.reprobe.forget();
+    }
+    let out = run_stages(&mut ctx, gait_cap, give_way.is_some());
     out.map_err(|kind| RelaxError {
         kind,
         iterations: ctx.used,

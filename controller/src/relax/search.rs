@@ -135,6 +135,10 @@ pub(super) struct Ctx<'a, const NV: usize, const NC: usize, B> {
     /// probe's active rows, which the next continues from
     /// ([`QpBackend::solve_reprobe`]).
     pub(super) reprobe: &'a mut Reprobe<NV, NC>,
+    /// Rows a probe adds first among violated ones (the marks of
+    /// [`QpBackend::solve_reprobe`]): on a cycle that gives way, the rows
+    /// active at the last cycle's relaxed plan; else none.
+    pub(super) prefer: &'a [bool; NC],
 }
 
 /// Relative and absolute padding of a probe above a proven lower bound.
@@ -173,13 +177,14 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
                 *on = true;
             }
         }
-        // No marks: the probe continues from the last one's active rows.
+        // The probe continues from the last one's active rows (or, the first
+        // of a cycle that gives way, starts from scratch with the marks).
         let sol = self.backend.solve_reprobe(
             self.solver,
             self.qp,
             &h,
             &enabled,
-            &[false; NC],
+            self.prefer,
             self.max_iter.min(left),
             self.reprobe,
         );

@@ -20,7 +20,7 @@ fn params<'a, const NC: usize>(
         gait_cap,
         capture,
         certificate,
-        give_way: false,
+        give_way: None,
     }
 }
 
@@ -593,4 +593,104 @@ fn a_conflict_ahead_leaves_the_side_wall_its_margin() {
 /// `kappa` of Table I's step map, 1/s.
 fn ctl_kappa() -> f64 {
     crate::constraints::Condensed::<3>::new(&crate::lip::Lip::new(9.81, 1.0, 0.4)).kappa
+}
+
+/// On a cycle that gives way (`Params::give_way`), where the first probe
+/// starts from scratch with the warm-start rows marked: the marks choose the
+/// path only, never the answer. On random infeasible cycles (a robot walking
+/// into one to three boxes, as in `relaxations_are_minimal_in_priority_order`),
+/// the scheme run with the rows of the nominal solve's active set marked and
+/// run with none marked reports the same stage and relaxations (to their
+/// tolerance, 1e-9 relative and absolute per probe) and, when the same rows
+/// took the safety relaxation, the same plan (the optimum of the same strictly
+/// convex QP). (The solves are printed, not asserted: which start is
+/// cheaper depends on the marks; the controller's, the rows of the last
+/// cycle's relaxed plan, are measured on the firmware's walk-into pass.)
+#[test]
+fn give_way_marks_change_the_path_not_the_answer() {
+    let mut rng = Lcg(0x9177_e5a1);
+    let ctl = PaperController::new(Config::default()).unwrap();
+    let solver = ctl.solver();
+    let mut asm = Assembly::default();
+    let (mut cases, mut same_rows) = (0usize, 0usize);
+    let (mut solves_marked, mut solves_plain) = (0usize, 0usize);
+    for _ in 0..300 {
+        let th = rng.range(-3.0, 3.0);
+        let dir = Vector2::new(libm::cos(th), libm::sin(th));
+        let side = Vector2::new(-dir.y, dir.x);
+        let mut obstacles =
+            [ConvexPolygon::<8>::new(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]).unwrap(); 3];
+        let n_obs = 1 + (rng.next() * 3.0) as usize;
+        for o in obstacles.iter_mut().take(n_obs) {
+            let c = dir * rng.range(0.3, 1.2) + side * rng.range(-0.6, 0.6);
+            let (a, b) = (rng.range(0.1, 0.6), rng.range(0.1, 0.6));
+            *o = ConvexPolygon::hull(&[
+                [c.x - a, c.y - b],
+                [c.x + a, c.y - b],
+                [c.x + a, c.y + b],
+                [c.x - a, c.y + b],
+            ])
+            .unwrap();
+        }
+        let input = CycleInput {
+            com_position: Vector2::zeros(),
+            com_velocity: dir * rng.range(0.2, 0.9),
+            heading: th,
+            turning_rate: 0.0,
+            stance_foot: side * rng.range(-0.15, 0.15),
+            stance_side: Side::Left,
+            time_in_step: rng.range(0.0, 0.4),
+            // Away from the boxes, as the give-way goal is.
+            goal: -dir,
+            obstacles: &obstacles[..n_obs],
+            obstacle_velocities: &[],
+            speed_cap: crate::NO_SPEED_CAP,
+        };
+        ctl.assemble(&input, None, &mut asm).unwrap();
+        let mut state = Reprobe::new(&asm.qp);
+        let nominal = solver.solve_reprobe(
+            &asm.qp,
+            &asm.qp.h,
+            &[true; NC],
+            &[false; NC],
+            64,
+            &mut state,
+        );
+        if !nominal.status.is_infeasible() {
+            continue;
+        }
+        let mut marks = [false; NC];
+        for &a in nominal.active_set() {
+            marks[usize::from(a)] = true;
+        }
+        let run = |marks: &[bool; NC], count: &mut Counting| {
+            let mut state = Reprobe::new(&asm.qp);
+            let p = Params {
+                give_way: Some(marks),
+                ..params(0.1, None, Some(&nominal.lambda))
+            };
+            relax(solver, count, &asm.qp, &asm.rows, p, &mut state).unwrap()
+        };
+        let (mut c1, mut c2) = (Counting(0), Counting(0));
+        let a = run(&marks, &mut c1);
+        let b = run(&[false; NC], &mut c2);
+        cases += 1;
+        solves_marked += c1.0;
+        solves_plain += c2.0;
+        let close = |x: f64, y: f64| (x - y).abs() <= 1e-6 * (1.0 + x.abs().max(y.abs()));
+        assert_eq!(a.level, b.level, "{a:?} {b:?}");
+        assert!(close(a.eps_safety, b.eps_safety), "{a:?} {b:?}");
+        assert!(close(a.eps_gait, b.eps_gait), "{a:?} {b:?}");
+        if a.conflict == b.conflict {
+            same_rows += 1;
+            assert!((a.u - b.u).amax() <= 1e-6, "{a:?} {b:?}");
+        }
+    }
+    std::println!(
+        "{cases} infeasible cycles, {same_rows} with the same rows relaxed; solves {solves_marked} marked, {solves_plain} not"
+    );
+    assert!(
+        cases >= 100 && same_rows * 10 >= cases * 9,
+        "{cases} {same_rows}"
+    );
 }

@@ -16,6 +16,12 @@ pub struct MappingSummary {
     pub map_update_max_ms: f64,
     /// Cells of the map seen (free or occupied) at the end, fraction of all.
     pub map_known_fraction: f64,
+    /// Cells of the map at the end (8 bytes each).
+    pub map_cells: usize,
+    /// Times the map's box grew to a scan's reach.
+    pub map_grows: usize,
+    /// Scans whose reach the box could not grow to (`lidar.map.max_cells`).
+    pub map_grows_refused: usize,
     /// Plans on the perceived map (0 without a planner).
     pub plans: usize,
     /// Plans after the first (blocked path or stalled robot).
@@ -56,6 +62,9 @@ pub fn summarize_mapping(log: &MappingLog) -> MappingSummary {
         map_update_p50_ms: u50,
         map_update_max_ms: umax,
         map_known_fraction: known as f64 / states.len().max(1) as f64,
+        map_cells: states.len(),
+        map_grows: log.map.grows(),
+        map_grows_refused: log.map.refused_grows(),
         plans: log.plans.len(),
         replans: log.replans(),
         plan_failures: log.failures(),
@@ -68,10 +77,13 @@ pub fn summarize_mapping(log: &MappingLog) -> MappingSummary {
 /// One line for [`super::human_summary`].
 pub fn mapping_line(m: &MappingSummary) -> String {
     format!(
-        "  map: {} updates (p50 {:.2} ms, max {:.2} ms), {:.0} % of cells seen; {} plans on the perceived map ({} replans, {} failed; p50 {:.1} ms, max {:.1} ms, total {:.1} ms)\n",
+        "  map: {} updates (p50 {:.2} ms, max {:.2} ms), {} cells ({} grows, {} refused), {:.0} % seen; {} plans on the perceived map ({} replans, {} failed; p50 {:.1} ms, max {:.1} ms, total {:.1} ms)\n",
         m.map_updates,
         m.map_update_p50_ms,
         m.map_update_max_ms,
+        m.map_cells,
+        m.map_grows,
+        m.map_grows_refused,
         100.0 * m.map_known_fraction,
         m.plans,
         m.replans,

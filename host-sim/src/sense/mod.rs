@@ -111,7 +111,7 @@ pub use dbscan::{clusters, dbscan};
 pub use infer::{
     cluster_polygon, free_tolerance, infer_obstacles, simplify_outer, split_and_merge,
 };
-pub use map::{CellState, MapParams, OccupancyMap};
+pub use map::{CellState, Growth, MapParams, OccupancyMap};
 
 /// Obstacle perception (docs/maths.md §6).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Deserialize, Serialize, clap::ValueEnum)]

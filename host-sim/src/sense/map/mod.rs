@@ -6,8 +6,9 @@
 //! K. M. Wurm, M. Bennewitz, C. Stachniss, W. Burgard, "OctoMap: an efficient
 //! probabilistic 3D mapping framework based on octrees", Autonomous Robots
 //! 34, 2013) and of Nav2's voxel and obstacle layers, flattened to 2D: the
-//! update of a cell is one addition (cheap), the memory is one `f32` per cell
-//! of a fixed box (bounded, allocated once), a clamped cell changes its mind
+//! update of a cell is one addition (cheap), the memory is one `f32` (and a
+//! `u32` scan stamp) per cell of a box (bounded by `max_cells`, re-allocated
+//! only when it grows), a clamped cell changes its mind
 //! after a few scans (a wall seen once and a ray that passed where it was
 //! later are both kept as evidence, not overwritten), and the free and unknown
 //! cells the planner and the safety rules need come for free.
@@ -48,10 +49,24 @@
 //! gets so sure that it cannot change within a few scans). With `decay > 0`
 //! every known cell's log-odds shrinks by the factor `exp(-decay dt)` per
 //! update (forgetting, for a world that changes; 0 = a static world).
-//! The map's outermost ring of cells is never cleared (a hit still marks
-//! it): nothing is known beyond the map's box, so free space seen up to the
-//! box's edge ends in a frontier there, and a wall just beyond the box
-//! (which the map cannot hold) is not walked into unseen.
+//!
+//! **A map that grows with the robot** ([`OccupancyMap::grow_to_cover`]).
+//! The first box is the bounding box of start and goal grown by
+//! `padding`; before each scan, when the scan's reach (the farthest hit or
+//! free length from the sensor, plus a cell) leaves the box's inner cells,
+//! the box grows by whole cells on the sides that need it (plus
+//! `GROW_SLACK`, 2 m), re-allocated with every cell's log-odds copied to the
+//! same world position, as Nav2's static layer grows with its map (a rolling
+//! window around the robot, the other choice, forgets the walls it leaves
+//! behind, which the planner needs to not walk back into a dead end). The
+//! map's outermost ring of cells is never cleared (a hit still marks it):
+//! nothing is known beyond the box, so free space seen up to the box's edge
+//! ends in a frontier there, and a wall just beyond the box (which the map
+//! cannot hold) is not walked into unseen. With the box grown to every
+//! scan's reach no ray reaches that ring: it holds only space no ray has
+//! reached. The map holds at most `max_cells` cells (8 bytes each); a
+//! growth past that is refused and the map keeps its box, whose edge then
+//! holds the robot in as a box that never grows (`grow = false`) does.
 //! A cell is *occupied* when `L > 0` (p > 0.5, OctoMap's occupancy
 //! threshold), *free* when `L < 0`, *unknown* when never updated (or decayed
 //! back to `|L| < 1e-3`).
@@ -74,6 +89,7 @@
 //! ends gave the controller half-planes across a 0.7 m corridor, taken at
 //! each piece's point nearest the robot, and the robot stopped in it.)
 
+mod grow;
 mod params;
 mod pieces;
 mod traverse;
@@ -84,8 +100,7 @@ mod tests;
 
 use ldcbf_controller::nalgebra::Vector2;
 
-use crate::world::grid::MAX_CELLS;
-
+pub use grow::Growth;
 pub use params::MapParams;
 
 /// What the map says about a cell.
@@ -107,7 +122,8 @@ fn logit(p: f64) -> f32 {
 /// |log-odds| below this is unknown.
 const UNKNOWN_EPS: f32 = 1e-3;
 
-/// A log-odds occupancy grid over a fixed box (module docs).
+/// A log-odds occupancy grid over a box that grows with the scans (module
+/// docs).
 #[derive(Clone, Debug)]
 pub struct OccupancyMap {
     /// World position of the lower-left corner of cell `(0, 0)`, m.
@@ -127,12 +143,16 @@ pub struct OccupancyMap {
     lo: f32,
     hi: f32,
     params: MapParams,
+    /// Times the box grew.
+    grows: usize,
+    /// Scans whose reach the box could not grow to ([`MapParams::max_cells`]).
+    refused: usize,
 }
 
 impl OccupancyMap {
     /// An all-unknown map over the box `[lo, hi]` (m) grown by
     /// `params.padding`; fails on invalid params or more than
-    /// [`MAX_CELLS`] cells.
+    /// `params.max_cells` cells.
     pub fn new(params: MapParams, lo: Vector2<f64>, hi: Vector2<f64>) -> Result<Self, String> {
         params.validate().map_err(|e| e.to_string())?;
         let pad = Vector2::repeat(params.padding);
@@ -140,10 +160,11 @@ impl OccupancyMap {
         let r = params.resolution;
         let w = ((hi.x - lo.x) / r).ceil().max(1.0);
         let h = ((hi.y - lo.y) / r).ceil().max(1.0);
-        if w * h > MAX_CELLS as f64 {
+        if w * h > params.max_cells as f64 {
             return Err(format!(
-                "map: {} cells (more than {MAX_CELLS}): raise map.resolution or lower map.padding",
-                w * h
+                "map: {} cells (more than map.max_cells = {}): raise map.resolution or lower map.padding",
+                w * h,
+                params.max_cells
             ));
         }
         let (width, height) = (w as usize, h as usize);
@@ -160,6 +181,8 @@ impl OccupancyMap {
             lo: logit(params.clamp_min),
             hi: logit(params.clamp_max),
             params,
+            grows: 0,
+            refused: 0,
         })
     }
 

@@ -2,6 +2,7 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::world::grid::MAX_CELLS;
 use crate::world::setting::SettingError;
 
 /// Mapping settings: the `[lidar.map]` table. Probabilities in (0, 1).
@@ -10,9 +11,16 @@ use crate::world::setting::SettingError;
 pub struct MapParams {
     /// Cell side, m.
     pub resolution: f64,
-    /// The map covers the bounding box of start and goal grown by this much on
-    /// every side, m (cells outside it are never updated: unknown).
+    /// The map's first box is the bounding box of start and goal grown by
+    /// this much on every side, m; with `grow` it then grows with the scans.
     pub padding: f64,
+    /// Grow the box when a scan's reach leaves it (default true; false = the
+    /// first box is the map for the whole run, cells outside it unknown).
+    pub grow: bool,
+    /// The most cells the map may hold, in `1..=MAX_CELLS` (20,000,000, 160 MB
+    /// at 8 bytes a cell); the default is that bound. A growth past it is
+    /// refused: the map keeps its box (module docs).
+    pub max_cells: usize,
     /// Probability of a hit (OctoMap's default 0.7).
     pub p_hit: f64,
     /// Probability of a miss (OctoMap's default 0.4).
@@ -53,6 +61,8 @@ impl Default for MapParams {
         MapParams {
             resolution: 0.025,
             padding: 3.0,
+            grow: true,
+            max_cells: MAX_CELLS,
             p_hit: 0.7,
             p_miss: 0.4,
             clamp_min: 0.1192,
@@ -76,6 +86,12 @@ impl MapParams {
         }
         if !(self.padding.is_finite() && (0.0..=100.0).contains(&self.padding)) {
             return Err(SettingError::new("map.padding", "must be in [0, 100] m"));
+        }
+        if !(1..=MAX_CELLS).contains(&self.max_cells) {
+            return Err(SettingError::new(
+                "map.max_cells",
+                format!("must be in 1..={MAX_CELLS}"),
+            ));
         }
         if !(prob(self.p_hit) && self.p_hit > 0.5) {
             return Err(SettingError::new("map.p_hit", "must be in (0.5, 1)"));

@@ -38,8 +38,8 @@ fn traversal_visits_every_cell_a_segment_crosses_in_order() {
     assert_eq!(n, m.width);
 }
 
-/// Rays that run off the map clear up to its outermost ring, which stays
-/// unknown: a frontier piece stands at the box's edge (where a wall
+/// In a box that does not grow, rays that run off the map clear up to its
+/// outermost ring, which stays unknown: a frontier piece stands at the box's edge (where a wall
 /// beyond the box would be), and none covers a cell seen free.
 #[test]
 fn the_map_ends_in_a_frontier_at_its_edge() {
@@ -47,6 +47,7 @@ fn the_map_ends_in_a_frontier_at_its_edge() {
         resolution: 0.1,
         padding: 0.0,
         unknown_radius: 1.0,
+        grow: false,
         ..MapParams::default()
     });
     // At (1.45, 0.05), 0.55 m from the map's edge x = 2; 8 rays, none hits.
@@ -226,6 +227,143 @@ fn decay_forgets_and_bad_settings_name_their_field() {
         ..MapParams::default()
     };
     assert!(OccupancyMap::new(huge, v(0.0, 0.0), v(1.0, 1.0)).is_err());
+}
+
+/// Every known cell of the map, as (centre, log-odds).
+fn known_cells(m: &OccupancyMap) -> Vec<(Vector2<f64>, f32)> {
+    (0..m.height)
+        .flat_map(|j| (0..m.width).map(move |i| (i, j)))
+        .filter(|&(i, j)| m.state(i, j) != CellState::Unknown)
+        .map(|(i, j)| (m.centre(i, j), m.log_odds(i, j)))
+        .collect()
+}
+
+/// Whether every cell of the map's outermost ring is unknown.
+fn ring_unknown(m: &OccupancyMap) -> bool {
+    (0..m.height)
+        .flat_map(|j| (0..m.width).map(move |i| (i, j)))
+        .filter(|&(i, j)| i == 0 || j == 0 || i + 1 == m.width || j + 1 == m.height)
+        .all(|(i, j)| m.state(i, j) == CellState::Unknown)
+}
+
+#[test]
+fn growing_keeps_every_cell_at_its_world_position() {
+    let mut m = map(MapParams {
+        resolution: 0.1,
+        padding: 0.0,
+        ..MapParams::default()
+    });
+    // Hits and misses within 1.5 m of the centre: inside the first box.
+    let rays: Vec<_> = (0..36)
+        .map(|k| {
+            (k % 3 == 0).then(|| v(0.05, 0.05) + crate::sense::ray_direction(0.0, k, 36) * 1.2)
+        })
+        .collect();
+    m.update(v(0.05, 0.05), 0.0, &rays, 1.5, 0.03, 0.0);
+    assert_eq!(m.grows(), 0, "the first box holds this scan");
+    let before = known_cells(&m);
+    assert!(before.iter().any(|c| c.1 > 0.0) && before.iter().any(|c| c.1 < 0.0));
+    let (o, w, h) = (m.origin, m.width, m.height);
+    assert_eq!(m.grow_to_cover(v(-5.0, -1.0), v(1.0, 6.0)), Growth::Grown);
+    assert!(m.width > w && m.height > h);
+    // The origin moved by whole cells to the left only (the box already
+    // reached y = -1 m below).
+    let shift = (o - m.origin) / m.resolution;
+    assert!(
+        shift.x > 0.0 && (shift.x - shift.x.round()).abs() < 1e-9,
+        "{shift}"
+    );
+    assert_eq!(shift.y, 0.0);
+    // Every known cell has the same log-odds at the same place; no new cell
+    // is known.
+    for (c, l) in &before {
+        let (i, j) = m.cell_of(*c).unwrap();
+        assert!((m.centre(i, j) - c).norm() < 1e-9);
+        assert_eq!(m.log_odds(i, j), *l, "at {c}");
+    }
+    assert_eq!(known_cells(&m).len(), before.len());
+    // The asked box is inside the inner cells.
+    for p in [v(-5.0, -1.0), v(1.0, 6.0)] {
+        let (i, j) = m.cell_of(p).unwrap();
+        assert!(i >= 1 && j >= 1 && i + 1 < m.width && j + 1 < m.height);
+    }
+    // Covered already: nothing changes.
+    assert_eq!(m.grow_to_cover(v(-1.0, -1.0), v(1.0, 1.0)), Growth::Covered);
+    assert_eq!(m.grows(), 1);
+}
+
+/// The box grows with a scan that leaves it: free space then ends in a
+/// frontier where the rays end, not at the box's edge, and no ray reaches
+/// the box's outermost ring.
+#[test]
+fn a_grown_map_ends_in_a_frontier_where_the_rays_end() {
+    let mut m = map(MapParams {
+        resolution: 0.1,
+        padding: 0.0,
+        unknown_radius: 3.5,
+        ..MapParams::default()
+    });
+    // At (1.45, 0.05), 0.55 m from the first box's edge x = 2; 8 rays of
+    // 3 m, none hits.
+    let o = v(1.45, 0.05);
+    m.update(o, 0.0, &[None; 8], 3.0, 0.03, 0.0);
+    assert_eq!(m.grows(), 1);
+    assert!(ring_unknown(&m));
+    // The first box's edge cell is cleared; the ray along +x ends at 4.45.
+    assert_eq!(m.state_at(v(1.95, 0.05)), CellState::Free);
+    assert_eq!(m.state_at(v(4.35, 0.05)), CellState::Free);
+    let end = v(4.55, 0.05);
+    assert_eq!(m.state_at(end), CellState::Unknown);
+    let (i, j) = m.cell_of(end).unwrap();
+    assert!(i + 1 < m.width, "beyond the rays the map goes on");
+    assert!(m.is_frontier(i, j));
+    let pieces = m.pieces(o, 3.5);
+    let at = |p: Vector2<f64>| {
+        pieces
+            .iter()
+            .any(|q| ldcbf_controller::closest_point_point_polygon(&p, q).signed_distance <= 0.0)
+    };
+    assert!(at(m.centre(i, j)), "no piece where the ray ends");
+    assert!(!at(v(1.95, 0.05)), "a piece at the first box's edge");
+}
+
+#[test]
+fn at_its_bound_the_map_keeps_its_box_or_grows_exactly() {
+    // 40 x 40 cells; the scan below needs 67 x 65 exactly, 87 x 105 with
+    // the slack.
+    let scan = |max_cells: usize| {
+        let mut m = map(MapParams {
+            resolution: 0.1,
+            padding: 0.0,
+            max_cells,
+            ..MapParams::default()
+        });
+        m.update(v(1.45, 0.05), 0.0, &[None; 8], 3.0, 0.03, 0.0);
+        m
+    };
+    let m = scan(2000);
+    assert_eq!(
+        (m.width, m.height, m.grows(), m.refused_grows()),
+        (40, 40, 0, 1)
+    );
+    // Kept: the rays stop at the edge, which stays a frontier.
+    let (_, j) = m.cell_of(v(1.45, 0.05)).unwrap();
+    assert_eq!(m.state(39, j), CellState::Unknown);
+    assert_eq!(m.state(38, j), CellState::Free);
+    assert!(ring_unknown(&m));
+    let m = scan(5000);
+    assert_eq!(
+        (m.width, m.height, m.grows(), m.refused_grows()),
+        (67, 65, 1, 0)
+    );
+    assert!(ring_unknown(&m));
+    let m = scan(10_000);
+    assert_eq!((m.width, m.height), (87, 105));
+    let bad = MapParams {
+        max_cells: 0,
+        ..MapParams::default()
+    };
+    assert_eq!(bad.validate().unwrap_err().field, "map.max_cells");
 }
 
 /// `hit_overrides_misses`: a cell cleared to the clamp by many scans is

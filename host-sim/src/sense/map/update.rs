@@ -65,6 +65,7 @@ impl OccupancyMap {
                 *l *= f;
             }
         }
+        self.grow_to_scan(origin, rays, free);
         self.scans = self.scans.wrapping_add(1).max(1);
         let scan = self.scans;
         // Hits first: they win over this scan's misses.
