@@ -139,7 +139,7 @@ where
         ) else {
             return Some(None);
         };
-        if blocked || n2 <= ZERO_ROW2 {
+        if blocked {
             return Some(None);
         }
         Some(rate_by(self.tol2, n2, ihn, hi - gx, || {
@@ -196,7 +196,8 @@ fn holds(slack: f64) -> bool {
 
 /// The end of [`ActiveSetFactor::violation`] for row `g` (`|g|^2 = n2`, its
 /// cached `1 / |L^-1 g|` in `ihn`, 0 = not yet) with the slack `slack`:
-/// `None` when it holds to the tolerance, NaN when the slack is not finite,
+/// `None` when it holds to the tolerance or is a zero row (`n2 = 0`), NaN
+/// when the slack is not finite,
 /// else the slack in the metric of `H^-1`.
 #[inline(always)]
 pub(super) fn rate<NV: Dim, NC: Dim>(
@@ -211,6 +212,12 @@ where
     DefaultAllocator: QpAllocator<NV, NC>,
 {
     if holds(slack) {
+        return None;
+    }
+    // A zero row is never added (one that contradicts itself ended the solve
+    // at its start): tested here, after the common case, not before the dot
+    // product.
+    if n2 <= ZERO_ROW2 {
         return None;
     }
     if !slack.is_finite() {
@@ -237,6 +244,12 @@ pub(super) fn rate_by(
     inv_hnorm: impl FnOnce() -> f64,
 ) -> Option<f64> {
     if holds(slack) {
+        return None;
+    }
+    // A zero row is never added (one that contradicts itself ended the solve
+    // at its start): tested here, after the common case, not before the dot
+    // product.
+    if n2 <= ZERO_ROW2 {
         return None;
     }
     if !slack.is_finite() {
@@ -277,7 +290,7 @@ where
         ) else {
             return None;
         };
-        if blocked || n2 <= ZERO_ROW2 {
+        if blocked {
             return None;
         }
         // (`dot_d`: as pairs for run-time sizes, the scan over all rows.)
