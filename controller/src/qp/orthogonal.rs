@@ -139,7 +139,7 @@ where
         ) else {
             return Some(None);
         };
-        if blocked || n2 <= ZERO_ROW2 {
+        if blocked {
             return Some(None);
         }
         Some(rate_by(self.tol2, n2, ihn, hi - gx, || {
@@ -183,9 +183,21 @@ where
     }
 }
 
+/// Whether `slack` is `+0` or positive and finite (the common case of the
+/// scan, a row that holds): the sign bit clear and the exponent below that of
+/// infinity and NaN, one integer compare of the high word instead of the two
+/// floating-point compares (each with its flags transfer on the M7) of the
+/// finiteness and sign tests. Every other slack (`-0`, negative, infinite or
+/// NaN) takes those tests as before, so the answer of [`rate`] is unchanged.
+#[inline(always)]
+fn holds(slack: f64) -> bool {
+    ((slack.to_bits() >> 32) as u32) < 0x7ff0_0000
+}
+
 /// The end of [`ActiveSetFactor::violation`] for row `g` (`|g|^2 = n2`, its
 /// cached `1 / |L^-1 g|` in `ihn`, 0 = not yet) with the slack `slack`:
-/// `None` when it holds to the tolerance, NaN when the slack is not finite,
+/// `None` when it holds to the tolerance or is a zero row (`n2 = 0`), NaN
+/// when the slack is not finite,
 /// else the slack in the metric of `H^-1`.
 #[inline(always)]
 pub(super) fn rate<NV: Dim, NC: Dim>(
@@ -199,6 +211,15 @@ pub(super) fn rate<NV: Dim, NC: Dim>(
 where
     DefaultAllocator: QpAllocator<NV, NC>,
 {
+    if holds(slack) {
+        return None;
+    }
+    // A zero row is never added (one that contradicts itself ended the solve
+    // at its start): tested here, after the common case, not before the dot
+    // product.
+    if n2 <= ZERO_ROW2 {
+        return None;
+    }
     if !slack.is_finite() {
         return Some(f64::NAN);
     }
@@ -222,6 +243,15 @@ pub(super) fn rate_by(
     slack: f64,
     inv_hnorm: impl FnOnce() -> f64,
 ) -> Option<f64> {
+    if holds(slack) {
+        return None;
+    }
+    // A zero row is never added (one that contradicts itself ended the solve
+    // at its start): tested here, after the common case, not before the dot
+    // product.
+    if n2 <= ZERO_ROW2 {
+        return None;
+    }
     if !slack.is_finite() {
         return Some(f64::NAN);
     }
@@ -260,7 +290,7 @@ where
         ) else {
             return None;
         };
-        if blocked || n2 <= ZERO_ROW2 {
+        if blocked {
             return None;
         }
         // (`dot_d`: as pairs for run-time sizes, the scan over all rows.)

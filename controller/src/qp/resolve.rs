@@ -24,11 +24,11 @@
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
+use super::QpAllocator;
 use super::bounds::BoundRows;
 use super::orthogonal::{Orthogonal, back_substitute, givens_drop, rate};
 use super::proximal::proximal_capable;
 use super::spans::unpack;
-use super::{QpAllocator, ZERO_ROW2};
 use crate::active_set::{ActiveSetFactor, AddError, remove_at};
 use crate::linalg::{column, columns, dot_d};
 
@@ -283,7 +283,7 @@ where
         ) else {
             return None;
         };
-        if blocked || n2 <= ZERO_ROW2 {
+        if blocked {
             return None;
         }
         // (Spans only where the proximal iterations are compiled in: a
