@@ -34,6 +34,7 @@ use nalgebra::{
     ArrayStorage, Const, DefaultAllocator, Dim, OMatrix, OVector, SMatrix, SVector, U1,
 };
 
+use super::guess::GuessWork;
 use super::resolve::{Kept, ResolveStop, resolve};
 use super::{DenseQpOf, DualActiveSetOf, QpAllocator, RowNormsOf};
 use crate::active_set::Iterate;
@@ -58,6 +59,9 @@ where
     /// `J = L^-T` and `R = 0` already (a start from scratch need not set
     /// them again).
     pub pristine: bool,
+    /// The hot start's guess's matrices (`qp/guess.rs`), kept (not
+    /// cleared) from solve to solve.
+    pub guess: GuessWork<NV>,
 }
 
 impl<NV: Dim> Carry<NV>
@@ -124,6 +128,7 @@ where
             },
             valid: false,
             pristine,
+            guess: GuessWork::zeros(nv),
         }
     }
 
@@ -246,6 +251,7 @@ impl<const NV: usize, const NC: usize> ReprobeOf<Const<NV>, Const<NC>> {
             },
             valid: false,
             pristine: false,
+            guess: GuessWork::EMPTY,
         },
     };
 }
