@@ -34,6 +34,7 @@ use nalgebra::{
     ArrayStorage, Const, DefaultAllocator, Dim, OMatrix, OVector, SMatrix, SVector, U1,
 };
 
+#[cfg(not(target_os = "none"))]
 use super::guess::GuessWork;
 use super::resolve::{Kept, ResolveStop, resolve};
 use super::{DenseQpOf, DualActiveSetOf, QpAllocator, RowNormsOf};
@@ -60,7 +61,10 @@ where
     /// them again).
     pub pristine: bool,
     /// The hot start's guess's matrices (`qp/guess.rs`), kept (not
-    /// cleared) from solve to solve.
+    /// cleared) from solve to solve. Not on bare-metal targets (the
+    /// firmware's N = 3 has no hot start; a guess there zeroes matrices of
+    /// its own).
+    #[cfg(not(target_os = "none"))]
     pub guess: GuessWork<NV>,
 }
 
@@ -128,6 +132,7 @@ where
             },
             valid: false,
             pristine,
+            #[cfg(not(target_os = "none"))]
             guess: GuessWork::zeros(nv),
         }
     }
@@ -251,6 +256,7 @@ impl<const NV: usize, const NC: usize> ReprobeOf<Const<NV>, Const<NC>> {
             },
             valid: false,
             pristine: false,
+            #[cfg(not(target_os = "none"))]
             guess: GuessWork::EMPTY,
         },
     };

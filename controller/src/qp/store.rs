@@ -153,15 +153,15 @@ where
 
     #[inline(always)]
     fn parts<'s>(&'s mut self, _own: &'s mut Self::Own) -> Parts<'s, NV> {
+        let carry = &mut **self;
+        #[cfg(not(target_os = "none"))]
+        let guess = Some(&mut carry.guess);
+        #[cfg(target_os = "none")]
+        let guess = None;
         let Carry {
-            J,
-            R,
-            kept,
-            valid,
-            guess,
-            ..
-        } = &mut **self;
-        (J, R, if *valid { Some(&*kept) } else { None }, Some(guess))
+            J, R, kept, valid, ..
+        } = carry;
+        (J, R, if *valid { Some(&*kept) } else { None }, guess)
     }
 
     #[inline(always)]
