@@ -156,7 +156,7 @@
 //! whose bound moved a little takes 0 to 3 iterations instead of rebuilding
 //! its active set from the unconstrained minimiser; the optimum is the same,
 //! the rounding and which certificate an infeasible probe returns may
-//! differ. On a cycle that gives way to a person ([`Params::give_way`]) the
+//! differ. On a cycle that gives way to a person (`Params::give_way`) the
 //! cost is another one than the nominal solve's, whose active rows are then
 //! a poor start: the first probe starts from scratch, adding the marked rows
 //! (the warm start: the rows active at the last cycle's relaxed plan) first

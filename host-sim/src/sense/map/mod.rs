@@ -30,12 +30,16 @@
 //! of its cells, rays beside it clear them scan after scan, and the hits,
 //! which slide along the object as the robot walks, each land in a cell
 //! with many misses, which one hit (`+logit(p_hit)` against a clamped
-//! `logit(clamp_min)`) never turned occupied: the needle of `crowded` seed
-//! 174 was hit in nearly every scan and stayed free in the map until the
-//! body touched it. Nav2's obstacle layer does the same (the clearing
-//! observations are ray-traced first, then every point of the marking
-//! observations sets its cell lethal). Later misses clear the cell as
-//! before (three scans from one hit).
+//! `logit(clamp_min)`) does not turn occupied: without the rule the needle
+//! of `crowded` seed 174 is hit in nearly every scan and stays free in the
+//! map until the body touches it. Nav2's obstacle layer does the same (the
+//! clearing observations are ray-traced first, then every point of the
+//! marking observations sets its cell lethal). Later misses clear the cell
+//! as before (three scans from one hit). The exception is the noise band:
+//! a hit with an occupied cell within `hit_noise_band` of it counts as an
+//! ordinary hit (it may be a noise hit of that obstacle's face; without the
+//! band the noise hits of grazing rays in front of a corridor's walls turn
+//! occupied and narrow it).
 //! [`OccupancyMap::update_scan`] takes each ray's marked point and free
 //! length instead: the simulator gives it those of the face fitted to each
 //! ray's neighbours ([`crate::sense::faces`]), which let a ray clear up to

@@ -2,7 +2,7 @@
 
 use super::*;
 use crate::sense::{Lidar, LidarParams, free_tolerance};
-use crate::world::{Polygon, square};
+use crate::world::square;
 
 fn v(x: f64, y: f64) -> Vector2<f64> {
     Vector2::new(x, y)
