@@ -21,7 +21,14 @@
 //!
 //! The unit tests below compare the factor with the one formed entry by
 //! entry over all entries, bit for bit.
+//!
+//! The guess's matrices `M` and `T` are a workspace ([`GuessWork`]) kept
+//! between solves (the controller's, cycle to cycle, in its probe state) and
+//! not cleared: the guess writes every entry it reads (the columns `0..k`
+//! of `M`; of column `i` of `T` the entries `0..=i`, those before `f_i` as
+//! zeros), so its results do not depend on what the workspace held.
 
+use nalgebra::{ArrayStorage, Const, SMatrix};
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector, U1};
 
 use super::spans::{Span, unpack};
@@ -32,9 +39,44 @@ use crate::linalg::{column, columns, dot};
 /// they save, at 40 they save a fifth of the controller's `step`).
 const SPANS_FROM: usize = 32;
 
+/// The matrices of the hot start's guess (module docs), `NV x NV`
+/// column-major, entries dimensionless scratch.
+#[derive(Clone, Debug)]
+pub(super) struct GuessWork<NV: Dim>
+where
+    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
+{
+    /// `M`: column `j` is `m_j = L^-1 g_j` of the `j`-th marked row.
+    pub M: OMatrix<f64, NV, NV>,
+    /// `T = C'` (the Cholesky factor of `M M'`, transposed).
+    pub T: OMatrix<f64, NV, NV>,
+}
+
+impl<NV: Dim> GuessWork<NV>
+where
+    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
+{
+    /// Zeroed storage for `nv` variables.
+    pub(super) fn zeros(nv: NV) -> Self {
+        GuessWork {
+            M: OMatrix::zeros_generic(nv, nv),
+            T: OMatrix::zeros_generic(nv, nv),
+        }
+    }
+}
+
+impl<const NV: usize> GuessWork<Const<NV>> {
+    /// Zeroed storage, for `const` initialisers.
+    pub(super) const EMPTY: Self = GuessWork {
+        M: SMatrix::from_array_storage(ArrayStorage([[0.0; NV]; NV])),
+        T: SMatrix::from_array_storage(ArrayStorage([[0.0; NV]; NV])),
+    };
+}
+
 /// Factors `K = M M'` of the first `k` columns of `M` (`NV x NV`,
-/// column-major) into `T = C'` (column `i` of `T` is row `i` of `C`; `T`
-/// comes zeroed). False when an entry of `M` is not finite or a pivot is
+/// column-major) into `T = C'` (column `i` of `T` is row `i` of `C`; of
+/// column `i` the entries `0..=i` are written, whatever `T` held: the
+/// others are never read). False when an entry of `M` is not finite or a pivot is
 /// below `1e-10` of its diagonal entry (nearly dependent rows).
 pub(super) fn factor_gram<NV: Dim>(
     M: &OMatrix<f64, NV, NV>,
@@ -115,6 +157,11 @@ where
         let Some(ti) = rest.get_mut(..n) else {
             return false;
         };
+        // Row `i` of `C` before `f_i`: zeros (read by the products of the
+        // rows after it and by the guess's back substitution).
+        for t in ti.get_mut(..fi).unwrap_or(&mut []) {
+            *t = 0.0;
+        }
         // With the spans two entries at a time: their sums are independent
         // chains up to the last product of the second, which needs the first
         // (a sum started before its row's `max(f_i, f_j)` only takes exact
@@ -250,11 +297,26 @@ mod tests {
                 let M = rows::<40>(seed, k);
                 let mut T = SMatrix::<f64, 40, 40>::zeros();
                 let ours = factor_gram(&M, k, &mut T);
+                // The same factor from a workspace holding another one's
+                // entries and NaN (a kept workspace is not cleared).
+                let mut kept = SMatrix::<f64, 40, 40>::from_element(f64::NAN);
+                let other = rows::<40>(seed + 1000, 30);
+                factor_gram(&other, 30, &mut kept);
+                let again = factor_gram(&M, k, &mut kept);
+                assert_eq!(ours, again, "seed {seed}, k {k}");
                 match reference(&M, k) {
                     Some(R) => {
                         assert!(ours, "seed {seed}, k {k}: declined");
                         for (a, b) in T.iter().zip(R.iter()) {
                             assert_eq!(a.to_bits(), b.to_bits(), "seed {seed}, k {k}");
+                        }
+                        // Of column `i < k` the entries `0..=i` are the
+                        // guess's (the others are never read).
+                        for i in 0..k {
+                            for r in 0..=i {
+                                let (a, b) = (kept[(r, i)], R[(r, i)]);
+                                assert_eq!(a.to_bits(), b.to_bits(), "seed {seed}, k {k}");
+                            }
                         }
                         factored += 1;
                     }

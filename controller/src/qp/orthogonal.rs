@@ -7,6 +7,7 @@
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
 use super::bounds::BoundRows;
+use super::guess::GuessWork;
 use super::proximal::proximal_capable;
 use super::resolve::back_substitute_by_columns;
 use super::spans::{Span, unpack};
@@ -70,6 +71,9 @@ where
     /// The rows that are simple bounds (`qp/bounds.rs`): `()` without
     /// (a zero-size type: the solves without bounds compile without a test).
     pub bounds: Bd,
+    /// The hot start's guess's kept workspace (`qp/guess.rs`); `None`: the
+    /// guess zeroes matrices of its own.
+    pub guess: Option<&'a mut GuessWork<NV>>,
 }
 
 impl<'a, NV: Dim, NC: Dim, Bd: BoundRows> Orthogonal<'a, NV, NC, Bd>
@@ -145,6 +149,105 @@ where
         Some(rate_by(self.tol2, n2, ihn, hi - gx, || {
             solver.inv_hnorm_unit(j)
         }))
+    }
+
+    /// [`ActiveSetFactor::hot_guess`] with `M` and `T` in `M`, `T`
+    /// (written where read, whatever they hold).
+    #[inline(always)]
+    fn guess_in(
+        &mut self,
+        M: &mut OMatrix<f64, NV, NV>,
+        T: &mut OMatrix<f64, NV, NV>,
+        act: &[u16],
+        k: usize,
+        mult: &mut [f64],
+        blocked: &[bool],
+    ) -> bool {
+        let nv = self.solver.nv();
+        let n = nv.value();
+        let k = k.min(n);
+        // Column j of `M` (NV x NV, column-major) is m_j = L^-1 g_j (the
+        // columns `0..k` written here).
+        let mut c = OVector::<f64, NV>::zeros_generic(nv, nalgebra::U1);
+        for (&a, (mcol, cj)) in act
+            .iter()
+            .zip(columns_mut(M.as_mut_slice(), n).zip(c.as_mut_slice().iter_mut()))
+            .take(k)
+        {
+            let Some((g, ha)) = self.row(usize::from(a)) else {
+                return false;
+            };
+            crate::linalg::copy(mcol, self.solver.linv_mul(g).as_slice());
+            *cj = dot(g, self.x.as_slice()) - ha;
+        }
+        let Ms = M.as_slice();
+        // K = C C' (lower C; `T = C'`, `qp/guess.rs`).
+        if !super::guess::factor_gram(M, k, T) {
+            return false;
+        }
+        let Ts = T.as_slice();
+        let diag = |i: usize| {
+            column(Ts, n, i)
+                .and_then(|t| t.get(i))
+                .copied()
+                .unwrap_or(0.0)
+        };
+        // C y = c (row `i` of `C` is column `i` of `T`).
+        let mut y = OVector::<f64, NV>::zeros_generic(nv, nalgebra::U1);
+        for (i, ti) in columns(Ts, n).enumerate().take(k) {
+            let mut s = c.get(i).copied().unwrap_or(0.0);
+            for (a, yl) in ti.iter().zip(y.as_slice()).take(i) {
+                s -= a * yl;
+            }
+            if let Some(yi) = y.get_mut(i) {
+                *yi = s / diag(i);
+            }
+        }
+        // C' lambda = y (column `i` of `C` is entry `i` of the columns of
+        // `T` after `i`).
+        let mut lambda = OVector::<f64, NV>::zeros_generic(nv, nalgebra::U1);
+        for i in (0..k).rev() {
+            let mut s = y.get(i).copied().unwrap_or(0.0);
+            let after = lambda.as_slice().get(i + 1..k).unwrap_or(&[]);
+            for (tl, ll) in columns_in(Ts, n, i + 1, k).zip(after) {
+                s -= tl.get(i).copied().unwrap_or(0.0) * ll;
+            }
+            if let Some(li) = lambda.get_mut(i) {
+                *li = s / diag(i);
+            }
+        }
+        if !lambda.as_slice().iter().all(|&l| l >= 0.0 && l.is_finite()) {
+            return false;
+        }
+        // x = x0 - L^-T M' lambda.
+        let mut w = OVector::<f64, NV>::zeros_generic(nv, nalgebra::U1);
+        for (col, &l) in columns(Ms, n).zip(lambda.as_slice().iter()).take(k) {
+            for (wk, &mk) in w.as_mut_slice().iter_mut().zip(col) {
+                *wk += l * mk;
+            }
+        }
+        let step = self.solver.linvt_mul(w.as_slice());
+        let x0 = self.x.clone();
+        for (xk, sk) in self.x.as_mut_slice().iter_mut().zip(step.as_slice().iter()) {
+            *xk -= sk;
+        }
+        // Every row must hold (the marked ones do, to rounding; if rounding
+        // says otherwise the guess is dropped).
+        let mut holds = true;
+        for (i, &b) in blocked.iter().enumerate() {
+            if self.violation(i, b).is_some() {
+                holds = false;
+                break;
+            }
+        }
+        if !holds || !self.x.as_slice().iter().all(|v| v.is_finite()) {
+            self.x = x0;
+            return false;
+        }
+        for (m, &l) in mult.iter_mut().zip(lambda.as_slice().iter()) {
+            *m = l;
+        }
+        true
     }
 
     /// `d = J' n_p = -J' g_p` (`g_p` row `p`).
@@ -415,92 +518,21 @@ where
     /// over all rows. Cheaper than the adds of `J` and `R` (`O(k^2 NV)`
     /// against `O(k NV^2)`), which are only needed if an iteration follows.
     fn hot_guess(&mut self, act: &[u16], k: usize, mult: &mut [f64], blocked: &[bool]) -> bool {
-        let nv = self.solver.nv();
-        let n = nv.value();
-        let k = k.min(n);
-        // Column j of `M` (NV x NV, column-major) is m_j = L^-1 g_j.
-        let mut M = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
-        let mut c = OVector::<f64, NV>::zeros_generic(nv, nalgebra::U1);
-        for (&a, (mcol, cj)) in act
-            .iter()
-            .zip(columns_mut(M.as_mut_slice(), n).zip(c.as_mut_slice().iter_mut()))
-            .take(k)
-        {
-            let Some((g, ha)) = self.row(usize::from(a)) else {
-                return false;
-            };
-            crate::linalg::copy(mcol, self.solver.linv_mul(g).as_slice());
-            *cj = dot(g, self.x.as_slice()) - ha;
-        }
-        let Ms = M.as_slice();
-        // K = C C' (lower C; `T = C'`, `qp/guess.rs`).
-        let mut T = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
-        if !super::guess::factor_gram(&M, k, &mut T) {
-            return false;
-        }
-        let Ts = T.as_slice();
-        let diag = |i: usize| {
-            column(Ts, n, i)
-                .and_then(|t| t.get(i))
-                .copied()
-                .unwrap_or(0.0)
-        };
-        // C y = c (row `i` of `C` is column `i` of `T`).
-        let mut y = OVector::<f64, NV>::zeros_generic(nv, nalgebra::U1);
-        for (i, ti) in columns(Ts, n).enumerate().take(k) {
-            let mut s = c.get(i).copied().unwrap_or(0.0);
-            for (a, yl) in ti.iter().zip(y.as_slice()).take(i) {
-                s -= a * yl;
+        // In the kept workspace (written where read, `qp/guess.rs`), or in
+        // zeroed matrices of its own.
+        match self.guess.take() {
+            Some(work) => {
+                let held = self.guess_in(&mut work.M, &mut work.T, act, k, mult, blocked);
+                self.guess = Some(work);
+                held
             }
-            if let Some(yi) = y.get_mut(i) {
-                *yi = s / diag(i);
+            None => {
+                let nv = self.solver.nv();
+                let mut M = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
+                let mut T = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
+                self.guess_in(&mut M, &mut T, act, k, mult, blocked)
             }
         }
-        // C' lambda = y (column `i` of `C` is entry `i` of the columns of
-        // `T` after `i`).
-        let mut lambda = OVector::<f64, NV>::zeros_generic(nv, nalgebra::U1);
-        for i in (0..k).rev() {
-            let mut s = y.get(i).copied().unwrap_or(0.0);
-            let after = lambda.as_slice().get(i + 1..k).unwrap_or(&[]);
-            for (tl, ll) in columns_in(Ts, n, i + 1, k).zip(after) {
-                s -= tl.get(i).copied().unwrap_or(0.0) * ll;
-            }
-            if let Some(li) = lambda.get_mut(i) {
-                *li = s / diag(i);
-            }
-        }
-        if !lambda.as_slice().iter().all(|&l| l >= 0.0 && l.is_finite()) {
-            return false;
-        }
-        // x = x0 - L^-T M' lambda.
-        let mut w = OVector::<f64, NV>::zeros_generic(nv, nalgebra::U1);
-        for (col, &l) in columns(Ms, n).zip(lambda.as_slice().iter()).take(k) {
-            for (wk, &mk) in w.as_mut_slice().iter_mut().zip(col) {
-                *wk += l * mk;
-            }
-        }
-        let step = self.solver.linvt_mul(w.as_slice());
-        let x0 = self.x.clone();
-        for (xk, sk) in self.x.as_mut_slice().iter_mut().zip(step.as_slice().iter()) {
-            *xk -= sk;
-        }
-        // Every row must hold (the marked ones do, to rounding; if rounding
-        // says otherwise the guess is dropped).
-        let mut holds = true;
-        for (i, &b) in blocked.iter().enumerate() {
-            if self.violation(i, b).is_some() {
-                holds = false;
-                break;
-            }
-        }
-        if !holds || !self.x.as_slice().iter().all(|v| v.is_finite()) {
-            self.x = x0;
-            return false;
-        }
-        for (m, &l) in mult.iter_mut().zip(lambda.as_slice().iter()) {
-            *m = l;
-        }
-        true
     }
 
     /// `d = J' n_p`, then the add of [`householder_add`] unless the part of

@@ -199,6 +199,7 @@ where
                     span: Some(&spans),
                     reorder: true,
                     bounds,
+                    guess: None,
                 },
                 kept: kept.as_ref(),
             };

@@ -34,6 +34,8 @@ use nalgebra::{
     ArrayStorage, Const, DefaultAllocator, Dim, OMatrix, OVector, SMatrix, SVector, U1,
 };
 
+#[cfg(not(target_os = "none"))]
+use super::guess::GuessWork;
 use super::resolve::{Kept, ResolveStop, resolve};
 use super::{DenseQpOf, DualActiveSetOf, QpAllocator, RowNormsOf};
 use crate::active_set::Iterate;
@@ -58,6 +60,12 @@ where
     /// `J = L^-T` and `R = 0` already (a start from scratch need not set
     /// them again).
     pub pristine: bool,
+    /// The hot start's guess's matrices (`qp/guess.rs`), kept (not
+    /// cleared) from solve to solve. Not on bare-metal targets (the
+    /// firmware's N = 3 has no hot start; a guess there zeroes matrices of
+    /// its own).
+    #[cfg(not(target_os = "none"))]
+    pub guess: GuessWork<NV>,
 }
 
 impl<NV: Dim> Carry<NV>
@@ -124,6 +132,8 @@ where
             },
             valid: false,
             pristine,
+            #[cfg(not(target_os = "none"))]
+            guess: GuessWork::zeros(nv),
         }
     }
 
@@ -246,6 +256,8 @@ impl<const NV: usize, const NC: usize> ReprobeOf<Const<NV>, Const<NC>> {
             },
             valid: false,
             pristine: false,
+            #[cfg(not(target_os = "none"))]
+            guess: GuessWork::EMPTY,
         },
     };
 }

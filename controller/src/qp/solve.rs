@@ -181,7 +181,7 @@ where
             Ok(start) => start,
             Err(status) => return active_set::stopped(nv, nc, status),
         };
-        let (J, R, kept) = store.parts(&mut own);
+        let (J, R, kept, guess) = store.parts(&mut own);
         let mut d = OVector::<f64, NV>::zeros_generic(nv, U1);
         let mut factor = Resumed {
             inner: Orthogonal {
@@ -200,6 +200,7 @@ where
                 span: None,
                 reorder: false,
                 bounds,
+                guess,
             },
             kept,
         };

@@ -11,17 +11,21 @@
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
+use super::guess::GuessWork;
 use super::reprobe::Carry;
 use super::resolve::Kept;
 use super::{DualActiveSetOf, QpAllocator};
 use crate::active_set::Iterate;
 use crate::solution::QpStatus;
 
-/// The factor of a solve: `J`, `R` and the active rows it may resume from.
+/// The factor of a solve: `J`, `R`, the active rows it may resume from and
+/// the hot start's guess's kept workspace (`None`: the guess's own zeroed
+/// matrices, `qp/guess.rs`).
 pub(super) type Parts<'s, NV> = (
     &'s mut OMatrix<f64, NV, NV>,
     &'s mut OMatrix<f64, NV, NV>,
     Option<&'s Kept<NV>>,
+    Option<&'s mut GuessWork<NV>>,
 );
 
 /// Where a solve keeps its factor (module docs).
@@ -107,7 +111,7 @@ where
 
     #[inline(always)]
     fn parts<'s>(&'s mut self, own: &'s mut Self::Own) -> Parts<'s, NV> {
-        (&mut own.0, &mut own.1, None)
+        (&mut own.0, &mut own.1, None, None)
     }
 
     #[inline(always)]
@@ -149,10 +153,15 @@ where
 
     #[inline(always)]
     fn parts<'s>(&'s mut self, _own: &'s mut Self::Own) -> Parts<'s, NV> {
+        let carry = &mut **self;
+        #[cfg(not(target_os = "none"))]
+        let guess = Some(&mut carry.guess);
+        #[cfg(target_os = "none")]
+        let guess = None;
         let Carry {
             J, R, kept, valid, ..
-        } = &mut **self;
-        (J, R, if *valid { Some(&*kept) } else { None })
+        } = carry;
+        (J, R, if *valid { Some(&*kept) } else { None }, guess)
     }
 
     #[inline(always)]
