@@ -37,7 +37,7 @@ fn needed(origin: f64, r: f64, n: usize, lo: f64, hi: f64, slack: usize) -> (usi
 impl OccupancyMap {
     /// Grows the box so that its inner cells (all but the outermost ring)
     /// cover the box from `lo` to `hi` (world frame, m), each side that grows
-    /// by [`GROW_SLACK`] more (or, when that would pass `max_cells`, by
+    /// by `GROW_SLACK` (2 m) more (or, when that would pass `max_cells`, by
     /// exactly what is needed). Every cell keeps its state at its world
     /// position; new cells are unknown. When even the exact growth would pass
     /// `max_cells` the map is left as it is ([`Growth::AtBound`]: rays then
