@@ -172,6 +172,17 @@ fn zero_row_within_tolerance_is_never_added() {
     }
 }
 
+/// The bare-metal scan's rate of a zero row that does not hold: its
+/// `1 / |L^-1 g|` is `-0` (cached: not `+0`), so `slack * -0` is `+0`.
+#[test]
+fn zero_row_rates_plus_zero() {
+    let s = solver2();
+    let ihn = s.inv_hnorm(&[0.0, 0.0], 0.0);
+    assert_eq!(ihn.to_bits(), (-0.0f64).to_bits());
+    assert_eq!((-0.5e-10 * ihn).to_bits(), 0);
+    assert!(s.inv_hnorm(&[1.0, 0.0], 1.0) > 0.0);
+}
+
 #[test]
 fn budget_is_respected() {
     let s = solver2();
