@@ -50,11 +50,13 @@ pub(crate) enum AddError {
 /// have length `NV` (the number of variables).
 pub(crate) trait ActiveSetFactor {
     /// The violation of row `i` (`i < m`) at the current iterate: `None` when
-    /// the row is `blocked` (active, left out or a zero row; the
+    /// the row is `blocked` (active, left out or a zero equality row; the
     /// representation tests this where it is cheapest: before a dot product,
     /// or after the sign of a stored slack) or holds to the primal tolerance,
     /// else its (negative) slack in the metric of `H^-1`,
-    /// `slack_i / |L^-1 g_i|` (the most negative is added), or NaN when the
+    /// `slack_i / |L^-1 g_i|` (the most negative is added; a zero row
+    /// `g_i = 0`, never added, may give `+0`, which the scan's start of 0
+    /// never takes), or NaN when the
     /// slack is not finite (the solve stops with
     /// [`QpStatus::NumericalError`]). An `Option` with early returns keeps the
     /// common case, a row that holds, one compare and branch (a three-way

@@ -13,7 +13,7 @@ use crate::linalg::{column, columns, dot_d};
 
 /// Per-row data of a constraint matrix `G` used by a solve: squared Euclidean
 /// norms `|g_i|^2` and reciprocal norms in the metric of `H^-1`,
-/// `1 / |L^-1 g_i|` (both 0 for a zero row). Built by
+/// `1 / |L^-1 g_i|` (0 and `+0` or `-0` for a zero row). Built by
 /// [`DualActiveSetOf::prepare_rows`] for [`DualActiveSetOf::solve_prepared`].
 #[derive(Clone, Debug)]
 pub struct RowNormsOf<NC: Dim>
@@ -23,7 +23,8 @@ where
     /// `|g_i|^2`, in the units of `G` squared (no square root or division, so
     /// the pass over all rows is cheap; the violation test squares the slack).
     pub(super) norm2: OVector<f64, NC>,
-    /// `1 / |L^-1 g_i|`, 0 = not computed yet.
+    /// `1 / |L^-1 g_i|`, `+0` = not computed yet, `-0` for a zero row (set
+    /// by the scan when it first finds the row violated).
     pub(super) inv_hnorm: OVector<f64, NC>,
     /// Rows covered.
     pub(super) m: usize,
@@ -134,11 +135,16 @@ where
         rows
     }
 
-    /// `1 / |L^-1 g|` for a row with `|g|^2 = n2 > 0`.
+    /// `1 / |L^-1 g|` for a row with `|g|^2 = n2 > 0`; `-0` for a zero row
+    /// (`n2 <= ZERO_ROW2`), whose rate in the scan, `slack * -0`, is then
+    /// `+0`: never added, and cached (`+0` is "not computed yet").
     // Inlined on hosts (vectorised into the callers); the compiler decides on
     // bare-metal targets, where one out-of-line copy saves flash.
     #[cfg_attr(not(target_os = "none"), inline(always))]
     pub(super) fn inv_hnorm(&self, g: &[f64], n2: f64) -> f64 {
+        if n2 <= ZERO_ROW2 {
+            return -0.0;
+        }
         let w = self.linv_mul(g);
         let hn = crate::linalg::sqrt(dot_d::<NV>(w.as_slice(), w.as_slice()));
         // L^-1 is nonsingular, so hn > 0 for a non-zero row (barring underflow,

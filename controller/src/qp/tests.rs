@@ -144,6 +144,45 @@ fn zero_row_negative_rhs_is_infeasible() {
     assert_eq!(s.solve(&qp, &[false; 4]).status, QpStatus::Solved);
 }
 
+/// A zero row that holds only to the tolerance (`-tol <= h_i < 0`) is never
+/// added (its rate in the scan is `+0`): the solve gives the bits of the one
+/// without it, with or without a mark on it.
+#[test]
+fn zero_row_within_tolerance_is_never_added() {
+    let s = solver2();
+    let tol = QpSettings::default().tol_primal;
+    let mut without = DenseQp::<2, 4>::with_q(Vector2::new(-2.0, -4.0));
+    without.push_row(&Vector2::new(1.0, 1.0), 1.0).unwrap();
+    let want = s.solve(&without, &[false; 4]);
+    assert_eq!(want.status, QpStatus::Solved);
+    assert_eq!(want.iterations, 1);
+    let mut qp = DenseQp::<2, 4>::with_q(Vector2::new(-2.0, -4.0));
+    qp.push_row(&Vector2::new(0.0, 0.0), -0.5 * tol).unwrap();
+    qp.push_row(&Vector2::new(1.0, 1.0), 1.0).unwrap();
+    qp.push_row(&Vector2::new(0.0, 0.0), -tol).unwrap();
+    for marks in [[false; 4], [true, false, true, false], [true; 4]] {
+        let sol = s.solve(&qp, &marks);
+        assert_eq!(sol.status, QpStatus::Solved);
+        assert_eq!(sol.iterations, want.iterations);
+        assert_eq!(sol.x.map(f64::to_bits), want.x.map(f64::to_bits));
+        assert_eq!(sol.lambda[0].to_bits(), 0);
+        assert_eq!(sol.lambda[1].to_bits(), want.lambda[0].to_bits());
+        assert_eq!(sol.lambda[2].to_bits(), 0);
+        assert_eq!(sol.active_set(), &[1]);
+    }
+}
+
+/// The bare-metal scan's rate of a zero row that does not hold: its
+/// `1 / |L^-1 g|` is `-0` (cached: not `+0`), so `slack * -0` is `+0`.
+#[test]
+fn zero_row_rates_plus_zero() {
+    let s = solver2();
+    let ihn = s.inv_hnorm(&[0.0, 0.0], 0.0);
+    assert_eq!(ihn.to_bits(), (-0.0f64).to_bits());
+    assert_eq!((-0.5e-10 * ihn).to_bits(), 0);
+    assert!(s.inv_hnorm(&[1.0, 0.0], 1.0) > 0.0);
+}
+
 #[test]
 fn budget_is_respected() {
     let s = solver2();
