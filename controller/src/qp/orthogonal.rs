@@ -75,6 +75,11 @@ where
     /// The hot start's guess's kept workspace (`qp/guess.rs`); `None`: the
     /// guess zeroes matrices of its own.
     pub guess: Option<&'a mut GuessWork<NV>>,
+    /// The hot start's guess ended the solve: `x` and the multipliers are
+    /// the optimum on the marked rows, but `J` and `R` were never formed
+    /// for them (still `L^-T` and 0), so the factor must not be kept for a
+    /// next probe.
+    pub guessed: bool,
 }
 
 impl<'a, NV: Dim, NC: Dim, Bd: BoundRows> Orthogonal<'a, NV, NC, Bd>
@@ -527,7 +532,7 @@ where
     fn hot_guess(&mut self, act: &[u16], k: usize, mult: &mut [f64], blocked: &[bool]) -> bool {
         // In the kept workspace (written where read, `qp/guess.rs`), or in
         // zeroed matrices of its own.
-        match self.guess.take() {
+        let held = match self.guess.take() {
             Some(work) => {
                 let held = self.guess_in(&mut work.M, &mut work.T, act, k, mult, blocked);
                 self.guess = Some(work);
@@ -539,7 +544,9 @@ where
                 let mut T = OMatrix::<f64, NV, NV>::zeros_generic(nv, nv);
                 self.guess_in(&mut M, &mut T, act, k, mult, blocked)
             }
-        }
+        };
+        self.guessed = held;
+        held
     }
 
     /// `d = J' n_p`, then the add of [`householder_add`] unless the part of

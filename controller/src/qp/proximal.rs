@@ -200,10 +200,12 @@ where
                     reorder: true,
                     bounds,
                     guess: None,
+                    guessed: false,
                 },
                 kept: kept.as_ref(),
             };
             let it = active_set::iterate(&mut factor, nv, m, me, start, marks, true, left, hot);
+            let guessed = factor.inner.guessed;
             let x = factor.inner.x;
             let Some(it) = it else {
                 // The orthogonal factor never asks for a restart.
@@ -223,6 +225,14 @@ where
                     s => s,
                 };
                 return self.proximal_answer(qp, it, x, status, used);
+            }
+            // A solve the guess ended left `J`, `R` at the start from
+            // scratch (no factor of its active rows): the next one starts
+            // from scratch too.
+            if guessed {
+                kept = None;
+                last = Some((it, x));
+                continue;
             }
             kept = Some(Kept {
                 act: it.act.clone(),

@@ -201,6 +201,7 @@ where
                 reorder: false,
                 bounds,
                 guess,
+                guessed: false,
             },
             kept,
         };
@@ -235,12 +236,14 @@ where
             iterate!(&mut factor)
         };
         let x = factor.inner.x;
+        let guessed = factor.inner.guessed;
         let Some(it) = it else {
             // The orthogonal factor never asks for a restart.
             store.keep(None);
             return active_set::stopped(nv, nc, QpStatus::NumericalError);
         };
-        store.keep(Some(&it));
+        // A solve the guess ended holds no factor of its active rows.
+        store.keep(Some(&it).filter(|_| !guessed));
         let objective = self.objective(&qp.q, &x);
         let mut sol = it.solution(nc, x, objective, |_| 1.0);
         sol.iterations = sol.iterations.saturating_add(resumed_drops);

@@ -141,3 +141,49 @@ fn hot_start_keeps_the_budget() {
     }
     assert!(limited > 50, "{limited} budget-limited solves");
 }
+
+/// A probe solved by the hot start's guess holds no factor of its active
+/// rows (`J`, `R` are never formed for them), so the next probe of the
+/// same rows must not resume from it: it starts from scratch and reaches
+/// the optimum of its own `h`.
+#[test]
+fn a_probe_after_a_guessed_probe_reaches_its_own_optimum() {
+    const NV: usize = 16;
+    const NC: usize = 32;
+    let mut rnd = uniform(41);
+    let mut guessed = 0;
+    for k in 0..40 {
+        let h = hessian::<NV>(&mut rnd, k % 2 == 0);
+        let hot = DualActiveSet::<NV, NC>::new(&h, QpSettings::default()).unwrap();
+        let mut qp = DenseQp::<NV, NC>::with_q(SVector::from_fn(|_, _| 5.0 * rnd()));
+        for _ in 0..NC {
+            let g = SVector::<f64, NV>::from_fn(|_, _| rnd());
+            let _ = qp.push_row(&g, rnd() + 0.3);
+        }
+        let all = [true; NC];
+        let unmarked = [false; NC];
+        let a = hot.solve(&qp, &unmarked);
+        if a.status != QpStatus::Solved {
+            continue;
+        }
+        let mut optimal = [false; NC];
+        for &i in a.active_set() {
+            optimal[usize::from(i)] = true;
+        }
+        let mut state = crate::qp::Reprobe::<NV, NC>::new(&qp);
+        let first = hot.solve_reprobe(&qp, &qp.h, &all, &optimal, 1000, &mut state);
+        assert_eq!(first.status, QpStatus::Solved, "qp {k}");
+        if first.iterations as usize == first.n_active {
+            guessed += 1;
+        }
+        let h2 = qp.h.map(|v| v - 0.2);
+        let second = hot.solve_reprobe(&qp, &h2, &all, &unmarked, 1000, &mut state);
+        let fresh = hot.solve_selected(&qp, &h2, &all, &unmarked, 1000);
+        assert_eq!(second.status, fresh.status, "qp {k}");
+        if fresh.status == QpStatus::Solved {
+            let xs = fresh.x.amax().max(1.0);
+            assert!((second.x - fresh.x).amax() <= 1e-9 * xs, "qp {k}");
+        }
+    }
+    assert!(guessed > 10, "the guess ended only {guessed} first probes");
+}
