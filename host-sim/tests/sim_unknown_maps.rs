@@ -241,6 +241,25 @@ fn corridor_119_with_1440_rays_keeps_off_the_walls() {
     assert!(s.success && !s.collision && !s.foot_collision, "{s:#?}");
 }
 
+/// Doorway class: `doorway` seed 120 at delta = 0.05, a door in reach the
+/// robot walked up to and then left. Near the door, checks of the path from
+/// the robot's position (a few centimetres off its leg) called it blocked,
+/// and the replan took the first margin that connected, 0.15 m, round the
+/// room through space not yet seen: time limit. Checked along the path as
+/// planned, and planned through the door when the way round costs more
+/// than `rrt_star.map_detour` times as much (`docs/safety.md`, "Paths the
+/// barrier can follow"), it reaches the goal without contact.
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "release only: cargo test --release -p ldcbf-sim --test sim_unknown_maps"
+)]
+fn doorway_120_goes_through_its_door() {
+    let s = study_run("doorway", 120, "0.05", "360");
+    assert!(s.success && !s.collision && !s.foot_collision, "{s:#?}");
+    assert_eq!(s.contacts_robot, 0, "{s:#?}");
+}
+
 /// 20 seeds of every layout family with LiDAR (the default 360 rays), the
 /// map and planning at delta = 0.05: no body or foot contact with the true
 /// map in any run.

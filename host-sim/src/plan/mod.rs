@@ -133,6 +133,19 @@ pub struct RrtParams {
     /// every this many seconds of simulated time (and replanned when it crosses
     /// an inflated occupied cell), s.
     pub replan_period: f64,
+    /// Planning on the perceived map: the smallest clearance beyond the body
+    /// radius a path may keep (the last of the margin attempts), m. Unset: the
+    /// controller's safety margin `delta` (see [`RrtParams::map_floor`]), so
+    /// no path goes through a gap narrower than the controller's barrier
+    /// lets the body through.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub map_min_margin: Option<f64>,
+    /// Planning on the perceived map: a path kept at a larger margin than
+    /// the smallest is taken only when its cost is at most this many times
+    /// that of the path at the smallest margin (>= 1); otherwise the path at
+    /// the smallest margin is taken (a short way through a narrow door beats
+    /// a long way round through unseen space).
+    pub map_detour: f64,
 }
 
 impl Default for RrtParams {
@@ -150,11 +163,23 @@ impl Default for RrtParams {
             switch_radius: 0.4,
             unknown_cost: 2.0,
             replan_period: 0.25,
+            map_min_margin: None,
+            map_detour: 1.5,
         }
     }
 }
 
 impl RrtParams {
+    /// The smallest clearance beyond the body radius a path on the perceived
+    /// map keeps, m: `map_min_margin` when set, else the controller's safety
+    /// margin `delta` (m), capped at `margin`.
+    pub fn map_floor(&self, delta: f64) -> f64 {
+        self.map_min_margin
+            .unwrap_or(delta)
+            .min(self.margin)
+            .max(0.0)
+    }
+
     /// Checks every field; the error names the bad one and says why.
     pub fn validate(&self) -> Result<(), SettingError> {
         let pos = |v: f64| v.is_finite() && v > 0.0;
@@ -196,6 +221,18 @@ impl RrtParams {
         }
         if !(pos(self.replan_period) && self.replan_period <= 60.0) {
             return Err(SettingError::new("replan_period", "must be in (0, 60] s"));
+        }
+        if self
+            .map_min_margin
+            .is_some_and(|m| !(m.is_finite() && m >= 0.0))
+        {
+            return Err(SettingError::new(
+                "map_min_margin",
+                "must be finite and >= 0",
+            ));
+        }
+        if !(self.map_detour.is_finite() && self.map_detour >= 1.0) {
+            return Err(SettingError::new("map_detour", "must be finite and >= 1"));
         }
         Ok(())
     }

@@ -16,12 +16,25 @@
 //! "freespace assumption" of navigation in unknown terrain), with the cost of
 //! entering one multiplied by `unknown_cost`: the path goes through space
 //! already seen free when that is not much longer, and towards the unknown
-//! only when it must. Occupied cells are inflated by the body radius plus
-//! `margin` (retried with the smaller margins of [`attempt_margins`] down to
-//! the body radius alone), the edge cost is the known-map planner's
+//! only when it must. The edge cost is the known-map planner's
 //! (`length * exp(-clearance)` of the cell entered, clearance capped at
 //! `clearance_cap`), and the path is shortcut through cells not inflated
 //! (unknown cells included) when `shortcut` is set.
+//!
+//! **Inflation: what the controller can pass, then the margin when it is
+//! cheap.** Occupied cells are inflated by the body radius plus a margin no
+//! smaller than the floor ([`RrtParams::map_floor`]: by default the
+//! controller's safety margin `delta`, whose barrier keeps the body that far
+//! from every piece, so a gap the controller cannot pass is never planned
+//! through). The path at the floor is found first; a path at a larger margin
+//! of [`attempt_margins`] (largest first) replaces it only when it costs at
+//! most `map_detour` times as much. Taking the first margin that connects,
+//! as the known-map planner does, chose a path kept 0.15 m from the walls
+//! round the room through unseen space over a door 0.7 m wide a few metres
+//! ahead. This is how a costmap's inflation works in Nav2 (the inflation
+//! layer, `docs.nav2.org`, "Inflation Layer Parameters"): lethal within the
+//! robot's inscribed radius, a cost that decays with the distance beyond, one
+//! search over both; here the decay is the edge cost and the margins.
 
 use ldcbf_controller::nalgebra::Vector2;
 
@@ -61,14 +74,18 @@ pub struct MapPlan {
 }
 
 /// Plans from `start` to `goal` (m) on `map` for a body of `body_radius` (m)
-/// (module docs). Fails when no margin down to the body radius alone leaves
-/// the start and the goal connected.
+/// keeping at least `floor` (m) beyond it (module docs): the path at the
+/// smallest margin `floor` is found first; a path at a larger margin of
+/// [`attempt_margins`] (largest first) replaces it when its cost is at most
+/// `params.map_detour` times as much. Fails when the start and the goal are
+/// not connected at the margin `floor`.
 pub fn plan_on_map(
     map: &CellMap<'_>,
     start: Vector2<f64>,
     goal: Vector2<f64>,
     params: &RrtParams,
     body_radius: f64,
+    floor: f64,
 ) -> Result<MapPlan, PlanError> {
     assert_eq!(
         map.occupied.len(),
@@ -80,67 +97,74 @@ pub fn plan_on_map(
         map.width * map.height,
         "one flag per cell"
     );
-    let mut last = PlanError::NoPath { nodes: 0 };
+    let (narrow, narrow_cost) = search(map, start, goal, params, body_radius + floor)?;
     for m in attempt_margins(params.margin) {
-        let inflation = body_radius + m;
-        let grid = OccupancyGrid::from_cells(
-            map.origin,
-            map.resolution,
-            map.width,
-            map.height,
-            map.occupied,
-            inflation,
-        );
-        let reach = inflation + 2.0 * map.resolution;
-        let (s_in, g_in) = ([start.x, start.y], [goal.x, goal.y]);
-        let mut entry = false;
-        let s = if grid.is_free(s_in) {
-            s_in
-        } else {
-            entry = true;
-            match nearest_free(&grid, s_in, reach) {
-                Some(e) => e,
-                None => {
-                    last = PlanError::StartBlocked;
-                    continue;
-                }
-            }
-        };
-        let g = if grid.is_free(g_in) {
-            g_in
-        } else {
-            match nearest_free(&grid, g_in, reach) {
-                Some(e) => e,
-                None => {
-                    last = PlanError::GoalBlocked;
-                    continue;
-                }
-            }
-        };
-        let unknown_cost = params.unknown_cost;
-        let Some((mut path, _)) = grid_search_with(&grid, s, g, params.clearance_cap, |k| {
-            if map.unknown[k] { unknown_cost } else { 1.0 }
-        }) else {
-            last = PlanError::NoPath { nodes: 0 };
-            continue;
-        };
-        if entry {
-            path.insert(0, s_in);
+        if m <= floor {
+            break;
         }
-        let mut kept = shortcut(&grid, &path, usize::from(entry), params.shortcut);
-        if dist(g, g_in) > 1e-12 {
-            path.push(g_in);
-            kept.push(g_in);
+        if let Ok((p, cost)) = search(map, start, goal, params, body_radius + m)
+            && cost <= params.map_detour * narrow_cost
+        {
+            return Ok(p);
         }
-        let to_v = |p: &[f64; 2]| Vector2::new(p[0], p[1]);
-        return Ok(MapPlan {
+    }
+    Ok(narrow)
+}
+
+/// One A* search on `map` with the occupied cells inflated by `inflation`
+/// (m): the plan and its cost (m, weighted as [`grid_search_with`]).
+fn search(
+    map: &CellMap<'_>,
+    start: Vector2<f64>,
+    goal: Vector2<f64>,
+    params: &RrtParams,
+    inflation: f64,
+) -> Result<(MapPlan, f64), PlanError> {
+    let grid = OccupancyGrid::from_cells(
+        map.origin,
+        map.resolution,
+        map.width,
+        map.height,
+        map.occupied,
+        inflation,
+    );
+    let reach = inflation + 2.0 * map.resolution;
+    let (s_in, g_in) = ([start.x, start.y], [goal.x, goal.y]);
+    let mut entry = false;
+    let s = if grid.is_free(s_in) {
+        s_in
+    } else {
+        entry = true;
+        nearest_free(&grid, s_in, reach).ok_or(PlanError::StartBlocked)?
+    };
+    let g = if grid.is_free(g_in) {
+        g_in
+    } else {
+        nearest_free(&grid, g_in, reach).ok_or(PlanError::GoalBlocked)?
+    };
+    let unknown_cost = params.unknown_cost;
+    let (mut path, cost) = grid_search_with(&grid, s, g, params.clearance_cap, |k| {
+        if map.unknown[k] { unknown_cost } else { 1.0 }
+    })
+    .ok_or(PlanError::NoPath { nodes: 0 })?;
+    if entry {
+        path.insert(0, s_in);
+    }
+    let mut kept = shortcut(&grid, &path, usize::from(entry), params.shortcut);
+    if dist(g, g_in) > 1e-12 {
+        path.push(g_in);
+        kept.push(g_in);
+    }
+    let to_v = |p: &[f64; 2]| Vector2::new(p[0], p[1]);
+    Ok((
+        MapPlan {
             path: path.iter().map(to_v).collect(),
             subgoals: kept.iter().map(to_v).collect(),
             grid,
             inflation,
-        });
-    }
-    Err(last)
+        },
+        cost,
+    ))
 }
 
 #[cfg(test)]
@@ -180,6 +204,7 @@ mod tests {
             Vector2::new(3.5, 0.5),
             &RrtParams::default(),
             0.2,
+            0.0,
         )
         .unwrap();
         assert_eq!(*p.subgoals.last().unwrap(), Vector2::new(3.5, 0.5));
@@ -201,6 +226,7 @@ mod tests {
             Vector2::new(3.5, 0.5),
             &RrtParams::default(),
             0.2,
+            0.0,
         );
         assert!(matches!(r, Err(PlanError::NoPath { .. })), "{r:?}");
         // Open map: a band at y in [1.4, 1.6) seen free, the rest unknown;
@@ -218,6 +244,7 @@ mod tests {
             Vector2::new(3.5, 0.5),
             &params,
             0.2,
+            0.0,
         )
         .unwrap();
         assert!(p.path.iter().any(|q| q.y > 1.4), "{:?}", p.path);
@@ -227,8 +254,51 @@ mod tests {
             Vector2::new(3.5, 0.5),
             &params,
             0.2,
+            0.0,
         )
         .unwrap();
         assert!(cheap.path.iter().all(|q| q.y < 1.0), "{:?}", cheap.path);
+    }
+
+    /// A 4 m x 4 m map at 0.1 m, all unknown, with a wall across x = 2 m
+    /// below y = 2.5 m holding a door of 6 cells (centres 0.3 m from the
+    /// nearest wall cell): the door admits an inflation of 0.25 m, not 0.35.
+    fn door_and_a_long_way_round() -> (Vec<bool>, Vec<bool>) {
+        let (w, h) = (40, 40);
+        let mut occ = vec![false; w * h];
+        for j in 0..25 {
+            if !(5..11).contains(&j) {
+                occ[j * w + 20] = true;
+            }
+        }
+        (occ, vec![true; w * h])
+    }
+
+    #[test]
+    fn a_narrow_door_ahead_beats_a_long_way_round_at_a_larger_margin() {
+        let (occ, unk) = door_and_a_long_way_round();
+        let map = CellMap {
+            height: 40,
+            ..cell_map(&occ, &unk)
+        };
+        let (start, goal) = (Vector2::new(0.5, 0.8), Vector2::new(3.5, 0.8));
+        let params = RrtParams::default();
+        // Body 0.2 m, floor 0.05 m: through the door at the largest margin
+        // it admits, 0.075 m (the margin 0.15 m only connects over the
+        // wall's end, more than twice as long).
+        let p = plan_on_map(&map, start, goal, &params, 0.2, 0.05).unwrap();
+        assert!((p.inflation - 0.275).abs() < 1e-12, "{}", p.inflation);
+        assert!(p.path.iter().all(|q| q.y < 1.2), "{:?}", p.path);
+        // A detour allowed to cost 10 times as much keeps the margin.
+        let lax = RrtParams {
+            map_detour: 10.0,
+            ..params.clone()
+        };
+        let p = plan_on_map(&map, start, goal, &lax, 0.2, 0.05).unwrap();
+        assert!((p.inflation - 0.35).abs() < 1e-12, "{}", p.inflation);
+        assert!(p.path.iter().any(|q| q.y > 2.5), "{:?}", p.path);
+        // A floor above what the door admits: no way through it.
+        let p = plan_on_map(&map, start, goal, &params, 0.2, 0.12).unwrap();
+        assert!(p.path.iter().any(|q| q.y > 2.5), "{:?}", p.path);
     }
 }
