@@ -140,12 +140,6 @@ pub struct RrtParams {
     /// lets the body through.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub map_min_margin: Option<f64>,
-    /// Planning on the perceived map: a path kept at a larger margin than
-    /// the smallest is taken only when its cost is at most this many times
-    /// that of the path at the smallest margin (>= 1); otherwise the path at
-    /// the smallest margin is taken (a short way through a narrow door beats
-    /// a long way round through unseen space).
-    pub map_detour: f64,
 }
 
 impl Default for RrtParams {
@@ -164,7 +158,6 @@ impl Default for RrtParams {
             unknown_cost: 2.0,
             replan_period: 0.25,
             map_min_margin: None,
-            map_detour: 1.5,
         }
     }
 }
@@ -230,9 +223,6 @@ impl RrtParams {
                 "map_min_margin",
                 "must be finite and >= 0",
             ));
-        }
-        if !(self.map_detour.is_finite() && self.map_detour >= 1.0) {
-            return Err(SettingError::new("map_detour", "must be finite and >= 1"));
         }
         Ok(())
     }

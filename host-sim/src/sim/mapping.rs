@@ -23,10 +23,10 @@
 //! half the stuck window ("stalled", at most once per half window). The
 //! check follows the path, not the robot: a robot a few centimetres off its
 //! leg in a doorway (the barrier keeps it off the corners) does not make the
-//! path "blocked", which, replanned at a larger margin, sent it away from the
-//! door round the room through space not yet seen (`docs/safety.md`, "Paths
-//! the barrier can follow"). A failed plan keeps the goal as the only
-//! subgoal and counts as a failure.
+//! path "blocked" (replanned, it can be sent away from the door round the
+//! room through space not yet seen; `docs/safety.md`, "Paths the barrier
+//! can follow"). A failed plan keeps the goal as the only subgoal and counts
+//! as a failure.
 //!
 //! **Speed cap** ([`Mapper::capture_cap`]): with
 //! `lidar.map.capture_speed_limit`, each cycle's
