@@ -314,7 +314,7 @@ impl<'s, B: QpBackend<NV, NC> + Clone> Loop<'s, B> {
             self.scenario,
             plant.time(),
             state.position,
-            (&self.subgoals, self.current),
+            &self.subgoals[self.current..],
             stalled,
         ) {
             self.subgoals = new;

@@ -14,19 +14,14 @@
 //! fill the controller's few obstacle slots with one side of a corridor.
 //!
 //! **Replanning** ([`Mapper::plan`]): a path is planned at the first cycle;
-//! then, every `replan_period` s, the rest of the path as planned (the leg
-//! the robot is on, from the subgoal it last passed or from where the path
-//! was planned, and the legs after it) is checked against the map's occupied
-//! cells inflated by the smallest inflation a plan may use (body radius plus
-//! [`crate::plan::RrtParams::map_floor`]) and replanned when it crosses one
-//! ("blocked"), and it is replanned when the robot has made no progress for
-//! half the stuck window ("stalled", at most once per half window). The
-//! check follows the path, not the robot: a robot a few centimetres off its
-//! leg in a doorway (the barrier keeps it off the corners) does not make the
-//! path "blocked" (replanned, it can be sent away from the door round the
-//! room through space not yet seen; `docs/safety.md`, "Paths the barrier
-//! can follow"). A failed plan keeps the goal as the only subgoal and counts
-//! as a failure.
+//! then, every `replan_period` s, the rest of the path (from the robot through
+//! the remaining subgoals) is checked against the map's occupied cells inflated
+//! by the plan's inflation and replanned when it crosses one ("blocked"), and
+//! it is replanned when the robot has made no progress for half the stuck
+//! window ("stalled", at most once per half window). Each plan keeps at least
+//! [`crate::plan::RrtParams::map_floor`] beyond the body radius
+//! ([`crate::plan::on_map`]). A failed plan keeps the goal as the only
+//! subgoal and counts as a failure.
 //!
 //! **Speed cap** ([`Mapper::capture_cap`]): with
 //! `lidar.map.capture_speed_limit`, each cycle's
@@ -104,9 +99,6 @@ pub(super) struct Mapper {
     /// The next time the path is checked, s.
     next_check: f64,
     last_stall_replan: f64,
-    /// Where the robot was when the current path was planned, m: the start
-    /// of its first leg.
-    plan_start: Vector2<f64>,
     last_update: Option<f64>,
     /// With `lidar.track_moving`: the people kept out of the map
     /// ([`crate::sense::movers`]) and what the last scan showed of them.
@@ -133,7 +125,6 @@ impl Mapper {
             planning,
             next_check: 0.0,
             last_stall_replan: f64::NEG_INFINITY,
-            plan_start: scenario.start,
             last_update: None,
             movers: scenario.lidar.track_moving.then(|| {
                 (
@@ -263,15 +254,14 @@ impl Mapper {
 
     /// With planning: the new subgoals when the path is (re)planned this
     /// cycle (module docs), else `None`. `position` is the robot's (m),
-    /// `subgoals` the path and `current` the subgoal the robot walks to (the
-    /// rest of the path is `subgoals[current..]`), `stalled` whether the
+    /// `subgoals[current..]` the rest of the path, `stalled` whether the
     /// robot has made no progress for half the stuck window.
     pub(super) fn plan(
         &mut self,
         scenario: &Scenario,
         time: f64,
         position: Vector2<f64>,
-        (subgoals, current): (&[Vector2<f64>], usize),
+        subgoals: &[Vector2<f64>],
         stalled: bool,
     ) -> Option<(ReplanReason, Vec<Vector2<f64>>)> {
         if !self.planning {
@@ -294,14 +284,9 @@ impl Mapper {
                 m.width,
                 m.height,
                 &occupied,
-                scenario.robot.body_radius + floor,
+                scenario.robot.body_radius,
             );
-            let leg_start = current
-                .checked_sub(1)
-                .and_then(|k| subgoals.get(k))
-                .copied()
-                .unwrap_or(self.plan_start);
-            if !path_blocked(&grid, leg_start, &subgoals[current..]) {
+            if !path_blocked(&grid, position, subgoals) {
                 return None;
             }
             ReplanReason::Blocked
@@ -328,7 +313,6 @@ impl Mapper {
             scenario.robot.body_radius,
             floor,
         );
-        self.plan_start = position;
         let ns = u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX);
         let subgoals = match res {
             Ok(p) => p.subgoals,
@@ -360,14 +344,13 @@ impl Mapper {
     }
 }
 
-/// Whether the rest of the path (from `leg_start`, m, the start of the leg
-/// the robot is on, through `subgoals`) crosses an occupied cell of `grid`:
-/// a subgoal before the last in an occupied cell, or a leg between two free
-/// cells that leaves the free cells. A leg from or to a point inside the
-/// inflation (a path planned from near a wall, a goal near a wall) is the
-/// plan's way out or in and is not checked.
-fn path_blocked(grid: &OccupancyGrid, leg_start: Vector2<f64>, subgoals: &[Vector2<f64>]) -> bool {
-    let mut prev = [leg_start.x, leg_start.y];
+/// Whether the rest of the path (from `position`, m, through `subgoals`)
+/// crosses an occupied cell of `grid`: a subgoal before the last in an
+/// occupied cell, or a leg between two free cells that leaves the free cells.
+/// A leg from or to a point inside the inflation (the robot near a wall, a
+/// goal near a wall) is the plan's way out or in and is not checked.
+fn path_blocked(grid: &OccupancyGrid, position: Vector2<f64>, subgoals: &[Vector2<f64>]) -> bool {
+    let mut prev = [position.x, position.y];
     for (k, s) in subgoals.iter().enumerate() {
         let q = [s.x, s.y];
         let (a, b) = (grid.is_free(prev), grid.is_free(q));
@@ -377,40 +360,4 @@ fn path_blocked(grid: &OccupancyGrid, leg_start: Vector2<f64>, subgoals: &[Vecto
         prev = q;
     }
     false
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A 4 m x 4 m grid at 0.1 m with a wall across x = 2 m holding a door
-    /// 1 m wide centred on y = 2 m, inflated by 0.3 m.
-    fn door() -> OccupancyGrid {
-        let (w, h) = (40, 40);
-        let mut cells = vec![false; w * h];
-        for j in (0..15).chain(25..40) {
-            cells[j * w + 20] = true;
-        }
-        OccupancyGrid::from_cells(Vector2::zeros(), 0.1, w, h, &cells, 0.3)
-    }
-
-    #[test]
-    fn a_robot_off_its_leg_does_not_block_the_path() {
-        let grid = door();
-        let subgoals = [Vector2::new(3.0, 2.0), Vector2::new(3.5, 2.0)];
-        // The leg as planned goes through the door's middle.
-        assert!(!path_blocked(&grid, Vector2::new(1.0, 2.0), &subgoals));
-        // From a robot 0.45 m below it, in a free cell, the straight line to
-        // the subgoal clips the door's lower corner: not the path.
-        let robot = Vector2::new(1.75, 1.55);
-        assert!(grid.is_free([robot.x, robot.y]));
-        assert!(path_blocked(&grid, robot, &subgoals));
-        // A wall newly seen across the leg does block it.
-        let mut cells = vec![false; 1600];
-        for j in 0..40 {
-            cells[j * 40 + 20] = true;
-        }
-        let closed = OccupancyGrid::from_cells(Vector2::zeros(), 0.1, 40, 40, &cells, 0.3);
-        assert!(path_blocked(&closed, Vector2::new(1.0, 2.0), &subgoals));
-    }
 }
