@@ -4,7 +4,7 @@
 
 use super::{Assembly, Core, CycleInput, InputError, Prediction};
 use crate::constraints::{
-    GaitBounds, RowId, RowKind, push_foot_row, push_gait_rows, push_ldcbf_row,
+    GaitBounds, RowId, RowKind, StepSpan, push_foot_row, push_gait_rows, push_ldcbf_row,
 };
 use crate::geometry::ConvexPolygon;
 use crate::heading::{plan_heading, wrap_angle};
@@ -109,7 +109,12 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         }
         // Step end k is at t_k = tau + k T from the input; a moving obstacle's
         // half-plane is taken there (`HalfPlane::h_at`).
-        let step_times = |k: usize| (tau + k as f64 * t_step, tau + (k + 1) as f64 * t_step);
+        let step = |k: usize| StepSpan {
+            k,
+            times: (tau + k as f64 * t_step, tau + (k + 1) as f64 * t_step),
+            p0,
+            v0,
+        };
         for ob in &out.obstacles[..out.n_obstacles.min(NOBS)] {
             for k in 0..N {
                 let i = out.qp.m;
@@ -119,10 +124,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                     &ob.half_plane,
                     cfg.gamma,
                     self.barrier_margin,
-                    k,
-                    step_times(k),
-                    &p0,
-                    &v0,
+                    &step(k),
                 )
                 .is_ok();
                 if let Some(slot) = out.rows.get_mut(i) {
@@ -138,17 +140,8 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                 for k in 0..N {
                     let i = out.qp.m;
                     let df = cfg.foot_margin(&ob.half_plane.eta, heading.theta[k]);
-                    ok &= push_foot_row(
-                        &mut out.qp,
-                        &self.model,
-                        &ob.half_plane,
-                        df,
-                        k,
-                        step_times(k),
-                        &p0,
-                        &v0,
-                    )
-                    .is_ok();
+                    ok &= push_foot_row(&mut out.qp, &self.model, &ob.half_plane, df, &step(k))
+                        .is_ok();
                     if let Some(slot) = out.rows.get_mut(i) {
                         *slot = RowId {
                             kind: RowKind::FootClearance(ob.index),
