@@ -57,6 +57,45 @@ impl RecordedInput {
         }
     }
 
+    /// This input as ten `f64` bit patterns, `[p_x, p_y, v_x, v_y, heading,
+    /// omega, foot_x, foot_y, time_in_step, side]` (m, m/s, rad, rad/s, s,
+    /// world frame W; side 0 = left, 1 = right stance foot): the rows the
+    /// firmware replays from flash (`firmware/src/recorded.rs`). The goal,
+    /// the obstacle list and the speed cap are not kept.
+    pub fn to_bits(&self) -> [u64; 10] {
+        [
+            self.com_position.x.to_bits(),
+            self.com_position.y.to_bits(),
+            self.com_velocity.x.to_bits(),
+            self.com_velocity.y.to_bits(),
+            self.heading.to_bits(),
+            self.turning_rate.to_bits(),
+            self.stance_foot.x.to_bits(),
+            self.stance_foot.y.to_bits(),
+            self.time_in_step.to_bits(),
+            u64::from(self.stance_side == Side::Right),
+        ]
+    }
+
+    /// The input of a row of [`RecordedInput::to_bits`] (side 1 is the
+    /// right foot, any other value the left), walking to `goal` (m, world)
+    /// among obstacle list 0 without a speed cap.
+    pub fn from_bits(r: &[u64; 10], goal: Vector2<f64>) -> RecordedInput {
+        let f = |i: usize| f64::from_bits(r[i]);
+        RecordedInput {
+            com_position: Vector2::new(f(0), f(1)),
+            com_velocity: Vector2::new(f(2), f(3)),
+            heading: f(4),
+            turning_rate: f(5),
+            stance_foot: Vector2::new(f(6), f(7)),
+            stance_side: if r[9] == 1 { Side::Right } else { Side::Left },
+            time_in_step: f(8),
+            goal,
+            obstacles: 0,
+            speed_cap: NO_SPEED_CAP,
+        }
+    }
+
     /// The controller input of this cycle among `obstacles` (the list that
     /// [`RecordedInput::obstacles`] names).
     pub fn input<'a, const V: usize>(
