@@ -1,4 +1,4 @@
-//! Workspace root package: hosts the cross-crate integration test in `tests/`
+//! Workspace root package: hosts the cross-crate integration tests in `tests/`
 //! and the benchmarks in `benches/`, and the fixtures they share ([`fixtures`]).
 
 pub mod fixtures {
