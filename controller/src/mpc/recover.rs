@@ -38,6 +38,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         // (`give_way`); the nominal cost is restored after it.
         let nominal_q = work.qp.q;
         let mut give_way = None;
+        let mut moving = [false; NC];
         if sol.status == QpStatus::Infeasible
             && let Some(goal) = self.give_way_goal(work, &sol.lambda)
         {
@@ -45,6 +46,8 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             // Its first probe starts from scratch, adding the rows of the
             // warm start (`prefer`) first.
             give_way = Some(prefer);
+            // The people's rows give way before the walls'.
+            moving = Self::moving_rows(work);
         }
         let relaxed = if sol.status == QpStatus::Infeasible {
             relax::relax(
@@ -64,6 +67,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                     ),
                     certificate: Some(&sol.lambda),
                     give_way,
+                    moving: give_way.map(|_| &moving),
                 },
                 reprobe,
             )

@@ -21,6 +21,7 @@ fn params<'a, const NC: usize>(
         capture,
         certificate,
         give_way: None,
+        moving: None,
     }
 }
 
@@ -696,4 +697,85 @@ fn give_way_marks_change_the_path_not_the_answer() {
         cases >= 100 && same_rows * 10 >= cases * 9,
         "{cases} {same_rows}"
     );
+}
+
+/// Moving rows first (module docs): a robot walking at 0.6 m/s between two
+/// walls 0.9 m apart, a person (a 0.5 m square) 0.9 m ahead walking at it at
+/// 0.6 m/s, goal behind and beside (as a give-way goal can be). The nominal QP is
+/// infeasible with the person's rows in the conflict; with the person's rows
+/// (`Params::moving`) given way first, every wall row keeps its nominal
+/// right-hand side and only the person's rows take the relaxation. Every
+/// safety row relaxed alike (no `moving`), a wall row gives way.
+#[test]
+fn a_person_gives_way_before_the_walls() {
+    let ctl = PaperController::new(Config::default()).unwrap();
+    let wall = |y0: f64, y1: f64| {
+        ConvexPolygon::<8>::new(&[[-2.0, y0], [6.0, y0], [6.0, y1], [-2.0, y1]]).unwrap()
+    };
+    let person =
+        ConvexPolygon::<8>::new(&[[0.65, -0.25], [1.15, -0.25], [1.15, 0.25], [0.65, 0.25]])
+            .unwrap();
+    let obstacles = [wall(0.45, 0.9), wall(-0.9, -0.45), person];
+    let velocities = [Vector2::zeros(), Vector2::zeros(), Vector2::new(-0.6, 0.0)];
+    let input = CycleInput {
+        com_position: Vector2::new(0.0, -0.1),
+        com_velocity: Vector2::new(0.6, 0.0),
+        heading: 0.0,
+        turning_rate: 0.0,
+        stance_foot: Vector2::new(0.0, -0.2),
+        stance_side: Side::Right,
+        time_in_step: 0.4,
+        goal: Vector2::new(-0.5, -1.5),
+        obstacles: &obstacles,
+        obstacle_velocities: &velocities,
+        speed_cap: crate::NO_SPEED_CAP,
+    };
+    let mut asm = Assembly::default();
+    ctl.assemble(&input, None, &mut asm).unwrap();
+    let solver = ctl.solver();
+    let nominal = solver.with_max_iter(64).solve(&asm.qp, &[false; NC]);
+    assert!(nominal.status.is_infeasible(), "{:?}", nominal.status);
+    let cb = CaptureBounds::new(ctl.config(), ctl_kappa(), asm.prediction.heading.omega_bar);
+    let mut moving = [false; NC];
+    for (m, id) in moving.iter_mut().zip(&asm.rows).take(asm.qp.m) {
+        *m = matches!(id.kind, RowKind::Ldcbf(2) | RowKind::FootClearance(2));
+    }
+    // The worst violation of the rows of obstacle `j` by the plan `u`.
+    let worst = |j: u32, u: &SVector<f64, 6>| {
+        asm.qp
+            .rows()
+            .zip(&asm.rows)
+            .filter(|(_, id)| {
+                matches!(id.kind, RowKind::Ldcbf(i) | RowKind::FootClearance(i) if i == j)
+            })
+            .map(|((g, h), _)| g.dot(u) - h)
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    let run = |moving: Option<&[bool; NC]>| {
+        let p = Params {
+            give_way: Some(&[false; NC]),
+            moving,
+            ..params(0.1, cb, Some(&nominal.lambda))
+        };
+        let r = relax(
+            solver,
+            &mut Counting(0),
+            &asm.qp,
+            &asm.rows,
+            p,
+            &mut Reprobe::new(&asm.qp),
+        )
+        .unwrap();
+        let walls = worst(0, &r.u).max(worst(1, &r.u));
+        std::println!("{r:?}: walls {walls:.4}, person {:.4}", worst(2, &r.u));
+        (r, walls)
+    };
+    let (first, walls) = run(Some(&moving));
+    assert_eq!(first.level, RelaxLevel::Safety, "{first:?}");
+    assert!(walls <= 1e-9, "a wall gave way: {first:?}");
+    let person = worst(2, &first.u);
+    assert!(person > 1e-3 && person <= first.eps_safety * (1.0 + 1e-9) + 1e-9);
+    assert_eq!(first.conflict, moving);
+    let (uniform, walls) = run(None);
+    assert!(walls > 1e-3, "the case does not test anything: {uniform:?}");
 }
