@@ -37,6 +37,7 @@ use nalgebra::{
 #[cfg(not(target_os = "none"))]
 use super::guess::GuessWork;
 use super::resolve::{Kept, ResolveStop, resolve};
+use super::store::Begin;
 use super::{DenseQpOf, DualActiveSetOf, QpAllocator, RowNormsOf};
 use crate::active_set::Iterate;
 use crate::solution::{QpSolutionOf, QpStatus};
@@ -147,16 +148,19 @@ where
     /// iterate and the drops made, or the status that ends the solve.
     pub(super) fn start<NC: Dim>(
         &mut self,
-        solver: &DualActiveSetOf<NV, NC>,
-        q: &OVector<f64, NV>,
-        h: &OVector<f64, NC>,
-        blocked: &mut OVector<bool, NC>,
-        me: usize,
-        max_iter: u32,
+        at: Begin<'_, NV, NC>,
     ) -> Result<(OVector<f64, NV>, u32), QpStatus>
     where
         DefaultAllocator: QpAllocator<NV, NC>,
     {
+        let Begin {
+            solver,
+            q,
+            h,
+            blocked,
+            me,
+            max_iter,
+        } = at;
         let nv = solver.nv();
         let n = nv.value();
         // Equality rows stay in the factor: one left out (or a zero one)

@@ -28,6 +28,29 @@ pub(super) type Parts<'s, NV> = (
     Option<&'s mut GuessWork<NV>>,
 );
 
+/// What [`Store::start`] starts a solve from: the linear term `q`, the
+/// right-hand side `h`, the rows `blocked` left out (the first `me` rows
+/// equalities; a start from kept rows marks them and the equality rows
+/// blocked) and the iteration budget `max_iter` (of which the drops made
+/// resuming take their part).
+pub(super) struct Begin<'b, NV: Dim, NC: Dim>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
+    /// The solver (for `L^-1` and the unconstrained minimiser).
+    pub solver: &'b DualActiveSetOf<NV, NC>,
+    /// The linear term.
+    pub q: &'b OVector<f64, NV>,
+    /// The right-hand side.
+    pub h: &'b OVector<f64, NC>,
+    /// The rows left out of the scans.
+    pub blocked: &'b mut OVector<bool, NC>,
+    /// The number of equality rows, at the head.
+    pub me: usize,
+    /// The iteration budget.
+    pub max_iter: u32,
+}
+
 /// Where a solve keeps its factor (module docs).
 pub(super) trait Store<NV: Dim>
 where
@@ -47,21 +70,15 @@ where
         DefaultAllocator: QpAllocator<NV, NC>;
 
     /// The starting iterate and the drops made resuming, or the status that
-    /// ends the solve (`Carry::start`; from scratch: the unconstrained
-    /// minimiser, no drops).
-    #[allow(clippy::too_many_arguments)]
-    fn start<NC: Dim>(
-        &mut self,
-        own: &mut Self::Own,
-        solver: &DualActiveSetOf<NV, NC>,
-        q: &OVector<f64, NV>,
-        h: &OVector<f64, NC>,
-        blocked: &mut OVector<bool, NC>,
-        me: usize,
-        max_iter: u32,
-    ) -> Result<(OVector<f64, NV>, u32), QpStatus>
+    /// ends the solve ([`Carry`]'s; from scratch, this default: the
+    /// unconstrained minimiser, no drops).
+    #[inline(always)]
+    fn start<NC: Dim>(&mut self, at: Begin<'_, NV, NC>) -> Result<(OVector<f64, NV>, u32), QpStatus>
     where
-        DefaultAllocator: QpAllocator<NV, NC>;
+        DefaultAllocator: QpAllocator<NV, NC>,
+    {
+        Ok((at.solver.unconstrained_minimiser(at.q), 0))
+    }
 
     /// The factor and the rows to resume from (after [`Store::start`]).
     fn parts<'s>(&'s mut self, own: &'s mut Self::Own) -> Parts<'s, NV>;
@@ -93,23 +110,6 @@ where
     }
 
     #[inline(always)]
-    fn start<NC: Dim>(
-        &mut self,
-        _own: &mut Self::Own,
-        solver: &DualActiveSetOf<NV, NC>,
-        q: &OVector<f64, NV>,
-        _h: &OVector<f64, NC>,
-        _blocked: &mut OVector<bool, NC>,
-        _me: usize,
-        _max_iter: u32,
-    ) -> Result<(OVector<f64, NV>, u32), QpStatus>
-    where
-        DefaultAllocator: QpAllocator<NV, NC>,
-    {
-        Ok((solver.unconstrained_minimiser(q), 0))
-    }
-
-    #[inline(always)]
     fn parts<'s>(&'s mut self, own: &'s mut Self::Own) -> Parts<'s, NV> {
         (&mut own.0, &mut own.1, None, None)
     }
@@ -135,20 +135,11 @@ where
     }
 
     #[inline(always)]
-    fn start<NC: Dim>(
-        &mut self,
-        _own: &mut Self::Own,
-        solver: &DualActiveSetOf<NV, NC>,
-        q: &OVector<f64, NV>,
-        h: &OVector<f64, NC>,
-        blocked: &mut OVector<bool, NC>,
-        me: usize,
-        max_iter: u32,
-    ) -> Result<(OVector<f64, NV>, u32), QpStatus>
+    fn start<NC: Dim>(&mut self, at: Begin<'_, NV, NC>) -> Result<(OVector<f64, NV>, u32), QpStatus>
     where
         DefaultAllocator: QpAllocator<NV, NC>,
     {
-        Carry::start(self, solver, q, h, blocked, me, max_iter)
+        Carry::start(self, at)
     }
 
     #[inline(always)]
