@@ -142,6 +142,17 @@ fn unbounded_resources_are_refused_or_capped() {
         &["qp", "solve", "x.npz", "--repeat", "0"],
         &["--repeat"],
     );
+    // Timings of each control cycle: 100,000,000 ran for hours.
+    fails_in(
+        tmp.path(),
+        &["run", "simple", "--no-plots", "--repeat", "10001"],
+        &["--repeat", "at most 10000", "got 10001"],
+    );
+    fails_in(
+        tmp.path(),
+        &["deadline", "--random", "1", "--repeat", "10001"],
+        &["--repeat", "at most 10000"],
+    );
     // 100,000 threads asked for: lowered, with a note, and the batch runs.
     let o = sim(
         &[
