@@ -36,7 +36,7 @@ use super::bounds::BoundRows;
 use super::orthogonal::Orthogonal;
 use super::resolve::Resume;
 use super::spans::{Span, unpack};
-use crate::linalg::{column, columns, columns_in, columns_mut, copy, dot};
+use crate::linalg::{column, columns, columns_in, columns_mut, copy, dot, dot_d};
 
 impl<NV: Dim, NC: Dim, Bd: BoundRows, Rs: Resume<NV>> Orthogonal<'_, NV, NC, Bd, Rs>
 where
@@ -69,7 +69,7 @@ where
                 return false;
             };
             copy(mcol, self.solver.linv_mul(g).as_slice());
-            *cj = dot(g, self.x.as_slice()) - ha;
+            *cj = dot_d::<NV>(g, self.x.as_slice()) - ha;
         }
         let Ms = M.as_slice();
         // K = C C' (lower C; `T = C'`, `qp/guess.rs`).
