@@ -7,12 +7,10 @@
 //! half-written, no input changed. The contract is listed in docs/cli-errors.md.
 
 mod common;
-use common::{fails_in, npy, npy_f64, sim, text, zip};
+use common::{fails_in, npy, npy_f64, sim, small_qp, text, zip};
 
 use std::path::Path;
 use std::sync::OnceLock;
-
-use ldcbf_reference::DenseProblem;
 
 /// The shipped `simple` scenario, as text.
 fn simple_toml() -> String {
@@ -459,18 +457,8 @@ fn merge_and_table_reject_bad_batch_directories() {
 /// A small valid QP (n = 6, m = 1) and its npz bytes.
 fn good_npz() -> Vec<u8> {
     let tmp = tempfile::tempdir().unwrap();
-    let mut p = DenseProblem::inequalities(
-        6,
-        vec![0.0; 36],
-        vec![-2.0; 6],
-        vec![1.0, 1.0, 0.0, 0.0, 0.0, 0.0],
-        vec![1.0],
-    );
-    for i in 0..6 {
-        p.P[i * 6 + i] = 2.0;
-    }
     let f = tmp.path().join("a.npz");
-    p.write_npz(&f).unwrap();
+    small_qp().write_npz(&f).unwrap();
     std::fs::read(f).unwrap()
 }
 

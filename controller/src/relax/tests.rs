@@ -69,6 +69,35 @@ impl Lcg {
     fn range(&mut self, a: f64, b: f64) -> f64 {
         a + (b - a) * self.next()
     }
+
+    /// One to three axis-aligned boxes (m, world), the rest of the array a
+    /// placeholder triangle, and how many: centres from 0.3 m to `ahead`
+    /// along `dir` and within `aside` along `side`, half-sizes from 0.1 m to
+    /// `half`.
+    fn boxes_ahead(
+        &mut self,
+        dir: Vector2<f64>,
+        side: Vector2<f64>,
+        ahead: f64,
+        aside: f64,
+        half: f64,
+    ) -> ([ConvexPolygon<8>; 3], usize) {
+        let mut obstacles =
+            [ConvexPolygon::<8>::new(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]).unwrap(); 3];
+        let n_obs = 1 + (self.next() * 3.0) as usize;
+        for o in obstacles.iter_mut().take(n_obs) {
+            let c = dir * self.range(0.3, ahead) + side * self.range(-aside, aside);
+            let (a, b) = (self.range(0.1, half), self.range(0.1, half));
+            *o = ConvexPolygon::hull(&[
+                [c.x - a, c.y - b],
+                [c.x + a, c.y - b],
+                [c.x + a, c.y + b],
+                [c.x - a, c.y + b],
+            ])
+            .unwrap();
+        }
+        (obstacles, n_obs)
+    }
 }
 
 /// The nominal QP with the gait and safety rows relaxed by `gait` and
@@ -147,20 +176,7 @@ fn relaxations_are_minimal_in_priority_order() {
         let side = Vector2::new(-dir.y, dir.x);
         let speed = rng.range(0.2, 1.2);
         let v = dir * speed + side * rng.range(-0.3, 0.3);
-        let mut obstacles =
-            [ConvexPolygon::<8>::new(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]).unwrap(); 3];
-        let n_obs = 1 + (rng.next() * 3.0) as usize;
-        for o in obstacles.iter_mut().take(n_obs) {
-            let c = dir * rng.range(0.3, 1.6) + side * rng.range(-0.8, 0.8);
-            let (a, b) = (rng.range(0.1, 0.8), rng.range(0.1, 0.8));
-            *o = ConvexPolygon::hull(&[
-                [c.x - a, c.y - b],
-                [c.x + a, c.y - b],
-                [c.x + a, c.y + b],
-                [c.x - a, c.y + b],
-            ])
-            .unwrap();
-        }
+        let (obstacles, n_obs) = rng.boxes_ahead(dir, side, 1.6, 0.8, 0.8);
         let input = CycleInput {
             com_position: Vector2::zeros(),
             com_velocity: v,
@@ -618,20 +634,7 @@ fn give_way_marks_change_the_path_not_the_answer() {
         let th = rng.range(-3.0, 3.0);
         let dir = Vector2::new(libm::cos(th), libm::sin(th));
         let side = Vector2::new(-dir.y, dir.x);
-        let mut obstacles =
-            [ConvexPolygon::<8>::new(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]).unwrap(); 3];
-        let n_obs = 1 + (rng.next() * 3.0) as usize;
-        for o in obstacles.iter_mut().take(n_obs) {
-            let c = dir * rng.range(0.3, 1.2) + side * rng.range(-0.6, 0.6);
-            let (a, b) = (rng.range(0.1, 0.6), rng.range(0.1, 0.6));
-            *o = ConvexPolygon::hull(&[
-                [c.x - a, c.y - b],
-                [c.x + a, c.y - b],
-                [c.x + a, c.y + b],
-                [c.x - a, c.y + b],
-            ])
-            .unwrap();
-        }
+        let (obstacles, n_obs) = rng.boxes_ahead(dir, side, 1.2, 0.6, 0.6);
         let input = CycleInput {
             com_position: Vector2::zeros(),
             com_velocity: dir * rng.range(0.2, 0.9),
