@@ -168,7 +168,9 @@ impl<NV: Dim> GuessWork<NV>
 where
     DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
 {
-    /// Zeroed storage for `nv` variables.
+    /// Zeroed storage for `nv` variables (hosts: bare-metal probe states
+    /// hold none).
+    #[cfg_attr(target_os = "none", allow(dead_code))]
     pub(super) fn zeros(nv: NV) -> Self {
         GuessWork {
             M: OMatrix::zeros_generic(nv, nv),
@@ -178,7 +180,9 @@ where
 }
 
 impl<const NV: usize> GuessWork<Const<NV>> {
-    /// Zeroed storage, for `const` initialisers.
+    /// Zeroed storage, for `const` initialisers (hosts, as
+    /// [`GuessWork::zeros`]).
+    #[cfg_attr(target_os = "none", allow(dead_code))]
     pub(super) const EMPTY: Self = GuessWork {
         M: SMatrix::from_array_storage(ArrayStorage([[0.0; NV]; NV])),
         T: SMatrix::from_array_storage(ArrayStorage([[0.0; NV]; NV])),
