@@ -198,23 +198,30 @@ pub(crate) fn columns_mut(s: &mut [f64], n: usize) -> core::slice::ChunksExactMu
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::{dot, dot_d, sqrt};
     use nalgebra::{Const, Dyn};
+
+    /// Seeded numbers of mixed signs and magnitudes (`1e-4` to `1e4`), so
+    /// that the sums of dot products round: for tests that compare the
+    /// bits of two orders of the same operations.
+    pub(crate) fn mixed(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let u = (state >> 11) as f64 / (1u64 << 53) as f64;
+            (u - 0.5) * 10f64.powi((state % 9) as i32 - 4)
+        }
+    }
 
     /// [`dot_d`] in each of its forms (by index, as pairs) has the bits of
     /// [`dot`]: every length up to the dimension, odd ones included, with
     /// entries of mixed signs and magnitudes (rounding in every sum).
     #[test]
     fn dot_d_has_the_bits_of_dot() {
-        let mut state = 0x2545_f491_4f6c_dd1d_u64;
-        let mut rnd = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            let u = (state >> 11) as f64 / (1u64 << 53) as f64;
-            (u - 0.5) * 10f64.powi((state % 9) as i32 - 4)
-        };
+        let mut rnd = mixed(0x2545_f491_4f6c_dd1d);
         for len in 0..=40 {
             for _ in 0..20 {
                 let a: [f64; 40] = core::array::from_fn(|_| rnd());

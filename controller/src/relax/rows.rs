@@ -288,14 +288,7 @@ mod tests {
                 );
             }
         }
-        let mut state = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut rnd = move || {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            let u = (state >> 11) as f64 / (1u64 << 53) as f64;
-            (u - 0.5) * 10f64.powi((state % 9) as i32 - 4)
-        };
+        let mut rnd = crate::linalg::tests::mixed(0x9e37_79b9_7f4a_7c15);
         check::<1>(&mut rnd);
         check::<2>(&mut rnd);
         check::<3>(&mut rnd);
