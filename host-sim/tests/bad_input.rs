@@ -102,6 +102,18 @@ fn bad_scenarios() -> Vec<(&'static str, Vec<u8>, Vec<&'static str>)> {
                 .into_bytes(),
             vec!["type.toml:8:", "time_limit"],
         ),
+        // A key given twice: the error names that key, not the one before it
+        // (it named `time_limit` for a second `goal` on the line after it).
+        (
+            "dup.toml",
+            simple
+                .replace(
+                    "time_limit = 120.0",
+                    "time_limit = 120.0\ngoal = [1.0, 1.0]",
+                )
+                .into_bytes(),
+            vec!["dup.toml:9:", "field `goal`", "duplicate key"],
+        ),
         // Impossible scenarios: no room for the robot's body at the start or goal.
         (
             "start_inside.toml",

@@ -36,7 +36,7 @@ use super::bounds::BoundRows;
 use super::orthogonal::Orthogonal;
 use super::resolve::Resume;
 use super::spans::{Span, unpack};
-use crate::linalg::{column, columns, columns_in, columns_mut, copy, dot};
+use crate::linalg::{column, columns, columns_in, columns_mut, copy, dot, dot_d};
 
 impl<NV: Dim, NC: Dim, Bd: BoundRows, Rs: Resume<NV>> Orthogonal<'_, NV, NC, Bd, Rs>
 where
@@ -69,7 +69,7 @@ where
                 return false;
             };
             copy(mcol, self.solver.linv_mul(g).as_slice());
-            *cj = dot(g, self.x.as_slice()) - ha;
+            *cj = dot_d::<NV>(g, self.x.as_slice()) - ha;
         }
         let Ms = M.as_slice();
         // K = C C' (lower C; `T = C'`, `qp/guess.rs`).
@@ -168,7 +168,9 @@ impl<NV: Dim> GuessWork<NV>
 where
     DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
 {
-    /// Zeroed storage for `nv` variables.
+    /// Zeroed storage for `nv` variables (hosts: bare-metal probe states
+    /// hold none).
+    #[cfg_attr(target_os = "none", allow(dead_code))]
     pub(super) fn zeros(nv: NV) -> Self {
         GuessWork {
             M: OMatrix::zeros_generic(nv, nv),
@@ -178,7 +180,9 @@ where
 }
 
 impl<const NV: usize> GuessWork<Const<NV>> {
-    /// Zeroed storage, for `const` initialisers.
+    /// Zeroed storage, for `const` initialisers (hosts, as
+    /// [`GuessWork::zeros`]).
+    #[cfg_attr(target_os = "none", allow(dead_code))]
     pub(super) const EMPTY: Self = GuessWork {
         M: SMatrix::from_array_storage(ArrayStorage([[0.0; NV]; NV])),
         T: SMatrix::from_array_storage(ArrayStorage([[0.0; NV]; NV])),

@@ -11,6 +11,7 @@ use super::bounds::BoundRows;
 use super::guess::GuessWork;
 use super::norms::RowNormsOf;
 use super::proximal::proximal_capable;
+use super::reprobe::Pending;
 use super::resolve::{Kept, Resume, back_substitute_by_columns};
 use super::spans::{Span, unpack};
 use super::updates::householder_add;
@@ -93,6 +94,10 @@ where
     /// The active rows the solve resumes from (`()`: none, from scratch;
     /// `qp/resolve.rs`).
     pub kept: Rs,
+    /// The start from scratch `J = L^-T`, `R = 0` still to be set before
+    /// `J` or `R` is first read ([`Orthogonal::settle`]; `qp/reprobe.rs`);
+    /// `None`: set already.
+    pub pending: Option<&'a mut Pending>,
 }
 
 impl<'a, NV: Dim, NC: Dim, Bd: BoundRows, Rs: Resume<NV>> Orthogonal<'a, NV, NC, Bd, Rs>
@@ -138,6 +143,26 @@ where
             guess: None,
             guessed: false,
             kept,
+            pending: None,
+        }
+    }
+
+    /// Sets the start from scratch if it is still [`Orthogonal::pending`]:
+    /// before the first read of `J` or `R` (every step but the scan and the
+    /// hot start's guess). Nothing on bare-metal targets and below the hot
+    /// start's sizes (never pending there).
+    #[inline(always)]
+    pub(super) fn settle(&mut self) {
+        // (A constant for the static sizes: nothing below the hot start's
+        // sizes either, which never leave it pending.)
+        if cfg!(target_os = "none") || !self.solver.hot_start_capable() {
+            return;
+        }
+        if let Some(p) = self.pending.as_deref_mut()
+            && p.unset
+        {
+            set_scratch(self.J, self.R, &self.solver.J0, p.r_cols);
+            *p = Pending::NONE;
         }
     }
 
@@ -405,6 +430,7 @@ where
 
     #[inline(always)]
     fn direction(&mut self, p: usize, _act: &[u16], nact: usize, r: &mut [f64]) -> Option<f64> {
+        self.settle();
         let n = self.n();
         let (gp, hp) = self.row(p)?;
         // d = J' n_p with the GI normal n_p = -g_p (n_p'x >= -h_p).
@@ -477,6 +503,7 @@ where
     /// Adds row `p` (see [`householder_add`]).
     #[inline(always)]
     fn add(&mut self, _p: usize, _r: &[f64], nact: usize) -> Result<(), AddError> {
+        self.settle();
         let added = if self.reordered() {
             householder_add::<NV, true>(self.J, self.R, nact, self.d.as_slice())
         } else {
@@ -492,6 +519,7 @@ where
     /// Removes active row `l` (see [`givens_drop`]).
     #[inline(always)]
     fn drop(&mut self, l: usize, nact: usize) {
+        self.settle();
         givens_drop(self.J, self.R, nact, l);
     }
 
@@ -542,6 +570,7 @@ where
     /// `d = J' n_p`, then the add of [`householder_add`] unless the part of
     /// `d` outside the active span is below `tol_dependence |d|`.
     fn hot_add(&mut self, p: usize, _act: &[u16], nact: usize) -> Result<bool, AddError> {
+        self.settle();
         let Some((gp, _)) = self.row(p) else {
             return Err(AddError::Numerical);
         };
@@ -572,6 +601,7 @@ where
     /// substitution; `w` kept in `d`), and `mult = R^-1 w`; the minimiser on
     /// the active rows is `x + J1 w` ([`ActiveSetFactor::hot_move`]).
     fn hot_multipliers(&mut self, act: &[u16], nact: usize, mult: &mut [f64]) -> bool {
+        self.settle();
         let n = nact.min(self.n());
         self.d.as_mut_slice().fill(0.0);
         for j in 0..n {
@@ -601,6 +631,7 @@ where
     }
 
     fn hot_move(&mut self, _act: &[u16], nact: usize) {
+        self.settle();
         let n = self.n();
         for (col, &wj) in columns(self.J.as_slice(), n)
             .zip(self.d.as_slice().iter())
@@ -621,5 +652,25 @@ where
             *u = k;
         }
         Some((kept.nact, kept.neq))
+    }
+}
+
+/// `J = J0` and the columns `0..r_cols` of `R` zeroed (the others are zero
+/// already): the start from scratch of a solve ([`Orthogonal::settle`]).
+/// Out of line: at most once per solve.
+#[inline(never)]
+fn set_scratch<NV: Dim>(
+    J: &mut OMatrix<f64, NV, NV>,
+    R: &mut OMatrix<f64, NV, NV>,
+    J0: &OMatrix<f64, NV, NV>,
+    r_cols: usize,
+) where
+    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
+{
+    crate::linalg::copy(J.as_mut_slice(), J0.as_slice());
+    let n = R.nrows();
+    let end = r_cols.min(R.ncols()).saturating_mul(n);
+    if let Some(cols) = R.as_mut_slice().get_mut(..end) {
+        cols.fill(0.0);
     }
 }

@@ -187,7 +187,7 @@ where
             Ok(start) => start,
             Err(status) => return active_set::stopped(nv, nc, status),
         };
-        let (J, R, kept, guess) = store.parts(&mut own);
+        let (J, R, kept, guess, pending) = store.parts(&mut own);
         let mut d = OVector::<f64, NV>::zeros_generic(nv, U1);
         // Rows left out are never scanned: they start (and stay) blocked as if
         // active, but never enter the active list.
@@ -219,7 +219,13 @@ where
             ($kept:expr) => {{
                 let mut f = Orthogonal::new(self, qp, hv, norms, tol, x, factor, bounds, $kept);
                 f.guess = guess;
+                f.pending = pending;
                 let it = iterate!(&mut f);
+                // A factor kept for the next solve is the factor: set, if
+                // no step of this solve needed it (a guess keeps none).
+                if !f.guessed {
+                    f.settle();
+                }
                 (it, f.x, f.guessed)
             }};
         }
@@ -230,11 +236,11 @@ where
         };
         let Some(it) = it else {
             // The orthogonal factor never asks for a restart.
-            store.keep(None);
+            store.keep(None, guessed);
             return active_set::stopped(nv, nc, QpStatus::NumericalError);
         };
         // A solve the guess ended holds no factor of its active rows.
-        store.keep(Some(&it).filter(|_| !guessed));
+        store.keep(Some(&it), guessed);
         let objective = self.objective(&qp.q, &x);
         let mut sol = it.solution(nc, x, objective, |_| 1.0);
         sol.iterations = sol.iterations.saturating_add(resumed_drops);

@@ -12,20 +12,22 @@
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
 use super::guess::GuessWork;
-use super::reprobe::Carry;
+use super::reprobe::{Carry, Pending};
 use super::resolve::Kept;
 use super::{DualActiveSetOf, QpAllocator};
 use crate::active_set::Iterate;
 use crate::solution::QpStatus;
 
-/// The factor of a solve: `J`, `R`, the active rows it may resume from and
+/// The factor of a solve: `J`, `R`, the active rows it may resume from,
 /// the hot start's guess's kept workspace (`None`: the guess's own zeroed
-/// matrices, `qp/guess.rs`).
+/// matrices, `qp/guess.rs`) and the start from scratch still to be set
+/// (`None`: nothing to set, `qp/reprobe.rs`).
 pub(super) type Parts<'s, NV> = (
     &'s mut OMatrix<f64, NV, NV>,
     &'s mut OMatrix<f64, NV, NV>,
     Option<&'s Kept<NV>>,
     Option<&'s mut GuessWork<NV>>,
+    Option<&'s mut Pending>,
 );
 
 /// What [`Store::start`] starts a solve from: the linear term `q`, the
@@ -84,8 +86,9 @@ where
     fn parts<'s>(&'s mut self, own: &'s mut Self::Own) -> Parts<'s, NV>;
 
     /// The end of the solve: its iteration, `None` when it stopped on a
-    /// numerical error.
-    fn keep(&mut self, it: Option<&Iterate<NV>>);
+    /// numerical error; `guessed`: the hot start's guess ended it (no
+    /// factor of its active rows formed, `J` and `R` as they were).
+    fn keep(&mut self, it: Option<&Iterate<NV>>, guessed: bool);
 }
 
 /// A single solve's factor, in its own frame, from scratch (module docs).
@@ -111,11 +114,11 @@ where
 
     #[inline(always)]
     fn parts<'s>(&'s mut self, own: &'s mut Self::Own) -> Parts<'s, NV> {
-        (&mut own.0, &mut own.1, None, None)
+        (&mut own.0, &mut own.1, None, None, None)
     }
 
     #[inline(always)]
-    fn keep(&mut self, _it: Option<&Iterate<NV>>) {}
+    fn keep(&mut self, _it: Option<&Iterate<NV>>, _guessed: bool) {}
 }
 
 impl<NV: Dim> Store<NV> for &mut Carry<NV>
@@ -150,16 +153,29 @@ where
         #[cfg(target_os = "none")]
         let guess = None;
         let Carry {
-            J, R, kept, valid, ..
+            J,
+            R,
+            kept,
+            valid,
+            pending,
+            ..
         } = carry;
-        (J, R, if *valid { Some(&*kept) } else { None }, guess)
+        let kept = if *valid { Some(&*kept) } else { None };
+        (J, R, kept, guess, Some(pending))
     }
 
     #[inline(always)]
-    fn keep(&mut self, it: Option<&Iterate<NV>>) {
+    fn keep(&mut self, it: Option<&Iterate<NV>>, guessed: bool) {
         match it {
-            Some(it) => Carry::keep(self, it),
-            None => self.valid = false,
+            Some(it) if !guessed => Carry::keep(self, it),
+            // The guess wrote nothing to `J` and `R`.
+            Some(_) => self.valid = false,
+            None => {
+                self.valid = false;
+                if cfg!(not(target_os = "none")) {
+                    self.pending.r_cols = self.R.ncols();
+                }
+            }
         }
     }
 }
