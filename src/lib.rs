@@ -1,4 +1,4 @@
-//! Workspace root package: hosts the cross-crate integration test in `tests/`
+//! Workspace root package: hosts the cross-crate integration tests in `tests/`
 //! and the benchmarks in `benches/`, and the fixtures they share ([`fixtures`]).
 
 pub mod fixtures {
@@ -16,7 +16,7 @@ pub mod fixtures {
     /// goal in it and obstacle list 0 (goal and obstacles are fixed per walk).
     pub use ldcbf_controller::RecordedInput;
     use ldcbf_controller::nalgebra::Vector2;
-    use ldcbf_controller::{Config, Controller, ConvexPolygon, CycleOutput};
+    use ldcbf_controller::{Config, Controller, ConvexPolygon, CycleOutput, Side};
 
     /// Goal of the `paper` scenario, m (world).
     pub const PAPER_GOAL: [f64; 2] = [10.0, 10.0];
@@ -38,6 +38,45 @@ pub mod fixtures {
             .iter()
             .map(|s| ConvexPolygon::hull(s).expect("the paper obstacles are valid"))
             .collect()
+    }
+
+    /// A robot with a body and feet: the simulator's `[robot]` defaults
+    /// (body radius 0.25 m, feet 0.22 x 0.10 m) with the foot-clearance rows
+    /// on (clearance 0 m), the rest [`Config::default`].
+    pub fn robot_config() -> Config {
+        Config {
+            body_radius: 0.25,
+            foot_length: 0.22,
+            foot_width: 0.10,
+            foot_clearance: Some(0.0),
+            ..Config::default()
+        }
+    }
+
+    /// Cycle `i` of an open-loop walk (inputs that do not react to the
+    /// commands): the CoM moves at (0.2, 0.15) m/s from the origin, heading
+    /// 0.6 rad, 20 Hz, 8 cycles a step from the left foot, the stance foot
+    /// 0.05 m beside the CoM, toward the goal (4, 5) m, among obstacle
+    /// list 0. World frame.
+    pub fn open_loop_walk(i: u32) -> RecordedInput {
+        let t = f64::from(i) * 0.05;
+        let side = if (i / 8).is_multiple_of(2) {
+            Side::Left
+        } else {
+            Side::Right
+        };
+        RecordedInput {
+            com_position: Vector2::new(0.2 * t, 0.15 * t),
+            com_velocity: Vector2::new(0.2, 0.15),
+            heading: 0.6,
+            turning_rate: 0.0,
+            stance_foot: Vector2::new(0.2 * t, 0.15 * t - 0.05 * side.sign()),
+            stance_side: side,
+            time_in_step: f64::from(i % 8) * 0.05,
+            goal: Vector2::new(4.0, 5.0),
+            obstacles: 0,
+            speed_cap: ldcbf_controller::NO_SPEED_CAP,
+        }
     }
 
     /// Walks from [`RecordedInput::at_rest`] toward `goal` with a fresh controller of

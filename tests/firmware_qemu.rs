@@ -24,7 +24,7 @@ use std::time::Duration;
 use ldcbf_controller::nalgebra::{SVector, Vector2};
 use ldcbf_controller::qp::{DenseQp, DualActiveSet, QpBackend, QpSolution, Reprobe};
 use ldcbf_controller::{
-    Config, Controller, ConvexPolygon, CycleInput, CycleStatus, PaperController, Side,
+    Config, Controller, ConvexPolygon, CycleStatus, PaperController, RecordedInput,
     constraint_capacity,
 };
 use ldcbf_nav::fixtures::{PAPER_GOAL, PAPER_OBSTACLES, paper_obstacles, walk};
@@ -75,47 +75,16 @@ fn workspace_root() -> PathBuf {
 }
 
 /// A recorded cycle: `[p_x, p_y, v_x, v_y, heading, omega, foot_x, foot_y,
-/// time_in_step, side]` as `f64` bits (side: 0 left, 1 right).
+/// time_in_step, side]` as `f64` bits (side: 0 left, 1 right;
+/// [`RecordedInput::to_bits`]).
 type Row = [u64; 10];
-
-fn decode<'a>(r: &Row, goal: Vector2<f64>, obstacles: &'a [Poly]) -> CycleInput<'a, 8> {
-    let f = |i: usize| f64::from_bits(r[i]);
-    CycleInput {
-        com_position: Vector2::new(f(0), f(1)),
-        com_velocity: Vector2::new(f(2), f(3)),
-        heading: f(4),
-        turning_rate: f(5),
-        stance_foot: Vector2::new(f(6), f(7)),
-        stance_side: if r[9] == 1 { Side::Right } else { Side::Left },
-        time_in_step: f(8),
-        goal,
-        obstacles,
-        obstacle_velocities: &[],
-        speed_cap: ldcbf_controller::NO_SPEED_CAP,
-    }
-}
-
-fn encode(c: &CycleInput<'_, 8>) -> Row {
-    [
-        c.com_position.x.to_bits(),
-        c.com_position.y.to_bits(),
-        c.com_velocity.x.to_bits(),
-        c.com_velocity.y.to_bits(),
-        c.heading.to_bits(),
-        c.turning_rate.to_bits(),
-        c.stance_foot.x.to_bits(),
-        c.stance_foot.y.to_bits(),
-        c.time_in_step.to_bits(),
-        u64::from(c.stance_side == Side::Right),
-    ]
-}
 
 /// The shared closed loop (`ldcbf_nav::fixtures::walk`, as in the benchmarks):
 /// every cycle's input and the controller's iterations for it.
 fn closed_loop(obstacles: &[Poly], goal: Vector2<f64>) -> Vec<(Row, u32)> {
     walk::<3, 6, NC, 8, 8>(obstacles, goal, 150)
         .iter()
-        .map(|(c, out)| (encode(&c.input(obstacles)), out.info.iterations))
+        .map(|(c, out)| (c.to_bits(), out.info.iterations))
         .collect()
 }
 
@@ -140,10 +109,7 @@ fn host_replay(
     rows.iter()
         .map(|r| {
             let out = ctl.step(
-                &CycleInput {
-                    obstacle_velocities: velocities,
-                    ..decode(r, goal, obstacles)
-                },
+                &RecordedInput::from_bits(r, goal).input_moving(obstacles, velocities),
                 None,
             );
             HostCommand {
@@ -170,20 +136,6 @@ impl QpBackend<6, NC> for CountSolves {
         prefer: &[bool; NC],
     ) -> QpSolution<6, NC> {
         let sol = solver.solve(qp, prefer);
-        self.0.push(sol.iterations);
-        sol
-    }
-
-    fn solve_selected(
-        &mut self,
-        solver: &DualActiveSet<6, NC>,
-        qp: &DenseQp<6, NC>,
-        h: &SVector<f64, NC>,
-        enabled: &[bool; NC],
-        prefer: &[bool; NC],
-        budget: u32,
-    ) -> QpSolution<6, NC> {
-        let sol = solver.solve_selected(qp, h, enabled, prefer, budget);
         self.0.push(sol.iterations);
         sol
     }
@@ -222,10 +174,7 @@ fn walk_into_solves() {
     let mut per_cycle = Vec::new();
     for (k, r) in recorded::CYCLES.iter().enumerate() {
         ctl.backend_mut().0.clear();
-        let input = CycleInput {
-            obstacle_velocities: &into,
-            ..decode(r, goal, &obstacles)
-        };
+        let input = RecordedInput::from_bits(r, goal).input_moving(&obstacles, &into);
         let out = ctl.step(&input, None);
         let solves = &ctl.backend().0;
         if out.status != CycleStatus::Optimal {
@@ -331,7 +280,7 @@ fn regenerate_recorded_cycles() {
     writeln!(f, "#[rustfmt::skip]").unwrap();
     writeln!(f, "pub static CYCLES: [[u64; 10]; {}] = [", rows.len()).unwrap();
     for (k, r) in rows.iter().enumerate() {
-        let c = decode(r, goal, &obstacles);
+        let c = RecordedInput::from_bits(r, goal);
         let mut fields: Vec<String> = r[..9].iter().map(|b| format!("{b:#018x}")).collect();
         fields.push(r[9].to_string());
         writeln!(

@@ -281,14 +281,7 @@ impl<const N: usize> Condensed<N> {
         p0: &Vector2<f64>,
         v0: &Vector2<f64>,
     ) -> (SVector<f64, N>, Vector2<f64>) {
-        let (w1, c1) = self.position(k + 1, p0, v0);
-        let (wp, cp) = self.position(k, p0, v0);
-        let (wv, cv) = self.velocity(k, p0, v0);
-        let d = 1.0 / (1.0 - self.c);
-        (
-            (w1 - wp * self.c - wv * self.s_over_beta) * d,
-            (c1 - cp * self.c - cv * self.s_over_beta) * d,
-        )
+        self.foot_less(k, self.c, p0, v0)
     }
 
     /// `(weights, constant)` of the foot offset `f_k - p_k`, `k = 0..N-1`:
@@ -299,13 +292,26 @@ impl<const N: usize> Condensed<N> {
         p0: &Vector2<f64>,
         v0: &Vector2<f64>,
     ) -> (SVector<f64, N>, Vector2<f64>) {
+        self.foot_less(k, 1.0, p0, v0)
+    }
+
+    /// `(weights, constant)` of `(p_{k+1} - a p_k - (s/beta) v_k) / (1 - c)`:
+    /// the foot `f_k` for `a = c`, the offset `f_k - p_k` for `a = 1` (the
+    /// factor 1 is exact, so the offset's bits are those of its own formula).
+    fn foot_less(
+        &self,
+        k: usize,
+        a: f64,
+        p0: &Vector2<f64>,
+        v0: &Vector2<f64>,
+    ) -> (SVector<f64, N>, Vector2<f64>) {
         let (w1, c1) = self.position(k + 1, p0, v0);
         let (wp, cp) = self.position(k, p0, v0);
         let (wv, cv) = self.velocity(k, p0, v0);
         let d = 1.0 / (1.0 - self.c);
         (
-            (w1 - wp - wv * self.s_over_beta) * d,
-            (c1 - cp - cv * self.s_over_beta) * d,
+            (w1 - wp * a - wv * self.s_over_beta) * d,
+            (c1 - cp * a - cv * self.s_over_beta) * d,
         )
     }
 
@@ -487,30 +493,49 @@ impl HalfPlane {
     }
 }
 
+/// Step `k` of the horizon as an obstacle's rows see it: the predicted
+/// state `x_0 = (p0, v0)` at the start of step 0 (m, m/s, world) the rows
+/// are affine in, and the times `(t0, t1)` of step ends `k` and `k + 1` from
+/// the cycle's input, s (where a moving half-plane is taken).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct StepSpan {
+    /// The step, `0..N`.
+    pub k: usize,
+    /// `(t0, t1)`: times of step ends `k` and `k + 1` from the input, s.
+    pub times: (f64, f64),
+    /// `p_0`: predicted CoM position at the start of step 0, m, world.
+    pub p0: Vector2<f64>,
+    /// `v_0`: predicted CoM velocity at the start of step 0, m/s, world.
+    pub v0: Vector2<f64>,
+}
+
 /// Appends the LDCBF row `h_{t1}(p_{k+1}) >= (1 - gamma) h_{t0}(p_k)` for
-/// step `k`, with `h_t` the half-plane moved to time `t` ([`HalfPlane::h_at`]);
-/// `(t0, t1)` are the times of step ends `k` and `k + 1` from the input, s
-/// (they do not matter for an obstacle at rest, whose row is the static one
-/// bit for bit).
-#[allow(clippy::result_unit_err, clippy::too_many_arguments)]
+/// the step `step` (its `k`, `(t0, t1)` and `x_0`), with `h_t` the
+/// half-plane moved to time `t` ([`HalfPlane::h_at`]; the times do not
+/// matter for an obstacle at rest, whose row is the static one bit for bit).
+#[allow(clippy::result_unit_err)]
 pub fn push_ldcbf_row<const N: usize, const NV: usize, const NC: usize>(
     qp: &mut DenseQp<NV, NC>,
     model: &Condensed<N>,
     hp: &HalfPlane,
     gamma: f64,
     delta: f64,
-    k: usize,
-    (t0, t1): (f64, f64),
-    p0: &Vector2<f64>,
-    v0: &Vector2<f64>,
+    step: &StepSpan,
 ) -> Result<(), ()> {
+    let StepSpan {
+        k,
+        times: (t0, t1),
+        p0,
+        v0,
+    } = step;
+    let k = *k;
     // Quantity Q = -p_{k+1} + (1 - gamma) p_k, bound -gamma (eta'c + delta)
     // - (rate t1 - (1 - gamma) rate t0).
     let (w1, c1) = model.position(k + 1, p0, v0);
     let (w0, c0) = model.position(k, p0, v0);
     let w = -w1 + w0 * (1.0 - gamma);
     let q0 = -c1 + c0 * (1.0 - gamma);
-    let motion = hp.shift(t1) - (1.0 - gamma) * hp.shift(t0);
+    let motion = hp.shift(*t1) - (1.0 - gamma) * hp.shift(*t0);
     push_row(
         qp,
         &hp.eta,
@@ -521,21 +546,19 @@ pub fn push_ldcbf_row<const N: usize, const NV: usize, const NC: usize>(
 }
 
 /// Appends the foot-clearance row `eta'(f_k - c) >= delta_foot + max(rate t0,
-/// rate t1)` for step `k`: the foot `f_k` stands from step end `k` to step end
-/// `k + 1` (times `t0`, `t1` from the input, s), and the moving half-plane is
-/// nearest to it at one of the two (the static row when `rate` is 0).
-#[allow(clippy::result_unit_err, clippy::too_many_arguments)]
+/// rate t1)` for the step `step`: the foot `f_k` stands from step end `k` to
+/// step end `k + 1` (times `t0`, `t1`), and the moving half-plane is nearest
+/// to it at one of the two (the static row when `rate` is 0).
+#[allow(clippy::result_unit_err)]
 pub fn push_foot_row<const N: usize, const NV: usize, const NC: usize>(
     qp: &mut DenseQp<NV, NC>,
     model: &Condensed<N>,
     hp: &HalfPlane,
     delta_foot: f64,
-    k: usize,
-    (t0, t1): (f64, f64),
-    p0: &Vector2<f64>,
-    v0: &Vector2<f64>,
+    step: &StepSpan,
 ) -> Result<(), ()> {
-    let (w, f_const) = model.foot(k, p0, v0);
+    let (t0, t1) = step.times;
+    let (w, f_const) = model.foot(step.k, &step.p0, &step.v0);
     let motion = hp.shift(t0).max(hp.shift(t1));
     push_row(
         qp,
@@ -748,9 +771,15 @@ mod tests {
             rate: 0.0,
         };
         let (gamma, delta) = (0.3, 0.2);
+        let at = |k| StepSpan {
+            k,
+            times: (0.0, 0.0),
+            p0,
+            v0,
+        };
         let mut qp = DenseQp::<6, 16>::default();
         for k in 0..3 {
-            push_ldcbf_row(&mut qp, &m, &hp, gamma, delta, k, (0.0, 0.0), &p0, &v0).unwrap();
+            push_ldcbf_row(&mut qp, &m, &hp, gamma, delta, &at(k)).unwrap();
         }
         for k in 0..3 {
             // row value = -(h(p_{k+1}) - (1-gamma) h(p_k))
@@ -759,10 +788,10 @@ mod tests {
         }
         // gamma = 1: plain h(p_{k+1}) >= 0.
         let mut qp1 = DenseQp::<6, 16>::default();
-        push_ldcbf_row(&mut qp1, &m, &hp, 1.0, delta, 1, (0.0, 0.0), &p0, &v0).unwrap();
+        push_ldcbf_row(&mut qp1, &m, &hp, 1.0, delta, &at(1)).unwrap();
         assert!((row_value(&qp1, 0, &u) + hp.h(&traj[2].0, delta)).abs() < 1e-13);
         let mut qpf = DenseQp::<6, 16>::default();
-        push_foot_row(&mut qpf, &m, &hp, 0.05, 2, (0.0, 0.0), &p0, &v0).unwrap();
+        push_foot_row(&mut qpf, &m, &hp, 0.05, &at(2)).unwrap();
         let e = -(hp.eta.dot(&(f[2] - hp.c)) - 0.05);
         assert!((row_value(&qpf, 0, &u) - e).abs() < 1e-13);
     }

@@ -39,15 +39,19 @@ pub(crate) fn dot(a: &[f64], b: &[f64]) -> f64 {
     acc[0] + acc[1]
 }
 
-/// [`dot`] for vectors of the dimension `D`: the same operations in the same
-/// order (the even and the odd products each summed in order, then added),
-/// so the same bits; for run-time sizes (`Dyn`) written as pairs, so that the
-/// two chains stay in registers (13 % off `solve` at n = 50), for the static
-/// sizes [`dot`] itself (whose fully unrolled form the Cortex-M7 runs
-/// fastest).
+/// [`dot`] for vectors of the dimension `D` (slices of the same length, at
+/// most `D`): the same operations in the same order (the even and the odd
+/// products each summed in order, then added), so the same bits. Written as
+/// pairs on hosts and for run-time sizes (`Dyn`): on hosts each pair of
+/// products becomes one two-lane multiply and one two-lane add (SSE2 on
+/// x86-64: the even products in one lane, the odd ones in the other), where
+/// [`dot`]'s loop by index stays scalar for the longer rows; for run-time
+/// sizes the two chains stay in registers (13 % off `solve` at n = 50). On
+/// bare-metal targets the static sizes use [`dot`] itself (fully unrolled:
+/// the form the Cortex-M7 runs fastest).
 #[inline(always)]
 pub(crate) fn dot_d<D: Dim>(a: &[f64], b: &[f64]) -> f64 {
-    if D::try_to_usize().is_some() {
+    if cfg!(target_os = "none") && D::try_to_usize().is_some() {
         return dot(a, b);
     }
     let (mut even, mut odd) = (0.0f64, 0.0f64);
@@ -194,8 +198,42 @@ pub(crate) fn columns_mut(s: &mut [f64], n: usize) -> core::slice::ChunksExactMu
 }
 
 #[cfg(test)]
-mod tests {
-    use super::sqrt;
+pub(crate) mod tests {
+    use super::{dot, dot_d, sqrt};
+    use nalgebra::{Const, Dyn};
+
+    /// Seeded numbers of mixed signs and magnitudes (`1e-4` to `1e4`), so
+    /// that the sums of dot products round: for tests that compare the
+    /// bits of two orders of the same operations.
+    pub(crate) fn mixed(seed: u64) -> impl FnMut() -> f64 {
+        let mut state = seed;
+        move || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            let u = (state >> 11) as f64 / (1u64 << 53) as f64;
+            (u - 0.5) * 10f64.powi((state % 9) as i32 - 4)
+        }
+    }
+
+    /// [`dot_d`] in each of its forms (by index, as pairs) has the bits of
+    /// [`dot`]: every length up to the dimension, odd ones included, with
+    /// entries of mixed signs and magnitudes (rounding in every sum).
+    #[test]
+    fn dot_d_has_the_bits_of_dot() {
+        let mut rnd = mixed(0x2545_f491_4f6c_dd1d);
+        for len in 0..=40 {
+            for _ in 0..20 {
+                let a: [f64; 40] = core::array::from_fn(|_| rnd());
+                let b: [f64; 40] = core::array::from_fn(|_| rnd());
+                let (a, b) = (&a[..len], &b[..len]);
+                let want = dot(a, b).to_bits();
+                assert_eq!(dot_d::<Const<40>>(a, b).to_bits(), want, "len {len}");
+                assert_eq!(dot_d::<Const<20>>(a, b).to_bits(), want, "len {len}");
+                assert_eq!(dot_d::<Dyn>(a, b).to_bits(), want, "len {len}");
+            }
+        }
+    }
 
     #[test]
     fn matches_libm_bit_for_bit() {

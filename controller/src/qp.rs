@@ -107,6 +107,7 @@ mod solve;
 mod solver;
 mod spans;
 mod store;
+mod updates;
 pub use backend::{OwnSolver, QpBackend};
 #[cfg(feature = "alloc")]
 pub use bounds::SimpleBoundsDyn;

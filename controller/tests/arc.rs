@@ -51,6 +51,45 @@ fn arc_min(
         .fold(f64::INFINITY, f64::min)
 }
 
+/// The property of both tests below for one step: a config, the normal's
+/// angle, the half-plane's `rate` (m/s, 0: at rest), the offsets `a` of the
+/// first step end and `b` of the foot beyond their bounds (m), the tangential
+/// positions `tp` of the CoM and `tf` of the foot (m) and the CoM's normal
+/// and tangential velocity (m/s). Rejects the draw when the config is
+/// invalid or the second step end is not on its (moved) margin.
+fn arc_keeps_clear(
+    cfg: &Config,
+    angle: f64,
+    rate: f64,
+    (a, b): (f64, f64),
+    (tp, tf): (f64, f64),
+    (vn, vt): (f64, f64),
+) -> Result<(), TestCaseError> {
+    prop_assume!(cfg.validate().is_ok());
+    let lip = Lip::new(cfg.gravity, cfg.com_height, cfg.step_duration);
+    let t_step = cfg.step_duration;
+    let body = cfg.body_radius + cfg.delta;
+    let eta = Vector2::new(angle.cos(), angle.sin());
+    let tan = Vector2::new(-eta.y, eta.x);
+    let margin = cfg.barrier_margin();
+    let df = cfg.foot_clearance.unwrap_or(0.0);
+    let foot_min = df + 0.5 * cfg.foot_length.min(cfg.foot_width) + (rate * t_step).max(0.0);
+    // Half-plane through the origin, e(p) = eta'p. Step start on its margin
+    // (plus a), foot on its bound (plus b); the step end must hold on the
+    // half-plane moved by rate T.
+    let p = eta * (margin + a) + tan * tp;
+    let f = eta * (foot_min + b) + tan * tf;
+    let v = eta * vn + tan * vt;
+    let (p1, _) = lip.propagate(&p, &v, &f, t_step);
+    prop_assume!(eta.dot(&p1) - rate * t_step >= margin);
+    let m = arc_min(&lip, &eta, rate, (p, v, f), 2000);
+    prop_assert!(
+        m >= body - 1e-12,
+        "arc min {m} < body {body} (margin {margin}, foot {foot_min}, rate {rate})"
+    );
+    Ok(())
+}
+
 proptest! {
     // About a fifth of the drawn steps fail the `prop_assume!` below: with
     // proptest's default cap of 1024 rejects, 4000 cases aborted ("Too many
@@ -81,24 +120,7 @@ proptest! {
         vt in -1.0f64..1.0,
     ) {
         let cfg = config(body_radius, delta, df, (foot_l, foot_w), t_step, h);
-        prop_assume!(cfg.validate().is_ok());
-        let lip = Lip::new(cfg.gravity, cfg.com_height, cfg.step_duration);
-        let eta = Vector2::new(angle.cos(), angle.sin());
-        let tan = Vector2::new(-eta.y, eta.x);
-        let margin = cfg.barrier_margin();
-        let foot_min = df + 0.5 * foot_l.min(foot_w);
-        // Half-plane through the origin: e(p) = eta'p.
-        let p = eta * (margin + a) + tan * tp;
-        let f = eta * (foot_min + b) + tan * tf;
-        let v = eta * vn + tan * vt;
-        let (p1, _) = lip.propagate(&p, &v, &f, lip.step_duration);
-        prop_assume!(eta.dot(&p1) >= margin);
-        let m = arc_min(&lip, &eta, 0.0, (p, v, f), 2000);
-        prop_assert!(
-            m >= body_radius + delta - 1e-12,
-            "arc min {m} < body {} (margin {margin}, foot {foot_min})",
-            body_radius + delta
-        );
+        arc_keeps_clear(&cfg, angle, 0.0, (a, b), (tp, tf), (vn, vt))?;
     }
 }
 
@@ -165,25 +187,7 @@ proptest! {
         vt in -1.0f64..1.0,
     ) {
         let cfg = config(body_radius, delta, df, (foot_l, foot_w), t_step, h);
-        prop_assume!(cfg.validate().is_ok());
-        let lip = Lip::new(cfg.gravity, cfg.com_height, cfg.step_duration);
-        let eta = Vector2::new(angle.cos(), angle.sin());
-        let tan = Vector2::new(-eta.y, eta.x);
-        let margin = cfg.barrier_margin();
-        let foot_min = df + 0.5 * foot_l.min(foot_w) + (rate * t_step).max(0.0);
-        // Step start on its half-plane's margin (plus a), foot on its bound
-        // (plus b); the step end must hold on the half-plane moved by rate T.
-        let p = eta * (margin + a) + tan * tp;
-        let f = eta * (foot_min + b) + tan * tf;
-        let v = eta * vn + tan * vt;
-        let (p1, _) = lip.propagate(&p, &v, &f, t_step);
-        prop_assume!(eta.dot(&p1) - rate * t_step >= margin);
-        let m = arc_min(&lip, &eta, rate, (p, v, f), 2000);
-        prop_assert!(
-            m >= body_radius + delta - 1e-12,
-            "arc min {m} < body {} (margin {margin}, foot {foot_min}, rate {rate})",
-            body_radius + delta
-        );
+        arc_keeps_clear(&cfg, angle, rate, (a, b), (tp, tf), (vn, vt))?;
     }
 }
 

@@ -22,6 +22,7 @@ use core::ptr::{null, null_mut};
 
 use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_controller::{CommandSource, CycleOutput, CycleStatus, InputError, LipState, Side};
+use ldcbf_nav::fixtures::{open_loop_walk, robot_config};
 
 use super::types::side_code;
 use super::*;
@@ -634,13 +635,7 @@ fn moving_obstacle_cycles_equal_the_rust_controller() {
 /// The walk of [`robot_config_cycles_equal_the_rust_controller`] with the
 /// obstacles' `velocities` (empty: `ldcbf_step`, at rest).
 fn robot_cycles_equal_rust(velocities: &[Vector2<f64>]) {
-    let rust_cfg = Config {
-        body_radius: 0.25,
-        foot_length: 0.22,
-        foot_width: 0.10,
-        foot_clearance: Some(0.0),
-        ..Config::default()
-    };
+    let rust_cfg = robot_config();
     let mut s = storage();
     let ctl = configured(&mut s, &LdcbfConfig::from(&rust_cfg));
     let mut rust = RobotController::new(rust_cfg).unwrap();
@@ -654,25 +649,8 @@ fn robot_cycles_equal_rust(velocities: &[Vector2<f64>]) {
     let mut out = sentinel();
     let (mut optimal, mut moving) = (0, 0);
     for i in 0..200u32 {
-        let t = f64::from(i) * 0.05;
-        let side = if (i / 8) % 2 == 0 {
-            Side::Left
-        } else {
-            Side::Right
-        };
-        let input = CycleInput {
-            com_position: Vector2::new(0.2 * t, 0.15 * t),
-            com_velocity: Vector2::new(0.2, 0.15),
-            heading: 0.6,
-            turning_rate: 0.0,
-            stance_foot: Vector2::new(0.2 * t, 0.15 * t - 0.05 * side.sign()),
-            stance_side: side,
-            time_in_step: f64::from(i % 8) * 0.05,
-            goal: Vector2::new(4.0, 5.0),
-            obstacles: &polys,
-            obstacle_velocities: velocities,
-            speed_cap: ldcbf_controller::NO_SPEED_CAP,
-        };
+        let input = open_loop_walk(i).input_moving(&polys, velocities);
+        let side = input.stance_side;
         if i == 100 {
             assert_eq!(unsafe { ldcbf_reset(ctl) }, LdcbfResult::Ok);
             rust.reset();

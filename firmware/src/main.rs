@@ -49,7 +49,7 @@ use cortex_m::peripheral::syst::SystClkSource;
 use cortex_m_rt::{ExceptionFrame, entry, exception};
 use cortex_m_semihosting::{debug, hio};
 use ldcbf_controller::nalgebra::Vector2;
-use ldcbf_controller::{Config, ConvexPolygon, CycleInput, PaperController, Side};
+use ldcbf_controller::{Config, ConvexPolygon, PaperController, RecordedInput};
 
 /// Vertex capacity of the obstacle polygons (as in the host benches).
 type Poly = ConvexPolygon<8>;
@@ -146,7 +146,8 @@ fn main() -> ! {
             state.controller.reset();
         }
         let rec = &recorded::CYCLES[i % n];
-        let input = decode(black_box(rec), goal, state.obstacles, black_box(moving));
+        let input = RecordedInput::from_bits(black_box(rec), goal)
+            .input_moving(state.obstacles, black_box(moving));
         let sp = cortex_m::register::msp::read() as usize;
         let bottom = paint_stack();
         let (cmd, ticks) = measure(&mut syst, || state.controller.step(black_box(&input), None));
@@ -212,31 +213,6 @@ fn init_state() -> State {
             controller,
             obstacles: (*core::ptr::addr_of!(OBSTACLES)).assume_init_ref(),
         }
-    }
-}
-
-/// Cycle input from a recorded row: `[p_x, p_y, v_x, v_y, heading, omega,
-/// foot_x, foot_y, time_in_step, side]`, `f64` bits, side 0 = left, 1 = right;
-/// the obstacles moving at `velocities` (m/s; empty: at rest).
-fn decode<'a>(
-    r: &[u64; 10],
-    goal: Vector2<f64>,
-    obstacles: &'a [Poly],
-    velocities: &'a [Vector2<f64>],
-) -> CycleInput<'a, 8> {
-    let f = |i: usize| f64::from_bits(r[i]);
-    CycleInput {
-        com_position: Vector2::new(f(0), f(1)),
-        com_velocity: Vector2::new(f(2), f(3)),
-        heading: f(4),
-        turning_rate: f(5),
-        stance_foot: Vector2::new(f(6), f(7)),
-        stance_side: if r[9] == 1 { Side::Right } else { Side::Left },
-        time_in_step: f(8),
-        goal,
-        obstacles,
-        obstacle_velocities: velocities,
-        speed_cap: ldcbf_controller::NO_SPEED_CAP,
     }
 }
 

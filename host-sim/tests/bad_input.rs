@@ -7,12 +7,10 @@
 //! half-written, no input changed. The contract is listed in docs/cli-errors.md.
 
 mod common;
-use common::{fails_in, npy, npy_f64, sim, text, zip};
+use common::{fails_in, npy, npy_f64, sim, small_qp, text, zip};
 
 use std::path::Path;
 use std::sync::OnceLock;
-
-use ldcbf_reference::DenseProblem;
 
 /// The shipped `simple` scenario, as text.
 fn simple_toml() -> String {
@@ -103,6 +101,18 @@ fn bad_scenarios() -> Vec<(&'static str, Vec<u8>, Vec<&'static str>)> {
                 .replace("time_limit = 120.0", "time_limit = \"soon\"")
                 .into_bytes(),
             vec!["type.toml:8:", "time_limit"],
+        ),
+        // A key given twice: the error names that key, not the one before it
+        // (it named `time_limit` for a second `goal` on the line after it).
+        (
+            "dup.toml",
+            simple
+                .replace(
+                    "time_limit = 120.0",
+                    "time_limit = 120.0\ngoal = [1.0, 1.0]",
+                )
+                .into_bytes(),
+            vec!["dup.toml:9:", "field `goal`", "duplicate key"],
         ),
         // Impossible scenarios: no room for the robot's body at the start or goal.
         (
@@ -459,18 +469,8 @@ fn merge_and_table_reject_bad_batch_directories() {
 /// A small valid QP (n = 6, m = 1) and its npz bytes.
 fn good_npz() -> Vec<u8> {
     let tmp = tempfile::tempdir().unwrap();
-    let mut p = DenseProblem::inequalities(
-        6,
-        vec![0.0; 36],
-        vec![-2.0; 6],
-        vec![1.0, 1.0, 0.0, 0.0, 0.0, 0.0],
-        vec![1.0],
-    );
-    for i in 0..6 {
-        p.P[i * 6 + i] = 2.0;
-    }
     let f = tmp.path().join("a.npz");
-    p.write_npz(&f).unwrap();
+    small_qp().write_npz(&f).unwrap();
     std::fs::read(f).unwrap()
 }
 

@@ -82,6 +82,15 @@ fn exact_lengths_and_absurd_magnitudes_name_the_field() {
         &["--set", "gravity=1e308"],
         &["`controller.gravity`", "out of range"],
     );
+    // A start heading within the range of numbers but not an angle: the
+    // first turn took it past the controller's input range, and the run
+    // ended as "diverged" after 0.45 s.
+    run_fails(
+        "heading = 0.0 }",
+        "heading = 1e6 }",
+        &[],
+        &["field `start`", "heading 1000000 rad"],
+    );
     // Within the range but an overflowing step map: every input is named.
     run_fails(
         "",
@@ -132,6 +141,17 @@ fn unbounded_resources_are_refused_or_capped() {
         tmp.path(),
         &["qp", "solve", "x.npz", "--repeat", "0"],
         &["--repeat"],
+    );
+    // Timings of each control cycle: 100,000,000 ran for hours.
+    fails_in(
+        tmp.path(),
+        &["run", "simple", "--no-plots", "--repeat", "10001"],
+        &["--repeat", "at most 10000", "got 10001"],
+    );
+    fails_in(
+        tmp.path(),
+        &["deadline", "--random", "1", "--repeat", "10001"],
+        &["--repeat", "at most 10000"],
     );
     // 100,000 threads asked for: lowered, with a note, and the batch runs.
     let o = sim(

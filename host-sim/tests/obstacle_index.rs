@@ -86,6 +86,23 @@ struct State {
     goal: [f64; 2],
 }
 
+impl State {
+    /// At rest at the origin, heading 0, left stance foot under the CoM, at
+    /// the start of a step, walking to `goal` (m).
+    fn at_rest(goal: [f64; 2]) -> State {
+        State {
+            com: [0.0, 0.0],
+            vel: [0.0, 0.0],
+            heading: 0.0,
+            turning_rate: 0.0,
+            foot: [0.0, 0.0],
+            left: true,
+            time_in_step: 0.0,
+            goal,
+        }
+    }
+}
+
 fn state() -> impl Strategy<Value = State> {
     (
         prop::array::uniform2(-16.0..16.0f64),
@@ -261,16 +278,7 @@ fn selection_is_not_vacuous() {
 fn candidates_out_of_range_are_skipped_and_order_breaks_ties() {
     let sq = Polygon::new(&[[1.0, -0.2], [1.4, -0.2], [1.4, 0.2], [1.0, 0.2]]).unwrap();
     let map = vec![sq, sq];
-    let s = State {
-        com: [0.0, 0.0],
-        vel: [0.0, 0.0],
-        heading: 0.0,
-        turning_rate: 0.0,
-        foot: [0.0, 0.0],
-        left: true,
-        time_in_step: 0.0,
-        goal: [5.0, 0.0],
-    };
+    let s = State::at_rest([5.0, 0.0]);
     let ctl = controller();
     let inp = input(&s, &map);
     let mut asm = Assembly::default();
@@ -291,16 +299,7 @@ fn a_map_past_u16_indices_is_selected_whole() {
     let near = Polygon::new(&[[1.0, -0.2], [1.4, -0.2], [1.4, 0.2], [1.0, 0.2]]).unwrap();
     let mut map = vec![far; 70_000];
     map.push(near);
-    let s = State {
-        com: [0.0, 0.0],
-        vel: [0.0, 0.0],
-        heading: 0.0,
-        turning_rate: 0.0,
-        foot: [0.0, 0.0],
-        left: true,
-        time_in_step: 0.0,
-        goal: [5.0, 0.0],
-    };
+    let s = State::at_rest([5.0, 0.0]);
     let ctl = controller();
     let inp = input(&s, &map);
     let index = ObstacleIndex::new(&map).unwrap();

@@ -2,7 +2,7 @@
 
 `data/moving_cycles.txt` holds 80 cycles of the humanoid controller with three
 moving obstacles, inputs and outputs as f64 bits, written by the Rust
-controller (`controller/tests/moving_fixture.rs`, which checks that the file
+controller (`tests/moving_fixture.rs`, which checks that the file
 is its output today). The same inputs through a fresh Python `Controller`, in
 order, give the same outputs bit for bit.
 """

@@ -83,6 +83,23 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         out
     }
 
+    /// The safety rows (LDCBF and foot clearance) of `work.qp` that belong to
+    /// a moving obstacle (`HalfPlane::rate != 0`), by row: on a cycle that
+    /// gives way they are relaxed before the static ones
+    /// ([`crate::relax`], "Moving rows first").
+    pub(super) fn moving_rows<const NOBS: usize>(work: &Assembly<N, NV, NC, NOBS>) -> [bool; NC] {
+        let active = work.active_obstacles();
+        let mut out = [false; NC];
+        for (o, id) in out.iter_mut().zip(&work.rows).take(work.qp.m) {
+            if let RowKind::Ldcbf(j) | RowKind::FootClearance(j) = id.kind {
+                *o = active
+                    .iter()
+                    .any(|ob| ob.index == j && ob.half_plane.rate != 0.0);
+            }
+        }
+        out
+    }
+
     /// The goal the priority scheme plans towards on an infeasible cycle
     /// whose infeasibility certificate `certificate` (one weight per row of
     /// `work.qp`, as [`crate::qp::QpSolution::lambda`] of the infeasible

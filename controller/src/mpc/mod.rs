@@ -59,25 +59,33 @@
 //! * `fields`: [`Config`]'s fields by name ([`FieldValue`]);
 //! * `plan`: the plan, status, diagnostics and assembly types of a cycle;
 //! * `select`: obstacle selection and [`ObstacleQuery`];
-//! * `cycle`: the cycle itself ([`Controller::step`], [`Controller::assemble`]);
+//! * `input`: the measured input ([`CycleInput`], [`RecordedInput`]), its
+//!   validation ([`InputError`]) and the prediction of `x_0`;
+//! * `assemble`: the QP of a cycle (headings, obstacles, cost and rows);
+//! * `cycle`: the cycle itself ([`Controller::step`], [`Controller::assemble`]):
+//!   the solve with its warm start, the plan and the diagnostics;
+//! * `recover`: an unsolved QP's relaxation ([`crate::relax`]) and fallback;
 //! * `fallback`: the fallback and hold commands;
 //! * `give_way`: the policy toward people (the forward speed bound near a
 //!   moving obstacle, the goal of a relaxation with a person in the conflict);
 //! * this file: the [`Controller`], its sizes, configuration and memory.
 
+mod assemble;
 mod config;
 mod cycle;
 mod fallback;
 mod fields;
 mod give_way;
+mod input;
 mod plan;
+mod recover;
 mod select;
 #[cfg(test)]
 mod tests;
 
 pub use config::{Config, ConfigError};
-pub use cycle::{CycleInput, InputError, MAX_RATE, NO_SPEED_CAP, RecordedInput};
 pub use fields::{FieldError, FieldValue};
+pub use input::{CycleInput, InputError, MAX_RATE, NO_SPEED_CAP, RecordedInput};
 pub use plan::{
     Assembly, CommandSource, CycleInfo, CycleOutput, CycleStatus, LipState, Plan, Prediction, Side,
 };

@@ -12,6 +12,14 @@ use super::{DenseQp, DualActiveSet, QpSolution, Reprobe};
 /// through this trait ([`Controller::with_backend`](crate::Controller::with_backend))
 /// so a whole closed loop can be run with either solver and compared.
 pub trait QpBackend<const NV: usize, const NC: usize> {
+    /// Whether the provided [`QpBackend::solve_selected`] and
+    /// [`QpBackend::solve_reprobe`] solve on the selected rows in place with
+    /// `solver` ([`DualActiveSet::solve_selected`],
+    /// [`DualActiveSet::solve_reprobe`]: [`OwnSolver`]), rather than on a
+    /// compact copy of them through [`QpBackend::solve_qp`] (the default, for
+    /// another solver).
+    const IN_PLACE: bool = false;
+
     /// Solves `min 1/2 u'Hu + q'u, G u <= h` where `H = solver.hessian()` and the
     /// rest is `qp`. `prefer` and the iteration limit
     /// (`solver.settings().max_iter`) are hints an external solver may ignore.
@@ -27,7 +35,8 @@ pub trait QpBackend<const NV: usize, const NC: usize> {
     /// like `qp`'s rows, in at most `budget` iterations (a hint, as the
     /// limit of the settings); see [`DualActiveSet::solve_selected`]. The provided
     /// method copies the enabled rows into a compact QP (on the stack) for
-    /// `solve_qp` and maps the result back; [`OwnSolver`] solves in place.
+    /// `solve_qp` and maps the result back, or solves in place
+    /// ([`QpBackend::IN_PLACE`]).
     fn solve_selected(
         &mut self,
         solver: &DualActiveSet<NV, NC>,
@@ -35,8 +44,11 @@ pub trait QpBackend<const NV: usize, const NC: usize> {
         h: &SVector<f64, NC>,
         enabled: &[bool; NC],
         prefer: &[bool; NC],
-        _budget: u32,
+        budget: u32,
     ) -> QpSolution<NV, NC> {
+        if Self::IN_PLACE {
+            return solver.solve_selected(qp, h, enabled, prefer, budget);
+        }
         let mut sub = DenseQp::with_q(qp.q);
         // Compact row -> row of `qp`, and the compact rows' warm-start marks.
         let mut orig = [0u16; NC];
@@ -73,49 +85,10 @@ pub trait QpBackend<const NV: usize, const NC: usize> {
     /// [`QpBackend::solve_selected`] as one of a series of probes of the same
     /// QP's rows (same `H` and `G`) that share `state`
     /// ([`DualActiveSet::solve_reprobe`]: each continues from the active rows
-    /// of the one before). The provided method ignores `state` and calls
-    /// `solve_selected`; [`OwnSolver`] resumes.
+    /// of the one before). The provided method resumes in place
+    /// ([`QpBackend::IN_PLACE`]), or else ignores `state` and calls
+    /// `solve_selected`.
     #[allow(clippy::too_many_arguments)]
-    fn solve_reprobe(
-        &mut self,
-        solver: &DualActiveSet<NV, NC>,
-        qp: &DenseQp<NV, NC>,
-        h: &SVector<f64, NC>,
-        enabled: &[bool; NC],
-        prefer: &[bool; NC],
-        budget: u32,
-        _state: &mut Reprobe<NV, NC>,
-    ) -> QpSolution<NV, NC> {
-        self.solve_selected(solver, qp, h, enabled, prefer, budget)
-    }
-}
-
-/// The built-in backend: [`DualActiveSet::solve`].
-#[derive(Clone, Copy, Debug, Default)]
-pub struct OwnSolver;
-
-impl<const NV: usize, const NC: usize> QpBackend<NV, NC> for OwnSolver {
-    fn solve_qp(
-        &mut self,
-        solver: &DualActiveSet<NV, NC>,
-        qp: &DenseQp<NV, NC>,
-        prefer: &[bool; NC],
-    ) -> QpSolution<NV, NC> {
-        solver.solve(qp, prefer)
-    }
-
-    fn solve_selected(
-        &mut self,
-        solver: &DualActiveSet<NV, NC>,
-        qp: &DenseQp<NV, NC>,
-        h: &SVector<f64, NC>,
-        enabled: &[bool; NC],
-        prefer: &[bool; NC],
-        budget: u32,
-    ) -> QpSolution<NV, NC> {
-        solver.solve_selected(qp, h, enabled, prefer, budget)
-    }
-
     fn solve_reprobe(
         &mut self,
         solver: &DualActiveSet<NV, NC>,
@@ -126,6 +99,27 @@ impl<const NV: usize, const NC: usize> QpBackend<NV, NC> for OwnSolver {
         budget: u32,
         state: &mut Reprobe<NV, NC>,
     ) -> QpSolution<NV, NC> {
-        solver.solve_reprobe(qp, h, enabled, prefer, budget, state)
+        if Self::IN_PLACE {
+            return solver.solve_reprobe(qp, h, enabled, prefer, budget, state);
+        }
+        self.solve_selected(solver, qp, h, enabled, prefer, budget)
+    }
+}
+
+/// The built-in backend: [`DualActiveSet::solve`], and the selected rows
+/// solved in place ([`QpBackend::IN_PLACE`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct OwnSolver;
+
+impl<const NV: usize, const NC: usize> QpBackend<NV, NC> for OwnSolver {
+    const IN_PLACE: bool = true;
+
+    fn solve_qp(
+        &mut self,
+        solver: &DualActiveSet<NV, NC>,
+        qp: &DenseQp<NV, NC>,
+        prefer: &[bool; NC],
+    ) -> QpSolution<NV, NC> {
+        solver.solve(qp, prefer)
     }
 }

@@ -1,26 +1,37 @@
 //! The active set of [`DualActiveSet::solve`] as Goldfarb and Idnani keep it:
 //! `J = L^-T Q` and the upper-triangular `R` of `L^-1 N_A = Q [R; 0]`, with
 //! the primal iterate `x`; one Householder reflection per add, Givens
-//! rotations per drop (no re-factorisation, no normal equations). The
+//! rotations per drop (no re-factorisation, no normal equations; the
+//! updates are `qp/updates.rs`, the hot start's guess `qp/guess.rs`). The
 //! iteration itself is [`crate::active_set::iterate`].
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
 use super::bounds::BoundRows;
 use super::guess::GuessWork;
+use super::norms::RowNormsOf;
 use super::proximal::proximal_capable;
-use super::resolve::back_substitute_by_columns;
+use super::reprobe::Pending;
+use super::resolve::{Kept, Resume, back_substitute_by_columns};
 use super::spans::{Span, unpack};
-use super::{DualActiveSetOf, QpAllocator, ZERO_ROW2};
+use super::updates::householder_add;
+pub(super) use super::updates::{back_substitute, givens_drop};
+use super::{DenseQpOf, DualActiveSetOf, QpAllocator, ZERO_ROW2};
 use crate::active_set::{ActiveSetFactor, AddError};
-use crate::linalg::{
-    column, column_mut, columns, columns_in, columns_in_mut, columns_mut, dot, dot_d, givens,
-};
+use crate::linalg::{column, columns, columns_in, dot, dot_d};
+
+/// The factor `J`, `R` a solve works on and its direction workspace `d`
+/// (the caller's, [`Orthogonal::J`]).
+pub(super) type FactorMut<'a, NV> = (
+    &'a mut OMatrix<f64, NV, NV>,
+    &'a mut OMatrix<f64, NV, NV>,
+    &'a mut OVector<f64, NV>,
+);
 
 /// The orthogonal factor of the active set, the iterate and the rows, for one
 /// solve. Slices of length `NV` or `NC` as named (constants for the static
 /// sizes).
-pub(super) struct Orthogonal<'a, NV: Dim, NC: Dim, Bd: BoundRows>
+pub(super) struct Orthogonal<'a, NV: Dim, NC: Dim, Bd: BoundRows, Rs: Resume<NV>>
 where
     DefaultAllocator: QpAllocator<NV, NC>,
 {
@@ -80,12 +91,81 @@ where
     /// for them (still `L^-T` and 0), so the factor must not be kept for a
     /// next probe.
     pub guessed: bool,
+    /// The active rows the solve resumes from (`()`: none, from scratch;
+    /// `qp/resolve.rs`).
+    pub kept: Rs,
+    /// The start from scratch `J = L^-T`, `R = 0` still to be set before
+    /// `J` or `R` is first read ([`Orthogonal::settle`]; `qp/reprobe.rs`);
+    /// `None`: set already.
+    pub pending: Option<&'a mut Pending>,
 }
 
-impl<'a, NV: Dim, NC: Dim, Bd: BoundRows> Orthogonal<'a, NV, NC, Bd>
+impl<'a, NV: Dim, NC: Dim, Bd: BoundRows, Rs: Resume<NV>> Orthogonal<'a, NV, NC, Bd, Rs>
 where
     DefaultAllocator: QpAllocator<NV, NC>,
 {
+    /// The factor of a solve of `qp`'s rows with the right-hand side `h`,
+    /// the row norms `norms`, the primal tolerance `tol`, from the iterate
+    /// `x` and the factor `J`, `R` (`d` the direction's workspace), the
+    /// bound rows `bounds` and the kept rows `kept`: no spans, the definite
+    /// path's order of operations, no guess workspace (set the fields
+    /// [`Orthogonal::span`], [`Orthogonal::reorder`] and
+    /// [`Orthogonal::guess`] after).
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    pub(super) fn new(
+        solver: &'a DualActiveSetOf<NV, NC>,
+        qp: &'a DenseQpOf<NV, NC>,
+        h: &'a OVector<f64, NC>,
+        norms: &'a mut RowNormsOf<NC>,
+        tol: f64,
+        x: OVector<f64, NV>,
+        (J, R, d): FactorMut<'a, NV>,
+        bounds: Bd,
+        kept: Rs,
+    ) -> Self {
+        Orthogonal {
+            solver,
+            rows: &qp.gt,
+            h,
+            norm2: &norms.norm2,
+            inv_hnorm: &mut norms.inv_hnorm,
+            tol2: tol * tol,
+            x,
+            J,
+            R,
+            d,
+            z: OVector::zeros_generic(solver.nv(), nalgebra::U1),
+            dependent: false,
+            span: None,
+            reorder: false,
+            bounds,
+            guess: None,
+            guessed: false,
+            kept,
+            pending: None,
+        }
+    }
+
+    /// Sets the start from scratch if it is still [`Orthogonal::pending`]:
+    /// before the first read of `J` or `R` (every step but the scan and the
+    /// hot start's guess). Nothing on bare-metal targets and below the hot
+    /// start's sizes (never pending there).
+    #[inline(always)]
+    pub(super) fn settle(&mut self) {
+        // (A constant for the static sizes: nothing below the hot start's
+        // sizes either, which never leave it pending.)
+        if cfg!(target_os = "none") || !self.solver.hot_start_capable() {
+            return;
+        }
+        if let Some(p) = self.pending.as_deref_mut()
+            && p.unset
+        {
+            set_scratch(self.J, self.R, &self.solver.J0, p.r_cols);
+            *p = Pending::NONE;
+        }
+    }
+
     /// Number of variables (a constant for the static sizes).
     #[inline(always)]
     fn n(&self) -> usize {
@@ -94,7 +174,7 @@ where
 
     /// Row `i` of `G` and `h_i`.
     #[inline(always)]
-    fn row(&self, i: usize) -> Option<(&'a [f64], f64)> {
+    pub(super) fn row(&self, i: usize) -> Option<(&'a [f64], f64)> {
         Some((
             column(self.rows.as_slice(), self.n(), i)?,
             *self.h.as_slice().get(i)?,
@@ -157,104 +237,53 @@ where
         }))
     }
 
-    /// [`ActiveSetFactor::hot_guess`] with `M` and `T` in `M`, `T`
-    /// (written where read, whatever they hold).
+    /// [`ActiveSetFactor::violation`] with the slack's dot product over all
+    /// of the row (`SPANNED` false) or over the row's span (the same bits).
+    // Row norms: Euclidean for the scale-free violation test, and in the
+    // metric of H^-1 (|J0' g_i| = |L^-1 g_i|) for choosing which row to add:
+    // `s_i / |L^-1 g_i|` is the square root of the cost increase of enforcing
+    // row i alone, which picks rows that matter and roughly halves the
+    // add/drop count on the controller's QPs compared with the Euclidean rule.
+    // A row is violated when `slack / |g| < -tol`, tested without the square
+    // root as `slack < 0` and `slack^2 > tol^2 |g|^2`.
     #[inline(always)]
-    fn guess_in(
+    pub(super) fn violation_over<const SPANNED: bool>(
         &mut self,
-        M: &mut OMatrix<f64, NV, NV>,
-        T: &mut OMatrix<f64, NV, NV>,
-        act: &[u16],
-        k: usize,
-        mult: &mut [f64],
-        blocked: &[bool],
-    ) -> bool {
-        let nv = self.solver.nv();
-        let n = nv.value();
-        let k = k.min(n);
-        // Column j of `M` (NV x NV, column-major) is m_j = L^-1 g_j (the
-        // columns `0..k` written here).
-        let mut c = OVector::<f64, NV>::zeros_generic(nv, nalgebra::U1);
-        for (&a, (mcol, cj)) in act
-            .iter()
-            .zip(columns_mut(M.as_mut_slice(), n).zip(c.as_mut_slice().iter_mut()))
-            .take(k)
-        {
-            let Some((g, ha)) = self.row(usize::from(a)) else {
-                return false;
-            };
-            crate::linalg::copy(mcol, self.solver.linv_mul(g).as_slice());
-            *cj = dot(g, self.x.as_slice()) - ha;
+        i: usize,
+        blocked: bool,
+    ) -> Option<f64> {
+        if let Some(v) = self.bound_violation(i, blocked) {
+            return v;
         }
-        let Ms = M.as_slice();
-        // K = C C' (lower C; `T = C'`, `qp/guess.rs`).
-        if !super::guess::factor_gram(M, k, T) {
-            return false;
-        }
-        let Ts = T.as_slice();
-        let diag = |i: usize| {
-            column(Ts, n, i)
-                .and_then(|t| t.get(i))
-                .copied()
-                .unwrap_or(0.0)
+        let n = self.n();
+        let (Some(g), Some(&hi), Some(&n2), Some(ihn)) = (
+            column(self.rows.as_slice(), n, i),
+            self.h.as_slice().get(i),
+            self.norm2.as_slice().get(i),
+            self.inv_hnorm.as_mut_slice().get_mut(i),
+        ) else {
+            return None;
         };
-        // C y = c (row `i` of `C` is column `i` of `T`).
-        let mut y = OVector::<f64, NV>::zeros_generic(nv, nalgebra::U1);
-        for (i, ti) in columns(Ts, n).enumerate().take(k) {
-            let mut s = c.get(i).copied().unwrap_or(0.0);
-            for (a, yl) in ti.iter().zip(y.as_slice()).take(i) {
-                s -= a * yl;
-            }
-            if let Some(yi) = y.get_mut(i) {
-                *yi = s / diag(i);
-            }
+        if blocked {
+            return None;
         }
-        // C' lambda = y (column `i` of `C` is entry `i` of the columns of
-        // `T` after `i`).
-        let mut lambda = OVector::<f64, NV>::zeros_generic(nv, nalgebra::U1);
-        for i in (0..k).rev() {
-            let mut s = y.get(i).copied().unwrap_or(0.0);
-            let after = lambda.as_slice().get(i + 1..k).unwrap_or(&[]);
-            for (tl, ll) in columns_in(Ts, n, i + 1, k).zip(after) {
-                s -= tl.get(i).copied().unwrap_or(0.0) * ll;
-            }
-            if let Some(li) = lambda.get_mut(i) {
-                *li = s / diag(i);
-            }
-        }
-        if !lambda.as_slice().iter().all(|&l| l >= 0.0 && l.is_finite()) {
-            return false;
-        }
-        // x = x0 - L^-T M' lambda.
-        let mut w = OVector::<f64, NV>::zeros_generic(nv, nalgebra::U1);
-        for (col, &l) in columns(Ms, n).zip(lambda.as_slice().iter()).take(k) {
-            for (wk, &mk) in w.as_mut_slice().iter_mut().zip(col) {
-                *wk += l * mk;
-            }
-        }
-        let step = self.solver.linvt_mul(w.as_slice());
-        let x0 = self.x.clone();
-        for (xk, sk) in self.x.as_mut_slice().iter_mut().zip(step.as_slice().iter()) {
-            *xk -= sk;
-        }
-        // Every row must hold (the marked ones do, to rounding; if rounding
-        // says otherwise the guess is dropped).
-        let mut holds = true;
-        // (A zero row's rate, `+0`, holds.)
-        for (i, &b) in blocked.iter().enumerate() {
-            if self.violation(i, b).is_some_and(|s| s < 0.0 || s.is_nan()) {
-                holds = false;
-                break;
-            }
-        }
-        if !holds || !self.x.as_slice().iter().all(|v| v.is_finite()) {
-            self.x = x0;
-            return false;
-        }
-        for (m, &l) in mult.iter_mut().zip(lambda.as_slice().iter()) {
-            *m = l;
-        }
-        true
+        let gx = if SPANNED {
+            // (Spans only where the proximal iterations are compiled in: a
+            // constant full range for the small static sizes.)
+            let (lo, up) = self
+                .span
+                .filter(|_| proximal_capable::<NV>())
+                .and_then(|sp| sp.as_slice().get(i))
+                .map_or((0, n), |&s| unpack(s));
+            dot_d::<NV>(
+                g.get(lo..up).unwrap_or(&[]),
+                self.x.as_slice().get(lo..up).unwrap_or(&[]),
+            )
+        } else {
+            // (`dot_d`: as pairs for run-time sizes, the scan over all rows.)
+            dot_d::<NV>(g, self.x.as_slice())
+        };
+        rate(self.solver, self.tol2, g, n2, ihn, hi - gx)
     }
 
     /// `d = J' n_p = -J' g_p` (`g_p` row `p`).
@@ -380,41 +409,28 @@ pub(super) fn rate_by(
     Some(slack * *ihn)
 }
 
-impl<NV: Dim, NC: Dim, Bd: BoundRows> ActiveSetFactor for Orthogonal<'_, NV, NC, Bd>
+impl<NV: Dim, NC: Dim, Bd: BoundRows, Rs: Resume<NV>> ActiveSetFactor
+    for Orthogonal<'_, NV, NC, Bd, Rs>
 where
     DefaultAllocator: QpAllocator<NV, NC>,
 {
-    // Row norms: Euclidean for the scale-free violation test, and in the
-    // metric of H^-1 (|J0' g_i| = |L^-1 g_i|) for choosing which row to add:
-    // `s_i / |L^-1 g_i|` is the square root of the cost increase of enforcing
-    // row i alone, which picks rows that matter and roughly halves the
-    // add/drop count on the controller's QPs compared with the Euclidean rule.
-    // A row is violated when `slack / |g| < -tol`, tested without the square
-    // root as `slack < 0` and `slack^2 > tol^2 |g|^2`.
+    /// The scan's rate of row `i` (over all of the row, or over
+    /// the row's span for a solve that may resume).
     #[inline(always)]
     fn violation(&mut self, i: usize, blocked: bool) -> Option<f64> {
-        if let Some(v) = self.bound_violation(i, blocked) {
-            return v;
+        // Without spans (every solve but the proximal ones) on hosts the
+        // iteration's own scan: a constant-length dot product for the static
+        // sizes (bare-metal targets: the resumed solves' code below, one copy
+        // in flash).
+        if !Rs::RESUMES || (cfg!(not(target_os = "none")) && self.span.is_none()) {
+            return self.violation_over::<false>(i, blocked);
         }
-        let n = self.n();
-        let (Some(g), Some(&hi), Some(&n2), Some(ihn)) = (
-            column(self.rows.as_slice(), n, i),
-            self.h.as_slice().get(i),
-            self.norm2.as_slice().get(i),
-            self.inv_hnorm.as_mut_slice().get_mut(i),
-        ) else {
-            return None;
-        };
-        if blocked {
-            return None;
-        }
-        // (`dot_d`: as pairs for run-time sizes, the scan over all rows.)
-        let slack = hi - dot_d::<NV>(g, self.x.as_slice());
-        rate(self.solver, self.tol2, g, n2, ihn, slack)
+        self.violation_over::<true>(i, blocked)
     }
 
     #[inline(always)]
     fn direction(&mut self, p: usize, _act: &[u16], nact: usize, r: &mut [f64]) -> Option<f64> {
+        self.settle();
         let n = self.n();
         let (gp, hp) = self.row(p)?;
         // d = J' n_p with the GI normal n_p = -g_p (n_p'x >= -h_p).
@@ -487,6 +503,7 @@ where
     /// Adds row `p` (see [`householder_add`]).
     #[inline(always)]
     fn add(&mut self, _p: usize, _r: &[f64], nact: usize) -> Result<(), AddError> {
+        self.settle();
         let added = if self.reordered() {
             householder_add::<NV, true>(self.J, self.R, nact, self.d.as_slice())
         } else {
@@ -502,6 +519,7 @@ where
     /// Removes active row `l` (see [`givens_drop`]).
     #[inline(always)]
     fn drop(&mut self, l: usize, nact: usize) {
+        self.settle();
         givens_drop(self.J, self.R, nact, l);
     }
 
@@ -552,6 +570,7 @@ where
     /// `d = J' n_p`, then the add of [`householder_add`] unless the part of
     /// `d` outside the active span is below `tol_dependence |d|`.
     fn hot_add(&mut self, p: usize, _act: &[u16], nact: usize) -> Result<bool, AddError> {
+        self.settle();
         let Some((gp, _)) = self.row(p) else {
             return Err(AddError::Numerical);
         };
@@ -582,6 +601,7 @@ where
     /// substitution; `w` kept in `d`), and `mult = R^-1 w`; the minimiser on
     /// the active rows is `x + J1 w` ([`ActiveSetFactor::hot_move`]).
     fn hot_multipliers(&mut self, act: &[u16], nact: usize, mult: &mut [f64]) -> bool {
+        self.settle();
         let n = nact.min(self.n());
         self.d.as_mut_slice().fill(0.0);
         for j in 0..n {
@@ -611,6 +631,7 @@ where
     }
 
     fn hot_move(&mut self, _act: &[u16], nact: usize) {
+        self.settle();
         let n = self.n();
         for (col, &wj) in columns(self.J.as_slice(), n)
             .zip(self.d.as_slice().iter())
@@ -621,215 +642,35 @@ where
             }
         }
     }
+
+    fn resume(&mut self, act: &mut [u16], mult: &mut [f64]) -> Option<(usize, usize)> {
+        let kept: &Kept<NV> = self.kept.kept()?;
+        for (a, &k) in act.iter_mut().zip(kept.act.as_slice()) {
+            *a = k;
+        }
+        for (u, &k) in mult.iter_mut().zip(kept.mult.as_slice()) {
+            *u = k;
+        }
+        Some((kept.nact, kept.neq))
+    }
 }
 
-/// `r[..nact] = R^-1 d[..nact]` by back substitution on the leading
-/// `nact x nact` block of the upper-triangular `R` (`r` comes zeroed). The
-/// same products and subtractions in the same order in both forms: for small
-/// `NV` (the controller's 6) both loops run over the constant `NV` with the
-/// test `< nact` inside, which the compiler unrolls fully; for larger `NV`
-/// (and run-time sizes) over `nact` (fully unrolled, the `NV^2 / 2` tests
-/// would cost more than they save). Measured in `docs/solvers.md`.
-/// Inlined on hosts; one out-of-line copy on bare-metal targets, shared
-/// with the resumed solves (`qp/resolve.rs`), for flash.
-#[cfg_attr(not(target_os = "none"), inline(always))]
-#[cfg_attr(target_os = "none", inline(never))]
-pub(super) fn back_substitute<NV: Dim>(
-    R: &OMatrix<f64, NV, NV>,
-    d: &[f64],
-    nact: usize,
-    r: &mut [f64],
+/// `J = J0` and the columns `0..r_cols` of `R` zeroed (the others are zero
+/// already): the start from scratch of a solve ([`Orthogonal::settle`]).
+/// Out of line: at most once per solve.
+#[inline(never)]
+fn set_scratch<NV: Dim>(
+    J: &mut OMatrix<f64, NV, NV>,
+    R: &mut OMatrix<f64, NV, NV>,
+    J0: &OMatrix<f64, NV, NV>,
+    r_cols: usize,
 ) where
     DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
 {
-    let small = NV::try_to_usize().is_some_and(|n| n <= 8);
-    let nv = R.nrows();
-    let (Some(d), Some(r)) = (d.get(..nv), r.get_mut(..nv)) else {
-        return;
-    };
-    let nact = nact.min(nv);
-    if small {
-        for i in (0..nv).rev() {
-            if i < nact {
-                let mut acc = d[i];
-                for k in (i + 1)..nv {
-                    if k < nact {
-                        acc -= R[(i, k)] * r[k];
-                    }
-                }
-                r[i] = acc / R[(i, i)];
-            }
-        }
-    } else {
-        // Checked access: the optimiser does not see `nact <= NV` here on
-        // every target (nopanic/); every access is in bounds.
-        for i in (0..nact).rev() {
-            let (Some(&di), Some(&rii)) = (d.get(i), R.get((i, i))) else {
-                continue;
-            };
-            let mut acc = di;
-            for k in (i + 1)..nact {
-                if let (Some(&rik), Some(&rk)) = (R.get((i, k)), r.get(k)) {
-                    acc -= rik * rk;
-                }
-            }
-            if let Some(ri) = r.get_mut(i) {
-                *ri = acc / rii;
-            }
-        }
-    }
-}
-
-/// Adds a row whose `d = J' n` is given: one Householder reflection of
-/// columns `nact..NV` of `J` maps `d[nact..]` to `alpha e_nact` (`|alpha| =
-/// |d[nact..]|`), and `d[..nact], alpha` becomes column `nact` of `R`. Half
-/// the flops of the equivalent Givens sweep, and all of them vectorise. False
-/// when the active set is full (`nact == NV`) or the new diagonal of `R` is
-/// zero or not finite.
-fn householder_add<NV: Dim, const SPARSE: bool>(
-    J: &mut OMatrix<f64, NV, NV>,
-    R: &mut OMatrix<f64, NV, NV>,
-    nact: usize,
-    d: &[f64],
-) -> bool
-where
-    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV> + nalgebra::allocator::Allocator<NV>,
-{
-    let (nvd, _) = J.shape_generic();
-    let n = nvd.value();
-    if nact >= n {
-        return false;
-    }
-    let mut v = OVector::<f64, NV>::zeros_generic(nvd, nalgebra::U1);
-    for (a, &b) in v.as_mut_slice().iter_mut().zip(d) {
-        *a = b;
-    }
-    let d0 = v.get(nact).copied().unwrap_or(0.0);
-    let mut tail = 0.0; // |d[nact+1..]|^2
-    for &dj in v.as_slice().iter().skip(nact + 1) {
-        tail += dj * dj;
-    }
-    let mut diag = d0;
-    if tail > 0.0 {
-        // x = d[nact..], alpha = -sign(x_0) |x|, v = x - alpha e_0 (no
-        // cancellation), reflection I - beta v v' with beta = 2 / v'v and
-        // v'v = 2 |x| (|x| + |x_0|).
-        let norm = crate::linalg::sqrt(d0 * d0 + tail);
-        let alpha = if d0 >= 0.0 { -norm } else { norm };
-        if let Some(vn) = v.get_mut(nact) {
-            *vn = d0 - alpha;
-        }
-        let beta = 1.0 / (norm * (norm + d0.abs()));
-        // J2 <- J2 (I - beta v v'): w = J2 v, then column j -= beta v_j w.
-        let mut w = OVector::<f64, NV>::zeros_generic(nvd, nalgebra::U1);
-        let v2 = v.as_slice().get(nact..).unwrap_or(&[]);
-        for (col, &vj) in columns_in(J.as_slice(), n, nact, n).zip(v2) {
-            if SPARSE && vj == 0.0 {
-                continue;
-            }
-            for (wk, c) in w.as_mut_slice().iter_mut().zip(col) {
-                *wk += c * vj;
-            }
-        }
-        for (col, &vj) in columns_in_mut(J.as_mut_slice(), n, nact, n).zip(v2) {
-            if SPARSE && vj == 0.0 {
-                continue;
-            }
-            let f = beta * vj;
-            for (c, wk) in col.iter_mut().zip(w.as_slice().iter()) {
-                *c -= f * wk;
-            }
-        }
-        diag = alpha;
-    }
-    // Column `nact` of R gets d[..nact], then the new diagonal (checked
-    // access, as in givens_drop).
-    let Some(col) = column_mut(R.as_mut_slice(), n, nact) else {
-        return false;
-    };
-    for (r, &di) in col.iter_mut().zip(d).take(nact) {
-        *r = di;
-    }
-    let Some(rd) = col.get_mut(nact) else {
-        return false;
-    };
-    *rd = diag;
-    diag != 0.0 && diag.is_finite()
-}
-
-/// Removes active row `l` (of `nact`): deletes column `l` of `R` and
-/// restores the triangle with Givens rotations, applied to `J` as well.
-// Inlined on hosts (as the compiler chose when the loop was written out
-// here; out of line it costs the paper QPs 4 %); one out-of-line copy on
-// bare-metal targets, shared by the iteration's drops and the resumed
-// solves' (`qp/resolve.rs`), for flash.
-#[cfg_attr(not(target_os = "none"), inline(always))]
-#[cfg_attr(target_os = "none", inline(never))]
-pub(super) fn givens_drop<NV: Dim>(
-    J: &mut OMatrix<f64, NV, NV>,
-    R: &mut OMatrix<f64, NV, NV>,
-    nact: usize,
-    l: usize,
-) where
-    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
-{
-    let nv = R.nrows();
-    let nact = nact.min(nv); // invariant of the iteration, stated for the compiler
-    for col in l..nact.saturating_sub(1) {
-        if let Some(pair) = col
-            .checked_mul(nv)
-            .and_then(|a| R.as_mut_slice().get_mut(a..a.saturating_add(2 * nv)))
-        {
-            let (dst, src) = pair.split_at_mut(nv.min(pair.len()));
-            crate::linalg::copy(dst, src);
-        }
-    }
-    if let Some(last) = nact
-        .checked_sub(1)
-        .and_then(|c| column_mut(R.as_mut_slice(), nv, c))
-    {
-        last.fill(0.0);
-    }
-    // Column `col` now has a sub-diagonal entry at row col+1 for col >= l.
-    for col in l..nact.saturating_sub(1) {
-        let (a, b) = (R[(col, col)], R[(col + 1, col)]);
-        if b == 0.0 {
-            continue;
-        }
-        let (c, s, rr) = givens(a, b);
-        R[(col, col)] = rr;
-        R[(col + 1, col)] = 0.0;
-        // Columns k in col+1..nact-1 (checked access: the optimiser cannot
-        // prove the bounds for every NV, see nopanic/).
-        for rk in columns_in_mut(R.as_mut_slice(), nv, col + 1, nact - 1) {
-            if let [.., ra, rb] = rk.get_mut(..col + 2).unwrap_or(&mut []) {
-                let (a, b) = (*ra, *rb);
-                *ra = c * a + s * b;
-                *rb = -s * a + c * b;
-            }
-        }
-        rotate_columns(J, col, c, s);
-    }
-}
-
-/// `[Ji, Jj] <- [c Ji + s Jj, -s Ji + c Jj]` for the adjacent columns `i` and
-/// `j = i + 1` (the callers' only use); with `j >= NV` nothing happens.
-fn rotate_columns<NV: Dim>(J: &mut OMatrix<f64, NV, NV>, i: usize, c: f64, s: f64)
-where
-    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
-{
-    let n = J.nrows();
-    // Column-major storage: columns i and i + 1 are contiguous.
-    let Some(start) = i.checked_mul(n) else {
-        return;
-    };
-    let Some(pair) = J.as_mut_slice().get_mut(start..start.saturating_add(2 * n)) else {
-        return;
-    };
-    let (ji, jj) = pair.split_at_mut(n.min(pair.len()));
-    for (a, b) in ji.iter_mut().zip(jj.iter_mut()) {
-        let (x, y) = (*a, *b);
-        *a = c * x + s * y;
-        *b = -s * x + c * y;
+    crate::linalg::copy(J.as_mut_slice(), J0.as_slice());
+    let n = R.nrows();
+    let end = r_cols.min(R.ncols()).saturating_mul(n);
+    if let Some(cols) = R.as_mut_slice().get_mut(..end) {
+        cols.fill(0.0);
     }
 }

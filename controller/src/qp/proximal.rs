@@ -47,7 +47,7 @@ use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector, U1};
 
 use super::bounds::BoundRows;
 use super::orthogonal::Orthogonal;
-use super::resolve::{Kept, ResolveStop, Resumed, resolve};
+use super::resolve::{Kept, ResolveStop, resolve};
 use super::spans::row_spans;
 use super::{DenseQpOf, DualActiveSetOf, HOT_START_MIN_NV, HessianError, QpAllocator, RowNormsOf};
 use crate::active_set::{self, Iterate};
@@ -182,31 +182,14 @@ where
             };
             let left = max_iter.saturating_sub(used);
             let marks = if kept.is_some() { &unmarked } else { &pref };
-            let mut factor = Resumed {
-                inner: Orthogonal {
-                    solver: self,
-                    rows: &qp.gt,
-                    h: hv,
-                    norm2: &norms.norm2,
-                    inv_hnorm: &mut norms.inv_hnorm,
-                    tol2: tol * tol,
-                    x,
-                    J: &mut J,
-                    R: &mut R,
-                    d: &mut d,
-                    z: OVector::zeros_generic(nv, U1),
-                    dependent: false,
-                    span: Some(&spans),
-                    reorder: true,
-                    bounds,
-                    guess: None,
-                    guessed: false,
-                },
-                kept: kept.as_ref(),
-            };
+            let factor = (&mut J, &mut R, &mut d);
+            let mut factor =
+                Orthogonal::new(self, qp, hv, norms, tol, x, factor, bounds, kept.as_ref());
+            factor.span = Some(&spans);
+            factor.reorder = true;
             let it = active_set::iterate(&mut factor, nv, m, me, start, marks, true, left, hot);
-            let guessed = factor.inner.guessed;
-            let x = factor.inner.x;
+            let guessed = factor.guessed;
+            let x = factor.x;
             let Some(it) = it else {
                 // The orthogonal factor never asks for a restart.
                 return active_set::stopped(nv, nc, QpStatus::NumericalError);

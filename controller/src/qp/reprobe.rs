@@ -37,9 +37,35 @@ use nalgebra::{
 #[cfg(not(target_os = "none"))]
 use super::guess::GuessWork;
 use super::resolve::{Kept, ResolveStop, resolve};
+use super::store::Begin;
 use super::{DenseQpOf, DualActiveSetOf, QpAllocator, RowNormsOf};
 use crate::active_set::Iterate;
 use crate::solution::{QpSolutionOf, QpStatus};
+
+/// A start from scratch (`J = L^-T`, `R = 0`) not yet written: on hosts,
+/// for the sizes with the hot start, a solve from scratch sets `J` and `R`
+/// only when it first needs them (`Orthogonal::settle`: before its first
+/// direction, add, drop or hot-start step), so a solve the hot start's
+/// guess ends (which reads neither) writes nothing, and a restart of the
+/// controller's next QP ([`ReprobeOf::restart`]) copies nothing.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Pending {
+    /// `J` and `R` still hold what an earlier solve left; the start from
+    /// scratch is to be set before they are read.
+    pub unset: bool,
+    /// The columns `0..r_cols` of `R` may be nonzero, the others are zero
+    /// (an add writes column `nact` of `R`, a drop zeroes the column it
+    /// vacates): setting `R = 0` zeroes only those.
+    pub r_cols: usize,
+}
+
+impl Pending {
+    /// Nothing to set, `R = 0`.
+    pub(super) const NONE: Pending = Pending {
+        unset: false,
+        r_cols: 0,
+    };
+}
 
 /// The factor of a solve's active rows: storage for the solve, and what it
 /// leaves for the next one of the same QP's rows (module docs).
@@ -60,6 +86,9 @@ where
     /// `J = L^-T` and `R = 0` already (a start from scratch need not set
     /// them again).
     pub pristine: bool,
+    /// The start from scratch left to the solve that first needs the factor
+    /// ([`Pending`]).
+    pub pending: Pending,
     /// The hot start's guess's matrices (`qp/guess.rs`), kept (not
     /// cleared) from solve to solve. Not on bare-metal targets (the
     /// firmware's N = 3 has no hot start; a guess there zeroes matrices of
@@ -110,6 +139,11 @@ where
             *self = Carry::scratch(solver);
             return;
         }
+        if lazy(solver) {
+            // Set by the solve that needs it (`Pending`).
+            self.pristine = false;
+            return;
+        }
         // Slices (a `memcpy` and a `memset`), not nalgebra's entry loops.
         for (j, &j0) in self.J.as_mut_slice().iter_mut().zip(solver.J0.as_slice()) {
             *j = j0;
@@ -132,6 +166,7 @@ where
             },
             valid: false,
             pristine,
+            pending: Pending::NONE,
             #[cfg(not(target_os = "none"))]
             guess: GuessWork::zeros(nv),
         }
@@ -147,16 +182,19 @@ where
     /// iterate and the drops made, or the status that ends the solve.
     pub(super) fn start<NC: Dim>(
         &mut self,
-        solver: &DualActiveSetOf<NV, NC>,
-        q: &OVector<f64, NV>,
-        h: &OVector<f64, NC>,
-        blocked: &mut OVector<bool, NC>,
-        me: usize,
-        max_iter: u32,
+        at: Begin<'_, NV, NC>,
     ) -> Result<(OVector<f64, NV>, u32), QpStatus>
     where
         DefaultAllocator: QpAllocator<NV, NC>,
     {
+        let Begin {
+            solver,
+            q,
+            h,
+            blocked,
+            me,
+            max_iter,
+        } = at;
         let nv = solver.nv();
         let n = nv.value();
         // Equality rows stay in the factor: one left out (or a zero one)
@@ -167,8 +205,12 @@ where
         }
         if !self.valid {
             if !self.pristine {
-                self.J.clone_from(&solver.J0);
-                self.R.fill(0.0);
+                if lazy(solver) {
+                    self.pending.unset = true;
+                } else {
+                    self.J.clone_from(&solver.J0);
+                    self.R.fill(0.0);
+                }
             }
             self.pristine = false;
             return Ok((solver.unconstrained_minimiser(q), 0));
@@ -208,11 +250,27 @@ where
     /// Keeps the active rows the iteration `it` ended with; the factor is
     /// valid for the next solve when it solved the QP or proved it empty.
     pub(super) fn keep(&mut self, it: &Iterate<NV>) {
+        // Columns past `nact` are zero, but for the column `nact` of an add
+        // that failed. (Read on hosts only, `Pending`.)
+        if cfg!(not(target_os = "none")) {
+            self.pending.r_cols = (it.nact + 1).min(self.R.ncols());
+        }
         self.kept.act.clone_from(&it.act);
         self.kept.nact = it.nact;
         self.kept.neq = it.neq;
         self.valid = matches!(it.status, QpStatus::Solved | QpStatus::Infeasible);
     }
+}
+
+/// Whether `solver`'s solves from scratch set `J` and `R` when they first
+/// need them ([`Pending`]): on hosts with the hot start (whose guess may end
+/// a solve without the factor); elsewhere every solve needs it.
+#[inline(always)]
+fn lazy<NV: Dim, NC: Dim>(solver: &DualActiveSetOf<NV, NC>) -> bool
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
+    cfg!(not(target_os = "none")) && solver.hot_start_capable()
 }
 
 /// What the probes of one QP share (module docs): its row norms and the
@@ -228,7 +286,7 @@ where
     /// Euclidean row norms of the QP and the `H^-1` norms found so far.
     norms: RowNormsOf<NC>,
     /// The factor of the last probe.
-    carry: Carry<NV>,
+    pub(super) carry: Carry<NV>,
 }
 
 /// [`ReprobeOf`] with the sizes as constants (stack only, `no_std`).
@@ -256,6 +314,7 @@ impl<const NV: usize, const NC: usize> ReprobeOf<Const<NV>, Const<NC>> {
             },
             valid: false,
             pristine: false,
+            pending: Pending::NONE,
             #[cfg(not(target_os = "none"))]
             guess: GuessWork::EMPTY,
         },

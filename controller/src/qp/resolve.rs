@@ -13,9 +13,9 @@
 //!   the iteration) and the minimiser formed again. That is a pair the dual
 //!   method starts from (Goldfarb & Idnani's S-pair: `x` optimal on the
 //!   active rows, multipliers `>= 0`);
-//! * [`Resumed`]: the factor handed to [`crate::active_set::iterate`], which
-//!   continues from that pair with its normal scans, adds and drops (only
-//!   where a row is violated).
+//! * [`Orthogonal`](super::orthogonal::Orthogonal) with the kept rows ([`Resume`]): the factor handed to
+//!   [`crate::active_set::iterate`], which continues from that pair with its
+//!   normal scans, adds and drops (only where a row is violated).
 //!
 //! With `J' H J = I` and `J' N = [R; 0]` (`N` the active normals `n_j =
 //! -g_j`, `N'x = b`, `b_j = -h_j`), `x = J y` solves `H x + q = N u`,
@@ -25,11 +25,9 @@
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
 use super::QpAllocator;
-use super::bounds::BoundRows;
-use super::orthogonal::{Orthogonal, back_substitute, givens_drop, rate};
+use super::orthogonal::{back_substitute, givens_drop};
 use super::proximal::proximal_capable;
-use super::spans::unpack;
-use crate::active_set::{ActiveSetFactor, AddError, remove_at};
+use crate::active_set::remove_at;
 use crate::linalg::{column, columns, dot_d};
 
 /// The active rows a proximal solve ended with (the order of the factor's
@@ -241,124 +239,44 @@ where
     Err(ResolveStop::Numerical)
 }
 
-/// The factor of the proximal iterations' solves for
-/// [`crate::active_set::iterate`]: `inner` with its rows' spans (the scan's
-/// slack over the span, `qp/spans.rs`), and with `kept` the active rows it
-/// already holds (the iteration resumes from them,
-/// [`ActiveSetFactor::resume`]).
-pub(super) struct Resumed<'k, 'a, NV: Dim, NC: Dim, Bd: BoundRows>
+/// The active rows a solve resumes from, as a type parameter of
+/// [`Orthogonal`](super::orthogonal::Orthogonal) (as [`BoundRows`](super::bounds::BoundRows) for the
+/// bounds): `()` for a solve that iterates from scratch (no resume hook, and
+/// the iteration's own scan with no test for spans), `Option<&Kept>` for the
+/// proximal iterations' solves and the probes (`qp/reprobe.rs`), whose scan
+/// reads the rows' spans where they are given and which resume from the
+/// kept rows ([`ActiveSetFactor::resume`](crate::active_set::ActiveSetFactor::resume)).
+pub(super) trait Resume<NV: Dim>
 where
-    DefaultAllocator: QpAllocator<NV, NC>,
+    DefaultAllocator: nalgebra::allocator::Allocator<NV>,
 {
-    /// The factor (holding the kept rows' factor when `kept` is given).
-    pub inner: Orthogonal<'a, NV, NC, Bd>,
-    /// The active rows and multipliers to resume from.
-    pub kept: Option<&'k Kept<NV>>,
+    /// Whether the solve may resume (and its scan reads spans).
+    const RESUMES: bool;
+
+    /// The rows and multipliers to resume from, if any.
+    fn kept(&self) -> Option<&Kept<NV>>;
 }
 
-impl<NV: Dim, NC: Dim, Bd: BoundRows> ActiveSetFactor for Resumed<'_, '_, NV, NC, Bd>
+impl<NV: Dim> Resume<NV> for ()
 where
-    DefaultAllocator: QpAllocator<NV, NC>,
+    DefaultAllocator: nalgebra::allocator::Allocator<NV>,
 {
-    /// [`Orthogonal`]'s violation with the slack's dot product over the
-    /// row's span (the same bits).
-    #[inline(always)]
-    fn violation(&mut self, i: usize, blocked: bool) -> Option<f64> {
-        // Without spans (every solve but the proximal ones) on hosts the
-        // iteration's own scan: a constant-length dot product for the static
-        // sizes (bare-metal targets: the code below, one copy in flash).
-        if cfg!(not(target_os = "none")) && self.inner.span.is_none() {
-            return self.inner.violation(i, blocked);
-        }
-        let o = &mut self.inner;
-        if let Some(v) = o.bound_violation(i, blocked) {
-            return v;
-        }
-        let n = o.solver.nv().value();
-        let (Some(g), Some(&hi), Some(&n2), Some(ihn)) = (
-            column(o.rows.as_slice(), n, i),
-            o.h.as_slice().get(i),
-            o.norm2.as_slice().get(i),
-            o.inv_hnorm.as_mut_slice().get_mut(i),
-        ) else {
-            return None;
-        };
-        if blocked {
-            return None;
-        }
-        // (Spans only where the proximal iterations are compiled in: a
-        // constant full range for the small static sizes.)
-        let (lo, up) = o
-            .span
-            .filter(|_| proximal_capable::<NV>())
-            .and_then(|sp| sp.as_slice().get(i))
-            .map_or((0, n), |&s| unpack(s));
-        let gx = dot_d::<NV>(
-            g.get(lo..up).unwrap_or(&[]),
-            o.x.as_slice().get(lo..up).unwrap_or(&[]),
-        );
-        rate(o.solver, o.tol2, g, n2, ihn, hi - gx)
-    }
+    const RESUMES: bool = false;
 
     #[inline(always)]
-    fn direction(&mut self, p: usize, act: &[u16], nact: usize, r: &mut [f64]) -> Option<f64> {
-        self.inner.direction(p, act, nact, r)
+    fn kept(&self) -> Option<&Kept<NV>> {
+        None
     }
+}
+
+impl<NV: Dim> Resume<NV> for Option<&Kept<NV>>
+where
+    DefaultAllocator: nalgebra::allocator::Allocator<NV>,
+{
+    const RESUMES: bool = true;
 
     #[inline(always)]
-    fn advance(&mut self, p: usize, t: f64, r: &[f64], act: &[u16], nact: usize) {
-        self.inner.advance(p, t, r, act, nact);
-    }
-
-    #[inline(always)]
-    fn add(&mut self, p: usize, r: &[f64], nact: usize) -> Result<(), AddError> {
-        self.inner.add(p, r, nact)
-    }
-
-    #[inline(always)]
-    fn drop(&mut self, l: usize, nact: usize) {
-        self.inner.drop(l, nact);
-    }
-
-    #[inline(always)]
-    fn hot_start_capable(&self) -> bool {
-        self.inner.hot_start_capable()
-    }
-
-    #[inline(always)]
-    fn equalities_capable(&self) -> bool {
-        self.inner.equalities_capable()
-    }
-
-    #[inline(always)]
-    fn slack(&self, i: usize) -> (f64, f64) {
-        self.inner.slack(i)
-    }
-
-    fn hot_guess(&mut self, act: &[u16], k: usize, mult: &mut [f64], blocked: &[bool]) -> bool {
-        self.inner.hot_guess(act, k, mult, blocked)
-    }
-
-    fn hot_add(&mut self, p: usize, act: &[u16], nact: usize) -> Result<bool, AddError> {
-        self.inner.hot_add(p, act, nact)
-    }
-
-    fn hot_multipliers(&mut self, act: &[u16], nact: usize, mult: &mut [f64]) -> bool {
-        self.inner.hot_multipliers(act, nact, mult)
-    }
-
-    fn hot_move(&mut self, act: &[u16], nact: usize) {
-        self.inner.hot_move(act, nact);
-    }
-
-    fn resume(&mut self, act: &mut [u16], mult: &mut [f64]) -> Option<(usize, usize)> {
-        let kept = self.kept?;
-        for (a, &k) in act.iter_mut().zip(kept.act.as_slice()) {
-            *a = k;
-        }
-        for (u, &k) in mult.iter_mut().zip(kept.mult.as_slice()) {
-            *u = k;
-        }
-        Some((kept.nact, kept.neq))
+    fn kept(&self) -> Option<&Kept<NV>> {
+        *self
     }
 }

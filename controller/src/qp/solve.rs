@@ -8,8 +8,7 @@ use nalgebra::{DefaultAllocator, Dim, OVector, U1};
 
 use super::orthogonal::Orthogonal;
 use super::proximal::proximal_capable;
-use super::resolve::Resumed;
-use super::store::{Local, Store};
+use super::store::{Begin, Local, Store};
 use super::{
     DenseQpOf, DualActiveSetOf, QpAllocator, QpSolutionOf, QpStatus, ReprobeOf, RowNormsOf,
     SimpleBoundsOf, bounds,
@@ -176,35 +175,20 @@ where
         let marked = cfg!(target_os = "none") || prefer.iter().any(|&p| p);
         // From scratch, or from the factor a carry holds (`qp/store.rs`).
         let mut own = store.own(self);
-        let start = store.start(&mut own, self, qv, hv, &mut blocked, me, max_iter);
+        let start = store.start(Begin {
+            solver: self,
+            q: qv,
+            h: hv,
+            blocked: &mut blocked,
+            me,
+            max_iter,
+        });
         let (x, resumed_drops) = match start {
             Ok(start) => start,
             Err(status) => return active_set::stopped(nv, nc, status),
         };
-        let (J, R, kept, guess) = store.parts(&mut own);
+        let (J, R, kept, guess, pending) = store.parts(&mut own);
         let mut d = OVector::<f64, NV>::zeros_generic(nv, U1);
-        let mut factor = Resumed {
-            inner: Orthogonal {
-                solver: self,
-                rows: &qp.gt,
-                h: hv,
-                norm2: &norms.norm2,
-                inv_hnorm: &mut norms.inv_hnorm,
-                tol2: tol * tol,
-                x,
-                J,
-                R,
-                d: &mut d,
-                z: OVector::zeros_generic(nv, U1),
-                dependent: false,
-                span: None,
-                reorder: false,
-                bounds,
-                guess,
-                guessed: false,
-            },
-            kept,
-        };
         // Rows left out are never scanned: they start (and stay) blocked as if
         // active, but never enter the active list.
         let hot = self.settings.hot_start;
@@ -230,20 +214,33 @@ where
         // second copy of the iteration cost the N = 3 step 2 %) and bare-metal
         // targets: one compiled iteration per instance.
         let plain = cfg!(not(target_os = "none")) && proximal_capable::<NV>();
-        let it = if !S::RESUMES || (plain && factor.kept.is_none()) {
-            iterate!(&mut factor.inner)
+        let factor = (J, R, &mut d);
+        macro_rules! run {
+            ($kept:expr) => {{
+                let mut f = Orthogonal::new(self, qp, hv, norms, tol, x, factor, bounds, $kept);
+                f.guess = guess;
+                f.pending = pending;
+                let it = iterate!(&mut f);
+                // A factor kept for the next solve is the factor: set, if
+                // no step of this solve needed it (a guess keeps none).
+                if !f.guessed {
+                    f.settle();
+                }
+                (it, f.x, f.guessed)
+            }};
+        }
+        let (it, x, guessed) = if !S::RESUMES || (plain && kept.is_none()) {
+            run!(())
         } else {
-            iterate!(&mut factor)
+            run!(kept)
         };
-        let x = factor.inner.x;
-        let guessed = factor.inner.guessed;
         let Some(it) = it else {
             // The orthogonal factor never asks for a restart.
-            store.keep(None);
+            store.keep(None, guessed);
             return active_set::stopped(nv, nc, QpStatus::NumericalError);
         };
         // A solve the guess ended holds no factor of its active rows.
-        store.keep(Some(&it).filter(|_| !guessed));
+        store.keep(Some(&it), guessed);
         let objective = self.objective(&qp.q, &x);
         let mut sol = it.solution(nc, x, objective, |_| 1.0);
         sol.iterations = sol.iterations.saturating_add(resumed_drops);

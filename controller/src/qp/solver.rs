@@ -218,9 +218,9 @@ where
         };
         let mut xhx = 0.0;
         for (col, xj) in columns(self.H.as_slice(), n).zip(x.iter()) {
-            xhx += xj * dot(col, x);
+            xhx += xj * dot_d::<NV>(col, x);
         }
-        0.5 * xhx + dot(q, x)
+        0.5 * xhx + dot_d::<NV>(q, x)
     }
 
     /// The unconstrained minimiser `x = -H^-1 q = -L^-T L^-1 q`, where every

@@ -12,21 +12,46 @@
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
 use super::guess::GuessWork;
-use super::reprobe::Carry;
+use super::reprobe::{Carry, Pending};
 use super::resolve::Kept;
 use super::{DualActiveSetOf, QpAllocator};
 use crate::active_set::Iterate;
 use crate::solution::QpStatus;
 
-/// The factor of a solve: `J`, `R`, the active rows it may resume from and
+/// The factor of a solve: `J`, `R`, the active rows it may resume from,
 /// the hot start's guess's kept workspace (`None`: the guess's own zeroed
-/// matrices, `qp/guess.rs`).
+/// matrices, `qp/guess.rs`) and the start from scratch still to be set
+/// (`None`: nothing to set, `qp/reprobe.rs`).
 pub(super) type Parts<'s, NV> = (
     &'s mut OMatrix<f64, NV, NV>,
     &'s mut OMatrix<f64, NV, NV>,
     Option<&'s Kept<NV>>,
     Option<&'s mut GuessWork<NV>>,
+    Option<&'s mut Pending>,
 );
+
+/// What [`Store::start`] starts a solve from: the linear term `q`, the
+/// right-hand side `h`, the rows `blocked` left out (the first `me` rows
+/// equalities; a start from kept rows marks them and the equality rows
+/// blocked) and the iteration budget `max_iter` (of which the drops made
+/// resuming take their part).
+pub(super) struct Begin<'b, NV: Dim, NC: Dim>
+where
+    DefaultAllocator: QpAllocator<NV, NC>,
+{
+    /// The solver (for `L^-1` and the unconstrained minimiser).
+    pub solver: &'b DualActiveSetOf<NV, NC>,
+    /// The linear term.
+    pub q: &'b OVector<f64, NV>,
+    /// The right-hand side.
+    pub h: &'b OVector<f64, NC>,
+    /// The rows left out of the scans.
+    pub blocked: &'b mut OVector<bool, NC>,
+    /// The number of equality rows, at the head.
+    pub me: usize,
+    /// The iteration budget.
+    pub max_iter: u32,
+}
 
 /// Where a solve keeps its factor (module docs).
 pub(super) trait Store<NV: Dim>
@@ -47,28 +72,23 @@ where
         DefaultAllocator: QpAllocator<NV, NC>;
 
     /// The starting iterate and the drops made resuming, or the status that
-    /// ends the solve (`Carry::start`; from scratch: the unconstrained
-    /// minimiser, no drops).
-    #[allow(clippy::too_many_arguments)]
-    fn start<NC: Dim>(
-        &mut self,
-        own: &mut Self::Own,
-        solver: &DualActiveSetOf<NV, NC>,
-        q: &OVector<f64, NV>,
-        h: &OVector<f64, NC>,
-        blocked: &mut OVector<bool, NC>,
-        me: usize,
-        max_iter: u32,
-    ) -> Result<(OVector<f64, NV>, u32), QpStatus>
+    /// ends the solve ([`Carry`]'s; from scratch, this default: the
+    /// unconstrained minimiser, no drops).
+    #[inline(always)]
+    fn start<NC: Dim>(&mut self, at: Begin<'_, NV, NC>) -> Result<(OVector<f64, NV>, u32), QpStatus>
     where
-        DefaultAllocator: QpAllocator<NV, NC>;
+        DefaultAllocator: QpAllocator<NV, NC>,
+    {
+        Ok((at.solver.unconstrained_minimiser(at.q), 0))
+    }
 
     /// The factor and the rows to resume from (after [`Store::start`]).
     fn parts<'s>(&'s mut self, own: &'s mut Self::Own) -> Parts<'s, NV>;
 
     /// The end of the solve: its iteration, `None` when it stopped on a
-    /// numerical error.
-    fn keep(&mut self, it: Option<&Iterate<NV>>);
+    /// numerical error; `guessed`: the hot start's guess ended it (no
+    /// factor of its active rows formed, `J` and `R` as they were).
+    fn keep(&mut self, it: Option<&Iterate<NV>>, guessed: bool);
 }
 
 /// A single solve's factor, in its own frame, from scratch (module docs).
@@ -93,29 +113,12 @@ where
     }
 
     #[inline(always)]
-    fn start<NC: Dim>(
-        &mut self,
-        _own: &mut Self::Own,
-        solver: &DualActiveSetOf<NV, NC>,
-        q: &OVector<f64, NV>,
-        _h: &OVector<f64, NC>,
-        _blocked: &mut OVector<bool, NC>,
-        _me: usize,
-        _max_iter: u32,
-    ) -> Result<(OVector<f64, NV>, u32), QpStatus>
-    where
-        DefaultAllocator: QpAllocator<NV, NC>,
-    {
-        Ok((solver.unconstrained_minimiser(q), 0))
-    }
-
-    #[inline(always)]
     fn parts<'s>(&'s mut self, own: &'s mut Self::Own) -> Parts<'s, NV> {
-        (&mut own.0, &mut own.1, None, None)
+        (&mut own.0, &mut own.1, None, None, None)
     }
 
     #[inline(always)]
-    fn keep(&mut self, _it: Option<&Iterate<NV>>) {}
+    fn keep(&mut self, _it: Option<&Iterate<NV>>, _guessed: bool) {}
 }
 
 impl<NV: Dim> Store<NV> for &mut Carry<NV>
@@ -135,20 +138,11 @@ where
     }
 
     #[inline(always)]
-    fn start<NC: Dim>(
-        &mut self,
-        _own: &mut Self::Own,
-        solver: &DualActiveSetOf<NV, NC>,
-        q: &OVector<f64, NV>,
-        h: &OVector<f64, NC>,
-        blocked: &mut OVector<bool, NC>,
-        me: usize,
-        max_iter: u32,
-    ) -> Result<(OVector<f64, NV>, u32), QpStatus>
+    fn start<NC: Dim>(&mut self, at: Begin<'_, NV, NC>) -> Result<(OVector<f64, NV>, u32), QpStatus>
     where
         DefaultAllocator: QpAllocator<NV, NC>,
     {
-        Carry::start(self, solver, q, h, blocked, me, max_iter)
+        Carry::start(self, at)
     }
 
     #[inline(always)]
@@ -159,16 +153,29 @@ where
         #[cfg(target_os = "none")]
         let guess = None;
         let Carry {
-            J, R, kept, valid, ..
+            J,
+            R,
+            kept,
+            valid,
+            pending,
+            ..
         } = carry;
-        (J, R, if *valid { Some(&*kept) } else { None }, guess)
+        let kept = if *valid { Some(&*kept) } else { None };
+        (J, R, kept, guess, Some(pending))
     }
 
     #[inline(always)]
-    fn keep(&mut self, it: Option<&Iterate<NV>>) {
+    fn keep(&mut self, it: Option<&Iterate<NV>>, guessed: bool) {
         match it {
-            Some(it) => Carry::keep(self, it),
-            None => self.valid = false,
+            Some(it) if !guessed => Carry::keep(self, it),
+            // The guess wrote nothing to `J` and `R`.
+            Some(_) => self.valid = false,
+            None => {
+                self.valid = false;
+                if cfg!(not(target_os = "none")) {
+                    self.pending.r_cols = self.R.ncols();
+                }
+            }
         }
     }
 }

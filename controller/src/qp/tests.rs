@@ -7,6 +7,7 @@ mod bounds;
 mod equalities;
 mod hot_start;
 mod proximal;
+mod restart;
 
 fn solver2() -> DualActiveSet<2, 4> {
     DualActiveSet::new(&Matrix2::new(2.0, 0.0, 0.0, 2.0), QpSettings::default()).unwrap()

@@ -1,10 +1,12 @@
-//! Confining a safety relaxation to the rows in conflict (see "Rows outside
-//! the conflict" in the module docs of [`crate::relax`]).
+//! Confining a safety relaxation to some of the safety rows: to the rows in
+//! conflict (see "Rows outside the conflict" in the module docs of
+//! [`crate::relax`]), and to the rows of moving obstacles first ("Moving rows
+//! first").
 
 use nalgebra::SVector;
 
 use super::RelaxFailure;
-use super::rows::{Keep, RowClass};
+use super::rows::{Keep, RowClass, Soft};
 use super::search::{Ctx, Probe};
 use crate::linalg::{columns, dot};
 use crate::qp::QpBackend;
@@ -94,4 +96,58 @@ impl<const NV: usize, const NC: usize, B: QpBackend<NV, NC>> Ctx<'_, NV, NC, B> 
         self.cert = None;
         Ok(None)
     }
+
+    /// With `reach` kept (the safety rows left to this search), the least
+    /// uniform relaxation of the safety rows of moving obstacles (`moving`,
+    /// by row of the nominal QP) alone, every static safety row at its
+    /// nominal right-hand side, at most [`MOVING_CAP`]; its optimal plan and
+    /// the rows that took it (none when it is 0). `Ok(None)` (nothing
+    /// spent but probes; the uniform relaxation of every safety row
+    /// follows) when the QP has no static or no moving safety row, or no
+    /// such relaxation up to the cap is feasible (the static rows take part
+    /// in the conflict).
+    pub(super) fn moving_first(
+        &mut self,
+        reach: Keep,
+        moving: &[bool; NC],
+    ) -> Result<Option<Yielded<NV, NC>>, RelaxFailure> {
+        let mut rows = [false; NC];
+        let mut fixed = false;
+        for ((r, &m), id) in rows.iter_mut().zip(moving).zip(self.rows).take(self.qp.m) {
+            if RowClass::of(id.kind) == RowClass::Safety {
+                *r = m;
+                fixed |= !m;
+            }
+        }
+        if !fixed || !rows.contains(&true) {
+            return Ok(None);
+        }
+        // (A certificate of the unconfined problem stays a valid, if weaker,
+        // bound here: it counts the static rows as relaxed too.)
+        self.conflict = rows;
+        self.confined = true;
+        // (Out of probes, `minimal` reports the plan at the cap with its own
+        // violation: feasible with every static row kept, not the least.)
+        let out = self
+            .minimal(reach, Soft::Safety, MOVING_CAP, None)?
+            .map(|(u, eps)| (u, eps, if eps > 0.0 { rows } else { [false; NC] }));
+        self.confined = false;
+        self.conflict = [false; NC];
+        if out.is_none() {
+            // The last certificate, found under the confinement, counts the
+            // static rows in `y'h` only: with every safety row relaxed they
+            // take the relaxation too.
+            self.cert = self.cert.map(|c| c.with_conflict_grown());
+        }
+        Ok(out)
+    }
 }
+
+/// A plan with the moving obstacles' rows relaxed first: the plan, the
+/// relaxation (m of `h`) and the rows that took it.
+pub(super) type Yielded<const NV: usize, const NC: usize> = (SVector<f64, NV>, f64, [bool; NC]);
+
+/// The largest relaxation of the moving obstacles' safety rows alone, m of
+/// `h` ([`Ctx::moving_first`]): beyond it the static rows give way too. A
+/// person who overlaps the robot's body by a whole metre is past any plan.
+pub(super) const MOVING_CAP: f64 = 1.0;

@@ -49,7 +49,9 @@
 //!
 //! So the priority order, most important first: reachability, capturability,
 //! gait up to the cap, safety, gait beyond the cap. Within the safety class,
-//! the rows outside the conflict come before the rows in it (below).
+//! on a cycle that gives way to a person the rows of obstacles at rest come
+//! before the rows of moving ones, and the rows outside the conflict come
+//! before the rows in it (both below).
 //!
 //! # Rows outside the conflict
 //!
@@ -79,6 +81,28 @@
 //! certificate adds no row, which only rounding can do) the uniform plan
 //! stands. Stage 1 relaxes no safety row and is unchanged; no solve is added
 //! to a feasible cycle.
+//!
+//! # Moving rows first
+//!
+//! A wall does not move out of the way; a person can. On a cycle that gives
+//! way to a person (`Params::give_way`: a moving obstacle's safety row in
+//! the nominal certificate) whose QP also holds safety rows of obstacles at
+//! rest, each of stages 2 to 4 first searches for the least uniform
+//! relaxation of the moving obstacles' safety rows alone
+//! (`Params::moving`; at most 1 m of `h`), with every static safety row
+//! kept at its nominal right-hand side, as the confinement above keeps the
+//! rows outside the conflict (a certificate of that search counts the static
+//! rows in `y'h` only). When that is feasible its plan stands, and the
+//! moving rows are the rows reported in [`Relaxed::conflict`]; only when a
+//! certificate proves it infeasible (the walls take part in the conflict:
+//! the robot cannot keep their full margin whatever the people's rows allow)
+//! does the stage relax every safety row as above, starting from that
+//! certificate with the static rows counted as relaxed. The search draws on
+//! the scheme's probes, so the bound on solves per cycle is unchanged. The
+//! relaxation of the moving rows can exceed the uniform one (fewer rows give
+//! way): the robot keeps the wall's margin and the person, who can, steps
+//! aside or walks into a robot that is giving way. Cycles without a moving
+//! obstacle in the conflict, or without a static safety row, are unchanged.
 //!
 //! Why the cap: the gait rows bound the CoM velocity at the end of each step,
 //! which is what keeps the pendulum capturable with steps inside the
@@ -191,7 +215,8 @@
 //! * `rows`: the row classes, their violation, the capturability bound and
 //!   the rows a relaxed problem keeps;
 //! * `search`: the certificate-driven search for one smallest relaxation;
-//! * `confine`: the safety relaxation confined to the rows in conflict;
+//! * `confine`: the safety relaxation confined to the rows in conflict, and
+//!   to the moving obstacles' rows first;
 //! * this file: the stages, in priority order, and their results.
 
 mod confine;
@@ -291,6 +316,11 @@ pub(crate) struct Params<'a, const NC: usize> {
     /// adding the rows `marks` first (the warm start: the rows active at the
     /// last cycle's relaxed plan).
     pub give_way: Option<&'a [bool; NC]>,
+    /// The safety rows of moving obstacles (by row of the nominal QP; see
+    /// "Moving rows first" in the module docs). Used only with `give_way`:
+    /// then, in stages 2 to 4, these rows give way before the static ones.
+    /// `None`, or no static safety row in `qp`: every safety row alike.
+    pub moving: Option<&'a [bool; NC]>,
 }
 
 /// Runs the priority scheme on the nominal QP `qp` (rows identified by `rows`;
@@ -316,6 +346,7 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         capture,
         certificate,
         give_way,
+        moving,
     } = p;
     let mut ctx = Ctx {
         solver,
@@ -354,7 +385,8 @@ pub(crate) fn relax<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
         // solve's active rows is a poor start (docs/fallback.md).
         ctx.reprobe.forget();
     }
-    let out = run_stages(&mut ctx, gait_cap, give_way.is_some());
+    let moving = if give_way.is_some() { moving } else { None };
+    let out = run_stages(&mut ctx, gait_cap, give_way.is_some(), moving);
     out.map_err(|kind| RelaxError {
         kind,
         iterations: ctx.used,
@@ -378,6 +410,7 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
     ctx: &mut Ctx<'_, NV, NC, B>,
     gait_cap: f64,
     give_way: bool,
+    moving: Option<&[bool; NC]>,
 ) -> Result<Relaxed<NV, NC>, RelaxFailure> {
     // The capturability bound, when on, is kept through stages 1-3.
     let capture0 = ctx.capture.map(|_| 0.0);
@@ -447,11 +480,26 @@ fn run_stages<const NV: usize, const NC: usize, B: QpBackend<NV, NC>>(
             gait: if cap.is_finite() { Some(cap) } else { None },
             capture,
         };
-        let Some((u_s, eps_s)) = ctx.minimal(reach, Soft::Safety, f64::INFINITY, known_s)? else {
-            continue;
+        // A person moves out of the way, a wall does not: the moving rows
+        // first, every static safety row at its full margin.
+        let first = match moving {
+            Some(mv) => ctx.moving_first(reach, mv)?,
+            None => None,
+        };
+        let (u_s, eps_s, conflict) = match first {
+            Some((u, eps, rows)) => (u, eps, Some(rows)),
+            None => {
+                let Some((u, eps)) = ctx.minimal(reach, Soft::Safety, f64::INFINITY, known_s)?
+                else {
+                    continue;
+                };
+                (u, eps, None)
+            }
         };
         // Only the rows in conflict give way; the others keep their margin.
-        let (u_s, conflict) = if eps_s > 0.0 {
+        let (u_s, conflict) = if let Some(rows) = conflict {
+            (u_s, rows)
+        } else if eps_s > 0.0 {
             match ctx.confine(reach.with(Soft::Safety, eps_s), &u_s)? {
                 Some(u) => (u, ctx.conflict),
                 None => (u_s, safety_rows(ctx.qp, ctx.rows)),

@@ -6,6 +6,7 @@
 use nalgebra::SVector;
 
 use crate::constraints::{RowId, RowKind};
+use crate::linalg::columns;
 use crate::qp::DenseQp;
 
 /// Priority class of a row.
@@ -81,22 +82,65 @@ pub fn class_violation<const NV: usize, const NC: usize>(
         safety: 0.0,
         gait: 0.0,
     };
-    for ((g, h), id) in qp.rows().zip(rows) {
-        let e = g.dot(u) - h;
+    let m = qp.m.min(NC);
+    let rows_g = columns(qp.gt.as_slice(), NV);
+    for ((g, &h), id) in rows_g.zip(qp.h.as_slice()).zip(rows).take(m) {
+        let e = nalgebra_dot::<NV>(g, u.as_slice()) - h;
         let e = if e.is_nan() { f64::INFINITY } else { e };
         let slot = match RowClass::of(id.kind) {
             RowClass::Reach => &mut v.reach,
             RowClass::Safety => &mut v.safety,
             RowClass::Gait => &mut v.gait,
         };
-        // A zero row (|g| = 0, i.e. |g|^2 = 0) constrains nothing; no square
-        // root needed to tell, and no test at all unless the row would raise
-        // the class's violation.
-        if e > *slot && g.norm_squared() != 0.0 {
+        // A zero row (|g| = 0, i.e. |g|^2 = 0: no entry with a nonzero
+        // square) constrains nothing; no square root needed to tell, and no
+        // test at all unless the row would raise the class's violation.
+        if e > *slot && g.iter().any(|&x| x * x != 0.0) {
             *slot = e;
         }
     }
     v
+}
+
+/// `g . u` over `NV` entries with the operations of nalgebra's
+/// `Matrix::dot` for vectors of `NV` entries, in its order, so its bits
+/// (the violations [`class_violation`] reports are compared bit for bit
+/// across builds): the sums of two, three and four products as nalgebra
+/// writes them out, else eight partial sums over blocks of eight entries,
+/// added as `((((0 + (s0 + s4)) + (s1 + s5)) + (s2 + s6)) + (s3 + s7))`,
+/// then the remaining products one by one. On the rows in place (no copy
+/// of each row into a vector, as `DenseQp::rows` makes); the partial sums
+/// of the blocks run as pairs (SSE2 lanes on hosts).
+#[inline(always)]
+fn nalgebra_dot<const NV: usize>(g: &[f64], u: &[f64]) -> f64 {
+    let (Some(g), Some(u)) = (g.get(..NV), u.get(..NV)) else {
+        return f64::NAN;
+    };
+    match (g, u) {
+        ([g0, g1], [u0, u1]) => return g0 * u0 + g1 * u1,
+        ([g0, g1, g2], [u0, u1, u2]) => return g0 * u0 + g1 * u1 + g2 * u2,
+        ([g0, g1, g2, g3], [u0, u1, u2, u3]) => {
+            return (g0 * u0 + g2 * u2) + (g1 * u1 + g3 * u3);
+        }
+        _ => {}
+    }
+    let mut acc = [0.0f64; 8];
+    let (mut bg, mut bu) = (g.chunks_exact(8), u.chunks_exact(8));
+    for (a, b) in bg.by_ref().zip(bu.by_ref()) {
+        for ((s, x), y) in acc.iter_mut().zip(a).zip(b) {
+            *s += x * y;
+        }
+    }
+    let [s0, s1, s2, s3, s4, s5, s6, s7] = acc;
+    let mut res = 0.0;
+    res += s0 + s4;
+    res += s1 + s5;
+    res += s2 + s6;
+    res += s3 + s7;
+    for (x, y) in bg.remainder().iter().zip(bu.remainder()) {
+        res += x * y;
+    }
+    res
 }
 
 /// The capturability bound (see the module docs): every body-frame component
@@ -221,5 +265,41 @@ impl Keep {
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::nalgebra_dot;
+    use nalgebra::SVector;
+
+    /// [`nalgebra_dot`] has the bits of nalgebra's `dot` for every length
+    /// the special cases and the blocks of eight meet.
+    #[test]
+    fn nalgebra_dot_has_the_bits_of_nalgebra() {
+        fn check<const NV: usize>(rnd: &mut impl FnMut() -> f64) {
+            for _ in 0..200 {
+                let g = SVector::<f64, NV>::from_fn(|_, _| rnd());
+                let u = SVector::<f64, NV>::from_fn(|_, _| rnd());
+                let want = g.dot(&u).to_bits();
+                assert_eq!(
+                    nalgebra_dot::<NV>(g.as_slice(), u.as_slice()).to_bits(),
+                    want
+                );
+            }
+        }
+        let mut rnd = crate::linalg::tests::mixed(0x9e37_79b9_7f4a_7c15);
+        check::<1>(&mut rnd);
+        check::<2>(&mut rnd);
+        check::<3>(&mut rnd);
+        check::<4>(&mut rnd);
+        check::<5>(&mut rnd);
+        check::<6>(&mut rnd);
+        check::<8>(&mut rnd);
+        check::<9>(&mut rnd);
+        check::<16>(&mut rnd);
+        check::<20>(&mut rnd);
+        check::<23>(&mut rnd);
+        check::<40>(&mut rnd);
     }
 }

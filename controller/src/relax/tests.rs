@@ -21,6 +21,7 @@ fn params<'a, const NC: usize>(
         capture,
         certificate,
         give_way: None,
+        moving: None,
     }
 }
 
@@ -68,6 +69,35 @@ impl Lcg {
     }
     fn range(&mut self, a: f64, b: f64) -> f64 {
         a + (b - a) * self.next()
+    }
+
+    /// One to three axis-aligned boxes (m, world), the rest of the array a
+    /// placeholder triangle, and how many: centres from 0.3 m to `ahead`
+    /// along `dir` and within `aside` along `side`, half-sizes from 0.1 m to
+    /// `half`.
+    fn boxes_ahead(
+        &mut self,
+        dir: Vector2<f64>,
+        side: Vector2<f64>,
+        ahead: f64,
+        aside: f64,
+        half: f64,
+    ) -> ([ConvexPolygon<8>; 3], usize) {
+        let mut obstacles =
+            [ConvexPolygon::<8>::new(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]).unwrap(); 3];
+        let n_obs = 1 + (self.next() * 3.0) as usize;
+        for o in obstacles.iter_mut().take(n_obs) {
+            let c = dir * self.range(0.3, ahead) + side * self.range(-aside, aside);
+            let (a, b) = (self.range(0.1, half), self.range(0.1, half));
+            *o = ConvexPolygon::hull(&[
+                [c.x - a, c.y - b],
+                [c.x + a, c.y - b],
+                [c.x + a, c.y + b],
+                [c.x - a, c.y + b],
+            ])
+            .unwrap();
+        }
+        (obstacles, n_obs)
     }
 }
 
@@ -147,20 +177,7 @@ fn relaxations_are_minimal_in_priority_order() {
         let side = Vector2::new(-dir.y, dir.x);
         let speed = rng.range(0.2, 1.2);
         let v = dir * speed + side * rng.range(-0.3, 0.3);
-        let mut obstacles =
-            [ConvexPolygon::<8>::new(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]).unwrap(); 3];
-        let n_obs = 1 + (rng.next() * 3.0) as usize;
-        for o in obstacles.iter_mut().take(n_obs) {
-            let c = dir * rng.range(0.3, 1.6) + side * rng.range(-0.8, 0.8);
-            let (a, b) = (rng.range(0.1, 0.8), rng.range(0.1, 0.8));
-            *o = ConvexPolygon::hull(&[
-                [c.x - a, c.y - b],
-                [c.x + a, c.y - b],
-                [c.x + a, c.y + b],
-                [c.x - a, c.y + b],
-            ])
-            .unwrap();
-        }
+        let (obstacles, n_obs) = rng.boxes_ahead(dir, side, 1.6, 0.8, 0.8);
         let input = CycleInput {
             com_position: Vector2::zeros(),
             com_velocity: v,
@@ -618,20 +635,7 @@ fn give_way_marks_change_the_path_not_the_answer() {
         let th = rng.range(-3.0, 3.0);
         let dir = Vector2::new(libm::cos(th), libm::sin(th));
         let side = Vector2::new(-dir.y, dir.x);
-        let mut obstacles =
-            [ConvexPolygon::<8>::new(&[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]).unwrap(); 3];
-        let n_obs = 1 + (rng.next() * 3.0) as usize;
-        for o in obstacles.iter_mut().take(n_obs) {
-            let c = dir * rng.range(0.3, 1.2) + side * rng.range(-0.6, 0.6);
-            let (a, b) = (rng.range(0.1, 0.6), rng.range(0.1, 0.6));
-            *o = ConvexPolygon::hull(&[
-                [c.x - a, c.y - b],
-                [c.x + a, c.y - b],
-                [c.x + a, c.y + b],
-                [c.x - a, c.y + b],
-            ])
-            .unwrap();
-        }
+        let (obstacles, n_obs) = rng.boxes_ahead(dir, side, 1.2, 0.6, 0.6);
         let input = CycleInput {
             com_position: Vector2::zeros(),
             com_velocity: dir * rng.range(0.2, 0.9),
@@ -693,4 +697,85 @@ fn give_way_marks_change_the_path_not_the_answer() {
         cases >= 100 && same_rows * 10 >= cases * 9,
         "{cases} {same_rows}"
     );
+}
+
+/// Moving rows first (module docs): a robot walking at 0.6 m/s between two
+/// walls 0.9 m apart, a person (a 0.5 m square) 0.9 m ahead walking at it at
+/// 0.6 m/s, goal behind and beside (as a give-way goal can be). The nominal QP is
+/// infeasible with the person's rows in the conflict; with the person's rows
+/// (`Params::moving`) given way first, every wall row keeps its nominal
+/// right-hand side and only the person's rows take the relaxation. Every
+/// safety row relaxed alike (no `moving`), a wall row gives way.
+#[test]
+fn a_person_gives_way_before_the_walls() {
+    let ctl = PaperController::new(Config::default()).unwrap();
+    let wall = |y0: f64, y1: f64| {
+        ConvexPolygon::<8>::new(&[[-2.0, y0], [6.0, y0], [6.0, y1], [-2.0, y1]]).unwrap()
+    };
+    let person =
+        ConvexPolygon::<8>::new(&[[0.65, -0.25], [1.15, -0.25], [1.15, 0.25], [0.65, 0.25]])
+            .unwrap();
+    let obstacles = [wall(0.45, 0.9), wall(-0.9, -0.45), person];
+    let velocities = [Vector2::zeros(), Vector2::zeros(), Vector2::new(-0.6, 0.0)];
+    let input = CycleInput {
+        com_position: Vector2::new(0.0, -0.1),
+        com_velocity: Vector2::new(0.6, 0.0),
+        heading: 0.0,
+        turning_rate: 0.0,
+        stance_foot: Vector2::new(0.0, -0.2),
+        stance_side: Side::Right,
+        time_in_step: 0.4,
+        goal: Vector2::new(-0.5, -1.5),
+        obstacles: &obstacles,
+        obstacle_velocities: &velocities,
+        speed_cap: crate::NO_SPEED_CAP,
+    };
+    let mut asm = Assembly::default();
+    ctl.assemble(&input, None, &mut asm).unwrap();
+    let solver = ctl.solver();
+    let nominal = solver.with_max_iter(64).solve(&asm.qp, &[false; NC]);
+    assert!(nominal.status.is_infeasible(), "{:?}", nominal.status);
+    let cb = CaptureBounds::new(ctl.config(), ctl_kappa(), asm.prediction.heading.omega_bar);
+    let mut moving = [false; NC];
+    for (m, id) in moving.iter_mut().zip(&asm.rows).take(asm.qp.m) {
+        *m = matches!(id.kind, RowKind::Ldcbf(2) | RowKind::FootClearance(2));
+    }
+    // The worst violation of the rows of obstacle `j` by the plan `u`.
+    let worst = |j: u32, u: &SVector<f64, 6>| {
+        asm.qp
+            .rows()
+            .zip(&asm.rows)
+            .filter(|(_, id)| {
+                matches!(id.kind, RowKind::Ldcbf(i) | RowKind::FootClearance(i) if i == j)
+            })
+            .map(|((g, h), _)| g.dot(u) - h)
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    let run = |moving: Option<&[bool; NC]>| {
+        let p = Params {
+            give_way: Some(&[false; NC]),
+            moving,
+            ..params(0.1, cb, Some(&nominal.lambda))
+        };
+        let r = relax(
+            solver,
+            &mut Counting(0),
+            &asm.qp,
+            &asm.rows,
+            p,
+            &mut Reprobe::new(&asm.qp),
+        )
+        .unwrap();
+        let walls = worst(0, &r.u).max(worst(1, &r.u));
+        std::println!("{r:?}: walls {walls:.4}, person {:.4}", worst(2, &r.u));
+        (r, walls)
+    };
+    let (first, walls) = run(Some(&moving));
+    assert_eq!(first.level, RelaxLevel::Safety, "{first:?}");
+    assert!(walls <= 1e-9, "a wall gave way: {first:?}");
+    let person = worst(2, &first.u);
+    assert!(person > 1e-3 && person <= first.eps_safety * (1.0 + 1e-9) + 1e-9);
+    assert_eq!(first.conflict, moving);
+    let (uniform, walls) = run(None);
+    assert!(walls > 1e-3, "the case does not test anything: {uniform:?}");
 }

@@ -110,6 +110,13 @@ pub fn execute_run(req: &RunRequest) -> Result<RunReport> {
     if req.timing_repeats == 0 {
         bail!("--repeat must be >= 1 (timings of each control cycle), got 0");
     }
+    if req.timing_repeats > crate::sim::MAX_TIMING_REPEATS {
+        bail!(
+            "--repeat must be at most {} (timings of each control cycle), got {}",
+            crate::sim::MAX_TIMING_REPEATS,
+            req.timing_repeats
+        );
+    }
     let scenario = load(
         &req.scenario,
         &LoadOptions {

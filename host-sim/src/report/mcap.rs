@@ -15,7 +15,7 @@
 //! | topic | schema | messages |
 //! |---|---|---|
 //! | `/tf` | `foxglove.FrameTransform` | `world -> com` at the samples of `trajectory.csv` |
-//! | `/com_path` | `foxglove.PosesInFrame` | the CoM path so far (one pose per 50 ms), at each footstep |
+//! | `/com_path` | `foxglove.PosesInFrame` | the CoM path so far (one pose per 50 ms; past 4,096 poses, 204.8 s, every second one, and so on: `MAX_PATH_POSES`), at each footstep |
 //! | `/footsteps` | `foxglove.SceneUpdate` | one per footstep: its footprint (entity `foot_K`) |
 //! | `/obstacles` | `foxglove.SceneUpdate` | once at t = 0: the true map's polygons |
 //! | `/goal` | `foxglove.SceneUpdate` | once at t = 0: the goal and the planner's subgoals |
@@ -182,21 +182,13 @@ fn sphere(p: Vector2<f64>, diameter: f64, color: Value) -> Value {
     })
 }
 
-fn polygons<'a>(
-    t: f64,
-    prefix: &str,
-    polys: impl Iterator<Item = &'a [Vector2<f64>]>,
-) -> Vec<Value> {
-    polys
-        .enumerate()
-        .map(|(j, v)| {
-            let prims = Prims {
-                lines: vec![line(LINE_LOOP, v, 0.03, color(0.3, 0.3, 0.3, 1.0))],
-                ..Prims::default()
-            };
-            entity(t, &format!("{prefix}_{j}"), prims)
-        })
-        .collect()
+/// Entity `{prefix}_{j}`: the outline of the polygon with vertices `v`.
+fn polygon(t: f64, prefix: &str, j: usize, v: &[Vector2<f64>]) -> Value {
+    let prims = Prims {
+        lines: vec![line(LINE_LOOP, v, 0.03, color(0.3, 0.3, 0.3, 1.0))],
+        ..Prims::default()
+    };
+    entity(t, &format!("{prefix}_{j}"), prims)
 }
 
 /// `/half_planes`: each active half-plane's boundary (a 1.6 m segment through
@@ -264,41 +256,46 @@ fn diagnostics(c: &CycleRecord) -> Value {
     })
 }
 
-/// Every message of `r`: (log time ns, channel index, JSON), in time order
-/// (ties in channel order, then in the order made).
-fn messages(r: &SimResult, every: usize) -> Vec<(u64, usize, Value)> {
-    let every = every.max(1);
-    let mut out: Vec<(u64, usize, Value)> = Vec::new();
-    let n = r.samples.len();
-    let kept = r
-        .samples
-        .iter()
-        .enumerate()
-        .filter(|(i, _)| i.is_multiple_of(every) || i + 1 == n);
-    for (_, s) in kept {
-        let (sz, cz) = (0.5 * s.heading).sin_cos();
-        let tf = json!({
-            "timestamp": stamp(s.time),
-            "parent_frame_id": WORLD_FRAME,
-            "child_frame_id": COM_FRAME,
-            "translation": point(s.position, 0.0),
-            "rotation": { "x": 0.0, "y": 0.0, "z": sz, "w": cz },
-        });
-        out.push((nanos(s.time), TF, tf));
-    }
+/// Most poses of one `/com_path` message: the path so far at one pose per
+/// [`PATH_EVERY`] samples (50 ms) while it has at most this many (204.8 s),
+/// then every second of them, and so on (the spacing doubles each time the
+/// path would exceed it). Bounds each message, so that the file grows with
+/// the run's length, not with its square.
+pub const MAX_PATH_POSES: usize = 4096;
+
+/// One message: (log time ns, channel index, JSON bytes).
+type Message = (u64, usize, Vec<u8>);
+
+/// The JSON bytes of `v` (a `Value` of ours always serialises).
+fn bytes(v: &impl serde::Serialize) -> Vec<u8> {
+    serde_json::to_vec(v).unwrap_or_default()
+}
+
+/// `/com_path` and `/footsteps` at each footstep of `r`: the CoM path up to
+/// the footstep (at most `max_poses` poses, [`MAX_PATH_POSES`]) and the
+/// footprint.
+fn footstep_messages(r: &SimResult, max_poses: usize) -> impl Iterator<Item = [Message; 2]> + '_ {
     let robot = &r.scenario.robot;
     let (len, wid) = (robot.foot_length.max(0.04), robot.foot_width.max(0.04));
-    let mut path = Vec::new();
-    let mut next_sample = 0;
-    for f in &r.footsteps {
+    let mut path: Vec<Value> = Vec::new();
+    let (mut next_sample, mut stride) = (0, PATH_EVERY);
+    r.footsteps.iter().map(move |f| {
         // The CoM path up to the footstep's time.
         while next_sample < r.samples.len() && r.samples[next_sample].time <= f.time {
+            if path.len() >= max_poses.max(2) {
+                // Keep the poses at multiples of twice the spacing.
+                let mut k = 0;
+                path.retain(|_| {
+                    k += 1;
+                    k % 2 == 1
+                });
+                stride *= 2;
+            }
             let s = &r.samples[next_sample];
             path.push(pose(s.position, 0.0, s.heading));
-            next_sample += PATH_EVERY;
+            next_sample += stride;
         }
         let msg = json!({ "timestamp": stamp(f.time), "frame_id": WORLD_FRAME, "poses": path });
-        out.push((nanos(f.time), COM_PATH, msg));
         let cube = json!({
             "pose": pose(f.position, 0.01, f.heading),
             "size": { "x": len, "y": wid, "z": 0.02 },
@@ -309,42 +306,128 @@ fn messages(r: &SimResult, every: usize) -> Vec<(u64, usize, Value)> {
             ..Prims::default()
         };
         let foot = entity(f.time, &format!("foot_{}", f.index), prims);
-        out.push((nanos(f.time), FOOTSTEPS, scene(f.time, false, vec![foot])));
-    }
-    let map = polygons(
-        0.0,
-        "obstacle",
-        r.scenario.obstacles.iter().map(|p| p.vertices()),
-    );
-    out.push((0, OBSTACLES, scene(0.0, true, map)));
-    let nav = &r.navigation;
-    let mut route = vec![r.scenario.start];
-    route.extend(nav.subgoals.iter().copied());
-    let mut spheres = vec![sphere(r.scenario.goal, 0.2, color(1.0, 0.8, 0.0, 1.0))];
-    spheres.extend(
-        nav.subgoals
-            .iter()
-            .map(|g| sphere(*g, 0.08, color(1.0, 0.8, 0.0, 0.6))),
-    );
-    let prims = Prims {
-        lines: vec![line(LINE_STRIP, &route, 0.01, color(1.0, 0.8, 0.0, 0.6))],
-        spheres,
-        ..Prims::default()
+        let t = nanos(f.time);
+        [
+            (t, COM_PATH, bytes(&msg)),
+            (t, FOOTSTEPS, bytes(&scene(f.time, false, vec![foot]))),
+        ]
+    })
+}
+
+/// The `foxglove.SceneUpdate` of [`scene`] with `entities` serialised one at a
+/// time as they are made (a map of many polygons is never one `Value`);
+/// the same bytes (fields in the order `Value` writes them: sorted).
+#[derive(serde::Serialize)]
+struct LazyScene<I: Iterator<Item = Value> + Clone> {
+    deletions: Vec<Value>,
+    #[serde(serialize_with = "lazy_seq")]
+    entities: I,
+}
+
+fn lazy_seq<S: serde::Serializer, I: Iterator<Item = Value> + Clone>(
+    it: &I,
+    s: S,
+) -> Result<S::Ok, S::Error> {
+    s.collect_seq(it.clone())
+}
+
+/// The scene of `polys` ([`polygons`]'s entities), written without holding
+/// them all.
+fn polygon_scene<'a>(
+    t: f64,
+    prefix: &'a str,
+    polys: impl Iterator<Item = &'a [Vector2<f64>]> + Clone,
+) -> Vec<u8> {
+    let Value::Object(mut head) = scene(t, true, Vec::new()) else {
+        return Vec::new();
     };
-    out.push((0, GOAL, scene(0.0, true, vec![entity(0.0, "goal", prims)])));
-    for s in &r.scans {
+    bytes(&LazyScene {
+        deletions: match head.remove("deletions") {
+            Some(Value::Array(d)) => d,
+            _ => Vec::new(),
+        },
+        entities: polys
+            .enumerate()
+            .map(move |(j, v)| polygon(t, prefix, j, v)),
+    })
+}
+
+/// Every message of `r` in the order written: by log time, ties in channel
+/// order, then in the order made. Each channel's messages are made in time
+/// order; this merges them, making one message per channel at a time, so
+/// that a long run is never held in memory whole.
+fn messages(r: &SimResult, every: usize) -> impl Iterator<Item = Message> + '_ {
+    let every = every.max(1);
+    let n = r.samples.len();
+    let tf = r
+        .samples
+        .iter()
+        .enumerate()
+        .filter(move |(i, _)| i.is_multiple_of(every) || i + 1 == n)
+        .map(|(_, s)| {
+            let (sz, cz) = (0.5 * s.heading).sin_cos();
+            let tf = json!({
+                "timestamp": stamp(s.time),
+                "parent_frame_id": WORLD_FRAME,
+                "child_frame_id": COM_FRAME,
+                "translation": point(s.position, 0.0),
+                "rotation": { "x": 0.0, "y": 0.0, "z": sz, "w": cz },
+            });
+            (nanos(s.time), TF, bytes(&tf))
+        });
+    let steps = footstep_messages(r, MAX_PATH_POSES).flatten();
+    let map = std::iter::once_with(|| {
+        let polys = r.scenario.obstacles.iter().map(|p| p.vertices());
+        (0, OBSTACLES, polygon_scene(0.0, "obstacle", polys))
+    });
+    let goal = std::iter::once_with(|| {
+        let nav = &r.navigation;
+        let mut route = vec![r.scenario.start];
+        route.extend(nav.subgoals.iter().copied());
+        let mut spheres = vec![sphere(r.scenario.goal, 0.2, color(1.0, 0.8, 0.0, 1.0))];
+        spheres.extend(
+            nav.subgoals
+                .iter()
+                .map(|g| sphere(*g, 0.08, color(1.0, 0.8, 0.0, 0.6))),
+        );
+        let prims = Prims {
+            lines: vec![line(LINE_STRIP, &route, 0.01, color(1.0, 0.8, 0.0, 0.6))],
+            spheres,
+            ..Prims::default()
+        };
+        let goal = scene(0.0, true, vec![entity(0.0, "goal", prims)]);
+        (0, GOAL, bytes(&goal))
+    });
+    let seen = r.scans.iter().map(|s| {
         let t = r.cycles.get(s.cycle).map_or(0.0, |c| c.time);
-        let seen = polygons(t, "perceived", s.obstacles.iter().map(|p| p.vertices()));
-        out.push((nanos(t), PERCEIVED, scene(t, true, seen)));
-    }
-    for c in &r.cycles {
+        let polys = s.obstacles.iter().map(|p| p.vertices());
+        (nanos(t), PERCEIVED, polygon_scene(t, "perceived", polys))
+    });
+    let cycles = r.cycles.iter().flat_map(|c| {
         let t = nanos(c.time);
-        out.push((t, HALF_PLANES, half_planes(c)));
-        out.push((t, PLAN, plan(c)));
-        out.push((t, DIAGNOSTICS, diagnostics(c)));
-    }
-    out.sort_by_key(|&(t, ch, _)| (t, ch));
-    out
+        [
+            (t, HALF_PLANES, bytes(&half_planes(c))),
+            (t, PLAN, bytes(&plan(c))),
+            (t, DIAGNOSTICS, bytes(&diagnostics(c))),
+        ]
+    });
+    let streams: Vec<Box<dyn Iterator<Item = Message> + '_>> = vec![
+        Box::new(tf),
+        Box::new(steps),
+        Box::new(map),
+        Box::new(goal),
+        Box::new(seen),
+        Box::new(cycles),
+    ];
+    let mut heads: Vec<_> = streams.into_iter().map(Iterator::peekable).collect();
+    std::iter::from_fn(move || {
+        let next = heads
+            .iter_mut()
+            .enumerate()
+            .filter_map(|(k, h)| h.peek().map(|&(t, ch, _)| ((t, ch), k)))
+            .min()?;
+        heads[next.1].next()
+    })
 }
 
 /// The JSON Schema of a schema name of [`CHANNELS`] (the fields written).
@@ -445,8 +528,7 @@ pub fn write_mcap(r: &SimResult, path: &Path, every: usize) -> std::io::Result<(
             .map_err(std::io::Error::other)?;
     }
     let mut seq = [0u32; CHANNELS.len()];
-    for (t, ch, msg) in messages(r, every) {
-        let data = serde_json::to_vec(&msg).map_err(std::io::Error::other)?;
+    for (t, ch, data) in messages(r, every) {
         let header = ::mcap::records::MessageHeader {
             channel_id: ids[ch],
             sequence: seq[ch],
@@ -508,5 +590,44 @@ mod tests {
         }
         assert!(want[6] > 10 && want[2] > 3, "a real walk: {want:?}");
         assert!(last >= nanos(r.cycles.last().unwrap().time));
+    }
+
+    /// A long run's `/com_path` grew with the square of its length (the whole
+    /// path at every footstep; 14 GB of memory for 500 s). Each message now
+    /// holds at most the cap: the path so far at one pose per 50 ms, then at
+    /// twice the spacing each time it would exceed the cap, always from the
+    /// start to the footstep. Checked with a small cap on a short walk.
+    #[test]
+    fn com_path_messages_stay_within_their_cap() {
+        let sc = load("simple", &LoadOptions::default()).unwrap();
+        let r = run(&sc, SimOptions::default()).unwrap();
+        let cap = 16;
+        let mut widened = 0;
+        for (f, [(_, ch, data), _]) in r.footsteps.iter().zip(footstep_messages(&r, cap)) {
+            assert_eq!(ch, COM_PATH);
+            let v: Value = serde_json::from_slice(&data).unwrap();
+            let poses = v["poses"].as_array().unwrap();
+            assert!(
+                !poses.is_empty() && poses.len() <= cap,
+                "{} poses",
+                poses.len()
+            );
+            // The samples up to the footstep, and the spacing that fits them.
+            let last = r.samples.iter().rposition(|s| s.time <= f.time).unwrap();
+            let mut stride = PATH_EVERY;
+            while last / stride + 1 > cap {
+                stride *= 2;
+            }
+            widened += usize::from(stride > PATH_EVERY);
+            assert_eq!(poses.len(), last / stride + 1, "footstep at {} s", f.time);
+            for (j, p) in poses.iter().enumerate() {
+                let s = &r.samples[j * stride];
+                let xy = (p["position"]["x"].as_f64(), p["position"]["y"].as_f64());
+                assert_eq!(xy, (Some(s.position.x), Some(s.position.y)), "pose {j}");
+            }
+        }
+        assert!(widened > 10, "the cap was reached: {widened}");
+        // The shipped runs stay below the real cap (their files unchanged).
+        assert!(r.samples.len() < MAX_PATH_POSES * PATH_EVERY);
     }
 }

@@ -11,7 +11,7 @@
 //! name = "simple"                      # required: letters, digits, - and _
 //! description = "one line for `list`"  # optional
 //! note = "free text: overrides and why" # optional
-//! start = { x = 0.0, y = 0.0, heading = 0.0 }  # heading optional (0)
+//! start = { x = 0.0, y = 0.0, heading = 0.0 }  # heading optional (0), in [-2 pi, 2 pi]
 //! stance = "left"          # initial stance foot, "left" (default) or "right"
 //! goal = [5.0, 5.0]
 //! time_limit = 120.0       # s of simulated time (default 120)

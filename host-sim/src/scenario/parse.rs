@@ -188,7 +188,10 @@ pub(super) fn toml_error(e: &toml::de::Error, text: &str, file: &str) -> Scenari
     let line = span.as_ref().map(|s| line_of(text, s.start));
     let field = span
         .as_ref()
-        .and_then(|s| path_at(text, s.start).or_else(|| key_near(text, s.start)))
+        .and_then(|s| {
+            let duplicate = e.message().contains("duplicate key");
+            path_at(text, s.start).or_else(|| key_near(text, s.start, duplicate))
+        })
         .unwrap_or_else(|| "(document)".into());
     ScenarioError {
         file: file.into(),
@@ -199,10 +202,17 @@ pub(super) fn toml_error(e: &toml::de::Error, text: &str, file: &str) -> Scenari
 }
 
 /// For text that does not parse: the `key` of the nearest `key = ...` line at or
-/// before `offset`, prefixed by the table header above it (`[t]` gives `t.key`,
-/// the n-th `[[t]]` gives `t[n].key`). A text scan, for messages only.
-fn key_near(text: &str, offset: usize) -> Option<String> {
-    let upto = &text[..offset.min(text.len())];
+/// before `offset` (with `its_line`, up to the end of the line holding
+/// `offset`: a duplicate key's error points at the key's first byte), prefixed
+/// by the table header above it (`[t]` gives `t.key`, the n-th `[[t]]` gives
+/// `t[n].key`). A text scan, for messages only.
+fn key_near(text: &str, offset: usize, its_line: bool) -> Option<String> {
+    let offset = offset.min(text.len());
+    let end = match text.get(offset..) {
+        Some(rest) if its_line => rest.find('\n').map_or(text.len(), |i| offset + i),
+        _ => offset,
+    };
+    let upto = text.get(..end).unwrap_or(text);
     let mut table = String::new();
     let mut counts: BTreeMap<String, usize> = BTreeMap::new();
     let mut key: Option<String> = None;

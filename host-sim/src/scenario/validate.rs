@@ -168,6 +168,15 @@ fn check_scalars(raw: &RawScenario, src: Source<'_>) -> Result<(), ScenarioError
             "x, y and heading must be finite".into(),
         ));
     }
+    // An angle: the run adds its turns to it, and the controller refuses a
+    // heading beyond 1e6 rad as a corrupted measurement.
+    if st.heading.abs() > 2.0 * core::f64::consts::PI {
+        return Err(src.err(
+            "start",
+            Some(raw.start.span()),
+            format!("heading {} rad is not in [-2 pi, 2 pi]", st.heading),
+        ));
+    }
     let g = raw.goal.get_ref().0;
     if !(finite(g[0]) && finite(g[1])) {
         return Err(src.err("goal", Some(raw.goal.span()), "must be finite".into()));

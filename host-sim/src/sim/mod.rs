@@ -94,7 +94,7 @@ mod closed_loop;
 mod contacts;
 mod options;
 pub use contacts::{Contact, ContactCause, ContactPart, STANDING_SPEED, contact_counts};
-pub use options::{MpcRate, SimError, SimOptions, Solver};
+pub use options::{MAX_TIMING_REPEATS, MpcRate, SimError, SimOptions, Solver};
 
 /// Horizon of [`RobotController`](ldcbf_controller::RobotController).
 pub const HORIZON: usize = 3;
@@ -306,10 +306,13 @@ impl SimResult {
 
 /// Runs the scenario to its end (see the module docs). Fails before the first
 /// tick on an invalid controller configuration or LiDAR, or
-/// [`SimOptions::timing_repeats`] = 0.
+/// [`SimOptions::timing_repeats`] = 0 or above [`MAX_TIMING_REPEATS`].
 pub fn run(scenario: &Scenario, options: SimOptions) -> Result<SimResult, SimError> {
     if options.timing_repeats == 0 {
         return Err(SimError::NoTimingRepeats);
+    }
+    if options.timing_repeats > MAX_TIMING_REPEATS {
+        return Err(SimError::TooManyTimingRepeats(options.timing_repeats));
     }
     match options.solver {
         Solver::Own => run_with(scenario, options, OwnSolver),

@@ -95,6 +95,11 @@ impl Default for SimOptions {
     }
 }
 
+/// Largest [`SimOptions::timing_repeats`]: the controller's time grows
+/// `K`-fold, so a run stays bounded (a 300-cycle walk at 10,000 repeats of
+/// 1-20 µs calls: 3-60 s more).
+pub const MAX_TIMING_REPEATS: u32 = 10_000;
+
 /// Why a run could not start, or why it stopped early. The messages are the
 /// ones the CLI prints; no variant has a `source` (the CLI prints the chain,
 /// which would repeat the inner message).
@@ -103,6 +108,9 @@ pub enum SimError {
     /// [`SimOptions::timing_repeats`] is 0.
     #[error("timing repeats must be >= 1, got 0")]
     NoTimingRepeats,
+    /// [`SimOptions::timing_repeats`] is above [`MAX_TIMING_REPEATS`].
+    #[error("timing repeats must be at most {MAX_TIMING_REPEATS}, got {0}")]
+    TooManyTimingRepeats(u32),
     /// The controller refused the scenario's configuration.
     #[error("controller: {0}")]
     Controller(ldcbf_controller::ConfigError),

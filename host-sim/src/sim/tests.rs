@@ -60,6 +60,10 @@ fn timing_repeats_leave_the_run_unchanged() {
         let err = run(&sc, opts(0)).map(|_| ()).unwrap_err();
         assert_eq!(err, SimError::NoTimingRepeats);
         assert!(err.to_string().contains(">= 1"), "{err}");
+        let err = run(&sc, opts(MAX_TIMING_REPEATS + 1))
+            .map(|_| ())
+            .unwrap_err();
+        assert_eq!(err, SimError::TooManyTimingRepeats(MAX_TIMING_REPEATS + 1));
     }
     assert!(same_walk(
         &once,

@@ -170,3 +170,20 @@ pub fn zip(members: &[(&str, Vec<u8>)]) -> Vec<u8> {
     out.extend_from_slice(&0u16.to_le_bytes());
     out
 }
+
+/// A small valid QP: `min sum (x_i - 1)^2` over 6 variables with
+/// `x_0 + x_1 <= 1` (`n = 6`, `m = 1`; optimum `x = (0.5, 0.5, 1, 1, 1, 1)`,
+/// objective -5.5 in the `1/2 x'Px + q'x` form).
+pub fn small_qp() -> ldcbf_reference::DenseProblem {
+    let mut p = ldcbf_reference::DenseProblem::inequalities(
+        6,
+        vec![0.0; 36],
+        vec![-2.0; 6],
+        vec![1.0, 1.0, 0.0, 0.0, 0.0, 0.0],
+        vec![1.0],
+    );
+    for i in 0..6 {
+        p.P[i * 6 + i] = 2.0;
+    }
+    p
+}

@@ -73,6 +73,9 @@ pub enum DeadlineError {
     /// `--repeat 0`.
     #[error("--repeat must be >= 1 (timings of each control cycle), got 0")]
     NoRepeat,
+    /// `--repeat` above [`MAX_TIMING_REPEATS`](crate::sim::MAX_TIMING_REPEATS).
+    #[error("--repeat must be at most {max} (timings of each control cycle), got {0}", max = crate::sim::MAX_TIMING_REPEATS)]
+    TooManyRepeats(u32),
     /// `--deadline-us` is not a positive number (µs).
     #[error("--deadline-us must be a positive number of microseconds, got {0}")]
     Deadline(f64),
@@ -355,6 +358,9 @@ pub fn run_cases_timed(
     if repeat == 0 {
         return Err(DeadlineError::NoRepeat);
     }
+    if repeat > crate::sim::MAX_TIMING_REPEATS {
+        return Err(DeadlineError::TooManyRepeats(repeat));
+    }
     let scenarios: Vec<Scenario> = cases
         .iter()
         .map(|c| c.load(sets))
@@ -505,6 +511,9 @@ pub fn run_deadline(req: &DeadlineRequest) -> Result<DeadlineReport, DeadlineErr
     }
     if req.repeat == 0 {
         return Err(DeadlineError::NoRepeat);
+    }
+    if req.repeat > crate::sim::MAX_TIMING_REPEATS {
+        return Err(DeadlineError::TooManyRepeats(req.repeat));
     }
     if req.cases.is_empty() && req.random == 0 {
         return Err(DeadlineError::NothingToRun);

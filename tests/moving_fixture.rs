@@ -3,13 +3,15 @@
 //! three obstacles that move, through the humanoid controller, written as
 //! `f64` bits to `python/tests/data/moving_cycles.txt`. This test checks that
 //! the file is what the Rust controller computes today;
-//! `LDCBF_BLESS=1 cargo test -p ldcbf-controller --test moving_fixture`
-//! rewrites it.
+//! `LDCBF_BLESS=1 cargo test --test moving_fixture` (from the workspace
+//! root) rewrites it. The walk and the robot are the C API test's
+//! (`ldcbf_nav::fixtures::{open_loop_walk, robot_config}`).
 
 use std::fmt::Write as _;
 
 use ldcbf_controller::nalgebra::Vector2;
-use ldcbf_controller::{Config, ConvexPolygon, CycleInput, RobotController, Side};
+use ldcbf_controller::{ConvexPolygon, RobotController, Side};
+use ldcbf_nav::fixtures::{open_loop_walk, robot_config};
 
 const OBSTACLES: [&[[f64; 2]]; 3] = [
     &[[2.0, 1.0], [3.0, 1.0], [2.5, 2.0]],
@@ -24,14 +26,7 @@ fn hex(x: f64) -> String {
 
 /// The fixture file for the obstacles moving at `velocities` (m/s).
 fn fixture(velocities: &[Vector2<f64>]) -> String {
-    let cfg = Config {
-        body_radius: 0.25,
-        foot_length: 0.22,
-        foot_width: 0.10,
-        foot_clearance: Some(0.0),
-        ..Config::default()
-    };
-    let mut ctl = RobotController::new(cfg).unwrap();
+    let mut ctl = RobotController::new(robot_config()).unwrap();
     let polys: Vec<ConvexPolygon<16>> = OBSTACLES
         .iter()
         .map(|p| ConvexPolygon::new(p).unwrap())
@@ -39,7 +34,7 @@ fn fixture(velocities: &[Vector2<f64>]) -> String {
     let mut s = String::from(
         "# python/tests/test_moving.py: cycles of the humanoid controller (body 0.25 m,\n\
          # feet 0.22 x 0.10 m, foot rows on) with moving obstacles, f64 bits in hex.\n\
-         # Written by controller/tests/moving_fixture.rs (LDCBF_BLESS=1); do not edit.\n\
+         # Written by tests/moving_fixture.rs (LDCBF_BLESS=1); do not edit.\n\
          # obstacle <x y>...; velocity <vx vy> (m/s, one per obstacle);\n\
          # cycle <px py vx vy heading omega footx footy side time_in_step gx gy>\n\
          #   -> <foot_target x y, turning_rate, min_h0, cost> <status> <source>\n",
@@ -52,25 +47,8 @@ fn fixture(velocities: &[Vector2<f64>]) -> String {
         writeln!(s, "velocity {} {}", hex(v[0]), hex(v[1])).unwrap();
     }
     for i in 0..80u32 {
-        let t = f64::from(i) * 0.05;
-        let side = if (i / 8) % 2 == 0 {
-            Side::Left
-        } else {
-            Side::Right
-        };
-        let input = CycleInput {
-            com_position: Vector2::new(0.2 * t, 0.15 * t),
-            com_velocity: Vector2::new(0.2, 0.15),
-            heading: 0.6,
-            turning_rate: 0.0,
-            stance_foot: Vector2::new(0.2 * t, 0.15 * t - 0.05 * side.sign()),
-            stance_side: side,
-            time_in_step: f64::from(i % 8) * 0.05,
-            goal: Vector2::new(4.0, 5.0),
-            obstacles: &polys,
-            obstacle_velocities: velocities,
-            speed_cap: ldcbf_controller::NO_SPEED_CAP,
-        };
+        let input = open_loop_walk(i).input_moving(&polys, velocities);
+        let side = input.stance_side;
         let out = ctl.step(&input, None);
         let ins = [
             input.com_position.x,
@@ -111,7 +89,7 @@ fn fixture(velocities: &[Vector2<f64>]) -> String {
 #[test]
 fn the_python_fixture_is_the_rust_controllers() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../python/tests/data/moving_cycles.txt");
+        .join("python/tests/data/moving_cycles.txt");
     let now = fixture(&VELOCITIES.map(Vector2::from));
     if std::env::var_os("LDCBF_BLESS").is_some() {
         std::fs::write(&path, &now).unwrap();
