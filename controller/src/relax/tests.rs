@@ -385,6 +385,19 @@ fn relaxations_are_minimal_in_priority_order() {
 }
 
 /// The number of safety rows of a cycle's QP.
+/// The worst violation of the safety rows of obstacle `j` (its LDCBF and
+/// foot-clearance rows) by the plan `u`, m.
+fn worst_violation(asm: &Assembly<3, 6, NC, 8>, j: u32, u: &SVector<f64, 6>) -> f64 {
+    asm.qp
+        .rows()
+        .zip(&asm.rows)
+        .filter(
+            |(_, id)| matches!(id.kind, RowKind::Ldcbf(i) | RowKind::FootClearance(i) if i == j),
+        )
+        .map(|((g, h), _)| g.dot(u) - h)
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
 fn safety_count(asm: &Assembly<3, 6, NC, 8>) -> usize {
     asm.rows
         .iter()
@@ -549,17 +562,7 @@ fn a_conflict_ahead_leaves_the_side_wall_its_margin() {
     .unwrap();
     assert_eq!(r.level, RelaxLevel::Safety, "{r:?}");
     assert!(r.eps_safety > 1e-3, "{r:?}");
-    // The worst violation of the rows of obstacle `j` by the plan `u`.
-    let worst = |j: u32, u: &SVector<f64, 6>| {
-        asm.qp
-            .rows()
-            .zip(&asm.rows)
-            .filter(|(_, id)| {
-                matches!(id.kind, RowKind::Ldcbf(i) | RowKind::FootClearance(i) if i == j)
-            })
-            .map(|((g, h), _)| g.dot(u) - h)
-            .fold(f64::NEG_INFINITY, f64::max)
-    };
+    let worst = |j: u32, u: &SVector<f64, 6>| worst_violation(&asm, j, u);
     std::println!(
         "{r:?}, {} solves; side wall {:.4}, fragment {:.4}",
         count.0,
@@ -740,17 +743,7 @@ fn a_person_gives_way_before_the_walls() {
     for (m, id) in moving.iter_mut().zip(&asm.rows).take(asm.qp.m) {
         *m = matches!(id.kind, RowKind::Ldcbf(2) | RowKind::FootClearance(2));
     }
-    // The worst violation of the rows of obstacle `j` by the plan `u`.
-    let worst = |j: u32, u: &SVector<f64, 6>| {
-        asm.qp
-            .rows()
-            .zip(&asm.rows)
-            .filter(|(_, id)| {
-                matches!(id.kind, RowKind::Ldcbf(i) | RowKind::FootClearance(i) if i == j)
-            })
-            .map(|((g, h), _)| g.dot(u) - h)
-            .fold(f64::NEG_INFINITY, f64::max)
-    };
+    let worst = |j: u32, u: &SVector<f64, 6>| worst_violation(&asm, j, u);
     let run = |moving: Option<&[bool; NC]>| {
         let p = Params {
             give_way: Some(&[false; NC]),
