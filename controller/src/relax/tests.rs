@@ -2,7 +2,7 @@ extern crate std;
 
 use super::*;
 use crate::constraints::RowKind;
-use crate::qp::QpStatus;
+use crate::qp::{QpSolution, QpStatus};
 use crate::{Assembly, Config, ConvexPolygon, CycleInput, PaperController, Side};
 use nalgebra::Vector2;
 
@@ -385,6 +385,25 @@ fn relaxations_are_minimal_in_priority_order() {
 }
 
 /// The number of safety rows of a cycle's QP.
+/// The paper controller's QP for `input`, its nominal solve (asserted
+/// infeasible: the case must need the priority scheme) and the cycle's
+/// capturability bounds.
+fn infeasible_cycle(
+    ctl: &PaperController,
+    input: &CycleInput<'_, 8>,
+) -> (
+    Assembly<3, 6, NC, 8>,
+    QpSolution<6, NC>,
+    Option<CaptureBounds>,
+) {
+    let mut asm = Assembly::default();
+    ctl.assemble(input, None, &mut asm).unwrap();
+    let nominal = ctl.solver().with_max_iter(64).solve(&asm.qp, &[false; NC]);
+    assert!(nominal.status.is_infeasible(), "{:?}", nominal.status);
+    let cb = CaptureBounds::new(ctl.config(), ctl_kappa(), asm.prediction.heading.omega_bar);
+    (asm, nominal, cb)
+}
+
 /// The worst violation of the safety rows of obstacle `j` (its LDCBF and
 /// foot-clearance rows) by the plan `u`, m.
 fn worst_violation(asm: &Assembly<3, 6, NC, 8>, j: u32, u: &SVector<f64, 6>) -> f64 {
@@ -544,12 +563,8 @@ fn a_conflict_ahead_leaves_the_side_wall_its_margin() {
         obstacle_velocities: &[],
         speed_cap: crate::NO_SPEED_CAP,
     };
-    let mut asm = Assembly::default();
-    ctl.assemble(&input, None, &mut asm).unwrap();
     let solver = ctl.solver();
-    let nominal = solver.with_max_iter(64).solve(&asm.qp, &[false; NC]);
-    assert!(nominal.status.is_infeasible(), "{:?}", nominal.status);
-    let cb = CaptureBounds::new(ctl.config(), ctl_kappa(), asm.prediction.heading.omega_bar);
+    let (asm, nominal, cb) = infeasible_cycle(&ctl, &input);
     let mut count = Counting(0);
     let r = relax(
         solver,
@@ -733,12 +748,8 @@ fn a_person_gives_way_before_the_walls() {
         obstacle_velocities: &velocities,
         speed_cap: crate::NO_SPEED_CAP,
     };
-    let mut asm = Assembly::default();
-    ctl.assemble(&input, None, &mut asm).unwrap();
     let solver = ctl.solver();
-    let nominal = solver.with_max_iter(64).solve(&asm.qp, &[false; NC]);
-    assert!(nominal.status.is_infeasible(), "{:?}", nominal.status);
-    let cb = CaptureBounds::new(ctl.config(), ctl_kappa(), asm.prediction.heading.omega_bar);
+    let (asm, nominal, cb) = infeasible_cycle(&ctl, &input);
     let mut moving = [false; NC];
     for (m, id) in moving.iter_mut().zip(&asm.rows).take(asm.qp.m) {
         *m = matches!(id.kind, RowKind::Ldcbf(2) | RowKind::FootClearance(2));
