@@ -3,7 +3,7 @@
 //! capturability bound on the gait velocity rows ([`CaptureBounds`]), and
 //! which rows a relaxed problem keeps with which right-hand sides (`Keep`).
 
-use nalgebra::SVector;
+use nalgebra::{SVector, SVectorView};
 
 use crate::constraints::{RowId, RowKind};
 use crate::linalg::columns;
@@ -85,7 +85,9 @@ pub fn class_violation<const NV: usize, const NC: usize>(
     let m = qp.m.min(NC);
     let rows_g = columns(qp.gt.as_slice(), NV);
     for ((g, &h), id) in rows_g.zip(qp.h.as_slice()).zip(rows).take(m) {
-        let e = nalgebra_dot::<NV>(g, u.as_slice()) - h;
+        // nalgebra's `dot` on a view of the row in place (no copy of each
+        // row, as `DenseQp::rows` makes): the bits of `g.dot(u)`.
+        let e = SVectorView::<f64, NV>::from_slice(g).dot(u) - h;
         let e = if e.is_nan() { f64::INFINITY } else { e };
         let slot = match RowClass::of(id.kind) {
             RowClass::Reach => &mut v.reach,
@@ -100,47 +102,6 @@ pub fn class_violation<const NV: usize, const NC: usize>(
         }
     }
     v
-}
-
-/// `g . u` over `NV` entries with the operations of nalgebra's
-/// `Matrix::dot` for vectors of `NV` entries, in its order, so its bits
-/// (the violations [`class_violation`] reports are compared bit for bit
-/// across builds): the sums of two, three and four products as nalgebra
-/// writes them out, else eight partial sums over blocks of eight entries,
-/// added as `((((0 + (s0 + s4)) + (s1 + s5)) + (s2 + s6)) + (s3 + s7))`,
-/// then the remaining products one by one. On the rows in place (no copy
-/// of each row into a vector, as `DenseQp::rows` makes); the partial sums
-/// of the blocks run as pairs (SSE2 lanes on hosts).
-#[inline(always)]
-fn nalgebra_dot<const NV: usize>(g: &[f64], u: &[f64]) -> f64 {
-    let (Some(g), Some(u)) = (g.get(..NV), u.get(..NV)) else {
-        return f64::NAN;
-    };
-    match (g, u) {
-        ([g0, g1], [u0, u1]) => return g0 * u0 + g1 * u1,
-        ([g0, g1, g2], [u0, u1, u2]) => return g0 * u0 + g1 * u1 + g2 * u2,
-        ([g0, g1, g2, g3], [u0, u1, u2, u3]) => {
-            return (g0 * u0 + g2 * u2) + (g1 * u1 + g3 * u3);
-        }
-        _ => {}
-    }
-    let mut acc = [0.0f64; 8];
-    let (mut bg, mut bu) = (g.chunks_exact(8), u.chunks_exact(8));
-    for (a, b) in bg.by_ref().zip(bu.by_ref()) {
-        for ((s, x), y) in acc.iter_mut().zip(a).zip(b) {
-            *s += x * y;
-        }
-    }
-    let [s0, s1, s2, s3, s4, s5, s6, s7] = acc;
-    let mut res = 0.0;
-    res += s0 + s4;
-    res += s1 + s5;
-    res += s2 + s6;
-    res += s3 + s7;
-    for (x, y) in bg.remainder().iter().zip(bu.remainder()) {
-        res += x * y;
-    }
-    res
 }
 
 /// The capturability bound (see the module docs): every body-frame component
@@ -265,41 +226,5 @@ impl Keep {
                 }
             }
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::nalgebra_dot;
-    use nalgebra::SVector;
-
-    /// [`nalgebra_dot`] has the bits of nalgebra's `dot` for every length
-    /// the special cases and the blocks of eight meet.
-    #[test]
-    fn nalgebra_dot_has_the_bits_of_nalgebra() {
-        fn check<const NV: usize>(rnd: &mut impl FnMut() -> f64) {
-            for _ in 0..200 {
-                let g = SVector::<f64, NV>::from_fn(|_, _| rnd());
-                let u = SVector::<f64, NV>::from_fn(|_, _| rnd());
-                let want = g.dot(&u).to_bits();
-                assert_eq!(
-                    nalgebra_dot::<NV>(g.as_slice(), u.as_slice()).to_bits(),
-                    want
-                );
-            }
-        }
-        let mut rnd = crate::linalg::tests::mixed(0x9e37_79b9_7f4a_7c15);
-        check::<1>(&mut rnd);
-        check::<2>(&mut rnd);
-        check::<3>(&mut rnd);
-        check::<4>(&mut rnd);
-        check::<5>(&mut rnd);
-        check::<6>(&mut rnd);
-        check::<8>(&mut rnd);
-        check::<9>(&mut rnd);
-        check::<16>(&mut rnd);
-        check::<20>(&mut rnd);
-        check::<23>(&mut rnd);
-        check::<40>(&mut rnd);
     }
 }
