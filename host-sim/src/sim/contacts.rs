@@ -19,11 +19,24 @@
 //!     obstacle to the body, is below `-`[`STANDING_SPEED`] (the robot
 //!     approached at more than 5 cm/s), or
 //!   * it is a foot that landed on the obstacle (the contact starts at the
-//!     landing tick: the controller chose that foothold);
+//!     landing tick: the controller chose that foothold), unless the obstacle
+//!     is a person who overlaps the body at that tick: the landing then takes
+//!     the cause of that body contact (see below);
 //! * **obstacle moved into a standing robot** ([`ContactCause::Obstacle`])
 //!   otherwise: a moving obstacle (a person) walked into a body that was
 //!   standing, moving away, or moving across (approach at most 5 cm/s), or
 //!   onto a foot already planted.
+//!
+//! **A foot landing on a person inside the body.** A person who overlaps the
+//! body disk covers ground next to the CoM, where every foothold within
+//! reach of the swing foot may lie; a landing on them is part of the body
+//! contact already under way, and is counted with its cause: the person's
+//! when the person walked into the body, the robot's when the robot walked
+//! into the person. A landing on a person who is clear of the body at the
+//! landing tick stays the robot's, however the person moved during the
+//! swing: the people walk at constant velocity and the controller plans
+//! every foothold against their predicted positions, so such a landing is a
+//! controller failure (`docs/results.md`, "Moving obstacles").
 //!
 //! The robot's policy toward a person who walks into it is the controller's
 //! (`controller/src/mpc/give_way.rs`, docs/safety.md): near people it walks no
@@ -88,7 +101,9 @@ pub struct Contact {
 /// Follows the contacts of one run, tick by tick.
 #[derive(Clone, Debug, Default)]
 pub(crate) struct ContactMonitor {
-    body: Vec<usize>,
+    /// The obstacles overlapping the body, each with the cause of its
+    /// episode.
+    body: Vec<(usize, ContactCause)>,
     foot: Vec<usize>,
     scratch: Vec<Overlap>,
     /// Every contact so far, in order of their start.
@@ -130,9 +145,10 @@ impl ContactMonitor {
         landed: bool,
     ) {
         map.body_contacts(&com, robot.body_radius, &mut self.scratch);
-        let body_now: Vec<usize> = self.scratch.iter().map(|o| o.obstacle).collect();
+        let mut body_now = Vec::with_capacity(self.scratch.len());
         for o in &self.scratch {
-            if self.body.contains(&o.obstacle) {
+            if let Some(&(_, cause)) = self.body.iter().find(|b| b.0 == o.obstacle) {
+                body_now.push((o.obstacle, cause));
                 continue;
             }
             let v_obs = map.velocities()[o.obstacle];
@@ -143,6 +159,7 @@ impl ContactMonitor {
             } else {
                 ContactCause::Obstacle
             };
+            body_now.push((o.obstacle, cause));
             self.contacts.push(Contact {
                 time,
                 obstacle: o.obstacle,
@@ -163,7 +180,12 @@ impl ContactMonitor {
                 continue;
             }
             let v_obs = map.velocities()[o.obstacle];
-            let cause = if landed || v_obs == Vector2::zeros() {
+            let in_body = self.body.iter().find(|b| b.0 == o.obstacle);
+            let cause = if v_obs == Vector2::zeros() {
+                ContactCause::Robot
+            } else if let (true, Some(&(_, body_cause))) = (landed, in_body) {
+                body_cause
+            } else if landed {
                 ContactCause::Robot
             } else {
                 ContactCause::Obstacle
@@ -346,6 +368,77 @@ mod tests {
             true,
         );
         assert_eq!(contact_counts(&m.contacts), (1, 0), "{:?}", m.contacts);
+    }
+
+    /// The person of `a_person_walking_into_a_standing_robot_is_the_persons_contact`
+    /// (from 1 m to the right, walking left at 0.5 m/s) with the body at
+    /// `com(t)` walking at `walk` for 1.2 s (the person over the body from
+    /// about 1.04 s when the body stands), the stance foot far away; then a
+    /// foot lands at (`foot_x`, 0) and the monitor's contacts are returned.
+    fn landing_after(com: impl Fn(f64) -> [f64; 2], walk: [f64; 2], foot_x: f64) -> Vec<Contact> {
+        let robot = RobotParams::default();
+        let mut map = MovingMap::new(&[person(1.0, 0.0)], &[Vector2::new(-0.5, 0.0)]).unwrap();
+        let mut m = ContactMonitor::default();
+        for k in 0..1200 {
+            let t = k as f64 * 1e-3;
+            body_tick(&mut m, &mut map, t, com(t), walk);
+        }
+        let t = 1.2;
+        map.set_time(t);
+        let c = com(t);
+        m.observe(
+            &map,
+            &robot,
+            t,
+            Vector2::new(c[0], c[1]),
+            Vector2::new(walk[0], walk[1]),
+            Vector2::new(foot_x, 0.0),
+            0.0,
+            true,
+        );
+        m.contacts
+    }
+
+    #[test]
+    fn a_foot_landing_on_a_person_inside_the_body_takes_the_body_contacts_cause() {
+        // The person walked into the standing body (theirs); at 1.2 s they are
+        // at x = 0.4, over the body, and the next foot lands under them: theirs.
+        let contacts = landing_after(|_| [0.0, 0.0], [0.0, 0.0], 0.4);
+        let parts: Vec<_> = contacts.iter().map(|c| (c.part, c.cause)).collect();
+        assert_eq!(
+            parts,
+            [
+                (ContactPart::Body, ContactCause::Obstacle),
+                (ContactPart::Foot, ContactCause::Obstacle)
+            ],
+            "{contacts:?}"
+        );
+        // The robot walked into the person at 0.3 m/s (its contact); the foot
+        // landing on them is the robot's too.
+        let contacts = landing_after(|t| [0.3 * t, 0.0], [0.3, 0.0], 0.6);
+        let parts: Vec<_> = contacts.iter().map(|c| (c.part, c.cause)).collect();
+        assert_eq!(
+            parts,
+            [
+                (ContactPart::Body, ContactCause::Robot),
+                (ContactPart::Foot, ContactCause::Robot)
+            ],
+            "{contacts:?}"
+        );
+    }
+
+    #[test]
+    fn a_foot_landing_on_a_person_clear_of_the_body_is_the_robots() {
+        // The body backs away ahead of the person (at x = -0.6 - 0.3 t, 0.7 m
+        // or more from them: no body contact) and the foot lands under the
+        // person, who walked onto that spot during the swing: the robot's.
+        let contacts = landing_after(|t| [-0.6 - 0.3 * t, 0.0], [-0.3, 0.0], 0.4);
+        let parts: Vec<_> = contacts.iter().map(|c| (c.part, c.cause)).collect();
+        assert_eq!(
+            parts,
+            [(ContactPart::Foot, ContactCause::Robot)],
+            "{contacts:?}"
+        );
     }
 
     #[test]
