@@ -66,7 +66,8 @@ fn velocities_of_another_length_are_an_input_error() {
 
 #[test]
 fn bad_velocities_of_selected_obstacles_are_an_input_error() {
-    // The second obstacle is beyond r_active = 4 m: its velocity is not read.
+    // The second obstacle is beyond r_active = 4 m: selected only when it
+    // closes in faster than vx_max (a person running at the robot).
     let obstacles = [rect(1.0, 1.5, -0.5, 0.5), rect(20.0, 21.0, 0.0, 1.0)];
     let mut ctl = Ctl::new(Config::default()).unwrap();
     for bad in [
@@ -87,13 +88,24 @@ fn bad_velocities_of_selected_obstacles_are_an_input_error() {
             ctl.assemble(&walking(&obstacles, &[bad, v(0.0, 0.0)]), None, &mut asm),
             Err(InputError::ObstacleVelocity)
         );
-        let far = ctl.step(&walking(&obstacles, &[v(0.2, 0.0), bad]), None);
+        // Far away, the velocity is read only to see whether it closes in
+        // faster than vx_max; these do not (NaN, across, away from the robot).
+        let away = v(bad.x.abs(), bad.y);
+        let far = ctl.step(&walking(&obstacles, &[v(0.2, 0.0), away]), None);
         assert!(
             !matches!(far.status, CycleStatus::InvalidInput(_)),
-            "{bad:?}: {:?}",
+            "{away:?}: {:?}",
             far.status
         );
     }
+    // One that closes in on the robot fast enough to be selected from 16 m
+    // away (70.8 m/s) is checked as any selected obstacle's: 100.1 m/s is
+    // too fast.
+    let far = ctl.step(&walking(&obstacles, &[v(0.2, 0.0), v(-70.8, 70.8)]), None);
+    assert_eq!(
+        far.status,
+        CycleStatus::InvalidInput(InputError::ObstacleVelocity)
+    );
     // 100 m/s exactly is accepted.
     let out = ctl.step(&walking(&obstacles, &[v(100.0, 0.0), v(0.0, 0.0)]), None);
     assert!(!matches!(out.status, CycleStatus::InvalidInput(_)));
@@ -253,4 +265,47 @@ fn each_step_end_sees_the_polygon_moved_to_its_time() {
             rows_follow_the_moved_polygon(&robot, &input);
         }
     }
+}
+
+/// A person running at the robot faster than it walks (`vx_max`, 0.8 m/s) is
+/// selected beyond `r_active`: up to `r_active + (c - vx_max) (tau + N T)`,
+/// `c` the closing speed (here `tau + N T = 0.3 + 1.2 = 1.5 s`); one closing
+/// in at most at `vx_max`, at rest, crossing or walking away only within
+/// `r_active` (4 m).
+#[test]
+fn a_person_running_at_the_robot_is_selected_beyond_r_active() {
+    let ctl = Ctl::new(Config::default()).unwrap();
+    let cfg = Config::default();
+    // About 5.9 m ahead of p_0, beyond r_active.
+    let obstacles = [rect(6.0, 6.5, -0.25, 0.25)];
+    let velocities = [v(0.0, 0.0)];
+    let p0 = ctl
+        .obstacle_query(&walking(&obstacles, &velocities))
+        .unwrap()
+        .center;
+    let cp = closest_point_point_polygon(&p0, &obstacles[0]);
+    assert!(cp.signed_distance > cfg.r_active + 1.0, "{cp:?}");
+    let horizon = (cfg.step_duration - 0.1) + 3.0 * cfg.step_duration;
+    // The closing speed at which it is selected from exactly its distance.
+    let threshold = cfg.vx_max + (cp.signed_distance - cfg.r_active) / horizon;
+    let selected = |u: Vector2<f64>| {
+        let mut asm = Asm::EMPTY;
+        ctl.assemble(&walking(&obstacles, &[u]), None, &mut asm)
+            .unwrap();
+        asm.active_obstacles().len()
+    };
+    // Head-on (the normal is -x): just above the threshold selected, just
+    // below not; running away, across, at rest or at vx_max: not.
+    assert_eq!(selected(v(-1.01 * threshold, 0.0)), 1);
+    assert_eq!(selected(v(-4.0, 0.0)), 1);
+    assert_eq!(selected(v(-0.99 * threshold, 0.0)), 0);
+    assert_eq!(selected(v(-cfg.vx_max, 0.0)), 0);
+    assert_eq!(selected(v(0.0, 0.0)), 0);
+    assert_eq!(selected(v(4.0, 0.0)), 0);
+    assert_eq!(selected(v(0.0, 4.0)), 0);
+    // Selected, its half-plane moves at its closing speed.
+    let mut asm = Asm::EMPTY;
+    ctl.assemble(&walking(&obstacles, &[v(-4.0, 0.0)]), None, &mut asm)
+        .unwrap();
+    assert!((asm.active_obstacles()[0].half_plane.rate - 4.0).abs() < 1e-12);
 }

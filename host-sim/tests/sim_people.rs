@@ -4,10 +4,13 @@
 //! Contacts where a person walks into the standing robot are counted apart
 //! and are not failures. The same with LiDAR: the people are tracked
 //! (`host-sim/src/sense/movers.rs`), kept out of the occupancy map and given
-//! to the controller with their estimated velocities. Release builds only
+//! to the controller with their estimated velocities. A person running
+//! head-on at 3-5 m/s is not walked into either. Release builds only
 //! (`.ci/run`).
 
+use ldcbf_sim::scenario::{LoadOptions, parse_str};
 use ldcbf_sim::sense::Perception;
+use ldcbf_sim::sim::{Outcome, SimOptions, contact_counts, run};
 use ldcbf_sim::studies::batch::{Aggregate, BatchRequest, SeedRange, run_batch};
 
 fn batch(family: &str, perception: Perception, seeds: u64) -> Aggregate {
@@ -79,5 +82,46 @@ fn lidar_tracking_no_robot_caused_contact_on_crossing_and_headon() {
             "{family}: only {} of 20 reached",
             a.reached
         );
+    }
+}
+
+/// One person running head-on at the robot at `speed` m/s (radius 0.25 m,
+/// from 8 m ahead, `y` m off the path), the robot walking to a goal 6 m ahead.
+fn running_head_on(speed: f64, y: f64) -> String {
+    format!(
+        r#"name = "person-running-head-on"
+start = {{ x = 0.0, y = 0.0, heading = 0.0 }}
+goal = [6.0, 0.0]
+time_limit = 30.0
+
+[controller]
+delta = 0.05
+
+[[obstacles]]
+regular = {{ center = [8.0, {y}], radius = 0.25, sides = 8 }}
+velocity = [-{speed}, 0.0]
+"#
+    )
+}
+
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "6 closed loops: run with --release (.ci/run does)"
+)]
+fn a_person_running_head_on_is_never_walked_into() {
+    // Faster than the robot can walk (vx_max 0.8 m/s): selected beyond
+    // r_active (controller/src/mpc/select.rs), so the robot has stopped or
+    // is backing off when they reach it, and every contact is theirs.
+    for speed in [3.0, 4.0, 5.0] {
+        for y in [0.0, 0.2] {
+            let text = running_head_on(speed, y);
+            let sc = parse_str(&text, "running", &LoadOptions::default()).unwrap();
+            let sim = run(&sc, SimOptions::default()).unwrap();
+            let (robot, person) = contact_counts(&sim.contacts);
+            println!("{speed} m/s, y {y}: contacts robot {robot} person {person}");
+            assert_eq!(robot, 0, "{speed} m/s, y {y}: {:?}", sim.contacts);
+            assert_eq!(sim.outcome, Outcome::GoalReached, "{speed} m/s, y {y}");
+        }
     }
 }

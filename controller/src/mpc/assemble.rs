@@ -45,8 +45,11 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             time_to_p0: tau,
         };
 
-        // 3. Active obstacles: within r_active of p_0, nearest first, at most NOBS.
-        out.select_obstacles(&p0, cfg, obstacles, input.obstacle_velocities)?;
+        // 3. Active obstacles: within r_active of p_0 (one closing in faster
+        // than vx_max: farther by the excess over the horizon), nearest first,
+        // at most NOBS.
+        let horizon = tau + N as f64 * t_step;
+        out.select_obstacles(&p0, cfg, horizon, obstacles, input.obstacle_velocities)?;
 
         // 4-5. Cost and rows.
         out.qp.clear();

@@ -1,7 +1,10 @@
 //! Obstacle selection (docs/maths.md §2.3): the obstacles whose signed
-//! distance to `p_0` is at most [`Config::r_active`], nearest first, at most
-//! `NOBS`, each linearised as the half-plane at its boundary point closest to
-//! `p_0` ([`ActiveObstacle`]). For a caller whose map is too large to scan
+//! distance to `p_0` is at most [`Config::r_active`] (a moving one closing in
+//! at a speed `c` above [`Config::vx_max`]: at most `r_active + (c - vx_max)
+//! (tau + N T)`, so that over the horizon it comes no closer than one closing
+//! in at `vx_max` from `r_active`), nearest first, at most `NOBS`, each
+//! linearised as the half-plane at its boundary point closest to `p_0`
+//! ([`ActiveObstacle`]). For a caller whose map is too large to scan
 //! every cycle: the disk that holds every obstacle a cycle can select
 //! ([`ObstacleQuery`], [`Controller::obstacle_query`]) and the candidates a
 //! spatial index returns for it (`among`, the `candidates` of
@@ -20,12 +23,16 @@ use crate::qp::QpBackend;
 ///
 /// A cycle selects obstacle `j` only if `closest_point_point_polygon(center,
 /// P_j).signed_distance <= radius` (`center` is the cycle's `p_0`, `radius` is
-/// [`Config::r_active`]). Such a polygon has a point within `radius` of
-/// `center` (its closest point, or `center` itself when inside), so its
-/// axis-aligned bounding box is within `radius` of `center` too: an index
-/// query for the boxes within [`ObstacleQuery::padded_radius`] of `center`
-/// returns every obstacle the cycle can select (the padding covers the
-/// rounding of both distance computations).
+/// [`Config::r_active`]), except a moving obstacle closing in faster than
+/// [`Config::vx_max`], selected up to `radius + (c - vx_max) (tau + N T)` (`c
+/// = eta'u`, m/s, its velocity `u` along the normal `eta` towards `center`):
+/// a caller passes such obstacles whatever the query. A polygon within
+/// `radius` has a point within `radius` of `center` (its closest point, or
+/// `center` itself when inside), so its axis-aligned bounding box is within
+/// `radius` of `center` too: an index query for the boxes within
+/// [`ObstacleQuery::padded_radius`] of `center` returns every other obstacle
+/// the cycle can select (the padding covers the rounding of both distance
+/// computations).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ObstacleQuery {
     /// The cycle's `p_0`, the predicted CoM position at the end of the current
@@ -115,8 +122,14 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
     /// Selects the active obstacles of `obstacles` (`(index in
     /// input.obstacles, polygon)`, in the order the selection sees them):
     /// those whose signed distance to `p0` (m, world) is at most
-    /// [`Config::r_active`], nearest first (ties in the order seen), at most
-    /// `NOBS` (the farthest drop out: [`Assembly::obstacles_truncated`]).
+    /// [`Config::r_active`], and each moving one closing in faster than
+    /// [`Config::vx_max`] (`c = eta'u > vx_max`, `u` its velocity
+    /// `velocities[index]`, m/s, world, `eta` the unit normal from it towards
+    /// `p0`; a NaN `c` counts as at rest) whose signed distance is at most
+    /// `r_active + (c - vx_max) horizon` (`horizon = tau + N T`, s: the radius
+    /// grows by the distance such an obstacle gains over the horizon on one
+    /// closing in at `vx_max`), nearest first (ties in the order seen), at
+    /// most `NOBS` (the farthest drop out: [`Assembly::obstacles_truncated`]).
     /// Each is linearised where it is now; its half-plane moves with the
     /// obstacle's velocity `velocities[index]` (at rest when `velocities` is
     /// empty), whose component along the normal is [`HalfPlane::rate`].
@@ -128,6 +141,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
         &mut self,
         p0: &Vector2<f64>,
         cfg: &Config,
+        horizon: f64,
         obstacles: impl Iterator<Item = (usize, &'o ConvexPolygon<V>)>,
         velocities: &[Vector2<f64>],
     ) -> Result<(), InputError> {
@@ -139,9 +153,18 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
                 break;
             };
             let cp = closest_point_point_polygon(p0, poly);
-            // NaN distances (impossible for validated polygons) are skipped too.
-            if cp.signed_distance.is_nan() || cp.signed_distance > cfg.r_active {
-                continue;
+            // False for a NaN distance (impossible for validated polygons):
+            // such an obstacle is skipped.
+            let within = |radius: f64| cp.signed_distance <= radius;
+            if !within(cfg.r_active) {
+                // Beyond `r_active` (which holds an obstacle closing in no
+                // faster than the robot walks), one closing in faster than
+                // `vx_max` gains the excess over the horizon.
+                let closing = velocities.get(idx).map_or(0.0, |u| cp.normal.dot(u));
+                let excess = (closing - cfg.vx_max).max(0.0);
+                if !within(cfg.r_active + excess * horizon) {
+                    continue;
+                }
             }
             let rate = if velocities.is_empty() {
                 0.0
