@@ -13,6 +13,10 @@
 //! enforce, and a wall seen as a staircase of cell rectangles would otherwise
 //! fill the controller's few obstacle slots with one side of a corridor.
 //!
+//! **The robot's own body** ([`inside_the_body`]): a hit closer to the CoM
+//! than the body radius (a person who walked into the robot) marks no cell,
+//! so the map never puts a wall where the robot stands.
+//!
 //! **Replanning** ([`Mapper::plan`]): a path is planned at the first cycle;
 //! then, every `replan_period` s, the rest of the path (from the robot through
 //! the remaining subgoals) is checked against the map's occupied cells inflated
@@ -106,6 +110,10 @@ pub(super) struct Mapper {
     /// The controller's pendulum, for the capture-step speed cap
     /// ([`Mapper::capture_cap`]; built once from the scenario's config).
     pendulum: ldcbf_controller::Lip,
+    /// The robot's body radius, m: hits closer than this to the scan's origin
+    /// (the CoM) are of something inside the body and mark no cell
+    /// ([`inside_the_body`]).
+    body_radius: f64,
 }
 
 impl Mapper {
@@ -133,6 +141,7 @@ impl Mapper {
                 )
             }),
             pendulum: capture::pendulum(&scenario.config),
+            body_radius: scenario.robot.body_radius,
         })
     }
 
@@ -151,17 +160,18 @@ impl Mapper {
         let (marks, free) = faces::fit_scan(&rays, origin, heading, p);
         let dt = self.last_update.map_or(0.0, |t| time - t);
         self.last_update = Some(time);
-        let kept_out: &[bool] = match self.movers.as_mut() {
+        let people: &[bool] = match self.movers.as_mut() {
             Some((movers, scan)) => {
                 *scan = movers.observe(time, &rays);
                 &scan.kept_out
             }
             None => &[],
         };
+        let kept_out = inside_the_body(&rays, origin, self.body_radius, people);
         let t0 = Instant::now();
         self.log
             .map
-            .update_scan(origin, heading, &marks, &free, dt, kept_out);
+            .update_scan(origin, heading, &marks, &free, dt, &kept_out);
         if let Some((_, scan)) = &self.movers {
             let r = self.log.map.resolution;
             for hull in &scan.obstacles {
@@ -360,4 +370,93 @@ fn path_blocked(grid: &OccupancyGrid, position: Vector2<f64>, subgoals: &[Vector
         prev = q;
     }
     false
+}
+
+/// The rays whose hits the map leaves out: those flagged in `kept_out` (a
+/// tracked person, [`crate::sense::movers`]; missing flags are `false`) and
+/// those whose hit is closer than `body_radius` (m) to the scan's `origin`
+/// (the CoM, m): a return from inside the robot's own body (a person who
+/// walked into it) is not a wall where the robot stands, as with Nav2's
+/// `footprint_clearing_enabled`. Such a ray still clears the cells in front of
+/// its hit, and the people tracker still sees it.
+pub(super) fn inside_the_body(
+    rays: &[Option<Vector2<f64>>],
+    origin: Vector2<f64>,
+    body_radius: f64,
+    kept_out: &[bool],
+) -> Vec<bool> {
+    rays.iter()
+        .enumerate()
+        .map(|(k, p)| {
+            kept_out.get(k).copied().unwrap_or(false)
+                || p.is_some_and(|p| (p - origin).norm() < body_radius)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scenario::{LoadOptions, load};
+    use crate::sense::CellState;
+    use crate::world::random::regular_polygon;
+
+    /// The occupied cells of `simple`'s LiDAR map (with the default humanoid's
+    /// body, radius 0.25 m) after one scan from the
+    /// origin with a person (radius 0.25 m) centred at (`x`, 0) and nothing
+    /// else, and whether any of them has its centre within the body radius.
+    fn scan_with_a_person_at(x: f64) -> (usize, bool) {
+        let sc = load(
+            "simple",
+            &LoadOptions::with_sets(&[("perception", "\"lidar\""), ("robot.body_radius", "0.25")]),
+        )
+        .unwrap();
+        let mut m = Mapper::new(&sc, false).unwrap();
+        let person = Polygon::new(&regular_polygon([x, 0.0], 0.25, 8, 0.0)).unwrap();
+        let origin = Vector2::zeros();
+        let hits = m.sense(origin, 0.0, 0.0, &[person]);
+        assert!(!hits.is_empty());
+        assert_eq!(sc.robot.body_radius, 0.25);
+        let map = &m.log.map;
+        let states = map.states();
+        let mut occupied = 0;
+        let mut in_body = false;
+        for (k, s) in states.iter().enumerate() {
+            if *s == CellState::Occupied {
+                occupied += 1;
+                let c = map.centre(k % map.width, k / map.width);
+                in_body |= c.norm() < sc.robot.body_radius;
+            }
+        }
+        (occupied, in_body)
+    }
+
+    #[test]
+    fn returns_from_inside_the_body_mark_no_cell() {
+        // The person overlaps the body (its near side 5 cm from the CoM):
+        // every hit is inside the body, none becomes a wall.
+        assert_eq!(scan_with_a_person_at(0.3), (0, false));
+        // A person clear of the body is mapped as before.
+        let (occupied, in_body) = scan_with_a_person_at(1.0);
+        assert!(occupied > 0 && !in_body, "{occupied} {in_body}");
+    }
+
+    #[test]
+    fn inside_the_body_keeps_the_flags_and_adds_the_near_hits() {
+        let o = Vector2::new(1.0, 1.0);
+        let rays = [
+            Some(Vector2::new(1.1, 1.0)),
+            Some(Vector2::new(2.0, 1.0)),
+            None,
+            Some(Vector2::new(3.0, 1.0)),
+        ];
+        assert_eq!(
+            inside_the_body(&rays, o, 0.25, &[false, false, false, true]),
+            [true, false, false, true]
+        );
+        assert_eq!(
+            inside_the_body(&rays, o, 0.25, &[]),
+            [true, false, false, false]
+        );
+    }
 }
