@@ -290,46 +290,53 @@ impl Line {
     }
 
     fn byte(&mut self, b: u8) {
-        if self.len < self.buf.len() {
-            self.buf[self.len] = b;
+        self.bytes(&[b]);
+    }
+
+    /// Appends `s` (what fits in the buffer). Every other writer goes
+    /// through this one copy (flash).
+    #[inline(never)]
+    fn bytes(&mut self, s: &[u8]) {
+        for (slot, &b) in self.buf.iter_mut().skip(self.len).zip(s) {
+            *slot = b;
             self.len += 1;
         }
     }
 
     fn str(&mut self, s: &str) -> &mut Self {
-        for &b in s.as_bytes() {
-            self.byte(b);
-        }
+        self.bytes(s.as_bytes());
         self
     }
 
+    #[inline(never)]
     fn dec(&mut self, mut v: u32) -> &mut Self {
         let mut digits = [0u8; 10];
-        let mut n = 0;
-        loop {
-            digits[n] = b'0' + (v % 10) as u8;
-            n += 1;
+        let mut n = digits.len();
+        for slot in digits.iter_mut().rev() {
+            *slot = b'0' + (v % 10) as u8;
+            n -= 1;
             v /= 10;
             if v == 0 {
                 break;
             }
         }
-        while n > 0 {
-            n -= 1;
-            self.byte(digits[n]);
-        }
+        self.bytes(digits.get(n..).unwrap_or(&[]));
         self
     }
 
     /// 16 lower-case hex digits.
+    #[inline(never)]
     fn hex(&mut self, v: u64) -> &mut Self {
-        for shift in (0..16).rev() {
-            let d = ((v >> (4 * shift)) & 0xF) as u8;
-            self.byte(if d < 10 { b'0' + d } else { b'a' + d - 10 });
+        let mut digits = [0u8; 16];
+        for (i, slot) in digits.iter_mut().enumerate() {
+            let d = ((v >> (60 - 4 * i)) & 0xF) as u8;
+            *slot = if d < 10 { b'0' + d } else { b'a' + d - 10 };
         }
+        self.bytes(&digits);
         self
     }
 
+    #[inline(never)]
     fn flush(&mut self, out: &mut hio::HostStream) {
         self.byte(b'\n');
         // (`get`: no slice-index panic path, whose message formatting would

@@ -125,6 +125,12 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
     }
 }
 
+// Cold and not inlined: its two call sites (an invalid input, a non-finite
+// output) are off the cycle path; one copy saves flash, and as a cold call
+// the optimiser lays the cycle path out for the other branches (firmware:
+// fewer instructions on every recorded cycle, firmware/README.md).
+#[cold]
+#[inline(never)]
 pub(super) fn hold<const N: usize, const NV: usize, const V: usize>(
     memory: &mut Memory<NV>,
     input: &CycleInput<'_, V>,
