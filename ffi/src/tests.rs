@@ -531,19 +531,7 @@ fn sentinel_rust() -> CycleOutput<LDCBF_HORIZON> {
     let mut c = RobotController::new(Config::default()).unwrap();
     let obstacles: [ConvexPolygon<LDCBF_MAX_VERTICES>; 0] = [];
     c.step(
-        &CycleInput {
-            com_position: Vector2::zeros(),
-            com_velocity: Vector2::zeros(),
-            heading: 0.0,
-            turning_rate: 0.0,
-            stance_foot: Vector2::zeros(),
-            stance_side: Side::Left,
-            time_in_step: 0.0,
-            goal: Vector2::new(1.0, 0.0),
-            obstacles: &obstacles,
-            obstacle_velocities: &[],
-            speed_cap: ldcbf_controller::NO_SPEED_CAP,
-        },
+        &ldcbf_controller::RecordedInput::at_rest(Vector2::new(1.0, 0.0)).input(&obstacles),
         None,
     )
 }

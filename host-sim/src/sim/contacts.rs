@@ -180,13 +180,14 @@ impl ContactMonitor {
                 continue;
             }
             let v_obs = map.velocities()[o.obstacle];
-            let in_body = self.body.iter().find(|b| b.0 == o.obstacle);
             let cause = if v_obs == Vector2::zeros() {
                 ContactCause::Robot
-            } else if let (true, Some(&(_, body_cause))) = (landed, in_body) {
-                body_cause
             } else if landed {
-                ContactCause::Robot
+                // A landing on a person over the body takes that contact's cause.
+                self.body
+                    .iter()
+                    .find(|b| b.0 == o.obstacle)
+                    .map_or(ContactCause::Robot, |&(_, body_cause)| body_cause)
             } else {
                 ContactCause::Obstacle
             };
@@ -403,28 +404,23 @@ mod tests {
     fn a_foot_landing_on_a_person_inside_the_body_takes_the_body_contacts_cause() {
         // The person walked into the standing body (theirs); at 1.2 s they are
         // at x = 0.4, over the body, and the next foot lands under them: theirs.
+        let parts = |contacts: &[Contact]| -> Vec<_> {
+            contacts.iter().map(|c| (c.part, c.cause)).collect()
+        };
         let contacts = landing_after(|_| [0.0, 0.0], [0.0, 0.0], 0.4);
-        let parts: Vec<_> = contacts.iter().map(|c| (c.part, c.cause)).collect();
-        assert_eq!(
-            parts,
-            [
-                (ContactPart::Body, ContactCause::Obstacle),
-                (ContactPart::Foot, ContactCause::Obstacle)
-            ],
-            "{contacts:?}"
-        );
+        let expected = [
+            (ContactPart::Body, ContactCause::Obstacle),
+            (ContactPart::Foot, ContactCause::Obstacle),
+        ];
+        assert_eq!(parts(&contacts), expected, "{contacts:?}");
         // The robot walked into the person at 0.3 m/s (its contact); the foot
         // landing on them is the robot's too.
         let contacts = landing_after(|t| [0.3 * t, 0.0], [0.3, 0.0], 0.6);
-        let parts: Vec<_> = contacts.iter().map(|c| (c.part, c.cause)).collect();
-        assert_eq!(
-            parts,
-            [
-                (ContactPart::Body, ContactCause::Robot),
-                (ContactPart::Foot, ContactCause::Robot)
-            ],
-            "{contacts:?}"
-        );
+        let expected = [
+            (ContactPart::Body, ContactCause::Robot),
+            (ContactPart::Foot, ContactCause::Robot),
+        ];
+        assert_eq!(parts(&contacts), expected, "{contacts:?}");
     }
 
     #[test]
