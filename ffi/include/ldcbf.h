@@ -443,6 +443,13 @@ typedef struct LdcbfConfig {
    * Primal feasibility tolerance of the solver, in (0, 1e-3).
    */
   double tol_primal;
+  /**
+   * 1: at an obstacle's vertex closest to the predicted CoM, the
+   * half-plane's normal is turned towards the edge normal that blocks the
+   * way to the goal least (for maps of grid cells); 0: the closest-point
+   * normal (the paper's).
+   */
+  uint8_t turn_vertex_normals;
 } LdcbfConfig;
 
 /**

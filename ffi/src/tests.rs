@@ -214,6 +214,7 @@ fn default_config_round_trips_to_the_rust_default() {
         body_radius: 0.25,
         foot_length: 0.22,
         foot_width: 0.10,
+        turn_vertex_normals: true,
         ..Config::default()
     };
     assert_eq!(LdcbfConfig::from(&rust).to_config().unwrap(), rust);

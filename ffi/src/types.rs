@@ -199,6 +199,11 @@ pub struct LdcbfConfig {
     pub warm_start: u8,
     /// Primal feasibility tolerance of the solver, in (0, 1e-3).
     pub tol_primal: f64,
+    /// 1: at an obstacle's vertex closest to the predicted CoM, the
+    /// half-plane's normal is turned towards the edge normal that blocks the
+    /// way to the goal least (for maps of grid cells); 0: the closest-point
+    /// normal (the paper's).
+    pub turn_vertex_normals: u8,
 }
 
 /// The measured state and the goal of one cycle (world frame).
@@ -374,6 +379,7 @@ impl From<&Config> for LdcbfConfig {
             capture_fraction: c.capture_fraction.unwrap_or(0.0),
             warm_start: u8::from(c.warm_start),
             tol_primal: c.tol_primal,
+            turn_vertex_normals: u8::from(c.turn_vertex_normals),
         }
     }
 }
@@ -385,6 +391,7 @@ impl LdcbfConfig {
         let foot = flag(self.foot_clearance_on, "foot_clearance_on")?;
         let capture = flag(self.capture_on, "capture_on")?;
         let warm = flag(self.warm_start, "warm_start")?;
+        let turn = flag(self.turn_vertex_normals, "turn_vertex_normals")?;
         Ok(Config {
             gravity: self.gravity,
             com_height: self.com_height,
@@ -411,6 +418,7 @@ impl LdcbfConfig {
             capture_fraction: capture.then_some(self.capture_fraction),
             warm_start: warm,
             tol_primal: self.tol_primal,
+            turn_vertex_normals: turn,
         })
     }
 }

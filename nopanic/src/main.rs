@@ -108,6 +108,7 @@ fn config(r: &[f64; 64]) -> Config {
         capture_fraction: if r[52] > 0.0 { Some(r[53]) } else { None },
         warm_start: r[49] > 0.0,
         tol_primal: r[50],
+        turn_vertex_normals: r[57] > 0.0,
     }
 }
 

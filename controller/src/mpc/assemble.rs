@@ -49,7 +49,14 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         // than vx_max: farther by the excess over the horizon), nearest first,
         // at most NOBS.
         let horizon = tau + N as f64 * t_step;
-        out.select_obstacles(&p0, cfg, horizon, obstacles, input.obstacle_velocities)?;
+        out.select_obstacles(
+            &p0,
+            &input.goal,
+            cfg,
+            horizon,
+            obstacles,
+            input.obstacle_velocities,
+        )?;
 
         // 4-5. Cost and rows.
         out.qp.clear();

@@ -89,6 +89,14 @@ pub struct Config {
     pub warm_start: bool,
     /// Primal feasibility tolerance of the solver (on unit-norm rows), m or m/s.
     pub tol_primal: f64,
+    /// At an obstacle's vertex closest to `p_0`, turn the half-plane's normal
+    /// from `(p_0 - c)/|p_0 - c|` towards the vertex's edge normal that blocks
+    /// the way to the goal least, keeping `p_0` at least
+    /// [`Config::barrier_margin`] from the half-plane (docs/maths.md §2.3).
+    /// `false` (the default) is the paper's closest-point normal; on a map of
+    /// grid cells (LiDAR) a one-cell piece in front of a wall otherwise gives a
+    /// half-plane across the way.
+    pub turn_vertex_normals: bool,
 }
 
 impl Default for Config {
@@ -119,6 +127,7 @@ impl Default for Config {
             capture_fraction: Some(0.92),
             warm_start: true,
             tol_primal: 1e-10,
+            turn_vertex_normals: false,
         }
     }
 }
@@ -173,6 +182,7 @@ impl Config {
         capture_fraction: None,
         warm_start: false,
         tol_primal: 0.0,
+        turn_vertex_normals: false,
     };
 
     /// This configuration with the iteration budgets (`max_iter`,

@@ -75,7 +75,7 @@ macro_rules! config_fields {
 }
 
 /// The number of [`Config`] fields.
-const FIELD_COUNT: usize = 25;
+const FIELD_COUNT: usize = 26;
 
 config_fields!(
     gravity: Real,
@@ -103,6 +103,7 @@ config_fields!(
     capture_fraction: Optional,
     warm_start: Flag,
     tol_primal: Real,
+    turn_vertex_normals: Flag,
 );
 
 #[cfg(test)]

@@ -56,6 +56,9 @@ pub struct ControllerOverrides {
     pub capture_fraction: Option<f64>,
     pub warm_start: Option<bool>,
     pub tol_primal: Option<f64>,
+    /// `Config::turn_vertex_normals`; unset: on with `perception = "lidar"`,
+    /// off otherwise (the paper's normal).
+    pub turn_vertex_normals: Option<bool>,
 }
 
 /// The robot's fields of [`Config`]: set in `[robot]`
@@ -97,7 +100,8 @@ impl ControllerOverrides {
             relax_bisections,
             max_gait_relaxation,
             warm_start,
-            tol_primal
+            tol_primal,
+            turn_vertex_normals
         );
         if let Some(r) = self.capture_fraction {
             c.capture_fraction = (r != 0.0).then_some(r);

@@ -9,6 +9,7 @@ use toml::Spanned;
 
 use super::parse::{RawObstacle, RawScenario, line_of};
 use super::{ControllerOverrides, Scenario, ScenarioError};
+use crate::sense::Perception;
 use crate::world::families;
 use crate::world::moving::parse_velocity;
 use crate::world::random::{random_obstacles, regular_polygon};
@@ -238,7 +239,13 @@ fn controller_config(
 ) -> Result<(Config, ControllerOverrides, RobotParams), ScenarioError> {
     let robot = raw.robot.get_ref().clone();
     let overrides = raw.controller.get_ref().clone();
-    let config = robot.apply(overrides.apply(Config::default()));
+    // On a map of grid cells the half-planes at vertices are turned
+    // (`Config::turn_vertex_normals`, docs/safety.md) unless the file says.
+    let base = Config {
+        turn_vertex_normals: *raw.perception.get_ref() == Perception::Lidar,
+        ..Config::default()
+    };
+    let config = robot.apply(overrides.apply(base));
     if let Err(e) = config.validate() {
         return Err(src.table_err("controller", e.field, e.requirement.into()));
     }
