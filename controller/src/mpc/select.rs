@@ -247,7 +247,7 @@ fn turned_normal<const V: usize>(
     }
     let to_goal = goal - p0;
     let len = crate::linalg::sqrt(to_goal.norm_squared());
-    if !(len > 1e-6) {
+    if len.is_nan() || len <= 1e-6 {
         return eta;
     }
     let d = to_goal / len;
@@ -282,7 +282,7 @@ fn turned_normal<const V: usize>(
     // Unit tangent from eta towards ne.
     let t = ne - eta * ne.dot(&eta);
     let tl = crate::linalg::sqrt(t.norm_squared());
-    if !(tl > 1e-12) {
+    if tl.is_nan() || tl <= 1e-12 {
         return eta;
     }
     let t = t / tl;
@@ -290,7 +290,7 @@ fn turned_normal<const V: usize>(
     // every turn `a` up to across the way (`eta(a)'d = 0`, below 90 degrees)
     // when `t'd > 0`; otherwise the turn would first block the way more.
     let (ed, td) = (eta.dot(&d), t.dot(&d));
-    if !(td > 0.0) {
+    if td.is_nan() || td <= 0.0 {
         return eta;
     }
     // The turn stops at the first of its three limits: the smallest angle,
