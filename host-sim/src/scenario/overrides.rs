@@ -56,7 +56,8 @@ pub struct ControllerOverrides {
     pub capture_fraction: Option<f64>,
     pub warm_start: Option<bool>,
     pub tol_primal: Option<f64>,
-    /// `Config::turn_vertex_normals`; unset: on with `perception = "lidar"`,
+    /// `Config::turn_vertex_normals`; unset: on with `perception = "lidar"`
+    /// and `planner = "rrt_star"` (the occupancy map and a planned path),
     /// off otherwise (the paper's normal).
     pub turn_vertex_normals: Option<bool>,
 }

@@ -172,17 +172,22 @@ fn random_family_is_seeded_and_keeps_start_and_goal_clear() {
 }
 
 /// `controller.turn_vertex_normals` is on with `perception = "lidar"` and
-/// off otherwise (the paper's normal), unless the file or `--set` says.
+/// `planner = "rrt_star"` (the occupancy map, walking to a planned path's
+/// subgoals) and off otherwise (the paper's normal), unless the file or
+/// `--set` says.
 #[test]
-fn vertex_normals_turn_with_lidar_unless_set() {
+fn vertex_normals_turn_on_the_map_with_a_plan_unless_set() {
     let set = LoadOptions::with_sets;
     let s = parse_str(OK, "t.toml", &LoadOptions::default()).unwrap();
     assert!(!s.config.turn_vertex_normals);
     let lidar = ("perception", "\"lidar\"");
     let s = parse_str(OK, "t.toml", &set(&[lidar])).unwrap();
+    assert!(!s.config.turn_vertex_normals);
+    let plan = ("planner", "\"rrt_star\"");
+    let s = parse_str(OK, "t.toml", &set(&[lidar, plan])).unwrap();
     assert!(s.config.turn_vertex_normals);
     let off = ("turn_vertex_normals", "false");
-    let s = parse_str(OK, "t.toml", &set(&[lidar, off])).unwrap();
+    let s = parse_str(OK, "t.toml", &set(&[lidar, plan, off])).unwrap();
     assert!(!s.config.turn_vertex_normals);
     let on = ("turn_vertex_normals", "true");
     let s = parse_str(OK, "t.toml", &set(&[on])).unwrap();

@@ -239,10 +239,13 @@ fn controller_config(
 ) -> Result<(Config, ControllerOverrides, RobotParams), ScenarioError> {
     let robot = raw.robot.get_ref().clone();
     let overrides = raw.controller.get_ref().clone();
-    // On a map of grid cells the half-planes at vertices are turned
-    // (`Config::turn_vertex_normals`, docs/safety.md) unless the file says.
+    // On the map of grid cells, walking to a planned path's subgoals, the
+    // half-planes at vertices are turned (`Config::turn_vertex_normals`,
+    // docs/safety.md) unless the file says.
+    let on_map = *raw.perception.get_ref() == Perception::Lidar
+        && *raw.planner.get_ref() == crate::plan::Planner::RrtStar;
     let base = Config {
-        turn_vertex_normals: *raw.perception.get_ref() == Perception::Lidar,
+        turn_vertex_normals: on_map,
         ..Config::default()
     };
     let config = robot.apply(overrides.apply(base));
