@@ -51,7 +51,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         let horizon = tau + N as f64 * t_step;
         out.select_obstacles(
             &p0,
-            &input.goal,
+            (&input.goal, theta0),
             cfg,
             horizon,
             obstacles,

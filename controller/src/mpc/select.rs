@@ -133,6 +133,10 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
     /// Each is linearised where it is now; its half-plane moves with the
     /// obstacle's velocity `velocities[index]` (at rest when `velocities` is
     /// empty), whose component along the normal is [`HalfPlane::rate`].
+    /// With [`Config::turn_vertex_normals`] the half-plane of an obstacle at
+    /// rest whose point closest to `p0` is a vertex is turned along the way
+    /// to `goal` (m, world), within what `heading` (rad, the body's at `p0`)
+    /// allows (`turned_normal`; the pair is the cycle's way).
     /// Writes `obstacles`, `n_obstacles` and `obstacles_truncated`.
     /// `Err(InputError::ObstacleVelocity)` when a selected obstacle's
     /// velocity is missing, not finite or faster than [`MAX_RATE`] (the
@@ -140,7 +144,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
     pub(super) fn select_obstacles<'o, const V: usize>(
         &mut self,
         p0: &Vector2<f64>,
-        goal: &Vector2<f64>,
+        (goal, heading): (&Vector2<f64>, f64),
         cfg: &Config,
         horizon: f64,
         obstacles: impl Iterator<Item = (usize, &'o ConvexPolygon<V>)>,
@@ -181,7 +185,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
             };
             // (A moving obstacle's rate is along the closest-point normal.)
             let eta = if cfg.turn_vertex_normals && rate == 0.0 {
-                turned_normal(p0, goal, poly, &cp, cfg.barrier_margin())
+                turned_normal(p0, goal, heading, poly, &cp, cfg.barrier_margin())
             } else {
                 cp.normal
             };
@@ -229,14 +233,18 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
 
 /// The half-plane's normal at a vertex `c` closest to `p0` (outside): of the
 /// supporting half-planes at `c` (normals in the vertex's normal cone), the
-/// one turned from `(p0 - c)/|p0 - c|` towards the edge normal that blocks the
-/// way to `goal` least, as far as that edge normal, or across the way (`eta'd
-/// = 0`), or until `p0` is `margin` from the half-plane, whichever comes
-/// first. Elsewhere (on an edge, inside, or moving away) the closest-point
-/// normal.
+/// one turned from `eta* = (p0 - c)/|p0 - c|` towards the edge normal that
+/// blocks the way to `goal` least (docs/maths.md §2.3). The turn stops at
+/// the first of: that edge normal; across the way to the goal (`eta'd = 0`);
+/// where `p0` would come within `margin` of the half-plane; and where the
+/// half-plane would block the way along `heading` (rad, the body's, where
+/// the robot's momentum goes) more than `eta*` does, or at all if `eta*`
+/// does not. Elsewhere (on an edge, inside, the goal's way not blocked, or
+/// a turn that would block it more at first) the closest-point normal.
 fn turned_normal<const V: usize>(
     p0: &Vector2<f64>,
     goal: &Vector2<f64>,
+    heading: f64,
     poly: &ConvexPolygon<V>,
     cp: &crate::geometry::ClosestPoint,
     margin: f64,
@@ -251,7 +259,7 @@ fn turned_normal<const V: usize>(
         return eta;
     }
     let d = to_goal / len;
-    if eta.dot(&d) >= 0.0 {
+    if eta.dot(&d).is_nan() || eta.dot(&d) >= 0.0 {
         return eta;
     }
     let verts = poly.vertices();
@@ -267,41 +275,57 @@ fn turned_normal<const V: usize>(
         let l = crate::linalg::sqrt(e.norm_squared());
         Vector2::new(e.y, -e.x) / l
     };
-    let prev = verts[(k + n - 1) % n];
-    let next = verts[(k + 1) % n];
-    let n_in = normal(&prev, &verts[k]);
-    let n_out = normal(&verts[k], &next);
+    let (Some(prev), Some(at), Some(next)) = (
+        verts.get((k + n - 1) % n),
+        verts.get(k),
+        verts.get((k + 1) % n),
+    ) else {
+        return eta;
+    };
+    let (n_in, n_out) = (normal(prev, at), normal(at, next));
     let ne = if n_in.dot(&d) >= n_out.dot(&d) {
         n_in
     } else {
         n_out
     };
-    if ne.dot(&d) <= eta.dot(&d) {
-        return eta;
-    }
-    // Unit tangent from eta towards ne.
+    // Unit tangent from eta towards ne: `eta(a) = cos a eta + sin a t`.
     let t = ne - eta * ne.dot(&eta);
     let tl = crate::linalg::sqrt(t.norm_squared());
     if tl.is_nan() || tl <= 1e-12 {
         return eta;
     }
     let t = t / tl;
-    // `eta(a)'d = cos(a) eta'd + sin(a) t'd` grows from `eta'd < 0` for
-    // every turn `a` up to across the way (`eta(a)'d = 0`, below 90 degrees)
-    // when `t'd > 0`; otherwise the turn would first block the way more.
+    // `eta(a)'d = cos a eta'd + sin a t'd` must grow from `eta'd < 0`.
     let (ed, td) = (eta.dot(&d), t.dot(&d));
     if td.is_nan() || td <= 0.0 {
         return eta;
     }
-    // The turn stops at the first of its three limits: the smallest angle,
-    // the largest cosine.
-    let cos_edge = ne.dot(&eta);
-    let cos_across = td / crate::linalg::sqrt(ed * ed + td * td);
+    // The four limits, as angles of turn (rad, each >= 0).
+    let edge = libm::atan2(ne.dot(&t), ne.dot(&eta));
+    let across = libm::atan2(td, ed) - core::f64::consts::FRAC_PI_2;
     let rho = cp.signed_distance;
-    let cos_margin = if rho > margin { margin / rho } else { 1.0 };
-    let c = cos_edge.max(cos_across).max(cos_margin).min(1.0);
-    let s = crate::linalg::sqrt((1.0 - c * c).max(0.0));
-    let out = eta * c + t * s;
+    let keep = if rho > margin {
+        libm::acos(margin / rho)
+    } else {
+        0.0
+    };
+    // Along the heading `u`: `eta(a)'u = R cos(a - alpha) >= min(eta'u, 0)`
+    // holds at `a = 0` and up to `alpha + acos(min(eta'u, 0) / R)`.
+    let (sh, ch) = libm::sincos(heading);
+    let u = Vector2::new(ch, sh);
+    let (eu, tu) = (eta.dot(&u), t.dot(&u));
+    let r = crate::linalg::sqrt(eu * eu + tu * tu);
+    let momentum = if r > 1e-12 {
+        libm::atan2(tu, eu) + libm::acos((eu.min(0.0) / r).clamp(-1.0, 1.0))
+    } else {
+        f64::INFINITY
+    };
+    let a = edge.min(across).min(keep).min(momentum);
+    if a.is_nan() || a <= 0.0 {
+        return eta;
+    }
+    let (sa, ca) = libm::sincos(a);
+    let out = eta * ca + t * sa;
     out / crate::linalg::sqrt(out.norm_squared())
 }
 
@@ -329,7 +353,7 @@ mod tests {
         let cp = closest_point_point_polygon(&p0, &bump);
         assert_eq!(cp.location, PointLocation::Outside);
         let margin = 0.3506;
-        let eta = turned_normal(&p0, &goal, &bump, &cp, margin);
+        let eta = turned_normal(&p0, &goal, 0.0, &bump, &cp, margin);
         // p0 keeps the margin from the turned half-plane, exactly.
         assert!((eta.dot(&(p0 - cp.point)) - margin).abs() < 1e-12, "{eta}");
         let ahead = Vector2::new(0.3, 0.0);
@@ -339,11 +363,14 @@ mod tests {
         assert!(drop_turned < 0.02, "{drop_turned}");
         // Moving away (goal behind), or on an edge: the closest-point normal.
         let back = Vector2::new(-5.0, 0.0);
-        assert_eq!(turned_normal(&p0, &back, &bump, &cp, margin), cp.normal);
+        assert_eq!(
+            turned_normal(&p0, &back, 0.0, &bump, &cp, margin),
+            cp.normal
+        );
         let beside = Vector2::new(1.2375, 0.0);
         let cp2 = closest_point_point_polygon(&beside, &bump);
         assert_eq!(
-            turned_normal(&beside, &goal, &bump, &cp2, margin),
+            turned_normal(&beside, &goal, 0.0, &bump, &cp2, margin),
             cp2.normal
         );
     }
@@ -360,13 +387,14 @@ mod tests {
             p in (-3.0f64..3.0, -3.0f64..3.0),
             g in (-5.0f64..5.0, -5.0f64..5.0),
             margin in 0.0f64..1.0,
+            heading in -4.0f64..4.0,
         ) {
             let pts: heapless::Vec<[f64; 2], 8> = pts.iter().map(|&(x, y)| [x, y]).collect();
             let Ok(poly) = ConvexPolygon::<8>::hull(&pts) else { return Ok(()) };
             let p0 = Vector2::new(p.0, p.1);
             let goal = Vector2::new(g.0, g.1);
             let cp = closest_point_point_polygon(&p0, &poly);
-            let eta = turned_normal(&p0, &goal, &poly, &cp, margin);
+            let eta = turned_normal(&p0, &goal, heading, &poly, &cp, margin);
             prop_assert!((eta.norm() - 1.0).abs() < 1e-9, "{eta}");
             for v in poly.vertices() {
                 prop_assert!(eta.dot(&(v - cp.point)) <= 1e-9, "vertex {v} beyond {eta}");
@@ -376,6 +404,8 @@ mod tests {
                 prop_assert!(eta.dot(&(p0 - cp.point)) >= keep - 1e-9);
                 let d = goal - p0;
                 prop_assert!(eta.dot(&d) >= cp.normal.dot(&d) - 1e-9 * (1.0 + d.norm()));
+                let u = Vector2::new(heading.cos(), heading.sin());
+                prop_assert!(eta.dot(&u) >= cp.normal.dot(&u).min(0.0) - 1e-9);
             } else {
                 prop_assert_eq!(eta, cp.normal);
             }
