@@ -91,8 +91,8 @@ pub struct Config {
     pub tol_primal: f64,
     /// At an obstacle's vertex closest to `p_0`, turn the half-plane's normal
     /// from `(p_0 - c)/|p_0 - c|` towards the vertex's edge normal that blocks
-    /// the way to the goal least, keeping `p_0` at least
-    /// [`Config::barrier_margin`] from the half-plane (docs/maths.md §2.3).
+    /// the way to the goal least, keeping at least half of `p_0`'s clearance
+    /// beyond [`Config::barrier_margin`] (docs/maths.md §2.3).
     /// `false` (the default) is the paper's closest-point normal; on a map of
     /// grid cells (LiDAR) a one-cell piece in front of a wall otherwise gives a
     /// half-plane across the way.

@@ -236,7 +236,8 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
 /// one turned from `eta* = (p0 - c)/|p0 - c|` towards the edge normal that
 /// blocks the way to `goal` least (docs/maths.md §2.3). The turn stops at
 /// the first of: that edge normal; across the way to the goal (`eta'd = 0`);
-/// where `p0` would come within `margin` of the half-plane; and where the
+/// where `p0` would keep less than half of its clearance beyond `margin`
+/// (its distance to `c` minus `margin`); and where the
 /// half-plane would block the way along `heading` (rad, the body's, where
 /// the robot's momentum goes) more than `eta*` does, or at all if `eta*`
 /// does not. Elsewhere (on an edge, inside, the goal's way not blocked, or
@@ -304,8 +305,9 @@ fn turned_normal<const V: usize>(
     let edge = libm::atan2(ne.dot(&t), ne.dot(&eta));
     let across = libm::atan2(td, ed) - core::f64::consts::FRAC_PI_2;
     let rho = cp.signed_distance;
+    // `p0` keeps at least half of its clearance beyond the margin.
     let keep = if rho > margin {
-        libm::acos(margin / rho)
+        libm::acos((0.5 * (margin + rho)) / rho)
     } else {
         0.0
     };
@@ -342,9 +344,10 @@ mod tests {
     /// A one-cell piece just in front of a corridor's right wall, 0.33 m
     /// ahead of the CoM, with the goal straight ahead (corridor 209 of the
     /// second unseen set): the closest-point normal points back at the robot
-    /// (a half-plane across the corridor); turned, it is nearly the cell's
-    /// top-face normal, across the way no more than the margin requires, and
-    /// walking 0.3 m ahead costs a few millimetres of `h` instead of 0.2 m.
+    /// (a half-plane across the corridor); turned until the CoM keeps half
+    /// of its clearance beyond the margin, 13 degrees from the cell's
+    /// top-face normal, walking 0.3 m ahead costs 7 cm of `h` instead of
+    /// 20 cm.
     #[test]
     fn a_cell_ahead_gives_a_half_plane_along_the_way() {
         let p0 = Vector2::new(0.9, 0.0);
@@ -354,13 +357,15 @@ mod tests {
         assert_eq!(cp.location, PointLocation::Outside);
         let margin = 0.3506;
         let eta = turned_normal(&p0, &goal, 0.0, &bump, &cp, margin);
-        // p0 keeps the margin from the turned half-plane, exactly.
-        assert!((eta.dot(&(p0 - cp.point)) - margin).abs() < 1e-12, "{eta}");
+        // p0 keeps half of its clearance beyond the margin, exactly.
+        let rho = cp.signed_distance;
+        let kept = eta.dot(&(p0 - cp.point));
+        assert!((kept - 0.5 * (margin + rho)).abs() < 1e-12, "{eta}");
         let ahead = Vector2::new(0.3, 0.0);
         let drop_closest = -cp.normal.dot(&ahead);
         let drop_turned = -eta.dot(&ahead);
         assert!(drop_closest > 0.2, "{drop_closest}");
-        assert!(drop_turned < 0.02, "{drop_turned}");
+        assert!(drop_turned < 0.07, "{drop_turned}");
         // Moving away (goal behind), or on an edge: the closest-point normal.
         let back = Vector2::new(-5.0, 0.0);
         assert_eq!(
@@ -376,11 +381,12 @@ mod tests {
     }
 
     proptest! {
-        /// Whatever the polygon, point and goal: the turned normal is a unit
-        /// vector whose half-plane at `c` holds the whole polygon (every
-        /// vertex on its far side), keeps `p0` at least `min(distance,
-        /// margin)` from it, and never blocks the way to the goal more than
-        /// the closest-point normal.
+        /// Whatever the polygon, point, goal and heading: the turned normal
+        /// is a unit vector whose half-plane at `c` holds the whole polygon
+        /// (every vertex on its far side), keeps `p0` at least `min(d, (d +
+        /// margin) / 2)` from it (`d` its distance to the polygon), and
+        /// blocks neither the way to the goal more than the closest-point
+        /// normal nor the heading more than `min(eta*'u, 0)`.
         #[test]
         fn the_turned_half_plane_still_separates(
             pts in proptest::collection::vec((-1.0f64..1.0, -1.0f64..1.0), 3..8),
@@ -400,7 +406,8 @@ mod tests {
                 prop_assert!(eta.dot(&(v - cp.point)) <= 1e-9, "vertex {v} beyond {eta}");
             }
             if cp.location == PointLocation::Outside {
-                let keep = cp.signed_distance.min(margin);
+                let rho = cp.signed_distance;
+                let keep = rho.min(0.5 * (margin + rho));
                 prop_assert!(eta.dot(&(p0 - cp.point)) >= keep - 1e-9);
                 let d = goal - p0;
                 prop_assert!(eta.dot(&d) >= cp.normal.dot(&d) - 1e-9 * (1.0 + d.norm()));
