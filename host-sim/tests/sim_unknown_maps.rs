@@ -238,8 +238,7 @@ fn narrow_corridors_at_delta_0_keep_off_the_walls() {
 /// way by up to 0.29 m and the body touched a wall in each (209: -128 mm).
 /// With the half-planes at vertices turned along the way
 /// (`Config::turn_vertex_normals`, on with LiDAR and a planner;
-/// docs/safety.md) none touches (209 ends at the time limit before a
-/// stretch seen too narrow at delta = 0.05).
+/// docs/safety.md) none touches.
 #[test]
 #[cfg_attr(
     debug_assertions,
