@@ -85,6 +85,13 @@ fn norm(v: &Vector2<f64>) -> f64 {
     crate::linalg::sqrt(v.norm_squared())
 }
 
+/// The outward unit normal of the edge from `a` to `b` of a counter-clockwise
+/// polygon.
+fn outward_normal(a: &Vector2<f64>, b: &Vector2<f64>) -> Vector2<f64> {
+    let e = b - a;
+    Vector2::new(e.y, -e.x) / norm(&e)
+}
+
 fn cross(a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
     a.x * b.y - a.y * b.x
 }
@@ -299,6 +306,24 @@ impl<const V: usize> ConvexPolygon<V> {
     pub fn contains(&self, p: &Vector2<f64>) -> bool {
         closest_point_point_polygon(p, self).signed_distance <= ON_BOUNDARY_TOL
     }
+
+    /// The outward unit normals of the two edges that meet at the vertex at
+    /// `c` (within [`DUPLICATE_TOL`]): the edge that ends there, then the one
+    /// that starts there (the vertex's normal cone lies between them). `None`
+    /// when `c` is not a vertex.
+    pub(crate) fn edge_normals_at(&self, c: &Vector2<f64>) -> Option<(Vector2<f64>, Vector2<f64>)> {
+        let verts = self.vertices();
+        let n = verts.len();
+        let k = verts
+            .iter()
+            .position(|v| (v - c).norm_squared() < DUPLICATE_TOL * DUPLICATE_TOL)?;
+        let (prev, at, next) = (
+            verts.get((k + n - 1) % n)?,
+            verts.get(k)?,
+            verts.get((k + 1) % n)?,
+        );
+        Some((outward_normal(prev, at), outward_normal(at, next)))
+    }
 }
 
 /// Where the query point lies relative to the polygon.
@@ -377,12 +402,9 @@ pub fn closest_point_point_polygon<const V: usize>(
     let dist = crate::linalg::sqrt(best_d2);
     // Edge `i` runs from vertex `i` to vertex `i + 1` (indices modulo `n >= 1`;
     // both always exist, the zero vector is never used).
-    let edge_normal = |i: usize| {
-        let e = match (verts.get(i % n), verts.get((i + 1) % n)) {
-            (Some(a), Some(b)) => b - a,
-            _ => Vector2::zeros(),
-        };
-        Vector2::new(e.y, -e.x) / norm(&e) // outward for counter-clockwise order
+    let edge_normal = |i: usize| match (verts.get(i % n), verts.get((i + 1) % n)) {
+        (Some(a), Some(b)) => outward_normal(a, b),
+        _ => Vector2::zeros(),
     };
     if dist <= ON_BOUNDARY_TOL {
         let mut nrm = edge_normal(best_edge);

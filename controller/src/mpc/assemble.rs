@@ -49,14 +49,12 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         // than vx_max: farther by the excess over the horizon), nearest first,
         // at most NOBS.
         let horizon = tau + N as f64 * t_step;
-        out.select_obstacles(
-            &p0,
-            (&input.goal, theta0),
-            cfg,
-            horizon,
-            obstacles,
-            input.obstacle_velocities,
-        )?;
+        let way = cfg.turn_vertex_normals.then_some(super::select::Way {
+            goal: &input.goal,
+            heading: theta0,
+            margin: self.barrier_margin,
+        });
+        out.select_obstacles(&p0, way, cfg, horizon, obstacles, input.obstacle_velocities)?;
 
         // 4-5. Cost and rows.
         out.qp.clear();

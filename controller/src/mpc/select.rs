@@ -133,10 +133,9 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
     /// Each is linearised where it is now; its half-plane moves with the
     /// obstacle's velocity `velocities[index]` (at rest when `velocities` is
     /// empty), whose component along the normal is [`HalfPlane::rate`].
-    /// With [`Config::turn_vertex_normals`] the half-plane of an obstacle at
-    /// rest whose point closest to `p0` is a vertex is turned along the way
-    /// to `goal` (m, world), within what `heading` (rad, the body's at `p0`)
-    /// allows (`turned_normal`; the pair is the cycle's way).
+    /// With `turn` ([`Config::turn_vertex_normals`]) the half-plane of an
+    /// obstacle at rest whose point closest to `p0` is a vertex is turned
+    /// along the cycle's [`Way`] (`turned_normal`).
     /// Writes `obstacles`, `n_obstacles` and `obstacles_truncated`.
     /// `Err(InputError::ObstacleVelocity)` when a selected obstacle's
     /// velocity is missing, not finite or faster than [`MAX_RATE`] (the
@@ -144,7 +143,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
     pub(super) fn select_obstacles<'o, const V: usize>(
         &mut self,
         p0: &Vector2<f64>,
-        (goal, heading): (&Vector2<f64>, f64),
+        turn: Option<Way<'_>>,
         cfg: &Config,
         horizon: f64,
         obstacles: impl Iterator<Item = (usize, &'o ConvexPolygon<V>)>,
@@ -184,10 +183,9 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
                 cp.normal.dot(u) + 0.0
             };
             // (A moving obstacle's rate is along the closest-point normal.)
-            let eta = if cfg.turn_vertex_normals && rate == 0.0 {
-                turned_normal(p0, goal, heading, poly, &cp, cfg.barrier_margin())
-            } else {
-                cp.normal
+            let eta = match &turn {
+                Some(w) if rate == 0.0 => turned_normal(p0, w.goal, w.heading, poly, &cp, w.margin),
+                _ => cp.normal,
             };
             let cand = ActiveObstacle {
                 index,
@@ -231,6 +229,18 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
     }
 }
 
+/// Where a cycle goes, for turning the half-planes at vertices
+/// ([`Config::turn_vertex_normals`]).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Way<'a> {
+    /// The cycle's goal (or subgoal), m, world.
+    pub goal: &'a Vector2<f64>,
+    /// The body's heading at `p_0`, rad.
+    pub heading: f64,
+    /// [`Config::barrier_margin`], m (the controller's, computed once).
+    pub margin: f64,
+}
+
 /// The half-plane's normal at a vertex `c` closest to `p0` (outside): of the
 /// supporting half-planes at `c` (normals in the vertex's normal cone), the
 /// one turned from `eta* = (p0 - c)/|p0 - c|` towards the edge normal that
@@ -260,30 +270,13 @@ fn turned_normal<const V: usize>(
         return eta;
     }
     let d = to_goal / len;
-    if eta.dot(&d).is_nan() || eta.dot(&d) >= 0.0 {
+    let ed = eta.dot(&d);
+    if ed.is_nan() || ed >= 0.0 {
         return eta;
     }
-    let verts = poly.vertices();
-    let n = verts.len();
-    let Some(k) = verts
-        .iter()
-        .position(|v| (v - cp.point).norm_squared() < 1e-18)
-    else {
+    let Some((n_in, n_out)) = poly.edge_normals_at(&cp.point) else {
         return eta;
     };
-    let normal = |a: &Vector2<f64>, b: &Vector2<f64>| {
-        let e = b - a;
-        let l = crate::linalg::sqrt(e.norm_squared());
-        Vector2::new(e.y, -e.x) / l
-    };
-    let (Some(prev), Some(at), Some(next)) = (
-        verts.get((k + n - 1) % n),
-        verts.get(k),
-        verts.get((k + 1) % n),
-    ) else {
-        return eta;
-    };
-    let (n_in, n_out) = (normal(prev, at), normal(at, next));
     let ne = if n_in.dot(&d) >= n_out.dot(&d) {
         n_in
     } else {
@@ -297,7 +290,7 @@ fn turned_normal<const V: usize>(
     }
     let t = t / tl;
     // `eta(a)'d = cos a eta'd + sin a t'd` must grow from `eta'd < 0`.
-    let (ed, td) = (eta.dot(&d), t.dot(&d));
+    let td = t.dot(&d);
     if td.is_nan() || td <= 0.0 {
         return eta;
     }

@@ -9,7 +9,6 @@ use toml::Spanned;
 
 use super::parse::{RawObstacle, RawScenario, line_of};
 use super::{ControllerOverrides, Scenario, ScenarioError};
-use crate::sense::Perception;
 use crate::world::families;
 use crate::world::moving::parse_velocity;
 use crate::world::random::{random_obstacles, regular_polygon};
@@ -242,10 +241,11 @@ fn controller_config(
     // On the map of grid cells, walking to a planned path's subgoals, the
     // half-planes at vertices are turned (`Config::turn_vertex_normals`,
     // docs/safety.md) unless the file says.
-    let on_map = *raw.perception.get_ref() == Perception::Lidar
-        && *raw.planner.get_ref() == crate::plan::Planner::RrtStar;
     let base = Config {
-        turn_vertex_normals: on_map,
+        turn_vertex_normals: raw
+            .planner
+            .get_ref()
+            .plans_on_map(*raw.perception.get_ref()),
         ..Config::default()
     };
     let config = robot.apply(overrides.apply(base));
