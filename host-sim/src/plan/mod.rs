@@ -91,12 +91,6 @@ impl Planner {
             Planner::RrtStar => "rrt_star",
         }
     }
-
-    /// Whether this planner with `perception` plans on the perceived map
-    /// ([`on_map`]: RRT* with LiDAR, the occupancy map's mode).
-    pub fn plans_on_map(self, perception: crate::sense::Perception) -> bool {
-        self == Planner::RrtStar && perception == crate::sense::Perception::Lidar
-    }
 }
 
 /// RRT* settings: the scenario's `[rrt_star]` table. Lengths in metres.

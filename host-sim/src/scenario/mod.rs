@@ -132,6 +132,12 @@ pub use overrides::{
 use parse::{RawScenario, apply_set, toml_error};
 use validate::validate;
 
+/// Whether `planner` with `perception` plans on the perceived map
+/// ([`crate::plan::on_map`]: RRT* with LiDAR, the occupancy map's mode).
+pub fn plans_on_map(planner: crate::plan::Planner, perception: crate::sense::Perception) -> bool {
+    planner == crate::plan::Planner::RrtStar && perception == crate::sense::Perception::Lidar
+}
+
 /// The paper's random test as a ready scenario: start (0, 0) heading 0, goal
 /// (10, 10), [`RandomParams::default`] obstacles from `seed`, default controller.
 /// For batch evaluations that do not want to read `scenarios/random.toml`.

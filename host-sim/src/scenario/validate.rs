@@ -242,10 +242,7 @@ fn controller_config(
     // half-planes at vertices are turned (`Config::turn_vertex_normals`,
     // docs/safety.md) unless the file says.
     let base = Config {
-        turn_vertex_normals: raw
-            .planner
-            .get_ref()
-            .plans_on_map(*raw.perception.get_ref()),
+        turn_vertex_normals: super::plans_on_map(*raw.planner.get_ref(), *raw.perception.get_ref()),
         ..Config::default()
     };
     let config = robot.apply(overrides.apply(base));

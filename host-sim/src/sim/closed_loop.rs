@@ -121,7 +121,7 @@ impl<'s, B: QpBackend<NV, NC> + Clone> Loop<'s, B> {
             MovingMap::new(&scenario.obstacles, &scenario.velocities).map_err(SimError::Map)?;
         let control_index = (scenario.perception == Perception::Known && world.is_static())
             .then(|| world.rest_index().clone());
-        let on_map = scenario.planner.plans_on_map(scenario.perception);
+        let on_map = crate::scenario::plans_on_map(scenario.planner, scenario.perception);
         let navigation = global_plan(scenario, &world, on_map);
         let mapper = match scenario.perception {
             Perception::Lidar => {
