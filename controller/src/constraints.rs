@@ -105,6 +105,7 @@ use nalgebra::{ArrayStorage, SMatrix, SVector, Vector2};
 
 use crate::lip::Lip;
 use crate::qp::DenseQp;
+use crate::reach::Reach;
 
 /// Kind of a constraint row; see the module docs for the formulas.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -471,6 +472,10 @@ pub struct HalfPlane {
     /// rest. The half-plane at time `t` from the input is the one through
     /// `c + u t`, the same normal.
     pub rate: f64,
+    /// What is known of the obstacle's velocity ([`Reach`]): with a spread,
+    /// the half-plane at time `t` is moved by [`Reach::shift`] instead (it
+    /// holds every position the obstacle can reach by then).
+    pub reach: Reach,
 }
 
 impl HalfPlane {
@@ -486,10 +491,34 @@ impl HalfPlane {
         self.h(p, delta) - self.shift(t)
     }
 
-    /// `rate t` (m), exactly `+0` when `rate` is 0 (of either sign), so that
-    /// subtracting it changes no bit of a static row.
+    /// How far the obstacle moves into the safe side by time `t` (m): `rate
+    /// t`, exactly `+0` when `rate` is 0 (of either sign), so that
+    /// subtracting it changes no bit of a static row; with an uncertain
+    /// velocity the farthest its reachable set gets, [`Reach::shift`].
     pub(crate) fn shift(&self, t: f64) -> f64 {
-        if self.rate == 0.0 { 0.0 } else { self.rate * t }
+        if self.reach.is_uncertain() {
+            self.reach.shift(self.rate, t)
+        } else if self.rate == 0.0 {
+            0.0
+        } else {
+            self.rate * t
+        }
+    }
+
+    /// The largest [`HalfPlane::shift`] over the times `[t0, t1]` (s), or a
+    /// bound above it (m): a foot that stands through them must clear it.
+    pub(crate) fn shift_over(&self, t0: f64, t1: f64) -> f64 {
+        if self.reach.is_uncertain() {
+            self.reach.shift_over(self.rate, (t0, t1))
+        } else {
+            self.shift(t0).max(self.shift(t1))
+        }
+    }
+
+    /// Whether the obstacle may move: a nonzero `rate` or an uncertain
+    /// velocity ([`Reach::is_uncertain`]).
+    pub fn moves(&self) -> bool {
+        self.rate != 0.0 || self.reach.is_uncertain()
     }
 }
 
@@ -559,7 +588,7 @@ pub fn push_foot_row<const N: usize, const NV: usize, const NC: usize>(
 ) -> Result<(), ()> {
     let (t0, t1) = step.times;
     let (w, f_const) = model.foot(step.k, &step.p0, &step.v0);
-    let motion = hp.shift(t0).max(hp.shift(t1));
+    let motion = hp.shift_over(t0, t1);
     push_row(
         qp,
         &hp.eta,
@@ -769,6 +798,7 @@ mod tests {
             c: Vector2::new(1.0, 1.0),
             eta: Vector2::new(-0.6, -0.8),
             rate: 0.0,
+            reach: Reach::NONE,
         };
         let (gamma, delta) = (0.3, 0.2);
         let at = |k| StepSpan {

@@ -125,9 +125,12 @@ class Controller:
         goal: _ArrayLike,
         obstacles: Optional[Sequence[_ArrayLike]] = None,
         obstacle_velocities: Optional[_ArrayLike] = None,
+        obstacle_velocity_radii: Optional[_ArrayLike] = None,
     ) -> _StepOutput:
         """One control cycle; ``obstacles`` are convex ``(k, 2)`` vertex arrays,
-        ``obstacle_velocities`` their velocities ``(n, 2)`` in m/s (None: at rest)."""
+        ``obstacle_velocities`` their velocities ``(n, 2)`` in m/s (None: at rest),
+        ``obstacle_velocity_radii`` their velocity uncertainty radii ``(n,)`` in m/s
+        (None: all 0, velocities known)."""
 
 def default_config() -> Dict[str, Any]:
     """The controller's defaults (the paper's Table I, a point robot)."""

@@ -167,6 +167,24 @@ pub(crate) fn velocities(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<Vector2
         .collect())
 }
 
+/// The obstacles' velocity uncertainty radii (`(n,)`, m/s): empty for
+/// `None` or an empty array (every radius 0).
+pub(crate) fn radii(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<f64>> {
+    const FIELD: &str = "obstacle_velocity_radii";
+    let Some(obj) = obj.filter(|o| !o.is_none()) else {
+        return Ok(Vec::new());
+    };
+    let (shape, d) = float_array(obj, FIELD)?;
+    if shape.len() != 1 {
+        return Err(arg_err(
+            obj.py(),
+            FIELD,
+            format!("expected one radius per obstacle, shape (n,), got shape {shape:?}"),
+        ));
+    }
+    Ok(d)
+}
+
 // ------------------------------------------------------------------ arrays out
 
 pub(crate) fn arr1<'py>(py: Python<'py>, v: Vec<f64>) -> Bound<'py, PyArray1<f64>> {

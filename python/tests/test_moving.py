@@ -116,3 +116,30 @@ def test_bad_velocities_are_the_controllers_answer():
 def test_bad_velocity_shapes_name_the_argument(bad):
     with pytest.raises(ldcbf_nav.ArgumentError, match="obstacle_velocities"):
         Controller().step(**START, obstacle_velocities=bad)
+
+
+def test_velocity_radii_widen_the_barrier_and_bad_ones_are_the_controllers_answer():
+    """`obstacle_velocity_radii`: zeros (or None) are the known velocities bit
+    for bit; a radius moves the plan (the set the person can reach); a NaN,
+    negative or miscounted radius is an input error with the hold command."""
+    ctl = Controller()
+    v = [[0.0, 0.0]]
+    known = ctl.step(**START, obstacle_velocities=v)
+    ctl.reset()
+    zeros = ctl.step(**START, obstacle_velocities=v, obstacle_velocity_radii=[0.0])
+    assert zeros["foot_target"].tobytes() == known["foot_target"].tobytes()
+    ctl.reset()
+    wide = ctl.step(**START, obstacle_velocities=v, obstacle_velocity_radii=[1.5])
+    assert wide["status"] != "invalid_input"
+    assert wide["plan"]["states"].tobytes() != known["plan"]["states"].tobytes()
+    for bad, name in (
+        ([math.nan], "obstacle_velocity_radius"),
+        ([-0.1], "obstacle_velocity_radius"),
+        ([0.1, 0.2], "obstacle_velocity_radius_count"),
+    ):
+        out = Controller().step(**START, obstacle_velocities=v, obstacle_velocity_radii=bad)
+        assert out["status"] == "invalid_input"
+        assert out["input_error"] == name
+        assert out["info"]["source"] == "hold"
+    with pytest.raises(ldcbf_nav.ArgumentError, match="obstacle_velocity_radii"):
+        Controller().step(**START, obstacle_velocity_radii=[[0.1]])

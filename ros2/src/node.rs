@@ -141,6 +141,7 @@ pub fn input_of<'a>(
         obstacles,
         // The known map is at rest.
         obstacle_velocities: &[],
+        obstacle_velocity_radii: &[],
         speed_cap: ldcbf_controller::NO_SPEED_CAP,
     }
 }

@@ -73,6 +73,7 @@
 //! noise_position = 0.0     # m, std. dev. of the measured CoM position per world axis
 //! noise_velocity = 0.0     # m/s, std. dev. of the measured CoM velocity per world axis
 //! noise_heading = 0.0      # rad, std. dev. of the measured heading
+//! velocity_error = 0.0     # m/s, known velocities handed over this wrong (and this uncertain)
 //! ```
 //!
 //! `--set disturbance.<field>=value` sets one of them (e.g.

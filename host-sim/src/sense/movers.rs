@@ -52,7 +52,7 @@
 //! on.
 
 use ldcbf_controller::closest_point_point_polygon;
-use ldcbf_controller::nalgebra::Vector2;
+use ldcbf_controller::nalgebra::{Matrix2, Vector2};
 
 use super::LidarParams;
 use super::dbscan::{dbscan, members};
@@ -70,6 +70,51 @@ pub struct MoverScan {
     pub obstacles: Vec<Polygon>,
     /// The velocity of each of `obstacles`, m/s (zero while tentative).
     pub velocities: Vec<Vector2<f64>>,
+    /// The velocity uncertainty radius of each of `obstacles`, m/s, world
+    /// frame: the true velocity lies within it of `velocities[i]`, in any
+    /// direction (the controller's
+    /// `ldcbf_controller::CycleInput::obstacle_velocity_radii`). Filled by
+    /// [`velocity_radius`]: [`WALKING_SPEED`] while tentative, the track's
+    /// covariance when moving or coasting.
+    pub velocity_radii: Vec<f64>,
+}
+
+/// The velocity uncertainty radius of a cluster whose track is not
+/// confirmed yet (or was just found again), m/s: it is handed over at rest
+/// and may walk off at a brisk walking speed in any direction.
+pub const WALKING_SPEED: f64 = 1.5;
+
+/// How many standard deviations of the track's velocity estimate the
+/// radius of a moving track spans ([`velocity_radius`]).
+pub const VELOCITY_SIGMAS: f64 = 3.0;
+
+/// The velocity uncertainty radius (m/s) handed over with a cluster whose
+/// track is in `motion` with velocity covariance `cov_v` (the 2x2 velocity
+/// block of the track's Kalman covariance, (m/s)^2): [`WALKING_SPEED`]
+/// while tentative; when moving, [`VELOCITY_SIGMAS`] standard deviations
+/// along the covariance's major axis (`sqrt` of its largest eigenvalue), at
+/// most [`WALKING_SPEED`]; 0 at rest (in the map, not handed over). A
+/// simple rule: the tracker's own bound replaces it when it states one.
+pub fn velocity_radius(motion: &Motion, cov_v: &Matrix2<f64>) -> f64 {
+    match motion {
+        Motion::AtRest => 0.0,
+        Motion::Tentative => WALKING_SPEED,
+        Motion::Moving(_) => {
+            // Largest eigenvalue of a symmetric 2x2 matrix, in closed form.
+            let (a, b, d) = (
+                cov_v[(0, 0)],
+                0.5 * (cov_v[(0, 1)] + cov_v[(1, 0)]),
+                cov_v[(1, 1)],
+            );
+            let lambda = 0.5 * (a + d) + (0.25 * (a - d) * (a - d) + b * b).sqrt();
+            let r = VELOCITY_SIGMAS * lambda.max(0.0).sqrt();
+            if r.is_finite() {
+                r.min(WALKING_SPEED)
+            } else {
+                WALKING_SPEED
+            }
+        }
+    }
 }
 
 /// The detector and tracker of things that move (module docs).
@@ -170,6 +215,7 @@ impl Movers {
         };
         let matched = self.tracker.matched().to_vec();
         for (((m, hull), motion), id) in pieces.iter().zip(hulls).zip(motions).zip(&matched) {
+            let radius = velocity_radius(&motion, &self.velocity_covariance(*id));
             let v = match motion {
                 Motion::AtRest => continue,
                 Motion::Tentative => Vector2::zeros(),
@@ -185,6 +231,7 @@ impl Movers {
             }
             out.obstacles.push(hull);
             out.velocities.push(v);
+            out.velocity_radii.push(radius);
         }
         // Noise points (in no cluster: a silhouette's grazing edge) next to a
         // hull kept out of the map are kept out with it.
@@ -210,9 +257,24 @@ impl Movers {
                 let v = tr.velocity();
                 out.obstacles.push(translated(hull, tr.position() - then));
                 out.velocities.push(v * (MAX_SPEED / v.norm()).min(1.0));
+                let cov = tr.covariance.fixed_view::<2, 2>(2, 2).into_owned();
+                out.velocity_radii
+                    .push(velocity_radius(&Motion::Moving(v), &cov));
             }
         }
         out
+    }
+
+    /// The velocity block of track `id`'s covariance ((m/s)^2; zero when it
+    /// does not live).
+    fn velocity_covariance(&self, id: u64) -> Matrix2<f64> {
+        self.tracker
+            .tracks()
+            .iter()
+            .find(|tr| tr.id == id)
+            .map_or_else(Matrix2::zeros, |tr| {
+                tr.covariance.fixed_view::<2, 2>(2, 2).into_owned()
+            })
     }
 
     /// The estimated position of track `id` (m), if it lives.
@@ -296,6 +358,7 @@ mod tests {
             let scan = movers.observe(t, &rays);
             assert_eq!(scan.kept_out.len(), rays.len());
             assert_eq!(scan.obstacles.len(), scan.velocities.len());
+            assert_eq!(scan.obstacles.len(), scan.velocity_radii.len());
             map.update_keeping_out(origin, 0.0, &rays, params.range, tol, 0.05, &scan.kept_out);
             for hull in &scan.obstacles {
                 map.clear_polygon(hull, map.resolution);
