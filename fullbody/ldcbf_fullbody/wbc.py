@@ -66,7 +66,7 @@ def foot_pose(sole: Sequence[float], yaw: float) -> np.ndarray:
 
 class WholeBodyIK:
     """placo's kinematics solver on the vendored G1 URDF, with the walking tasks:
-    both feet (hard), the CoM (soft, weight 1), the trunk's orientation
+    both feet (weight 1000), the CoM (weight 1), the trunk's orientation
     (upright, yawed to the heading), the upper body at its posture."""
 
     def __init__(self, dt: float) -> None:
@@ -77,11 +77,11 @@ class WholeBodyIK:
         self.robot.update_kinematics()
         self.solver = placo.KinematicsSolver(self.robot)
         self.solver.dt = dt
-        self.solver.enable_velocity_limits(True)
+        self.solver.enable_velocity_limits(False)
         self.feet = {}
         for side, frame in FOOT_FRAME.items():
             task = self.solver.add_frame_task(frame, self.robot.get_T_world_frame(frame))
-            task.configure(f"{side}_foot", "hard", 1.0, 1.0)
+            task.configure(f"{side}_foot", "soft", 1e3, 1e3)
             self.feet[side] = task
         self.com = self.solver.add_com_task(self.robot.com_world())
         self.com.configure("com", "soft", 1.0)
@@ -110,16 +110,22 @@ class WholeBodyIK:
             self.robot.update_kinematics()
         return {n: float(self.robot.get_joint(n)) for n in self.names}
 
+    def gravity_torques(self, left_share: float) -> Dict[str, float]:
+        """Joint torques (N m) holding the IK configuration still against
+        gravity, the weight carried by the left foot for ``left_share`` in
+        [0, 1] and by the right for the rest (placo's static gravity
+        compensation with each foot as the support, blended)."""
+        tl = self.robot.static_gravity_compensation_torques_dict(FOOT_FRAME["left"])
+        tr = self.robot.static_gravity_compensation_torques_dict(FOOT_FRAME["right"])
+        return {n: left_share * tl[n] + (1.0 - left_share) * tr[n] for n in self.names}
+
     def settle(self, left: np.ndarray, right: np.ndarray, com: Sequence[float], yaw: float) -> Dict[str, float]:
         """Places the IK robot on the references, from its posture, until it
         converges (used before the physics starts)."""
-        self.solver.enable_velocity_limits(False)
         self.place(left, right, com, yaw)
         T = np.eye(4)
         T[:3, :3] = yaw_matrix(yaw)
         T[:3, 3] = [com[0], com[1], com[2] + 0.1]
         self.robot.set_T_world_fbase(T)
         self.robot.update_kinematics()
-        q = self.solve(200)
-        self.solver.enable_velocity_limits(True)
-        return q
+        return self.solve(200)
