@@ -51,6 +51,9 @@ class Options:
     #: Add the static gravity torques of the IK configuration (placo, on the
     #: stance foot) to the servos as a feed-forward.
     gravity_feedforward: bool = True
+    #: Swing-foot feedback gain: the IK's swing target is ``path + gain (path -
+    #: measured)`` in the horizontal plane (0: open loop).
+    swing_feedback: float = 1.0
     #: Simulated time limit, s (``None``: the scenario's ``time_limit``).
     time_limit: Optional[float] = None
     #: Before the first step, the CoM moves (in double support, quasi-statically)
@@ -70,6 +73,9 @@ class StepRecord:
     side: str
     planned_x: float
     planned_y: float
+    #: Where the swing path ended (the IK's last horizontal target).
+    swing_end_x: float
+    swing_end_y: float
     landed_x: float
     landed_y: float
     landed_yaw: float
@@ -271,7 +277,7 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
             status_counts[last_status] = status_counts.get(last_status, 0) + 1
             target = np.asarray(out["foot_target"], dtype=float)
             if trace:
-                trace(f"t={t:6.3f} com ({com[0]:.3f}, {com[1]:.3f}, {com[2]:.3f}) v ({vel[0]:.2f}, {vel[1]:.2f}) ref ({p_ref[0]:.3f}, {p_ref[1]:.3f}) stance {stance} ({stance_sole[0]:.3f}, {stance_sole[1]:.3f}) target ({target[0]:.3f}, {target[1]:.3f}) pelvis z {d.xpos[body.pelvis][2]:.3f}")
+                trace(f"t={t:6.3f} com ({com[0]:.3f}, {com[1]:.3f}, {com[2]:.3f}) v ({vel[0]:.2f}, {vel[1]:.2f}) ref ({p_ref[0]:.3f}, {p_ref[1]:.3f}) stance {stance} ({stance_sole[0]:.3f}, {stance_sole[1]:.3f}) target ({target[0]:.3f}, {target[1]:.3f}) pelvis z {d.xpos[body.pelvis][2]:.3f} swing {body.sole(swing).round(3)} path {swing_path.x.round(3)} stance meas {body.sole(stance).round(3)}")
             next_omega = float(out["turning_rate"])
             a = options.reference_reset
             p_ref = p_ref + a * (com[:2] - p_ref)
@@ -290,9 +296,12 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
         heading_ref += omega * dt
         p_ref, v_ref = gait.lip_flow(p_ref, v_ref, stance_sole, beta, dt)
         xy = swing_path.advance(target, phase, dt, T)
+        xy = xy + options.swing_feedback * (xy - body.sole(swing)[:2])
         swing_xyz = np.array([xy[0], xy[1], gait.swing_height((tick_in_step + 1) / per_step, options.swing_height)])
         land_yaw = yaws[swing] + (heading_ref + omega * (T - (tick_in_step + 1) * dt) - yaws[swing]) * gait.smoothstep(phase)
-        stance_pose = wbc.foot_pose([*stance_sole, 0.0], yaws[stance])
+        # The IK's stance foot is where the body's stance foot is (flat on
+        # the ground), so that the swing foot is placed in the world's frame.
+        stance_pose = wbc.foot_pose([*body.sole(stance)[:2], 0.0], body.foot_yaw(stance))
         swing_pose = wbc.foot_pose(swing_xyz, land_yaw)
         left_pose, right_pose = (stance_pose, swing_pose) if stance == "left" else (swing_pose, stance_pose)
         drive(body, ik, options, left_pose, right_pose, np.array([p_ref[0], p_ref[1], H]), heading_ref, 1.0 if stance == "left" else 0.0)
@@ -311,10 +320,10 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
             err = float(np.linalg.norm(landed[:2] - target))
             com = body.com()
             steps.append(
-                StepRecord(len(steps) + 1, t, swing, target[0], target[1], landed[0], landed[1], body.foot_yaw(swing), err, com[0], com[1], last_status)
+                StepRecord(len(steps) + 1, t, swing, target[0], target[1], swing_path.x[0], swing_path.x[1], landed[0], landed[1], body.foot_yaw(swing), err, com[0], com[1], last_status)
             )
             if log:
-                log(f"t={t:6.2f} step {len(steps):3d} {swing:5s} error {err * 100:5.1f} cm com ({com[0]:.2f}, {com[1]:.2f})")
+                log(f"t={t:6.2f} step {len(steps):3d} {swing:5s} error {err * 100:5.1f} cm com ({com[0]:.2f}, {com[1]:.2f}) target ({target[0]:.3f}, {target[1]:.3f}) path ({swing_path.x[0]:.3f}, {swing_path.x[1]:.3f}) landed ({landed[0]:.3f}, {landed[1]:.3f}) stance yaw {body.foot_yaw(stance):.3f} stance sole {body.sole(stance).round(3)}")
             yaws[swing] = land_yaw
             stance, swing = swing, stance
             stance_sole = landed[:2].copy()

@@ -31,10 +31,13 @@ OUT = pathlib.Path(__file__).resolve().parents[1] / "ldcbf_fullbody" / "model"
 URDF_NAME = "g1_29dof_rev_1_0.urdf"
 
 # Position-servo stiffness (N m/rad) by joint-name fragment, and the joint
-# damping (N m s/rad) and armature (kg m^2) added to every joint.
-KP = {"hip": 1200.0, "knee": 1200.0, "ankle": 600.0, "waist": 1200.0, "shoulder": 200.0, "elbow": 200.0, "wrist": 50.0}
-DAMPING = {"hip": 12.0, "knee": 12.0, "ankle": 6.0, "waist": 12.0, "shoulder": 3.0, "elbow": 3.0, "wrist": 1.0}
-ARMATURE = 0.01
+# damping (N m s/rad) and armature (kg m^2) added to every joint. The legs'
+# stiffness must exceed the body's gravity stiffness m g H (about 220 N m/rad)
+# with hip, knee and ankle compliances in series: at a third of these values
+# the standing CoM drifts outward and the body falls (docs/fullbody.md).
+KP = {"hip": 3000.0, "knee": 3000.0, "ankle": 3000.0, "waist": 3000.0, "shoulder": 300.0, "elbow": 300.0, "wrist": 50.0}
+DAMPING = {"hip": 30.0, "knee": 30.0, "ankle": 30.0, "waist": 30.0, "shoulder": 3.0, "elbow": 3.0, "wrist": 1.0}
+ARMATURE = 0.03
 
 
 def robot_dir() -> pathlib.Path:
