@@ -41,7 +41,7 @@ def split_sets(pairs: List[str]) -> Tuple[Dict[str, Any], Dict[str, Any]]:
 def controller_config(scenario: Dict[str, Any], sets: Dict[str, Any]) -> Dict[str, Any]:
     """The scenario's controller settings with the robot's geometry and gait
     limits taken from the G1 (``robot.derived_config``); a ``--set`` of a
-    controller setting wins over both."""
+    controller setting (``delta=0.05``) wins over both."""
     import ldcbf_nav
 
     config = dict(scenario["config"])
@@ -59,7 +59,7 @@ def run_one(name: str, pairs: List[str], out: pathlib.Path, seed: Optional[int],
     from . import report
 
     option_sets, scenario_sets = split_sets(pairs)
-    scenario = ldcbf_nav.load_scenario(name, seed=seed, sets=scenario_sets or None)
+    scenario = ldcbf_nav.load_scenario(name, seed=seed, **scenario_sets)
     if scenario["planner"] != "none" or scenario["perception"] != "known":
         raise ValueError(
             f"{name}: planner {scenario['planner']!r} and perception {scenario['perception']!r}: "
@@ -81,11 +81,28 @@ def main(argv: Optional[List[str]] = None) -> int:
     run.add_argument("--seed", type=int, default=None)
     run.add_argument("--out", required=True, type=pathlib.Path, help="output folder")
     run.add_argument("--quiet", action="store_true", help="no line per footstep")
+    bat = sub.add_parser("batch", help="many seeds of a scenario family")
+    bat.add_argument("--family", required=True, help="a scenario with a [generator]")
+    bat.add_argument("--seeds", required=True, help="A..B (B excluded), A..=B or one seed")
+    bat.add_argument("--shard", default="1/1", help="run only shard I of N (interleaved), as ldcbf-sim batch")
+    bat.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a setting")
+    bat.add_argument("--out", type=pathlib.Path, default=None, help="output folder [out/fullbody-batch-<family>[-shard<I>of<N>]]")
     args = parser.parse_args(argv)
     try:
         import ldcbf_nav
 
         try:
+            if args.command == "batch":
+                from . import batch
+
+                part = batch.shard(args.shard)
+                seeds = batch.shard_seeds(batch.seed_range(args.seeds), part)
+                suffix = f"-shard{part[0]}of{part[1]}" if part[1] > 1 else ""
+                out = args.out or pathlib.Path(f"out/fullbody-batch-{pathlib.Path(args.family).stem}{suffix}")
+                split_sets(args.set)
+                rows = batch.run_batch(args.family, seeds, args.set, out, run_one)
+                print(batch.verdict(rows))
+                return 0
             summary = run_one(args.scenario, args.set, args.out, args.seed, args.quiet)
         except ldcbf_nav.ArgumentError as e:
             raise ValueError(str(e)) from e

@@ -54,6 +54,9 @@ class Options:
     #: Swing-foot feedback gain: the IK's swing target is ``path + gain (path -
     #: measured)`` in the horizontal plane (0: open loop).
     swing_feedback: float = 1.0
+    #: The IK's stance foot is the measured stance foot (True) or where it
+    #: landed (False).
+    anchor_stance: bool = True
     #: Simulated time limit, s (``None``: the scenario's ``time_limit``).
     time_limit: Optional[float] = None
     #: Before the first step, the CoM moves (in double support, quasi-statically)
@@ -301,7 +304,10 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
         land_yaw = yaws[swing] + (heading_ref + omega * (T - (tick_in_step + 1) * dt) - yaws[swing]) * gait.smoothstep(phase)
         # The IK's stance foot is where the body's stance foot is (flat on
         # the ground), so that the swing foot is placed in the world's frame.
-        stance_pose = wbc.foot_pose([*body.sole(stance)[:2], 0.0], body.foot_yaw(stance))
+        if options.anchor_stance:
+            stance_pose = wbc.foot_pose([*body.sole(stance)[:2], 0.0], body.foot_yaw(stance))
+        else:
+            stance_pose = wbc.foot_pose([*stance_sole, 0.0], yaws[stance])
         swing_pose = wbc.foot_pose(swing_xyz, land_yaw)
         left_pose, right_pose = (stance_pose, swing_pose) if stance == "left" else (swing_pose, stance_pose)
         drive(body, ik, options, left_pose, right_pose, np.array([p_ref[0], p_ref[1], H]), heading_ref, 1.0 if stance == "left" else 0.0)
@@ -323,7 +329,7 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
                 StepRecord(len(steps) + 1, t, swing, target[0], target[1], swing_path.x[0], swing_path.x[1], landed[0], landed[1], body.foot_yaw(swing), err, com[0], com[1], last_status)
             )
             if log:
-                log(f"t={t:6.2f} step {len(steps):3d} {swing:5s} error {err * 100:5.1f} cm com ({com[0]:.2f}, {com[1]:.2f}) target ({target[0]:.3f}, {target[1]:.3f}) path ({swing_path.x[0]:.3f}, {swing_path.x[1]:.3f}) landed ({landed[0]:.3f}, {landed[1]:.3f}) stance yaw {body.foot_yaw(stance):.3f} stance sole {body.sole(stance).round(3)}")
+                log(f"t={t:6.2f} step {len(steps):3d} {swing:5s} error {err * 100:5.1f} cm com ({com[0]:.2f}, {com[1]:.2f}) target ({target[0]:.3f}, {target[1]:.3f}) path ({swing_path.x[0]:.3f}, {swing_path.x[1]:.3f}) landed ({landed[0]:.3f}, {landed[1]:.3f}) stance yaw {body.foot_yaw(stance):.3f} stance sole {body.sole(stance).round(3)} ik swing {(ik.robot.get_T_world_frame(wbc.FOOT_FRAME[swing]) @ np.append(wbc.SOLE_OFFSET, 1.0))[:3].round(3)} ik com {ik.robot.com_world().round(3)} torso tilt {math.degrees(math.acos(d.xmat[body.torso][8])):.1f}")
             yaws[swing] = land_yaw
             stance, swing = swing, stance
             stance_sole = landed[:2].copy()

@@ -32,12 +32,12 @@ PELVIS_FRAME = "pelvis"
 #: The standing posture the IK starts from and the arms and waist are pulled
 #: towards (rad): knees bent, arms slightly away from the body.
 POSTURE = {
-    "left_hip_pitch_joint": -0.3,
-    "right_hip_pitch_joint": -0.3,
-    "left_knee_joint": 0.6,
-    "right_knee_joint": 0.6,
-    "left_ankle_pitch_joint": -0.3,
-    "right_ankle_pitch_joint": -0.3,
+    "left_hip_pitch_joint": -0.5,
+    "right_hip_pitch_joint": -0.5,
+    "left_knee_joint": 1.0,
+    "right_knee_joint": 1.0,
+    "left_ankle_pitch_joint": -0.5,
+    "right_ankle_pitch_joint": -0.5,
     "left_shoulder_roll_joint": 0.15,
     "right_shoulder_roll_joint": -0.15,
     "left_elbow_joint": 0.9,
