@@ -72,6 +72,30 @@ def run_one(name: str, pairs: List[str], out: pathlib.Path, seed: Optional[int],
     return result["summary"]
 
 
+#: Settings of the derived configuration that the scenario file keeps under
+#: ``[robot]`` rather than ``[controller]``.
+ROBOT_FIELDS = ("body_radius", "foot_length", "foot_width")
+
+
+def lip_overrides(pairs: List[str]) -> Dict[str, Any]:
+    """The ``--set`` overrides that make ``ldcbf-sim run`` (the LIP plant) use
+    the full-body run's robot: the G1's derived settings, then the user's."""
+    option_sets, scenario_sets = split_sets(pairs)
+    sets: Dict[str, Any] = {}
+    for key, value in robot.derived_config().items():
+        sets[f"robot.{key}" if key in ROBOT_FIELDS else key] = value
+    sets.update(scenario_sets)
+    return sets
+
+
+def run_lip(name: str, pairs: List[str], seed: Optional[int]) -> Dict[str, Any]:
+    """The LIP plant (``ldcbf_nav.simulate``, the library of ``ldcbf-sim
+    run``) on the same scenario with the G1's settings; its summary."""
+    import ldcbf_nav
+
+    return ldcbf_nav.simulate(name, seed=seed, **lip_overrides(pairs))["summary"]
+
+
 def main(argv: Optional[List[str]] = None) -> int:
     parser = argparse.ArgumentParser(prog="python3 -m ldcbf_fullbody", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
@@ -87,6 +111,10 @@ def main(argv: Optional[List[str]] = None) -> int:
     bat.add_argument("--shard", default="1/1", help="run only shard I of N (interleaved), as ldcbf-sim batch")
     bat.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="override a setting")
     bat.add_argument("--out", type=pathlib.Path, default=None, help="output folder [out/fullbody-batch-<family>[-shard<I>of<N>]]")
+    lip = sub.add_parser("lip", help="the LIP plant (ldcbf-sim run) with the G1's settings, for comparison")
+    lip.add_argument("scenario")
+    lip.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
+    lip.add_argument("--seed", type=int, default=None)
     args = parser.parse_args(argv)
     try:
         import ldcbf_nav
@@ -102,6 +130,11 @@ def main(argv: Optional[List[str]] = None) -> int:
                 split_sets(args.set)
                 rows = batch.run_batch(args.family, seeds, args.set, out, run_one)
                 print(batch.verdict(rows))
+                return 0
+            if args.command == "lip":
+                lip_summary = run_lip(args.scenario, args.set, args.seed)
+                keys = ("outcome", "steps", "sim_time", "min_body_clearance", "min_footstep_clearance", "contacts_robot")
+                print(" ".join(f"{k}={lip_summary[k]}" for k in keys))
                 return 0
             summary = run_one(args.scenario, args.set, args.out, args.seed, args.quiet)
         except ldcbf_nav.ArgumentError as e:

@@ -15,6 +15,9 @@ from . import model, wbc
 
 #: CoM height of the paper's Table I (the controller's defaults), m.
 TABLE_I_COM_HEIGHT = 1.0
+#: The step duration is rounded to this (s): a whole number of MuJoCo ticks
+#: (2 ms) and of the LIP plant's (1 ms).
+STEP_QUANTUM = 0.002
 #: Half the lateral distance between the sole points when standing, m.
 STANCE_HALF_WIDTH = 0.1
 #: The ankle-roll link's collision spheres (centre x, y in the link frame, m) and radius.
@@ -81,7 +84,7 @@ def derived_config() -> Dict[str, float]:
     the four foot spheres; ``body_radius`` as :func:`body_radius`; the gait
     limits of Table I (defined for a 1 m CoM height) scaled to ``H`` by
     Froude similarity (lengths times ``H``, times and velocities times
-    ``sqrt(H)``, rates over ``sqrt(H)``), which maps a LIP gait of one height
+    ``sqrt(H)``, rates over ``sqrt(H)``; ``T`` rounded to ``STEP_QUANTUM``), which maps a LIP gait of one height
     to the same dimensionless gait of the other."""
     import ldcbf_nav
 
@@ -90,7 +93,7 @@ def derived_config() -> Dict[str, float]:
     r = H / TABLE_I_COM_HEIGHT
     out = {
         "com_height": H,
-        "step_duration": table["step_duration"] * math.sqrt(r),
+        "step_duration": round(table["step_duration"] * math.sqrt(r) / STEP_QUANTUM) * STEP_QUANTUM,
         "l_max": table["l_max"] * r,
         "alpha": table["alpha"] * r,
         "omega_max": table["omega_max"] / math.sqrt(r),

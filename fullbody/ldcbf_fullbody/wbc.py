@@ -47,6 +47,9 @@ POSTURE = {
 #: Joints held at the posture (with a low weight) rather than left free.
 UPPER_BODY = ("waist", "shoulder", "elbow", "wrist")
 
+#: The feet tasks: "hard" (equality constraints of the IK QP) or "soft".
+FOOT_PRIORITY = "hard"
+
 
 def yaw_matrix(yaw: float) -> np.ndarray:
     """Rotation about z by ``yaw`` (rad)."""
@@ -81,7 +84,7 @@ class WholeBodyIK:
         self.feet = {}
         for side, frame in FOOT_FRAME.items():
             task = self.solver.add_frame_task(frame, self.robot.get_T_world_frame(frame))
-            task.configure(f"{side}_foot", "soft", 1e3, 1e3)
+            task.configure(f"{side}_foot", FOOT_PRIORITY, 1e3, 1e3)
             self.feet[side] = task
         self.com = self.solver.add_com_task(self.robot.com_world())
         self.com.configure("com", "soft", 1.0)

@@ -40,7 +40,8 @@ def test_derived_config_comes_from_the_model():
     assert cfg["foot_width"] == pytest.approx(0.07)
     # The arms stick out beyond the pelvis: the radius covers them.
     assert 0.2 < cfg["body_radius"] < 0.4
-    assert cfg["step_duration"] == pytest.approx(0.4 * math.sqrt(cfg["com_height"]))
+    assert cfg["step_duration"] == pytest.approx(0.4 * math.sqrt(cfg["com_height"]), abs=0.001)
+    assert round(cfg["step_duration"] / 0.002, 9).is_integer()
 
 
 def test_obstacles_are_prisms_touching_the_robot_only():
