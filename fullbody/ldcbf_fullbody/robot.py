@@ -18,6 +18,12 @@ TABLE_I_COM_HEIGHT = 1.0
 #: The step duration is rounded to this (s): a whole number of MuJoCo ticks
 #: (2 ms) and of the LIP plant's (1 ms).
 STEP_QUANTUM = 0.002
+#: Lowest lateral velocity at a step's end (times the stance sign), m/s: not
+#: scaled from Table I (0.08 m/s) but raised, so that the LIP's sway puts the
+#: feet wide enough apart for the G1's hips. Measured on `simple`: with 0.08
+#: the plan put the swing foot 1 cm beside the stance foot and the body fell
+#: at 1.75 s; with 0.25 it walked 10 s (docs/fullbody.md).
+VY_MIN = 0.25
 #: Half the lateral distance between the sole points when standing, m.
 STANCE_HALF_WIDTH = 0.1
 #: The ankle-roll link's collision spheres (centre x, y in the link frame, m) and radius.
@@ -85,7 +91,8 @@ def derived_config() -> Dict[str, float]:
     limits of Table I (defined for a 1 m CoM height) scaled to ``H`` by
     Froude similarity (lengths times ``H``, times and velocities times
     ``sqrt(H)``, rates over ``sqrt(H)``; ``T`` rounded to ``STEP_QUANTUM``), which maps a LIP gait of one height
-    to the same dimensionless gait of the other."""
+    to the same dimensionless gait of the other; except ``vy_min``, set to
+    ``VY_MIN``."""
     import ldcbf_nav
 
     table = ldcbf_nav.default_config()
@@ -103,4 +110,5 @@ def derived_config() -> Dict[str, float]:
     }
     for key in ("vx_min", "vx_max", "vy_min", "vy_max"):
         out[key] = table[key] * math.sqrt(r)
+    out["vy_min"] = VY_MIN
     return out

@@ -56,7 +56,7 @@ class Options:
     swing_feedback: float = 1.0
     #: The IK's stance foot is the measured stance foot (True) or where it
     #: landed (False).
-    anchor_stance: bool = True
+    anchor_stance: bool = False
     #: Simulated time limit, s (``None``: the scenario's ``time_limit``).
     time_limit: Optional[float] = None
     #: Before the first step, the CoM moves (in double support, quasi-statically)
