@@ -25,6 +25,16 @@ def write(result: Dict[str, Any], out: pathlib.Path, config: Dict[str, Any]) -> 
         for s in result["steps"]:
             w.writerow(dataclasses.asdict(s))
     picture(result, out / "run.png", config)
+    if result.get("frames"):
+        animation(result["frames"], out / "run.gif")
+
+
+def animation(frames, path: pathlib.Path, fps: float = 10.0) -> None:
+    """The rendered frames as an animated GIF (Pillow, matplotlib's dependency)."""
+    from PIL import Image
+
+    images = [Image.fromarray(f) for f in frames]
+    images[0].save(path, save_all=True, append_images=images[1:], duration=round(1000 / fps), loop=0)
 
 
 def picture(result: Dict[str, Any], path: pathlib.Path, config: Dict[str, Any]) -> None:

@@ -57,6 +57,9 @@ class Options:
     #: The IK's stance foot is the measured stance foot (True) or where it
     #: landed (False).
     anchor_stance: bool = False
+    #: Frames per simulated second of an animation (0: none). Needs
+    #: offscreen OpenGL (``MUJOCO_GL=egl``).
+    animation_fps: float = 0.0
     #: Simulated time limit, s (``None``: the scenario's ``time_limit``).
     time_limit: Optional[float] = None
     #: Before the first step, the CoM moves (in double support, quasi-statically)
@@ -253,6 +256,14 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
     samples: Dict[str, List[Any]] = {"t": [], "com": [], "left": [], "right": [], "links": []}
     tracked = ["pelvis", "torso_link", "left_wrist_yaw_link", "right_wrist_yaw_link", "left_knee_link", "right_knee_link"]
     tracked_ids = [body.link_names.index(n) for n in tracked]
+    frames: List[np.ndarray] = []
+    renderer = None
+    per_frame = 0
+    if options.animation_fps > 0:
+        renderer = mujoco.Renderer(m, 240, 320)
+        camera = mujoco.MjvCamera()
+        camera.distance, camera.elevation, camera.azimuth = 3.0, -30.0, 225.0
+        per_frame = max(1, round(1.0 / (options.animation_fps * dt)))
     reached = False
     fell = False
     status_counts: Dict[str, int] = {}
@@ -313,6 +324,10 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
         drive(body, ik, options, left_pose, right_pose, np.array([p_ref[0], p_ref[1], H]), heading_ref, 1.0 if stance == "left" else 0.0)
         tick += 1
         t = tick * dt
+        if renderer is not None and tick % per_frame == 0:
+            camera.lookat[:] = body.com()
+            renderer.update_scene(d, camera)
+            frames.append(renderer.render().copy())
         tick_in_step += 1
         for link in body.obstacle_contacts():
             contacts[link] = contacts.get(link, 0) + 1
@@ -355,4 +370,4 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
         "controller_status": status_counts,
         "physics_dt": dt,
     }
-    return {"summary": summary, "steps": steps, "samples": samples, "tracked": tracked, "obstacles": obstacles, "goal": goal, "start": start}
+    return {"frames": frames, "summary": summary, "steps": steps, "samples": samples, "tracked": tracked, "obstacles": obstacles, "goal": goal, "start": start}

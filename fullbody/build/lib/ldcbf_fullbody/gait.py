@@ -1,0 +1,70 @@
+"""The walking references between footsteps, in W (m, rad, s): the swing
+foot's path and the CoM's LIP reference.
+
+The controller's model is the LIP with its zero-moment point at the stance
+sole point and an instantaneous exchange of support at the end of each step
+(docs/maths.md §1); the references follow that model exactly, so the body is
+asked to do what the controller predicted.
+"""
+
+import math
+from typing import Tuple
+
+import numpy as np
+
+
+def smoothstep(s: float) -> float:
+    """Quintic 0 -> 1 on s in [0, 1], zero velocity and acceleration at both ends."""
+    s = min(max(s, 0.0), 1.0)
+    return s * s * s * (10.0 + s * (-15.0 + 6.0 * s))
+
+
+#: The swing foot moves horizontally between these fractions of the step
+#: (it lifts and lands vertically); a target changed after ``SWING_END`` is
+#: not followed (it counts as landing error).
+SWING_START = 0.1
+SWING_END = 0.85
+
+
+def swing_height(phase: float, height: float) -> float:
+    """The swing sole's height (m) at ``phase`` in [0, 1]: ``height`` at mid-step,
+    zero velocity at lift-off and touchdown."""
+    return height * 0.5 * (1.0 - math.cos(2.0 * math.pi * min(max(phase, 0.0), 1.0)))
+
+
+class Swing:
+    """The swing foot's horizontal path (W, m): a minimum-jerk (quintic)
+    motion to the latest target, re-planned each tick from the current
+    position, velocity and acceleration, ending at rest at ``SWING_END``."""
+
+    def __init__(self, start: np.ndarray) -> None:
+        self.x = np.array(start, dtype=float)
+        self.v = np.zeros(2)
+        self.a = np.zeros(2)
+
+    def advance(self, target: np.ndarray, phase: float, dt: float, duration: float) -> np.ndarray:
+        """Moves ``dt`` (s) along the re-planned path at ``phase`` (the fraction
+        of the step of ``duration`` s done before this tick); returns (x, y)."""
+        if phase < SWING_START or phase >= SWING_END:
+            return self.x.copy()
+        tau = (SWING_END - phase) * duration
+        if tau <= dt:
+            self.x, self.v, self.a = np.array(target, dtype=float), np.zeros(2), np.zeros(2)
+            return self.x.copy()
+        d = np.asarray(target, dtype=float) - self.x
+        v0, a0 = self.v, self.a
+        c3 = (20.0 * d - 12.0 * v0 * tau - 3.0 * a0 * tau**2) / (2.0 * tau**3)
+        c4 = (-30.0 * d + 16.0 * v0 * tau + 3.0 * a0 * tau**2) / (2.0 * tau**4)
+        c5 = (12.0 * d - 6.0 * v0 * tau - a0 * tau**2) / (2.0 * tau**5)
+        t = dt
+        self.x = self.x + v0 * t + 0.5 * a0 * t**2 + c3 * t**3 + c4 * t**4 + c5 * t**5
+        self.v = v0 + a0 * t + 3.0 * c3 * t**2 + 4.0 * c4 * t**3 + 5.0 * c5 * t**4
+        self.a = a0 + 6.0 * c3 * t + 12.0 * c4 * t**2 + 20.0 * c5 * t**3
+        return self.x.copy()
+
+
+def lip_flow(p: np.ndarray, v: np.ndarray, foot: np.ndarray, beta: float, tau: float) -> Tuple[np.ndarray, np.ndarray]:
+    """The LIP's closed-form flow over ``tau`` (s) with the ZMP at ``foot``:
+    ``p'' = beta^2 (p - foot)`` per horizontal axis (docs/maths.md §1)."""
+    c, s = math.cosh(beta * tau), math.sinh(beta * tau)
+    return c * p + (s / beta) * v + (1.0 - c) * foot, beta * s * p + c * v - beta * s * foot
