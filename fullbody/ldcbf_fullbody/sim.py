@@ -291,7 +291,10 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
             status_counts[last_status] = status_counts.get(last_status, 0) + 1
             target = np.asarray(out["foot_target"], dtype=float)
             if trace:
-                trace(f"t={t:6.3f} com ({com[0]:.3f}, {com[1]:.3f}, {com[2]:.3f}) v ({vel[0]:.2f}, {vel[1]:.2f}) ref ({p_ref[0]:.3f}, {p_ref[1]:.3f}) stance {stance} ({stance_sole[0]:.3f}, {stance_sole[1]:.3f}) target ({target[0]:.3f}, {target[1]:.3f}) pelvis z {d.xpos[body.pelvis][2]:.3f} swing {body.sole(swing).round(3)} path {swing_path.x.round(3)} stance meas {body.sole(stance).round(3)}")
+                trace(
+                    f"t={t:6.3f} com {com.round(3)} v {vel[:2].round(2)} ref {p_ref.round(3)} "
+                    f"stance {stance} {stance_sole.round(3)} target {target.round(3)} swing {body.sole(swing).round(3)}"
+                )
             next_omega = float(out["turning_rate"])
             a = options.reference_reset
             p_ref = p_ref + a * (com[:2] - p_ref)
@@ -344,7 +347,11 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
                 StepRecord(len(steps) + 1, t, swing, target[0], target[1], swing_path.x[0], swing_path.x[1], landed[0], landed[1], body.foot_yaw(swing), err, com[0], com[1], last_status)
             )
             if log:
-                log(f"t={t:6.2f} step {len(steps):3d} {swing:5s} error {err * 100:5.1f} cm com ({com[0]:.2f}, {com[1]:.2f}) target ({target[0]:.3f}, {target[1]:.3f}) path ({swing_path.x[0]:.3f}, {swing_path.x[1]:.3f}) landed ({landed[0]:.3f}, {landed[1]:.3f}) stance yaw {body.foot_yaw(stance):.3f} stance sole {body.sole(stance).round(3)} ik swing {(ik.robot.get_T_world_frame(wbc.FOOT_FRAME[swing]) @ np.append(wbc.SOLE_OFFSET, 1.0))[:3].round(3)} ik com {ik.robot.com_world().round(3)} torso tilt {math.degrees(math.acos(d.xmat[body.torso][8])):.1f}")
+                log(
+                    f"t={t:6.2f} step {len(steps):3d} {swing:5s} error {err * 100:5.1f} cm "
+                    f"target ({target[0]:.3f}, {target[1]:.3f}) landed ({landed[0]:.3f}, {landed[1]:.3f}) "
+                    f"com ({com[0]:.2f}, {com[1]:.2f})"
+                )
             yaws[swing] = land_yaw
             stance, swing = swing, stance
             stance_sole = landed[:2].copy()
@@ -368,6 +375,7 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
         "wall_time": wall,
         "real_time_factor": t / wall if wall > 0 else None,
         "controller_status": status_counts,
+        "ik_soft_feet_ticks": ik.soft_ticks,
         "physics_dt": dt,
     }
     return {"frames": frames, "summary": summary, "steps": steps, "samples": samples, "tracked": tracked, "obstacles": obstacles, "goal": goal, "start": start}

@@ -96,6 +96,8 @@ class WholeBodyIK:
         self.posture.set_joints({n: POSTURE.get(n, 0.0) for n in self.names if n.startswith(UPPER_BODY)})
         self.posture.configure("posture", "soft", 1e-2)
         self.solver.add_regularization_task(1e-5)
+        #: Ticks whose IK had the feet as soft tasks (hard ones infeasible).
+        self.soft_ticks = 0
 
     def place(self, left: np.ndarray, right: np.ndarray, com: Sequence[float], yaw: float) -> None:
         """Sets the references: foot poses (4x4, W), the CoM (m, W), the trunk's yaw (rad)."""
@@ -109,7 +111,17 @@ class WholeBodyIK:
         """Runs the solver ``iterations`` times (each a step of ``dt``) and
         returns the joint angles (rad) by joint name."""
         for _ in range(iterations):
-            self.solver.solve(True)
+            try:
+                self.solver.solve(True)
+            except RuntimeError:
+                # The feet cannot be met exactly within the joint limits: this
+                # tick they are soft tasks (weight 1000) instead.
+                self.soft_ticks += 1
+                for side, task in self.feet.items():
+                    task.configure(f"{side}_foot", "soft", 1e3, 1e3)
+                self.solver.solve(True)
+                for side, task in self.feet.items():
+                    task.configure(f"{side}_foot", FOOT_PRIORITY, 1e3, 1e3)
             self.robot.update_kinematics()
         return {n: float(self.robot.get_joint(n)) for n in self.names}
 
