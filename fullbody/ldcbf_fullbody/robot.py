@@ -20,9 +20,11 @@ TABLE_I_COM_HEIGHT = 1.0
 STEP_QUANTUM = 0.002
 #: Lowest lateral velocity at a step's end (times the stance sign), m/s: not
 #: scaled from Table I (0.08 m/s) but raised, so that the LIP's sway puts the
-#: feet wide enough apart for the G1's hips. Measured on `simple`: with 0.08
-#: the plan put the swing foot 1 cm beside the stance foot and the body fell
-#: at 1.75 s; with 0.25 it walked 10 s (docs/fullbody.md).
+#: feet wide enough apart for the G1's hips. Measured on `simple`
+#: (docs/fullbody.md): 0.08 put the swing foot 1 cm beside the stance foot
+#: and the body fell at 1.75 s; 0.18 and 0.2 fell at 1.7 s; 0.25 walked
+#: 10.6 s, although with it most cycles' QPs are infeasible and solved by the
+#: priority scheme's relaxation of the gait rows.
 VY_MIN = 0.25
 #: Half the lateral distance between the sole points when standing, m.
 STANCE_HALF_WIDTH = 0.1
