@@ -85,3 +85,19 @@ def test_short_walk_stays_up_and_clear(tmp_path):
     assert summary["landing_error_p95_m"] <= 0.10
     assert (out / "steps.csv").read_text().count("\n") == summary["steps"] + 1
     assert (out / "run.png").stat().st_size > 10_000
+
+
+def test_batch_seeds_and_shards_as_ldcbf_sim():
+    from ldcbf_fullbody import batch
+
+    assert batch.seed_range("0..5") == (0, 5)
+    assert batch.seed_range("3..=4") == (3, 5)
+    assert batch.seed_range("7") == (7, 8)
+    for bad in ("5..5", "a..b", "-1..2"):
+        with pytest.raises(ValueError, match="--seeds"):
+            batch.seed_range(bad)
+    assert batch.shard_seeds((10, 17), (2, 3)) == [11, 14]
+    shards = [batch.shard_seeds((0, 10), (i, 3)) for i in (1, 2, 3)]
+    assert sorted(s for part in shards for s in part) == list(range(10))
+    with pytest.raises(ValueError, match="--shard"):
+        batch.shard("4/3")
