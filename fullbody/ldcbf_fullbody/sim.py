@@ -25,7 +25,7 @@ import numpy as np
 
 from . import gait, model, wbc
 
-#: A fall: the pelvis origin below this height (m; standing: about 0.72 m) ...
+#: A fall: the pelvis origin below this height (m; standing: 0.714 m) ...
 FALL_HEIGHT = 0.45
 #: ... or the torso's z axis more than this from the vertical (rad; 45 deg).
 FALL_TILT = math.radians(45.0)
