@@ -48,15 +48,37 @@ class Options:
     #: CoM feedback gain of the IK's CoM target: ``ref + gain (ref - measured)``
     #: in the horizontal plane (0: open loop).
     com_feedback: float = 1.0
+    #: DCM feedback gain of the IK's CoM target: ``+ gain (xi_ref - xi)`` with
+    #: the divergent component ``xi = c + c' / beta`` of the reference and of
+    #: the measurement, horizontal (0: none).
+    dcm_feedback: float = 0.0
     #: Add the static gravity torques of the IK configuration (placo, on the
     #: stance foot) to the servos as a feed-forward.
     gravity_feedforward: bool = True
     #: Swing-foot feedback gain: the IK's swing target is ``path + gain (path -
     #: measured)`` in the horizontal plane (0: open loop).
     swing_feedback: float = 1.0
+    #: The swing foot follows the controller's target until this fraction of
+    #: the step, then holds the last one (committed) to touchdown (1: never
+    #: frozen; the path itself ends at ``gait.SWING_END``).
+    swing_freeze: float = 1.0
+    #: After a touchdown the new swing foot holds still until the next
+    #: control cycle plans it (False: it heads for the last target, which was
+    #: planned for the other foot).
+    hold_until_planned: bool = False
+    #: Smallest lateral distance (m) between the sole points, along the stance
+    #: foot's lateral axis: a controller target closer to (or across) the
+    #: stance foot is moved out to it (0: off). The controller has no such
+    #: row; the G1's legs cannot put the feet side by side.
+    min_foot_width: float = 0.0
     #: The IK's stance foot is the measured stance foot (True) or where it
     #: landed (False).
     anchor_stance: bool = False
+    #: MuJoCo's ``impratio`` with elliptic friction cones (0: MuJoCo's default
+    #: pyramidal cones, impratio 1). Above 1 it makes friction harder, so the
+    #: stance foot creeps less under the swing leg's reaction (MuJoCo's
+    #: documentation recommends it against slip).
+    impratio: float = 0.0
     #: Frames per simulated second of an animation (0: none). Needs
     #: offscreen OpenGL (``MUJOCO_GL=egl``).
     animation_fps: float = 0.0
@@ -79,6 +101,10 @@ class StepRecord:
     side: str
     planned_x: float
     planned_y: float
+    #: The controller's last target before touchdown (differs from the
+    #: planned, committed one when it changed after ``swing_freeze``).
+    latest_x: float
+    latest_y: float
     #: Where the swing path ended (the IK's last horizontal target).
     swing_end_x: float
     swing_end_y: float
@@ -186,8 +212,29 @@ class Body:
         return best
 
 
+def separated(target: np.ndarray, stance: np.ndarray, stance_yaw: float, swing: str, width: float):
+    """The swing target (x, y, W) moved sideways, if needed, so that it lies at
+    least ``width`` (m) to the swing's side of the stance sole point along the
+    stance foot's lateral axis (no crossed or touching feet); returns the
+    target and whether it was moved."""
+    lateral = np.array([-math.sin(stance_yaw), math.cos(stance_yaw)]) * (1.0 if swing == "left" else -1.0)
+    gap = float((target - stance) @ lateral)
+    if width <= 0.0 or gap >= width:
+        return target, False
+    return target + (width - gap) * lateral, True
+
+
 def drive(
-    body: Body, ik: wbc.WholeBodyIK, options: Options, left: np.ndarray, right: np.ndarray, com: np.ndarray, yaw: float, left_share: float
+    body: Body,
+    ik: wbc.WholeBodyIK,
+    options: Options,
+    left: np.ndarray,
+    right: np.ndarray,
+    com: np.ndarray,
+    yaw: float,
+    left_share: float,
+    com_velocity: Optional[np.ndarray] = None,
+    beta: float = 1.0,
 ) -> None:
     """One physics tick: the IK on the references (foot poses 4x4, CoM
     reference (x, y, z), trunk yaw), the CoM feedback, the servos' targets
@@ -195,6 +242,10 @@ def drive(
     measured = body.com()
     target = np.array(com, dtype=float)
     target[:2] += options.com_feedback * (target[:2] - measured[:2])
+    if options.dcm_feedback and com_velocity is not None:
+        xi_ref = com[:2] + com_velocity / beta
+        xi = measured[:2] + body.com_velocity()[:2] / beta
+        target[:2] += options.dcm_feedback * (xi_ref - xi)
     ik.place(left, right, target, yaw)
     q = ik.solve(1)
     body.command(q, ik.gravity_torques(left_share) if options.gravity_feedforward else None)
@@ -211,6 +262,9 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
     obstacles = [np.asarray(p, dtype=float) for p in scenario["obstacles"]]
     body = Body(obstacles, options.obstacle_height)
     m, d = body.m, body.d
+    if options.impratio > 0:
+        m.opt.cone = mujoco.mjtCone.mjCONE_ELLIPTIC
+        m.opt.impratio = options.impratio
     dt = m.opt.timestep
     H = config["com_height"]
     T = config["step_duration"]
@@ -245,6 +299,7 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
     swing = "right" if stance == "left" else "left"
     swing_path = gait.Swing(soles[swing][:2])
     target = soles[swing][:2].copy()
+    latest = target.copy()
     omega = 0.0
     heading_ref = heading
     stance_sole = soles[stance][:2].copy()
@@ -267,6 +322,7 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
     reached = False
     fell = False
     status_counts: Dict[str, int] = {}
+    widened = 0
     t0 = time.perf_counter()
     t = 0.0
     tick = 0
@@ -289,7 +345,10 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
             )
             last_status = out["status"]
             status_counts[last_status] = status_counts.get(last_status, 0) + 1
-            target = np.asarray(out["foot_target"], dtype=float)
+            latest = np.asarray(out["foot_target"], dtype=float)
+            if tick_in_step < options.swing_freeze * per_step:
+                target, moved = separated(latest, stance_sole, yaws[stance], swing, options.min_foot_width)
+                widened += int(moved)
             if trace:
                 trace(
                     f"t={t:6.3f} com {com.round(3)} v {vel[:2].round(2)} ref {p_ref.round(3)} "
@@ -324,7 +383,7 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
             stance_pose = wbc.foot_pose([*stance_sole, 0.0], yaws[stance])
         swing_pose = wbc.foot_pose(swing_xyz, land_yaw)
         left_pose, right_pose = (stance_pose, swing_pose) if stance == "left" else (swing_pose, stance_pose)
-        drive(body, ik, options, left_pose, right_pose, np.array([p_ref[0], p_ref[1], H]), heading_ref, 1.0 if stance == "left" else 0.0)
+        drive(body, ik, options, left_pose, right_pose, np.array([p_ref[0], p_ref[1], H]), heading_ref, 1.0 if stance == "left" else 0.0, v_ref, beta)
         tick += 1
         t = tick * dt
         if renderer is not None and tick % per_frame == 0:
@@ -344,7 +403,7 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
             err = float(np.linalg.norm(landed[:2] - target))
             com = body.com()
             steps.append(
-                StepRecord(len(steps) + 1, t, swing, target[0], target[1], swing_path.x[0], swing_path.x[1], landed[0], landed[1], body.foot_yaw(swing), err, com[0], com[1], last_status)
+                StepRecord(len(steps) + 1, t, swing, target[0], target[1], latest[0], latest[1], swing_path.x[0], swing_path.x[1], landed[0], landed[1], body.foot_yaw(swing), err, com[0], com[1], last_status)
             )
             if log:
                 log(
@@ -356,6 +415,11 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
             stance, swing = swing, stance
             stance_sole = landed[:2].copy()
             swing_path = gait.Swing(body.sole(swing)[:2])
+            if options.hold_until_planned:
+                # Until the controller plans this step, the new swing foot
+                # holds where it is (the last target was the other foot's).
+                target = swing_path.x.copy()
+                latest = target.copy()
             tick_in_step = 0
             omega = next_omega
     wall = time.perf_counter() - t0
@@ -376,6 +440,7 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
         "real_time_factor": t / wall if wall > 0 else None,
         "controller_status": status_counts,
         "ik_soft_feet_ticks": ik.soft_ticks,
+        "widened_targets": widened,
         "physics_dt": dt,
     }
     return {"frames": frames, "summary": summary, "steps": steps, "samples": samples, "tracked": tracked, "obstacles": obstacles, "goal": goal, "start": start}

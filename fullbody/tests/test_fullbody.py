@@ -101,3 +101,17 @@ def test_batch_seeds_and_shards_as_ldcbf_sim():
     assert sorted(s for part in shards for s in part) == list(range(10))
     with pytest.raises(ValueError, match="--shard"):
         batch.shard("4/3")
+
+
+def test_a_crossed_swing_target_is_moved_out_to_the_minimum_width():
+    stance = np.array([1.0, 2.0])
+    # Heading +y: the left side is -x. A left-foot target 0.02 m to the right.
+    target, moved = sim.separated(np.array([1.02, 2.1]), stance, math.pi / 2, "left", 0.12)
+    assert moved and np.allclose(target, [0.88, 2.1])
+    # Wide enough already, or the filter off: unchanged.
+    wide = np.array([0.8, 2.1])
+    assert sim.separated(wide, stance, math.pi / 2, "left", 0.12) == (wide, False)
+    assert not sim.separated(np.array([1.02, 2.1]), stance, math.pi / 2, "left", 0.0)[1]
+    # Right foot, heading 0: must be at y <= 1.88.
+    target, moved = sim.separated(np.array([1.1, 1.95]), stance, 0.0, "right", 0.12)
+    assert moved and np.allclose(target, [1.1, 1.88])
