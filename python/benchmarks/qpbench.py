@@ -172,7 +172,12 @@ def main():
     ap.add_argument("sets", nargs="*", help="directories of npz files")
     ap.add_argument("--runs", type=int, default=1, help="harness runs per set")
     ap.add_argument("--limit", type=int, default=0, help="first N files of each set")
-    ap.add_argument("--solvers", nargs="+", default=SOLVERS)
+    ap.add_argument(
+        "--solvers",
+        type=lambda v: v.split(","),
+        default=SOLVERS,
+        help="comma-separated qpsolvers names (default: %(default)s)",
+    )
     ap.add_argument("--report", help="directory for qpbenchmark's report and CSV")
     ap.add_argument("--export", help="write controller QPs here (see docs)")
     ap.add_argument("--every", type=int, default=1)
