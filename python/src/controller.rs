@@ -118,7 +118,8 @@ impl PyController {
     /// with status `"invalid_input"` and the hold command, as onboard.
     /// `obstacle_velocities` (`(n, 2)`, m/s, world frame, one per obstacle):
     /// the obstacles' constant velocities over the horizon; `None` = all at
-    /// rest. A count other than the obstacles' or a non-finite or absurd
+    /// rest. A count other than the obstacles' (an empty array with
+    /// obstacles too) or a non-finite or absurd
     /// velocity is the controller's answer too (`input_error`
     /// `"obstacle_velocity_count"`, `"obstacle_velocity"`).
     /// `obstacle_velocity_radii` (`(n,)`, m/s, one per obstacle): the radius
@@ -146,7 +147,7 @@ impl PyController {
         obstacle_velocity_radii: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let obstacles = polygons(obstacles)?;
-        let velocities = velocities(obstacle_velocities)?;
+        let velocities = velocities(obstacle_velocities, obstacles.len())?;
         let radii = radii(obstacle_velocity_radii)?;
         let input = CycleInput {
             com_position: vec2(com_position, "com_position")?,
