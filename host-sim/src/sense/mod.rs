@@ -97,12 +97,15 @@ use serde::{Deserialize, Serialize};
 use crate::world::setting::SettingError;
 use crate::world::{MAX_VERTICES, Polygon};
 
+mod assign;
 mod dbscan;
 pub mod detect;
 pub mod faces;
 mod infer;
 mod map;
 pub mod movers;
+#[cfg(test)]
+mod patterns;
 #[cfg(test)]
 mod tests;
 pub mod track;
