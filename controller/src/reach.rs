@@ -57,7 +57,7 @@ impl Reach {
     // Not inlined: one copy in the firmware's flash (64 KiB), not one per row.
     #[inline(never)]
     pub fn radius(&self, t: f64) -> f64 {
-        if !(t > 0.0) {
+        if t.is_nan() || t <= 0.0 {
             return 0.0;
         }
         let w = self.speed_max + self.speed;
