@@ -442,7 +442,7 @@ pub fn push_gait_rows<const N: usize, const NV: usize, const NC: usize>(
     p0: &Vector2<f64>,
     v0: &Vector2<f64>,
 ) -> Result<(), ()> {
-    let (s, c) = (libm::sin(theta_k), libm::cos(theta_k));
+    let (s, c) = libm::sincos(theta_k);
     let lon = Vector2::new(c, s);
     let lat = Vector2::new(-s, c);
     let (wv, v_free) = model.velocity(k + 1, p0, v0);

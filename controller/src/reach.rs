@@ -54,8 +54,10 @@ impl Reach {
     /// of speed at most `v_max` and `v_hat`) and `u' = min(u, w)`: `u' t +
     /// a_max t^2 / 2` up to `t* = (w - u') / a_max`, then `w t - (w -
     /// u')^2 / (2 a_max)`; `u' t` when `a_max = 0` or `u' = w`.
+    // Not inlined: one copy in the firmware's flash (64 KiB), not one per row.
+    #[inline(never)]
     pub fn radius(&self, t: f64) -> f64 {
-        if !(t > 0.0) {
+        if t.is_nan() || t <= 0.0 {
             return 0.0;
         }
         let w = self.speed_max + self.speed;
@@ -74,6 +76,8 @@ impl Reach {
     /// How far the set reaches along a unit normal `eta` beyond the
     /// obstacle's position now, at time `t` (s), m: `min(rate t + r(t),
     /// v_max t)` with `rate = eta'v_hat` (m/s).
+    // Not inlined: one copy in the firmware's flash (64 KiB), not one per row.
+    #[inline(never)]
     pub fn shift(&self, rate: f64, t: f64) -> f64 {
         let t = if t > 0.0 { t } else { 0.0 };
         let predicted = rate * t + self.radius(t);
@@ -89,6 +93,8 @@ impl Reach {
     /// bound above it, m: `min(max(f(t0), f(t1)), v_max t1)` with `f(t) =
     /// rate t + r(t)`, which is convex (so its largest value on the interval
     /// is at an end) while `v_max t` grows.
+    // Not inlined: one copy in the firmware's flash (64 KiB), not one per row.
+    #[inline(never)]
     pub fn shift_over(&self, rate: f64, (t0, t1): (f64, f64)) -> f64 {
         let t0 = if t0 > 0.0 { t0 } else { 0.0 };
         let t1 = if t1 > t0 { t1 } else { t0 };

@@ -6,7 +6,7 @@
 use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_controller::{
     Assembly, CommandSource, Config, ConvexPolygon, CycleInput, CycleStatus, InputError,
-    PaperController, Reach, RowId, RowKind, Side,
+    PaperController, Reach, RecordedInput, RowId, RowKind, Side,
 };
 
 type Ctl = PaperController;
@@ -233,15 +233,12 @@ fn near_an_uncertain_obstacle_the_robot_walks_no_faster_than_one_step_stops_it()
         let mut ctl = Ctl::new(cfg).unwrap();
         let out = ctl.step(
             &CycleInput {
-                com_velocity: v(0.0, 0.0),
-                stance_foot: v(0.0, -0.1),
-                time_in_step: 0.0,
-                goal: v(8.0, 0.0),
-                ..walking(obstacles, &[], radii)
+                obstacle_velocity_radii: radii,
+                ..RecordedInput::at_rest(v(8.0, 0.0)).input(obstacles)
             },
             None,
         );
-        assert_eq!(out.status, CycleStatus::Optimal);
+        assert_eq!(out.status, CycleStatus::Optimal, "{radii:?}");
         out.plan
             .states
             .iter()

@@ -169,5 +169,25 @@ fn velocities_wrong_by_up_to_the_radius_no_robot_caused_contact() {
             a.contacts_robot, 0,
             "{family}: the robot moved into a person whose velocity it misjudged"
         );
+        assert!(
+            a.reached >= 18,
+            "{family}: only {} of 20 reached",
+            a.reached
+        );
     }
+    // The same wrong velocities with the margin off (constant-velocity
+    // prediction trusted): the robot walks into people (3 robot-caused
+    // contacts on these seeds when measured), so the check above can fail.
+    let off = batch_set(
+        "crossing",
+        20,
+        &[
+            ("disturbance.velocity_error", "0.3"),
+            ("controller.velocity_margin", "false"),
+        ],
+    );
+    assert!(
+        off.contacts_robot > 0,
+        "margin off: no robot-caused contact"
+    );
 }
