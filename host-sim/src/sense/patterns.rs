@@ -15,11 +15,15 @@ use crate::world::random::regular_polygon;
 
 /// A person: an octagon of radius `r` at `c` (t = 0) walking at `v`, or
 /// following `path(t)` (a displacement from `c`) when given.
+/// A walk that is not at constant velocity: the displacement and the
+/// velocity at `t`.
+type Path = fn(f64) -> (Vector2<f64>, Vector2<f64>);
+
 struct Person {
     body: Polygon,
     v: Vector2<f64>,
     /// Displacement at `t` when the walk is not at constant velocity.
-    path: Option<fn(f64) -> (Vector2<f64>, Vector2<f64>)>,
+    path: Option<Path>,
 }
 
 impl Person {
@@ -234,13 +238,14 @@ fn a_person_hidden_behind_another_coasts_and_is_found_again() {
             // The truth is within the coasting track's uncertainty radius.
             let e = (f.scan.velocities[i] - f.truth[1].1).norm();
             assert!(e <= f.scan.velocity_radii[i], "t = {}: {e} m/s off", f.t);
-        } else if let Some(i) = nearest(&f.scan, c, 0.3) {
-            if i < f.ids.len() && f.t > 1.0 {
-                if hidden == 0 {
-                    ids_before.push(f.ids[i]);
-                } else {
-                    ids_after.push(f.ids[i]);
-                }
+        } else if let Some(i) = nearest(&f.scan, c, 0.3)
+            && i < f.ids.len()
+            && f.t > 1.0
+        {
+            if hidden == 0 {
+                ids_before.push(f.ids[i]);
+            } else {
+                ids_after.push(f.ids[i]);
             }
         }
     }
