@@ -14,33 +14,13 @@ use std::time::Instant;
 
 use ldcbf_controller::RobotController;
 use ldcbf_controller::nalgebra::Vector2;
-use ldcbf_ros2::msgs::{GaitState, Header, LaserScan, Point, Pose, PoseStamped, Time};
+use ldcbf_ros2::msgs::{GaitState, Header, Point, Time};
 use ldcbf_ros2::node::NavNode;
 use ldcbf_ros2::record::odometry;
-use ldcbf_ros2::scan::MAX_RAYS;
+use ldcbf_ros2::scan::{MAX_RAYS, full_turn};
 use ldcbf_sim::scenario::{LoadOptions, load};
 
 const REPEATS: usize = 20;
-
-fn scan(stamp: Time, ranges: Vec<f32>) -> LaserScan {
-    let n = ranges.len();
-    let inc = (core::f64::consts::TAU / n as f64) as f32;
-    LaserScan {
-        header: Header {
-            stamp,
-            frame_id: "base_link".into(),
-        },
-        angle_min: 0.0,
-        angle_max: inc * (n - 1) as f32,
-        angle_increment: inc,
-        time_increment: 0.0,
-        scan_time: 0.0,
-        range_min: 0.0,
-        range_max: 3.0,
-        ranges,
-        intensities: Vec::new(),
-    }
-}
 
 fn main() {
     let sc = load("crowded", &LoadOptions::default()).expect("crowded");
@@ -97,22 +77,13 @@ fn main() {
                 ..sc.lidar.clone()
             };
             let mut nav = NavNode::new(ctl, Vec::new(), "map").with_lidar(params);
-            let _ = nav.on_goal(&PoseStamped {
-                pose: Pose {
-                    position: Point {
-                        x: sc.goal.x,
-                        y: sc.goal.y,
-                        z: 0.0,
-                    },
-                    ..Pose::default()
-                },
-                ..PoseStamped::default()
-            });
+            let robot = ldcbf_ros2::robot::Robot::new(&sc, "map").expect("stand-in");
+            let _ = nav.on_goal(&robot.goal());
             let mut worst = 0f64;
             for k in 0..REPEATS {
                 let t = Time::from_secs(0.05 * k as f64);
                 let _ = nav.on_odom(odometry(t, "map", sc.start, Vector2::zeros(), 0.0, 0.0));
-                let _ = nav.on_scan(scan(t, ranges.clone()));
+                let _ = nav.on_scan(full_turn(t, ranges.clone(), 3.0));
                 let g = GaitState {
                     header: Header {
                         stamp: t,

@@ -3,14 +3,18 @@
 //! prints, and the clock the input stamps make ([`Clock`]), which notices a
 //! stamp that goes back in time.
 //!
-//! **Clock jumps** (as `robot_localization`'s `reset_on_time_jump` and
-//! `tf2_ros::Buffer`, which clear their state when time jumps back): on each
-//! input topic (`/odom`, `/gait_state`, `/scan`) the stamps of one publisher
-//! never decrease (DDS keeps a writer's order, and a best-effort reader drops
-//! an older sample). A stamp older than the newest one seen on its topic is a
-//! jump back (a simulation restarted, a bag replayed, a peer's clock set
-//! back, or a hostile far-future stamp before it): the node logs it, counts
-//! it and resets (forgets the odometry, the scan, the waiting gait state, the
+//! **Clock jumps.** As `robot_localization` does (the last stamp per topic,
+//! `last_message_times_`), the node compares each input's stamp with the
+//! newest one seen on its topic (`/odom`, `/gait_state`, `/scan`): the stamps
+//! of one publisher never decrease (DDS keeps a writer's order, and a
+//! best-effort reader drops an older sample). `robot_localization` then
+//! ignores the older message, which alone lets one far-future stamp silence
+//! a topic for good; the node treats it as `tf2_ros::Buffer` treats ROS
+//! time going back ("Detected jump back in time. Clearing TF buffer.") and
+//! as `robot_localization`'s ROS 1 `reset_on_time_jump`: a jump back (a
+//! simulation restarted, a bag replayed, a peer's clock set back, or a
+//! far-future stamp before it), which it logs, counts and answers by a
+//! reset (it forgets the odometry, the scan, the waiting gait state, the
 //! last stamp planned on, the people it tracks and the known map's time
 //! origin), then takes the message as the first of the new timeline. So a
 //! far-future stamp costs the cycles up to the next message of its topic,

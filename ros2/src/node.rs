@@ -106,8 +106,6 @@ pub struct NavNode {
     /// The stamp of the first gait state planned on (since the start or the
     /// last clock jump): time 0 of the known map's people and the tracker.
     origin: Option<Time>,
-    /// The last command's foot target (a refusal holds it).
-    last_target: Option<Vector2<f64>>,
     clock: Clock,
     rejections: Rejections,
     log: Vec<String>,
@@ -224,7 +222,6 @@ impl NavNode {
             pending: None,
             last: None,
             origin: None,
-            last_target: None,
             clock: Clock::default(),
             rejections: Rejections::default(),
             log: Vec::new(),
@@ -451,61 +448,36 @@ impl NavNode {
             None,
         );
         let compute_ns = start.elapsed().as_nanos() as u64;
-        self.last_target = Some(out.foot_target);
         Some(self.messages(&out, stamp, compute_ns))
     }
 
     /// The answer to a gait state the node cannot plan on (`why`): the
-    /// controller's hold ([`FootstepCommand::INVALID_INPUT`], source hold,
-    /// status `invalid_input`): the last command's foot target (the stance
-    /// foot before any, the origin if that is not finite) for every planned
-    /// foot, no turning, no obstacle in use; `/diagnostics` says why.
+    /// controller's own hold. The controller is handed the cycle with a
+    /// state that is not a measurement (NaN), so the command, the plan and
+    /// the controller's memory are those of any invalid input
+    /// ([`FootstepCommand::INVALID_INPUT`], source hold, status
+    /// `invalid_input`: the last target held, no turning, no obstacle);
+    /// `/diagnostics` says why.
     fn refusal(&mut self, gait: &GaitState, why: &str) -> CycleMessages {
-        let f = Vector2::new(gait.stance_foot.x, gait.stance_foot.y);
-        let finite = |v: &Vector2<f64>| v.x.is_finite() && v.y.is_finite();
-        let target = match self.last_target {
-            Some(t) if finite(&t) => t,
-            _ if finite(&f) => f,
-            _ => Vector2::zeros(),
-        };
-        let st = ldcbf_controller::LipState {
-            position: target,
-            velocity: Vector2::zeros(),
-            heading: 0.0,
-        };
-        let side = if gait.stance_side == GaitState::LEFT {
-            Side::Left
-        } else {
-            Side::Right
-        };
-        let o = CycleOutput::<HORIZON> {
-            foot_target: target,
+        let nan = Vector2::repeat(f64::NAN);
+        let input = CycleInput::<{ ldcbf_sim::world::MAX_VERTICES }> {
+            com_position: nan,
+            com_velocity: nan,
+            heading: f64::NAN,
             turning_rate: 0.0,
-            plan: ldcbf_controller::Plan {
-                x0: st,
-                states: [st; HORIZON],
-                feet: [target; HORIZON],
-                first_side: side.opposite(),
+            stance_foot: Vector2::new(gait.stance_foot.x, gait.stance_foot.y),
+            stance_side: if gait.stance_side == GaitState::RIGHT {
+                Side::Right
+            } else {
+                Side::Left
             },
-            status: CycleStatus::InvalidInput(ldcbf_controller::InputError::State),
-            info: ldcbf_controller::CycleInfo {
-                qp_status: None,
-                iterations: 0,
-                active_set_size: 0,
-                active_obstacles: 0,
-                obstacles_truncated: false,
-                inside_obstacle: false,
-                time_clamped: false,
-                warm_started: false,
-                source: CommandSource::Hold,
-                cost: f64::NAN,
-                max_violation: f64::NAN,
-                min_h0: f64::INFINITY,
-                relax_gait: 0.0,
-                relax_safety: 0.0,
-                relax_capture: 0.0,
-            },
+            time_in_step: 0.0,
+            goal: Vector2::zeros(),
+            obstacles: &[],
+            obstacle_velocities: &[],
+            speed_cap: ldcbf_controller::NO_SPEED_CAP,
         };
+        let o = self.controller.step(&input, None);
         let mut m = self.messages(&o, gait.header.stamp, 0);
         if let Some(st) = m.diagnostics.status.first_mut() {
             st.message = format!("invalid_input (hold): {why}");

@@ -166,16 +166,11 @@ pub fn perceive(
     })
 }
 
-/// A full-turn scan (zero angle along the heading) of the hit points `hits`
-/// (ray order, `None` = no return, `+inf`) from `origin`, stamped `stamp` in
-/// the body frame `base_link`.
-pub fn laser_scan(
-    stamp: Time,
-    origin: Vector2<f64>,
-    hits: &[Option<Vector2<f64>>],
-    range: f64,
-) -> LaserScan {
-    let n = hits.len().max(1);
+/// A full turn of `ranges` (ray `i` at `2 pi i / n` from the zero angle,
+/// m; `+inf`: no return) stamped `stamp` in the body frame `base_link`,
+/// ranges `[0, range_max]`.
+pub fn full_turn(stamp: Time, ranges: Vec<f32>, range_max: f32) -> LaserScan {
+    let n = ranges.len().max(1);
     LaserScan {
         header: Header {
             stamp,
@@ -187,11 +182,24 @@ pub fn laser_scan(
         time_increment: 0.0,
         scan_time: 0.0,
         range_min: 0.0,
-        range_max: range as f32,
-        ranges: hits
-            .iter()
-            .map(|h| h.map_or(f32::INFINITY, |p| (p - origin).norm() as f32))
-            .collect(),
+        range_max,
+        ranges,
         intensities: Vec::new(),
     }
+}
+
+/// A full-turn scan (zero angle along the heading) of the hit points `hits`
+/// (ray order, `None` = no return, `+inf`) from `origin`, stamped `stamp` in
+/// the body frame `base_link`.
+pub fn laser_scan(
+    stamp: Time,
+    origin: Vector2<f64>,
+    hits: &[Option<Vector2<f64>>],
+    range: f64,
+) -> LaserScan {
+    let ranges = hits
+        .iter()
+        .map(|h| h.map_or(f32::INFINITY, |p| (p - origin).norm() as f32))
+        .collect();
+    full_turn(stamp, ranges, range as f32)
 }

@@ -3,11 +3,12 @@
 //! simulator's behaviour. Without DDS (the same messages over Cyclone DDS:
 //! `ros2/tests/python/test_hostile_dds.py`).
 
+mod common;
+
+use common::{gait_at, goal};
 use ldcbf_controller::RobotController;
 use ldcbf_controller::nalgebra::Vector2;
-use ldcbf_ros2::msgs::{
-    FootstepCommand, GaitState, Header, LaserScan, Odometry, Point, Pose, PoseStamped, Time,
-};
+use ldcbf_ros2::msgs::{FootstepCommand, GaitState, LaserScan, Odometry, Time};
 use ldcbf_ros2::node::{CycleMessages, NavNode};
 use ldcbf_ros2::params::Params;
 use ldcbf_ros2::record::{odometry, play};
@@ -29,50 +30,12 @@ fn odom(stamp: Time) -> Odometry {
 }
 
 fn gait(stamp: Time) -> GaitState {
-    GaitState {
-        header: Header {
-            stamp,
-            frame_id: "map".into(),
-        },
-        stance_side: GaitState::LEFT,
-        stance_foot: Point {
-            x: 0.0,
-            y: 0.1,
-            z: 0.0,
-        },
-        time_in_step: 0.1,
-        turning_rate: 0.0,
-    }
-}
-
-fn goal(x: f64, y: f64) -> PoseStamped {
-    PoseStamped {
-        pose: Pose {
-            position: Point { x, y, z: 0.0 },
-            ..Pose::default()
-        },
-        ..PoseStamped::default()
-    }
+    gait_at(stamp, [0.0, 0.1])
 }
 
 /// A full turn of `n` rays, every one at `r` m (a ring around the robot).
 fn ring(stamp: Time, n: usize, r: f32) -> LaserScan {
-    let inc = (core::f64::consts::TAU / n as f64) as f32;
-    LaserScan {
-        header: Header {
-            stamp,
-            frame_id: "base_link".into(),
-        },
-        angle_min: 0.0,
-        angle_max: inc * (n - 1) as f32,
-        angle_increment: inc,
-        time_increment: 0.0,
-        scan_time: 0.0,
-        range_min: 0.0,
-        range_max: 3.0,
-        ranges: vec![r; n],
-        intensities: Vec::new(),
-    }
+    ldcbf_ros2::scan::full_turn(stamp, vec![r; n], 3.0)
 }
 
 /// The LiDAR node of `crowded`, with a goal.

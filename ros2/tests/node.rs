@@ -1,9 +1,12 @@
 //! The node's logic without DDS: conversions, the cycle's trigger, the
 //! messages, the parameter file, the recorded run.
 
+mod common;
+
+use common::{gait_at, goal};
 use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_controller::{CycleStatus, RobotController};
-use ldcbf_ros2::msgs::{FootstepCommand, GaitState, Header, Point, Pose, PoseStamped, Time};
+use ldcbf_ros2::msgs::{FootstepCommand, GaitState, Time};
 use ldcbf_ros2::node::{NavNode, input_of, quaternion, yaw};
 use ldcbf_ros2::params::Params;
 use ldcbf_ros2::record::{odometry, play};
@@ -14,30 +17,7 @@ fn stamp(t: f64) -> Time {
 }
 
 fn gait(t: f64) -> GaitState {
-    GaitState {
-        header: Header {
-            stamp: stamp(t),
-            frame_id: "map".into(),
-        },
-        stance_side: GaitState::LEFT,
-        stance_foot: Point {
-            x: 0.0,
-            y: 3.0,
-            z: 0.0,
-        },
-        time_in_step: 0.1,
-        turning_rate: 0.0,
-    }
-}
-
-fn goal(x: f64, y: f64) -> PoseStamped {
-    PoseStamped {
-        pose: Pose {
-            position: Point { x, y, z: 0.0 },
-            ..Pose::default()
-        },
-        ..PoseStamped::default()
-    }
+    gait_at(stamp(t), [0.0, 3.0])
 }
 
 fn circles() -> (RobotController, Vec<ldcbf_sim::world::Polygon>) {
