@@ -92,10 +92,11 @@ pub struct NavNode {
     /// The known map when some of its obstacles move (people, moved with
     /// their velocities from the time origin; `None`: all at rest).
     people: Option<MovingMap>,
-    /// The controller's obstacles of the last cycle, and their velocities
-    /// (empty: all at rest).
+    /// The controller's obstacles of the last cycle, their velocities
+    /// (empty: all at rest) and velocity uncertainty radii (empty: exact).
     obstacles: Vec<Polygon>,
     velocities: Vec<Vector2<f64>>,
+    radii: Vec<f64>,
     /// With LiDAR perception.
     lidar: Option<LidarState>,
     frame_id: String,
@@ -168,7 +169,8 @@ pub fn source_code(s: CommandSource) -> u8 {
 }
 
 /// The controller's input fields from an odometry and a gait state (the
-/// obstacles and the goal are the caller's).
+/// goal, the obstacles, their velocities (m/s) and velocity uncertainty
+/// radii (m/s; each list empty: all at rest, all exact) are the caller's).
 pub fn input_of<'a>(
     odom: &Odometry,
     gait: &GaitState,
@@ -215,6 +217,7 @@ impl NavNode {
             people: None,
             obstacles,
             velocities: Vec::new(),
+            radii: Vec::new(),
             lidar: None,
             frame_id: frame_id.into(),
             goal: None,
@@ -433,6 +436,7 @@ impl NavNode {
                             .unwrap_or_default(); // checked on arrival
                     self.obstacles = seen.obstacles;
                     self.velocities = seen.velocities;
+                    self.radii = seen.radii;
                 }
             }
             None => {
@@ -444,7 +448,14 @@ impl NavNode {
             }
         }
         let out = self.controller.step(
-            &input_of(&odom, &gait, goal, &self.obstacles, &self.velocities),
+            &input_of(
+                &odom,
+                &gait,
+                goal,
+                &self.obstacles,
+                &self.velocities,
+                &self.radii,
+            ),
             None,
         );
         let compute_ns = start.elapsed().as_nanos() as u64;
@@ -475,6 +486,7 @@ impl NavNode {
             goal: Vector2::zeros(),
             obstacles: &[],
             obstacle_velocities: &[],
+            obstacle_velocity_radii: &[],
             speed_cap: ldcbf_controller::NO_SPEED_CAP,
         };
         let o = self.controller.step(&input, None);

@@ -126,6 +126,9 @@ pub struct Perceived {
     pub obstacles: Vec<Polygon>,
     /// One velocity per obstacle, or none (all at rest).
     pub velocities: Vec<Vector2<f64>>,
+    /// One velocity uncertainty radius per obstacle (m/s; 0 at rest), or
+    /// none (all exact).
+    pub radii: Vec<f64>,
 }
 
 /// The obstacles inferred from `scan` (see the module docs). With `movers`
@@ -133,7 +136,8 @@ pub struct Perceived {
 /// [`ldcbf_sim::sense::movers`], and the scan's time, s), the people are
 /// tracked as the simulator tracks them: the rays of a person kept out of
 /// the map are left out of the pieces at rest, and the person's hull is
-/// handed over with its velocity (at rest while tentative). Fails as
+/// handed over with its velocity and its uncertainty radius (at rest, with
+/// the walking speed as radius, while tentative). Fails as
 /// [`check`].
 pub fn perceive(
     scan: &LaserScan,
@@ -147,7 +151,7 @@ pub fn perceive(
     let Some((movers, t)) = movers else {
         return Ok(Perceived {
             obstacles: infer_obstacles(&r, origin, zero, params),
-            velocities: Vec::new(),
+            ..Perceived::default()
         });
     };
     let people = movers.observe(t, &r);
@@ -158,11 +162,14 @@ pub fn perceive(
     }
     let mut obstacles = infer_obstacles(&r, origin, zero, params);
     let mut velocities = vec![Vector2::zeros(); obstacles.len()];
+    let mut radii = vec![0.0; obstacles.len()];
     obstacles.extend(people.obstacles);
     velocities.extend(people.velocities);
+    radii.extend(people.velocity_radii);
     Ok(Perceived {
         obstacles,
         velocities,
+        radii,
     })
 }
 

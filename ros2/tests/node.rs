@@ -32,7 +32,7 @@ fn yaw_and_body_twist_round_trip() {
         let v = Vector2::new(0.4, -0.1);
         let o = odometry(stamp(1.0), "map", Vector2::new(1.0, 2.0), v, psi, 0.2);
         let (_, obs) = circles();
-        let inp = input_of(&o, &gait(1.0), Vector2::new(5.0, 5.0), &obs, &[]);
+        let inp = input_of(&o, &gait(1.0), Vector2::new(5.0, 5.0), &obs, &[], &[]);
         assert!((inp.com_velocity - v).norm() < 1e-12, "{psi}");
         assert!((inp.heading - psi).abs() < 1e-12);
         assert_eq!(inp.com_position, Vector2::new(1.0, 2.0));
@@ -74,7 +74,7 @@ fn gait_state_waits_for_its_odometry() {
     );
     let o = odom(0.5);
     let want = twin.step(
-        &input_of(&o, &gait(0.5), Vector2::new(9.0, 3.0), &obs, &[]),
+        &input_of(&o, &gait(0.5), Vector2::new(9.0, 3.0), &obs, &[], &[]),
         None,
     );
     let c = &m.command;
