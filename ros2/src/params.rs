@@ -180,7 +180,7 @@ impl Params {
             .chain(
                 top.iter()
                     .filter_map(|(k, v)| Some((k.as_str()?, v)))
-                    .filter(|(k, _)| ours(*k)),
+                    .filter(|(k, _)| ours(k)),
             )
             .collect();
         if sections.is_empty() {
