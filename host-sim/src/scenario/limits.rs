@@ -25,9 +25,96 @@ pub const MAX_KEY_LEN: usize = 256;
 /// Integers (seeds, counts) are not bound here; their own fields check them.
 pub const MAX_MAGNITUDE: f64 = 1e6;
 
-/// Largest scenario file, bytes (the shipped ones have a few kB; large maps
-/// come from a `[generator]`).
+/// Largest scenario file, `deadline --instructions` CSV or study
+/// `summary.json`, bytes (the shipped scenarios have a few kB; large maps come
+/// from a `[generator]`). Read by [`read_regular_file`].
 pub const MAX_FILE_BYTES: u64 = 1 << 24;
+
+/// Largest `runs.csv` of a study directory (`table`, `merge`) and npz file
+/// (`qp solve`; what it decompresses to is capped apart), bytes: a row of
+/// `runs.csv` has under 300 bytes, so the 1,000,000 seeds of the largest
+/// study fit.
+pub const MAX_TABLE_BYTES: u64 = 1 << 29;
+
+/// The one rule for every file the tools read (scenarios, `qp solve`'s npz
+/// files, `deadline --instructions`, the files of a study directory): a
+/// regular file (a symbolic link to one is followed) of at most `max_bytes`.
+/// A directory, a device, a FIFO or a socket is refused before it is opened,
+/// so nothing blocks on a FIFO or reads a device for ever. Returns the size,
+/// bytes. The error's kind is `NotFound` for a missing file; its message says
+/// what is wrong, without the path (the caller names it).
+pub fn check_regular_file(path: &std::path::Path, max_bytes: u64) -> std::io::Result<u64> {
+    check_metadata(&std::fs::metadata(path)?, max_bytes)
+}
+
+/// [`check_regular_file`] on metadata already read.
+fn check_metadata(meta: &std::fs::Metadata, max_bytes: u64) -> std::io::Result<u64> {
+    if meta.is_dir() {
+        return Err(refuse("is a directory, not a file".into()));
+    }
+    if !meta.is_file() {
+        return Err(refuse(
+            "is not a regular file (a device, a FIFO or a socket)".into(),
+        ));
+    }
+    if meta.len() > max_bytes {
+        return Err(too_big(meta.len(), max_bytes));
+    }
+    Ok(meta.len())
+}
+
+/// An error of [`check_regular_file`]: the input is refused.
+fn refuse(message: String) -> std::io::Error {
+    std::io::Error::new(std::io::ErrorKind::InvalidInput, message)
+}
+
+/// The error of a file of `len` bytes over `max_bytes`.
+fn too_big(len: u64, max_bytes: u64) -> std::io::Error {
+    refuse(format!(
+        "is {len} bytes, more than the {max_bytes} bytes read from one file"
+    ))
+}
+
+/// Reads the file at `path` after [`check_regular_file`]; the opened file is
+/// checked again and the read stops after `max_bytes + 1` bytes, so a file
+/// swapped or grown between the check and the read is refused too.
+pub fn read_regular_file(path: &std::path::Path, max_bytes: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::Read as _;
+    check_regular_file(path, max_bytes)?;
+    let file = std::fs::File::open(path)?;
+    check_metadata(&file.metadata()?, max_bytes)?;
+    let mut bytes = Vec::new();
+    file.take(max_bytes + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > max_bytes {
+        return Err(too_big(bytes.len() as u64, max_bytes));
+    }
+    Ok(bytes)
+}
+
+/// Most obstacles with a velocity (people) in one scenario: each is checked
+/// against the body and the feet at every 1 kHz tick, cast by every LiDAR ray
+/// and predicted by the controller, so the wall time grows with their number
+/// (docs/cli-errors.md gives the measured cost).
+pub const MAX_MOVING_OBSTACLES: usize = 1000;
+
+/// Largest `lidar.map.resolution` with the LiDAR perception, m, whatever the
+/// body (docs/cli-errors.md gives the runs that set it; [`max_map_cell`]).
+pub const MAX_MAP_CELL: f64 = 0.1;
+
+/// Largest `lidar.map.resolution` for a robot whose CoM the controller keeps
+/// `barrier_margin` (m) from every piece of the map: [`MAX_MAP_CELL`], and a
+/// cell's diagonal at most the barrier margin (`r sqrt 2 <= m`) when it is
+/// positive. A piece is a whole cell, so the cell holding the CoM must never
+/// hold a wall while the body keeps its margin: a wall point in it is within a
+/// diagonal of the CoM. (A point robot at `delta = 0` has no margin; the
+/// fixed bound alone applies.)
+pub fn max_map_cell(barrier_margin: f64) -> f64 {
+    if barrier_margin > 0.0 {
+        MAX_MAP_CELL.min(barrier_margin / core::f64::consts::SQRT_2)
+    } else {
+        MAX_MAP_CELL
+    }
+}
 
 /// Longest piece of user text an error message repeats, characters.
 pub const MAX_ECHO: usize = 80;
@@ -126,6 +213,27 @@ mod tests {
         let s = shorten(&long, MAX_ECHO);
         assert!(s.starts_with(&"é".repeat(MAX_ECHO)), "{s}");
         assert!(s.ends_with("... (20000 bytes in all)"), "{s}");
+    }
+
+    #[test]
+    fn only_regular_files_within_the_size_are_read() {
+        let dir = std::env::temp_dir().join(format!("ldcbf-limits-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let f = dir.join("f.txt");
+        std::fs::write(&f, "12345").unwrap();
+        assert_eq!(read_regular_file(&f, 5).unwrap(), b"12345");
+        let big = read_regular_file(&f, 4).unwrap_err();
+        assert!(
+            big.to_string().contains("5 bytes, more than the 4"),
+            "{big}"
+        );
+        let d = read_regular_file(&dir, 100).unwrap_err();
+        assert!(d.to_string().contains("is a directory"), "{d}");
+        let dev = check_regular_file(std::path::Path::new("/dev/null"), 100).unwrap_err();
+        assert!(dev.to_string().contains("not a regular file"), "{dev}");
+        let missing = read_regular_file(&dir.join("no"), 100).unwrap_err();
+        assert_eq!(missing.kind(), std::io::ErrorKind::NotFound);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]
