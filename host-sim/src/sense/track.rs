@@ -9,7 +9,7 @@
 //!    [`TrackParams::accel_noise`] m^2/s^3, the discrete model of Bar-Shalom,
 //!    Li and Kirubarajan, "Estimation with Applications to Tracking and
 //!    Navigation", 2001, section 6.2.2) is predicted to `t`.
-//! 3. **Data association**: global nearest neighbour ([`super::assign`]):
+//! 3. **Data association**: global nearest neighbour (`sense/assign.rs`):
 //!    a (track, piece) pair is inside the gate when the piece's centre is
 //!    within [`TrackParams::gate`] m of the track's prediction and within
 //!    the squared Mahalanobis distance [`TrackParams::gate_chi2`] in the
