@@ -63,6 +63,7 @@ fn cycle_input<'a>(
         goal,
         obstacles,
         obstacle_velocities: &[], // every obstacle at rest
+        obstacle_velocity_radii: &[],
         speed_cap: ldcbf_controller::NO_SPEED_CAP,
     }
 }

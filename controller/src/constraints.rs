@@ -106,6 +106,9 @@ use nalgebra::{ArrayStorage, SMatrix, SVector, Vector2};
 use crate::lip::Lip;
 use crate::qp::DenseQp;
 
+mod obstacle;
+pub use obstacle::{HalfPlane, StepSpan, push_foot_row, push_ldcbf_row};
+
 /// Kind of a constraint row; see the module docs for the formulas.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum RowKind {
@@ -439,7 +442,7 @@ pub fn push_gait_rows<const N: usize, const NV: usize, const NC: usize>(
     p0: &Vector2<f64>,
     v0: &Vector2<f64>,
 ) -> Result<(), ()> {
-    let (s, c) = (libm::sin(theta_k), libm::cos(theta_k));
+    let (s, c) = libm::sincos(theta_k);
     let lon = Vector2::new(c, s);
     let lat = Vector2::new(-s, c);
     let (wv, v_free) = model.velocity(k + 1, p0, v0);
@@ -457,121 +460,10 @@ pub fn push_gait_rows<const N: usize, const NV: usize, const NC: usize>(
     push_row(qp, &-lat, &wd, &d_const, b.l_max)
 }
 
-/// A linearised obstacle: the half-plane `h(p) = eta'(p - c) - delta >= 0`,
-/// moving along its normal at `rate` (see [`HalfPlane::h_at`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct HalfPlane {
-    /// `c`: closest boundary point to `p_0` of the obstacle where it is at
-    /// the time of the cycle's input (m, world).
-    pub c: Vector2<f64>,
-    /// `eta`: unit normal towards the safe side.
-    pub eta: Vector2<f64>,
-    /// `eta'u`, m/s: the obstacle's velocity `u` (world frame) along the
-    /// normal; > 0 when it moves towards the safe side. 0 for an obstacle at
-    /// rest. The half-plane at time `t` from the input is the one through
-    /// `c + u t`, the same normal.
-    pub rate: f64,
-}
-
-impl HalfPlane {
-    /// `h(p) = eta'(p - c) - delta` (m): the half-plane at the input's time.
-    pub fn h(&self, p: &Vector2<f64>, delta: f64) -> f64 {
-        self.eta.dot(&(p - self.c)) - delta
-    }
-
-    /// `h_t(p) = eta'(p - c - u t) - delta = h(p) - rate t` (m): the
-    /// half-plane of the obstacle moved for `t` seconds from the input's time.
-    /// Equal to [`HalfPlane::h`] bit for bit when `rate` is 0.
-    pub fn h_at(&self, p: &Vector2<f64>, delta: f64, t: f64) -> f64 {
-        self.h(p, delta) - self.shift(t)
-    }
-
-    /// `rate t` (m), exactly `+0` when `rate` is 0 (of either sign), so that
-    /// subtracting it changes no bit of a static row.
-    pub(crate) fn shift(&self, t: f64) -> f64 {
-        if self.rate == 0.0 { 0.0 } else { self.rate * t }
-    }
-}
-
-/// Step `k` of the horizon as an obstacle's rows see it: the predicted
-/// state `x_0 = (p0, v0)` at the start of step 0 (m, m/s, world) the rows
-/// are affine in, and the times `(t0, t1)` of step ends `k` and `k + 1` from
-/// the cycle's input, s (where a moving half-plane is taken).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct StepSpan {
-    /// The step, `0..N`.
-    pub k: usize,
-    /// `(t0, t1)`: times of step ends `k` and `k + 1` from the input, s.
-    pub times: (f64, f64),
-    /// `p_0`: predicted CoM position at the start of step 0, m, world.
-    pub p0: Vector2<f64>,
-    /// `v_0`: predicted CoM velocity at the start of step 0, m/s, world.
-    pub v0: Vector2<f64>,
-}
-
-/// Appends the LDCBF row `h_{t1}(p_{k+1}) >= (1 - gamma) h_{t0}(p_k)` for
-/// the step `step` (its `k`, `(t0, t1)` and `x_0`), with `h_t` the
-/// half-plane moved to time `t` ([`HalfPlane::h_at`]; the times do not
-/// matter for an obstacle at rest, whose row is the static one bit for bit).
-#[allow(clippy::result_unit_err)]
-pub fn push_ldcbf_row<const N: usize, const NV: usize, const NC: usize>(
-    qp: &mut DenseQp<NV, NC>,
-    model: &Condensed<N>,
-    hp: &HalfPlane,
-    gamma: f64,
-    delta: f64,
-    step: &StepSpan,
-) -> Result<(), ()> {
-    let StepSpan {
-        k,
-        times: (t0, t1),
-        p0,
-        v0,
-    } = step;
-    let k = *k;
-    // Quantity Q = -p_{k+1} + (1 - gamma) p_k, bound -gamma (eta'c + delta)
-    // - (rate t1 - (1 - gamma) rate t0).
-    let (w1, c1) = model.position(k + 1, p0, v0);
-    let (w0, c0) = model.position(k, p0, v0);
-    let w = -w1 + w0 * (1.0 - gamma);
-    let q0 = -c1 + c0 * (1.0 - gamma);
-    let motion = hp.shift(*t1) - (1.0 - gamma) * hp.shift(*t0);
-    push_row(
-        qp,
-        &hp.eta,
-        &w,
-        &q0,
-        -gamma * (hp.eta.dot(&hp.c) + delta) - motion,
-    )
-}
-
-/// Appends the foot-clearance row `eta'(f_k - c) >= delta_foot + max(rate t0,
-/// rate t1)` for the step `step`: the foot `f_k` stands from step end `k` to
-/// step end `k + 1` (times `t0`, `t1`), and the moving half-plane is nearest
-/// to it at one of the two (the static row when `rate` is 0).
-#[allow(clippy::result_unit_err)]
-pub fn push_foot_row<const N: usize, const NV: usize, const NC: usize>(
-    qp: &mut DenseQp<NV, NC>,
-    model: &Condensed<N>,
-    hp: &HalfPlane,
-    delta_foot: f64,
-    step: &StepSpan,
-) -> Result<(), ()> {
-    let (t0, t1) = step.times;
-    let (w, f_const) = model.foot(step.k, &step.p0, &step.v0);
-    let motion = hp.shift(t0).max(hp.shift(t1));
-    push_row(
-        qp,
-        &hp.eta,
-        &-w,
-        &-f_const,
-        -hp.eta.dot(&hp.c) - delta_foot - motion,
-    )
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::reach::Reach;
 
     fn model() -> (Lip, Condensed<3>) {
         let lip = Lip::new(9.81, 1.0, 0.4);
@@ -769,6 +661,7 @@ mod tests {
             c: Vector2::new(1.0, 1.0),
             eta: Vector2::new(-0.6, -0.8),
             rate: 0.0,
+            reach: Reach::NONE,
         };
         let (gamma, delta) = (0.3, 0.2);
         let at = |k| StepSpan {

@@ -64,10 +64,12 @@ pub mod lip;
 pub mod mpc;
 mod names;
 pub mod qp;
+pub mod reach;
 pub mod relax;
 mod solution;
 
 pub use nalgebra;
+pub use reach::Reach;
 
 pub use constraints::{Condensed, HalfPlane, RowId, RowKind};
 pub use geometry::{

@@ -202,6 +202,26 @@ pub(crate) mod tests {
     use super::{dot, dot_d, sqrt};
     use nalgebra::{Const, Dyn};
 
+    /// `libm::sincos` is `(libm::sin, libm::cos)` bit for bit (the gait
+    /// rows and the fallback take one `sincos` of a heading, so that the
+    /// firmware links one kernel, not three): headings of every magnitude
+    /// the controller accepts, and the multiples of pi / 4 where the
+    /// argument reduction switches quadrant.
+    #[test]
+    fn sincos_is_sin_and_cos_bit_for_bit() {
+        let mut next = mixed(7);
+        let quarter = core::f64::consts::FRAC_PI_4;
+        let angles = (0..200_000)
+            .map(|_| next() * 1e2)
+            .chain((-400..400).map(|k| f64::from(k) * quarter))
+            .chain([0.0, -0.0, 1e6, -1e6, 3.0e5, f64::MIN_POSITIVE]);
+        for a in angles {
+            let (s, c) = libm::sincos(a);
+            assert_eq!(s.to_bits(), libm::sin(a).to_bits(), "sin {a}");
+            assert_eq!(c.to_bits(), libm::cos(a).to_bits(), "cos {a}");
+        }
+    }
+
     /// Seeded numbers of mixed signs and magnitudes (`1e-4` to `1e4`), so
     /// that the sums of dot products round: for tests that compare the
     /// bits of two orders of the same operations.

@@ -70,7 +70,8 @@ impl QpStatus {
 impl InputError {
     /// Short lower-case name of the bad input: `state`, `stance_foot`,
     /// `time_in_step`, `goal`, `not_configured`, `obstacle_velocity_count`,
-    /// `obstacle_velocity` (`Display` gives a sentence).
+    /// `obstacle_velocity`, `obstacle_velocity_radius_count`,
+    /// `obstacle_velocity_radius` (`Display` gives a sentence).
     pub const fn name(self) -> &'static str {
         match self {
             InputError::State => "state",
@@ -80,6 +81,8 @@ impl InputError {
             InputError::NotConfigured => "not_configured",
             InputError::ObstacleVelocityCount => "obstacle_velocity_count",
             InputError::ObstacleVelocity => "obstacle_velocity",
+            InputError::ObstacleVelocityRadiusCount => "obstacle_velocity_radius_count",
+            InputError::ObstacleVelocityRadius => "obstacle_velocity_radius",
         }
     }
 }

@@ -90,13 +90,30 @@
 pub use crate::solution::QpSolutionDyn;
 pub use crate::solution::{QpAllocator, QpSolution, QpSolutionOf, QpStatus};
 
+// The files in one-way layers, each naming only files of the layers below
+// it (`controller/tests/qp_layering.rs` lists them and checks it), from the
+// bottom up:
+// - the data: `settings` (and size thresholds), `updates` (of the factor
+//   `J`, `R`), `kept` (the rows a factor resumes from), `dense` (the QP),
+//   `bounds`, `solver` (the Hessian's factor `L^-1`), `spans`, `norms`,
+//   `start` (the checks a solve starts with), `gram` (the hot start's Gram
+//   factor);
+// - the factor of the active set, `orthogonal`; the hot start's `guess` on
+//   it; one `step` of the dual iteration on it;
+// - one solve: `resolve` (its start from a kept factor), `store` (where it
+//   keeps the factor), `dual` (the solve);
+// - above one solve: `reprobe` (the probes that continue from the last
+//   one's factor), `proximal` (the outer loop for a semidefinite `H`),
+//   `solve` (the entry points), `backend` (the controller's trait).
 #[macro_use]
 mod start;
-
 mod backend;
 mod bounds;
 mod dense;
+mod dual;
+mod gram;
 mod guess;
+mod kept;
 mod norms;
 mod orthogonal;
 mod proximal;
@@ -106,8 +123,10 @@ mod settings;
 mod solve;
 mod solver;
 mod spans;
+mod step;
 mod store;
 mod updates;
+
 pub use backend::{OwnSolver, QpBackend};
 #[cfg(feature = "alloc")]
 pub use bounds::SimpleBoundsDyn;
@@ -118,25 +137,13 @@ pub use dense::{DenseQp, DenseQpOf};
 #[cfg(feature = "alloc")]
 pub use norms::RowNormsDyn;
 pub use norms::{RowNorms, RowNormsOf};
-pub use proximal::{PROX_EPS, PROX_MAX_OUTER, PROX_TOL};
+pub use proximal::{PROX_MAX_OUTER, PROX_TOL};
 pub use reprobe::{Reprobe, ReprobeOf};
-pub use settings::{HessianError, QpSettings};
+pub(crate) use settings::ZERO_ROW2;
+pub use settings::{HOT_START_MIN_NV, HessianError, PROX_EPS, QpSettings};
 #[cfg(feature = "alloc")]
 pub use solver::DualActiveSetDyn;
 pub use solver::{DualActiveSet, DualActiveSetOf};
-
-/// Rows whose squared Euclidean norm is not above this (it is 0 for an exactly
-/// zero row or one whose squares underflow, `|g| < ~1e-162`) are treated as zero
-/// rows: satisfied when `h_i >= -tol`, infeasible otherwise.
-pub(crate) const ZERO_ROW2: f64 = 0.0;
-
-/// Smallest number of variables for which [`QpSettings::hot_start`] and
-/// equality rows are compiled into a static instance (the controller's
-/// horizons `N >= 8`; `Dyn` instances use the same threshold at run time).
-/// Below it, scanning the marked rows first gets most of the gain, and the
-/// hot start's code (3.8 KiB of Thumb at `NV = 6`) would not fit the
-/// firmware's 64 KiB of flash (`docs/horizon.md`).
-pub const HOT_START_MIN_NV: usize = 16;
 
 #[cfg(test)]
 mod tests;

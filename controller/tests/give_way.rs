@@ -46,6 +46,7 @@ fn standing<'a>(
         goal,
         obstacles,
         obstacle_velocities: velocities,
+        obstacle_velocity_radii: &[],
         speed_cap: ldcbf_controller::NO_SPEED_CAP,
     }
 }

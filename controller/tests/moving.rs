@@ -35,6 +35,7 @@ fn walking<'a>(obstacles: &'a [Poly], velocities: &'a [Vector2<f64>]) -> CycleIn
         goal: v(5.0, 0.0),
         obstacles,
         obstacle_velocities: velocities,
+        obstacle_velocity_radii: &[],
         speed_cap: ldcbf_controller::NO_SPEED_CAP,
     }
 }
@@ -127,6 +128,7 @@ fn at_rest_is_the_static_controller_bit_for_bit() {
         ia.time_in_step = t;
         let ib = CycleInput {
             obstacle_velocities: &zeros,
+            obstacle_velocity_radii: &[],
             speed_cap: ldcbf_controller::NO_SPEED_CAP,
             ..ia
         };

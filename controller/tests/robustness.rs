@@ -51,6 +51,7 @@ fn at_rest<'a>(p: Vector2<f64>, goal: Vector2<f64>, obstacles: &'a [Poly]) -> Cy
         goal,
         obstacles,
         obstacle_velocities: &[],
+        obstacle_velocity_radii: &[],
         speed_cap: ldcbf_controller::NO_SPEED_CAP,
     }
 }
@@ -205,6 +206,7 @@ impl Walker {
             goal,
             obstacles,
             obstacle_velocities: &[],
+            obstacle_velocity_radii: &[],
             speed_cap: ldcbf_controller::NO_SPEED_CAP,
         }
     }

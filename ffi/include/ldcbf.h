@@ -13,7 +13,7 @@
  * Version of this C API; [`ldcbf_api_version`] returns it. Compare the two
  * to check that the header matches the library.
  */
-#define LDCBF_API_VERSION 2
+#define LDCBF_API_VERSION 3
 
 /**
  * Horizon `N`: footsteps planned per cycle (the length of the plan arrays of
@@ -226,6 +226,16 @@ enum LdcbfInputError
    * 100 m/s.
    */
   LDCBF_INPUT_ERROR_OBSTACLE_VELOCITY = 7,
+  /**
+   * Velocity uncertainty radii were given, but not one per obstacle (not
+   * raised by the C API, which passes one per obstacle or none).
+   */
+  LDCBF_INPUT_ERROR_OBSTACLE_VELOCITY_RADIUS_COUNT = 8,
+  /**
+   * The velocity uncertainty radius of a selected obstacle is negative,
+   * not finite or larger than 100 m/s.
+   */
+  LDCBF_INPUT_ERROR_OBSTACLE_VELOCITY_RADIUS = 9,
 };
 #ifndef __cplusplus
 #if __STDC_VERSION__ >= 202311L
@@ -450,6 +460,20 @@ typedef struct LdcbfConfig {
    * normal (the paper's).
    */
   uint8_t turn_vertex_normals;
+  /**
+   * 1: use the obstacles' velocity uncertainty radii
+   * ([`ldcbf_step_uncertain`](crate::ldcbf_step_uncertain)); 0: take
+   * every radius as 0 (constant-velocity prediction, no margin).
+   */
+  uint8_t velocity_margin;
+  /**
+   * Largest speed of a person of uncertain velocity, m/s (> 0).
+   */
+  double person_speed_max;
+  /**
+   * Largest acceleration of a person of uncertain velocity, m/s^2 (>= 0).
+   */
+  double person_accel_max;
 } LdcbfConfig;
 
 /**
@@ -784,6 +808,35 @@ LdcbfResult ldcbf_step_moving(struct LdcbfController *ctl,
                               uint32_t n_obstacles,
                               const double *velocities,
                               struct LdcbfOutput *out);
+
+/**
+ * [`ldcbf_step_moving`] with velocity uncertainty radii: `radii` holds one
+ * double per obstacle (`n_obstacles` of them, m/s, world frame), the radius
+ * around the obstacle's velocity (or around rest, with NULL `velocities`)
+ * that holds its true velocity in any direction (docs/maths.md §2.7: the
+ * barrier then holds against the set a person can reach, with the
+ * configuration's `person_speed_max` and `person_accel_max`, and the robot
+ * walks no faster than it can stop in one step nearby). 0 is a known,
+ * constant velocity. NULL (or `n_obstacles == 0`): every radius 0, exactly
+ * [`ldcbf_step_moving`]. A radius that is negative, not finite or larger
+ * than 100 m/s, for an obstacle the cycle selects, gives
+ * [`LdcbfCycleStatus::InvalidInput`] with
+ * [`LdcbfInputError::ObstacleVelocityRadius`] and the hold command, as in
+ * Rust. Other results as [`ldcbf_step_moving`], plus a pointer error for a
+ * misaligned or overlapping `radii`.
+ *
+ * # Safety
+ * As [`ldcbf_step_moving`]; `radii`, when non-NULL and aligned, must be
+ * valid for reads of `n_obstacles` doubles.
+ */
+LdcbfResult ldcbf_step_uncertain(struct LdcbfController *ctl,
+                                 const struct LdcbfInput *input,
+                                 const double *points,
+                                 const uint32_t *point_counts,
+                                 uint32_t n_obstacles,
+                                 const double *velocities,
+                                 const double *radii,
+                                 struct LdcbfOutput *out);
 
 /**
  * The LIP's closed-form flow under the controller's model: from CoM position

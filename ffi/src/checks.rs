@@ -211,6 +211,38 @@ pub(crate) unsafe fn obstacle_velocities(
     Ok(buf)
 }
 
+/// The caller's `n` obstacle velocity uncertainty radii (`n` doubles at
+/// `radii`, m/s) copied into `buf`: empty when `radii` is NULL or `n` is 0
+/// (every radius 0), else checked for alignment and overlap with the
+/// controller (the values are the controller's to check).
+///
+/// # Safety
+/// As [`ldcbf_step_uncertain`](crate::ldcbf_step_uncertain) for `radii`;
+/// `n <= LDCBF_MAX_OBSTACLES`.
+pub(crate) unsafe fn obstacle_radii(
+    ctl: *const LdcbfController,
+    radii: *const f64,
+    n: usize,
+    buf: &mut [f64; LDCBF_MAX_OBSTACLES],
+) -> Result<&[f64], LdcbfResult> {
+    if radii.is_null() || n == 0 {
+        return Ok(&[]);
+    }
+    check_ptr(radii).and(check_disjoint(
+        radii,
+        n.saturating_mul(size_of::<f64>()),
+        ctl,
+    ))?;
+    let Some(buf) = buf.get_mut(..n) else {
+        return Err(LdcbfResult::TooManyObstacles);
+    };
+    // SAFETY: non-NULL, aligned, readable for `n` doubles by contract, at
+    // most `LDCBF_MAX_OBSTACLES * 8` bytes, outside the controller.
+    let given = unsafe { core::slice::from_raw_parts(radii, n) };
+    buf.copy_from_slice(given);
+    Ok(buf)
+}
+
 /// Validates the obstacles (convex hulls) into `buf`.
 pub(crate) fn load_obstacles(
     buf: &mut heapless::Vec<ConvexPolygon<LDCBF_MAX_VERTICES>, LDCBF_MAX_OBSTACLES, usize>,

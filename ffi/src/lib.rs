@@ -82,7 +82,7 @@ mod types;
 
 use checks::{
     LastError, Truncating, check_controller, check_disjoint, check_ptr, load_obstacles,
-    obstacle_slices, obstacle_velocities, overlaps,
+    obstacle_radii, obstacle_slices, obstacle_velocities, overlaps,
 };
 pub use types::{
     LdcbfCommandSource, LdcbfConfig, LdcbfCycleInfo, LdcbfCycleStatus, LdcbfInput, LdcbfInputError,
@@ -92,7 +92,7 @@ use types::{arr, side, xy};
 
 /// Version of this C API; [`ldcbf_api_version`] returns it. Compare the two
 /// to check that the header matches the library.
-pub const LDCBF_API_VERSION: u32 = 2;
+pub const LDCBF_API_VERSION: u32 = 3;
 
 /// Horizon `N`: footsteps planned per cycle (the length of the plan arrays of
 /// [`LdcbfPlan`]).
@@ -392,6 +392,51 @@ pub unsafe extern "C" fn ldcbf_step_moving(
     velocities: *const f64,
     out: *mut LdcbfOutput,
 ) -> LdcbfResult {
+    // SAFETY: the caller's contract, forwarded; NULL radii = known velocities.
+    unsafe {
+        ldcbf_step_uncertain(
+            ctl,
+            input,
+            points,
+            point_counts,
+            n_obstacles,
+            velocities,
+            core::ptr::null(),
+            out,
+        )
+    }
+}
+
+/// [`ldcbf_step_moving`] with velocity uncertainty radii: `radii` holds one
+/// double per obstacle (`n_obstacles` of them, m/s, world frame), the radius
+/// around the obstacle's velocity (or around rest, with NULL `velocities`)
+/// that holds its true velocity in any direction (docs/maths.md §2.7: the
+/// barrier then holds against the set a person can reach, with the
+/// configuration's `person_speed_max` and `person_accel_max`, and the robot
+/// walks no faster than it can stop in one step nearby). 0 is a known,
+/// constant velocity. NULL (or `n_obstacles == 0`): every radius 0, exactly
+/// [`ldcbf_step_moving`]. A radius that is negative, not finite or larger
+/// than 100 m/s, for an obstacle the cycle selects, gives
+/// [`LdcbfCycleStatus::InvalidInput`] with
+/// [`LdcbfInputError::ObstacleVelocityRadius`] and the hold command, as in
+/// Rust. Other results as [`ldcbf_step_moving`], plus a pointer error for a
+/// misaligned or overlapping `radii`.
+///
+/// # Safety
+/// As [`ldcbf_step_moving`]; `radii`, when non-NULL and aligned, must be
+/// valid for reads of `n_obstacles` doubles.
+#[unsafe(no_mangle)]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn ldcbf_step_uncertain(
+    ctl: *mut LdcbfController,
+    input: *const LdcbfInput,
+    points: *const f64,
+    point_counts: *const u32,
+    n_obstacles: u32,
+    velocities: *const f64,
+    radii: *const f64,
+    out: *mut LdcbfOutput,
+) -> LdcbfResult {
     // SAFETY: the caller's contract on `ctl`.
     if let Err(e) = unsafe { check_controller(ctl) } {
         return e;
@@ -450,6 +495,16 @@ pub unsafe extern "C" fn ldcbf_step_moving(
                 return e;
             }
         };
+    let mut spread = [0.0; LDCBF_MAX_OBSTACLES];
+    // SAFETY: forwarded contract on `radii`; `counts` has the checked
+    // obstacle count.
+    let radii = match unsafe { obstacle_radii(ctl, radii, counts.len(), &mut spread) } {
+        Ok(r) => r,
+        Err(e) => {
+            handle.last_error = LastError::Pointer("radii");
+            return e;
+        }
+    };
     let cycle = CycleInput {
         com_position: xy(input.com_position),
         com_velocity: xy(input.com_velocity),
@@ -461,6 +516,7 @@ pub unsafe extern "C" fn ldcbf_step_moving(
         goal: xy(input.goal),
         obstacles: &handle.obstacles,
         obstacle_velocities: velocities,
+        obstacle_velocity_radii: radii,
         speed_cap: ldcbf_controller::NO_SPEED_CAP,
     };
     let result = handle.controller.step(&cycle, None);

@@ -215,6 +215,9 @@ fn default_config_round_trips_to_the_rust_default() {
         foot_length: 0.22,
         foot_width: 0.10,
         turn_vertex_normals: true,
+        velocity_margin: false,
+        person_speed_max: 1.2,
+        person_accel_max: 0.5,
         ..Config::default()
     };
     assert_eq!(LdcbfConfig::from(&rust).to_config().unwrap(), rust);
@@ -737,6 +740,103 @@ fn step_moving_checks_the_velocities() {
     assert_eq!(unsafe { ldcbf_reset(ctl) }, LdcbfResult::Ok);
     assert_eq!(call(null(), &mut null_v), LdcbfResult::Ok);
     assert_eq!(format!("{at_rest:?}"), format!("{null_v:?}"));
+}
+
+/// `ldcbf_step_uncertain`: NULL radii are `ldcbf_step_moving`; a misaligned
+/// or overlapping array is a pointer error that writes nothing; a NaN or
+/// negative radius is the controller's input error with the hold command,
+/// and a positive one is the Rust controller's cycle, bit for bit.
+#[test]
+fn step_uncertain_checks_the_radii() {
+    let mut s = storage();
+    let ctl = configured(&mut s, &default_config());
+    let (points, counts) = two_obstacles();
+    let mut input = input_at_rest();
+    input.goal = [3.0, 3.0];
+    input.com_position = [1.0, 1.5];
+    input.stance_foot = [1.0, 1.5];
+    let mut out = sentinel();
+    let untouched = format!("{:?}", sentinel());
+    let velocities = [0.1, 0.0, 0.0, 0.0];
+    let call = |r: *const f64, out: &mut LdcbfOutput| unsafe {
+        ldcbf_reset(ctl);
+        ldcbf_step_uncertain(
+            ctl,
+            &input,
+            points.as_ptr(),
+            counts.as_ptr(),
+            2,
+            velocities.as_ptr(),
+            r,
+            out,
+        )
+    };
+    let radii = [0.3, 0.0, f64::NAN];
+    let misaligned = radii.as_ptr().cast::<u8>().wrapping_add(1).cast::<f64>();
+    assert_eq!(call(misaligned, &mut out), LdcbfResult::Misaligned);
+    assert_eq!(format!("{out:?}"), untouched);
+    assert!(last_error(ctl).contains("`radii`"), "{}", last_error(ctl));
+    assert_eq!(call(ctl.cast::<f64>(), &mut out), LdcbfResult::Overlap);
+    assert_eq!(format!("{out:?}"), untouched);
+    for bad in [[f64::NAN, 0.0], [-0.1, 0.0], [f64::INFINITY, 0.0]] {
+        assert_eq!(call(bad.as_ptr(), &mut out), LdcbfResult::Ok);
+        assert_eq!(out.status, LdcbfCycleStatus::InvalidInput);
+        assert_eq!(out.input_error, LdcbfInputError::ObstacleVelocityRadius);
+    }
+    // NULL radii: `ldcbf_step_moving`.
+    let mut moving = sentinel();
+    let mut null_r = sentinel();
+    assert_eq!(unsafe { ldcbf_reset(ctl) }, LdcbfResult::Ok);
+    let r = unsafe {
+        ldcbf_step_moving(
+            ctl,
+            &input,
+            points.as_ptr(),
+            counts.as_ptr(),
+            2,
+            velocities.as_ptr(),
+            &mut moving,
+        )
+    };
+    assert_eq!(r, LdcbfResult::Ok);
+    assert_eq!(call(null(), &mut null_r), LdcbfResult::Ok);
+    assert_eq!(format!("{moving:?}"), format!("{null_r:?}"));
+    // A radius: the Rust controller's cycle.
+    let mut c_out = sentinel();
+    assert_eq!(call(radii.as_ptr(), &mut c_out), LdcbfResult::Ok);
+    let obstacles: Vec<ConvexPolygon<LDCBF_MAX_VERTICES>> = [(0, 3), (3, 4)]
+        .iter()
+        .map(|&(at, n)| {
+            let pts: Vec<[f64; 2]> = (at..at + n)
+                .map(|i| [points[2 * i], points[2 * i + 1]])
+                .collect();
+            ConvexPolygon::hull(&pts).unwrap()
+        })
+        .collect();
+    let v = [Vector2::new(0.1, 0.0), Vector2::zeros()];
+    let mut rust = RobotController::new(Config::default()).unwrap();
+    let rust_out = rust.step(
+        &CycleInput {
+            com_position: Vector2::new(1.0, 1.5),
+            com_velocity: Vector2::zeros(),
+            heading: input.heading,
+            turning_rate: input.turning_rate,
+            stance_foot: Vector2::new(1.0, 1.5),
+            stance_side: ldcbf_controller::Side::Left,
+            time_in_step: input.time_in_step,
+            goal: Vector2::new(3.0, 3.0),
+            obstacles: &obstacles,
+            obstacle_velocities: &v,
+            obstacle_velocity_radii: &radii[..2],
+            speed_cap: ldcbf_controller::NO_SPEED_CAP,
+        },
+        None,
+    );
+    assert_eq!(
+        format!("{c_out:?}"),
+        format!("{:?}", LdcbfOutput::from(&rust_out))
+    );
+    assert_ne!(format!("{c_out:?}"), format!("{moving:?}"));
 }
 
 mod hostile;

@@ -99,6 +99,12 @@ pub enum LdcbfInputError {
     /// The velocity of a selected obstacle is not finite or faster than
     /// 100 m/s.
     ObstacleVelocity = 7,
+    /// Velocity uncertainty radii were given, but not one per obstacle (not
+    /// raised by the C API, which passes one per obstacle or none).
+    ObstacleVelocityRadiusCount = 8,
+    /// The velocity uncertainty radius of a selected obstacle is negative,
+    /// not finite or larger than 100 m/s.
+    ObstacleVelocityRadius = 9,
 }
 
 /// Where the command came from (the Rust controller's `CommandSource`).
@@ -204,6 +210,14 @@ pub struct LdcbfConfig {
     /// way to the goal least (for maps of grid cells); 0: the closest-point
     /// normal (the paper's).
     pub turn_vertex_normals: u8,
+    /// 1: use the obstacles' velocity uncertainty radii
+    /// ([`ldcbf_step_uncertain`](crate::ldcbf_step_uncertain)); 0: take
+    /// every radius as 0 (constant-velocity prediction, no margin).
+    pub velocity_margin: u8,
+    /// Largest speed of a person of uncertain velocity, m/s (> 0).
+    pub person_speed_max: f64,
+    /// Largest acceleration of a person of uncertain velocity, m/s^2 (>= 0).
+    pub person_accel_max: f64,
 }
 
 /// The measured state and the goal of one cycle (world frame).
@@ -380,6 +394,9 @@ impl From<&Config> for LdcbfConfig {
             warm_start: u8::from(c.warm_start),
             tol_primal: c.tol_primal,
             turn_vertex_normals: u8::from(c.turn_vertex_normals),
+            velocity_margin: u8::from(c.velocity_margin),
+            person_speed_max: c.person_speed_max,
+            person_accel_max: c.person_accel_max,
         }
     }
 }
@@ -392,6 +409,7 @@ impl LdcbfConfig {
         let capture = flag(self.capture_on, "capture_on")?;
         let warm = flag(self.warm_start, "warm_start")?;
         let turn = flag(self.turn_vertex_normals, "turn_vertex_normals")?;
+        let margin = flag(self.velocity_margin, "velocity_margin")?;
         Ok(Config {
             gravity: self.gravity,
             com_height: self.com_height,
@@ -419,6 +437,9 @@ impl LdcbfConfig {
             warm_start: warm,
             tol_primal: self.tol_primal,
             turn_vertex_normals: turn,
+            velocity_margin: margin,
+            person_speed_max: self.person_speed_max,
+            person_accel_max: self.person_accel_max,
         })
     }
 }
@@ -454,6 +475,10 @@ impl From<&CycleOutput<LDCBF_HORIZON>> for LdcbfOutput {
                     InputError::NotConfigured => LdcbfInputError::NotConfigured,
                     InputError::ObstacleVelocityCount => LdcbfInputError::ObstacleVelocityCount,
                     InputError::ObstacleVelocity => LdcbfInputError::ObstacleVelocity,
+                    InputError::ObstacleVelocityRadiusCount => {
+                        LdcbfInputError::ObstacleVelocityRadiusCount
+                    }
+                    InputError::ObstacleVelocityRadius => LdcbfInputError::ObstacleVelocityRadius,
                 },
             ),
         };

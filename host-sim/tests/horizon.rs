@@ -88,6 +88,7 @@ fn closed_loop<const N: usize, const NV: usize, const NC: usize>(
                 goal: subgoals[current],
                 obstacles: &sc.obstacles,
                 obstacle_velocities: &[],
+                obstacle_velocity_radii: &[],
                 speed_cap: ldcbf_controller::NO_SPEED_CAP,
             };
             let t0 = Instant::now();

@@ -245,6 +245,7 @@ fn check_case(case: &Case, b: u32, time_limit: f64) -> (String, Vec<String>, usi
             goal: c.goal,
             obstacles,
             obstacle_velocities: &[],
+            obstacle_velocity_radii: &[],
             speed_cap: ldcbf_controller::NO_SPEED_CAP,
         };
         ctl.assemble(&input, None, &mut asm).expect("valid input");

@@ -141,6 +141,7 @@ fn input<'a>(s: &State, obstacles: &'a [Polygon]) -> CycleInput<'a, 32> {
         goal: v(s.goal),
         obstacles,
         obstacle_velocities: &[],
+        obstacle_velocity_radii: &[],
         speed_cap: ldcbf_controller::NO_SPEED_CAP,
     }
 }

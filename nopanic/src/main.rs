@@ -46,6 +46,9 @@ static mut QPRAW: [f64; LNV * LNV + LNC * LNV + LNV + 2 * LNC + 2] =
 /// Opaque obstacle velocities (any bits, any count up to `NPOLY`).
 static mut VEL: [[f64; 2]; NPOLY] = [[0.0; 2]; NPOLY];
 
+/// Opaque velocity uncertainty radii (any bits, any count up to `NPOLY`).
+static mut RAD: [f64; NPOLY] = [0.0; NPOLY];
+
 /// Opaque candidate lists for `Controller::step` (any indices, in or out of range).
 static mut CAND: [u32; 16] = [0; 16];
 
@@ -109,6 +112,9 @@ fn config(r: &[f64; 64]) -> Config {
         warm_start: r[49] > 0.0,
         tol_primal: r[50],
         turn_vertex_normals: r[57] > 0.0,
+        velocity_margin: r[59] > 0.0,
+        person_speed_max: r[60],
+        person_accel_max: r[61],
     }
 }
 
@@ -116,6 +122,7 @@ fn input<'a>(
     r: &[f64; 64],
     obstacles: &'a [ConvexPolygon<V>],
     velocities: &'a [Vector2<f64>],
+    radii: &'a [f64],
 ) -> CycleInput<'a, V> {
     CycleInput {
         com_position: Vector2::new(r[0], r[1]),
@@ -128,6 +135,7 @@ fn input<'a>(
         goal: Vector2::new(r[10], r[11]),
         obstacles,
         obstacle_velocities: velocities,
+        obstacle_velocity_radii: radii,
         speed_cap: ldcbf_controller::NO_SPEED_CAP,
     }
 }
@@ -213,7 +221,14 @@ fn main() -> ! {
         }
         // SAFETY: plain volatile read of a static that is never referenced.
         let vel = unsafe { read_volatile(addr_of!(VEL)) }.map(|[x, y]| Vector2::new(x, y));
-        let inp = input(&r, obstacles, &vel[..len(r[58], NPOLY)]);
+        // SAFETY: plain volatile read of a static that is never referenced.
+        let rad = unsafe { read_volatile(addr_of!(RAD)) };
+        let inp = input(
+            &r,
+            obstacles,
+            &vel[..len(r[58], NPOLY)],
+            &rad[..len(r[62], NPOLY)],
+        );
         let a = paper.step(&inp, None);
         let b = foot.step(&inp, None);
         let mut out = summary(&a);

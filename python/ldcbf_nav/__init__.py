@@ -5,7 +5,12 @@
 * :func:`simulate`: a closed-loop run of the simulator behind ``ldcbf-sim run``
   (same scenarios, same ``--set`` overrides); its logs as numpy columns.
 * :func:`load_scenario`: a scenario, validated as ``ldcbf-sim`` loads it.
-* :func:`solve_qp`: the controller's dense dual active-set QP solver.
+* :func:`solve_qp`: the controller's dense dual active-set QP solver;
+  :func:`solve_dense` the same in qpsolvers' problem form (equalities and
+  bounds natively, numpy buffers read in place) and :class:`QpSolver` for
+  repeated solves with one ``P`` (factored once, warm-started).
+* qpsolvers: when it is installed, ``import ldcbf_nav`` registers the solver
+  as ``"ldcbf"`` (:mod:`ldcbf_nav.qpsolvers_backend`).
 
 Frames and units: world frame, metres, seconds, radians (headings
 counter-clockwise from the world x axis).
@@ -18,6 +23,7 @@ and its message name the argument or setting.
 
 from __future__ import annotations
 
+import importlib.util
 import os
 from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
@@ -28,9 +34,11 @@ from ._native import (
     ArgumentError,
     ConfigError,
     Controller,
+    QpSolver,
     ScenarioError,
     default_config,
     humanoid_config,
+    solve_dense,
     solve_qp,
 )
 
@@ -40,11 +48,13 @@ __all__ = [
     "ConfigError",
     "Controller",
     "QP_SIZES",
+    "QpSolver",
     "ScenarioError",
     "default_config",
     "humanoid_config",
     "load_scenario",
     "simulate",
+    "solve_dense",
     "solve_qp",
 ]
 
@@ -54,6 +64,13 @@ __version__ = "0.1.0"
 for _exc in (ArgumentError, ConfigError, ScenarioError):
     _exc.__module__ = __name__
 del _exc
+
+# qpsolvers' solver "ldcbf" (ldcbf_nav/qpsolvers_backend.py), when qpsolvers
+# is installed.
+if importlib.util.find_spec("qpsolvers") is not None:
+    from .qpsolvers_backend import register as _register
+
+    _register()
 
 ScenarioSpec = Union[str, "os.PathLike[str]", Mapping[str, Any]]
 

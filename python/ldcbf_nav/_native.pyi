@@ -125,9 +125,12 @@ class Controller:
         goal: _ArrayLike,
         obstacles: Optional[Sequence[_ArrayLike]] = None,
         obstacle_velocities: Optional[_ArrayLike] = None,
+        obstacle_velocity_radii: Optional[_ArrayLike] = None,
     ) -> _StepOutput:
         """One control cycle; ``obstacles`` are convex ``(k, 2)`` vertex arrays,
-        ``obstacle_velocities`` their velocities ``(n, 2)`` in m/s (None: at rest)."""
+        ``obstacle_velocities`` their velocities ``(n, 2)`` in m/s (None: at rest),
+        ``obstacle_velocity_radii`` their velocity uncertainty radii ``(n,)`` in m/s
+        (None: all 0, velocities known)."""
 
 def default_config() -> Dict[str, Any]:
     """The controller's defaults (the paper's Table I, a point robot)."""
@@ -155,6 +158,89 @@ def solve_qp(
     the same solver, any size). ``max_iter >= 1``; ``tol_primal`` and
     ``tol_dependence`` each in ``(0, 1e-3)`` (else ``ArgumentError``).
     """
+
+DenseResult = Tuple[
+    str,
+    np.ndarray,
+    np.ndarray,
+    np.ndarray,
+    Optional[np.ndarray],
+    float,
+    int,
+]
+
+def solve_dense(
+    P: _ArrayLike,
+    q: _ArrayLike,
+    G: Optional[_ArrayLike] = None,
+    h: Optional[_ArrayLike] = None,
+    A: Optional[_ArrayLike] = None,
+    b: Optional[_ArrayLike] = None,
+    lb: Optional[_ArrayLike] = None,
+    ub: Optional[_ArrayLike] = None,
+    initvals: Optional[_ArrayLike] = None,
+    *,
+    max_iter: int = 1000,
+    tol_primal: float = 1e-10,
+    tol_dependence: float = 1e-12,
+) -> DenseResult:
+    """``min 1/2 x'Px + q'x`` s.t. ``Gx <= h``, ``Ax = b``, ``lb <= x <= ub``
+    (qpsolvers' form), one cold solve.
+
+    Equalities are held as equality rows, finite bounds as simple bounds
+    (``-inf``/``+inf`` or an absent array: no bound). A C-contiguous float64
+    array is read in place; anything else is converted once (complex
+    entries refused). ``initvals``: a primal guess; the rows active or
+    violated there enter the active set first. Solved at the smallest
+    compiled size that holds ``n`` and the rows (:data:`QP_SIZES`), else by
+    the run-time-sized instance.
+
+    Returns ``(status, x, z, y, z_box, objective, iterations)``: ``z`` the
+    multipliers of ``G x <= h`` (m,), ``y`` of ``A x = b`` (me,), ``z_box``
+    of the bounds (n,; ``> 0`` where the upper bound is active, ``< 0`` the
+    lower; None without bounds), with ``P x + q + G'z + A'y + z_box = 0`` at
+    a solution. ``status``: ``solved``, ``infeasible`` (the multipliers hold
+    the Farkas certificate), ``iteration_limit`` or ``numerical_error``.
+    A bad member raises ``ArgumentError`` naming it (shape, non-finite
+    entry, ``P`` not symmetric positive (semi)definite).
+    """
+
+class QpSolver:
+    """Repeated QPs with one ``P`` (an MPC loop): ``P`` is checked and
+    factored once; each :meth:`solve` reuses the factor and the row storage
+    of the size chosen at the first solve (a compiled size when ``n`` and
+    the rows fit one; a new instance when the rows outgrow it) and starts
+    from the previous solve's active set (when the row count is unchanged).
+    """
+
+    def __init__(
+        self,
+        P: _ArrayLike,
+        *,
+        max_iter: int = 1000,
+        tol_primal: float = 1e-10,
+        tol_dependence: float = 1e-12,
+    ) -> None: ...
+    @property
+    def n(self) -> int:
+        """Number of variables."""
+    @property
+    def path(self) -> Optional[str]:
+        """``static`` or ``dynamic``: the instance of the last solve (None before)."""
+    def solve(
+        self,
+        q: _ArrayLike,
+        G: Optional[_ArrayLike] = None,
+        h: Optional[_ArrayLike] = None,
+        A: Optional[_ArrayLike] = None,
+        b: Optional[_ArrayLike] = None,
+        lb: Optional[_ArrayLike] = None,
+        ub: Optional[_ArrayLike] = None,
+        *,
+        warm_start: Union[bool, _ArrayLike, None] = True,
+    ) -> DenseResult:
+        """As :func:`solve_dense` with this ``P``. ``warm_start``: ``True``
+        (the previous active set), ``False`` (cold) or a primal guess."""
 
 def load_scenario(
     scenario: Union[str, Dict[str, Any]],

@@ -118,10 +118,18 @@ impl PyController {
     /// with status `"invalid_input"` and the hold command, as onboard.
     /// `obstacle_velocities` (`(n, 2)`, m/s, world frame, one per obstacle):
     /// the obstacles' constant velocities over the horizon; `None` = all at
-    /// rest. A count other than the obstacles' or a non-finite or absurd
+    /// rest. A count other than the obstacles' (an empty array with
+    /// obstacles too) or a non-finite or absurd
     /// velocity is the controller's answer too (`input_error`
     /// `"obstacle_velocity_count"`, `"obstacle_velocity"`).
-    #[pyo3(signature = (com_position, com_velocity, heading, turning_rate, stance_foot, stance_side, time_in_step, goal, obstacles=None, obstacle_velocities=None))]
+    /// `obstacle_velocity_radii` (`(n,)`, m/s, one per obstacle): the radius
+    /// around each velocity (or around rest) that holds the true velocity,
+    /// in any direction (docs/maths.md §2.7: the barrier holds against the
+    /// set a person can reach; 0 = known velocity); `None` = all 0. A count
+    /// other than the obstacles' or a negative or non-finite radius is the
+    /// controller's answer (`"obstacle_velocity_radius_count"`,
+    /// `"obstacle_velocity_radius"`).
+    #[pyo3(signature = (com_position, com_velocity, heading, turning_rate, stance_foot, stance_side, time_in_step, goal, obstacles=None, obstacle_velocities=None, obstacle_velocity_radii=None))]
     #[allow(clippy::too_many_arguments)]
     fn step<'py>(
         &mut self,
@@ -136,9 +144,11 @@ impl PyController {
         goal: &Bound<'py, PyAny>,
         obstacles: Option<&Bound<'py, PyAny>>,
         obstacle_velocities: Option<&Bound<'py, PyAny>>,
+        obstacle_velocity_radii: Option<&Bound<'py, PyAny>>,
     ) -> PyResult<Bound<'py, PyDict>> {
         let obstacles = polygons(obstacles)?;
-        let velocities = velocities(obstacle_velocities)?;
+        let velocities = velocities(obstacle_velocities, obstacles.len())?;
+        let radii = radii(obstacle_velocity_radii)?;
         let input = CycleInput {
             com_position: vec2(com_position, "com_position")?,
             com_velocity: vec2(com_velocity, "com_velocity")?,
@@ -150,6 +160,7 @@ impl PyController {
             goal: vec2(goal, "goal")?,
             obstacles: &obstacles,
             obstacle_velocities: &velocities,
+            obstacle_velocity_radii: &radii,
             speed_cap: ldcbf_controller::NO_SPEED_CAP,
         };
         with_controller!(&mut self.inner, c => output_dict(py, &c.step(&input, None)))

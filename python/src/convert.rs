@@ -7,7 +7,10 @@ use ldcbf_controller::{ConvexPolygon, Side};
 use ldcbf_sim::scenario::limits::{MAX_ECHO, shorten};
 use ldcbf_sim::world::{MAX_VERTICES, Polygon};
 use numpy::ndarray::Array2;
-use numpy::{IntoPyArray, PyArray1, PyArrayMethods, PyUntypedArrayMethods};
+use numpy::{
+    IntoPyArray, PyArray1, PyArrayDescrMethods, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn,
+    PyUntypedArray, PyUntypedArrayMethods,
+};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyList, PyString};
@@ -45,20 +48,55 @@ pub(crate) fn str_arg(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<String> {
     })
 }
 
-/// `obj` as a C-contiguous float64 numpy array (`numpy.ascontiguousarray`),
-/// its shape and its entries; a conversion failure names `field`.
-pub(crate) fn float_array(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<(Vec<usize>, Vec<f64>)> {
+/// `obj` as a C-contiguous float64 numpy array, borrowed read-only: read
+/// where it lies when it is one, else converted once
+/// (`numpy.ascontiguousarray(obj, float64)`). Complex entries are refused
+/// (numpy would drop their imaginary parts with only a warning); a
+/// conversion failure names `field`.
+pub(crate) fn readonly_f64<'py>(
+    obj: &Bound<'py, PyAny>,
+    field: &str,
+) -> PyResult<PyReadonlyArrayDyn<'py, f64>> {
+    if let Ok(a) = obj.cast::<PyArrayDyn<f64>>()
+        && a.is_c_contiguous()
+    {
+        return Ok(a.readonly());
+    }
     let py = obj.py();
     let np = py.import("numpy")?;
     let arr = np
-        .call_method1("ascontiguousarray", (obj, np.getattr("float64")?))
+        .call_method1("asarray", (obj,))
+        .or_arg(|e| arg_err(py, field, format!("not an array of numbers ({e})")))?;
+    if let Ok(a) = arr.cast::<PyUntypedArray>()
+        && a.dtype().kind() == b'c'
+    {
+        return Err(arg_err(
+            py,
+            field,
+            format!(
+                "complex entries are not supported (dtype {}): pass the real part explicitly",
+                a.dtype()
+            ),
+        ));
+    }
+    let arr = np
+        .call_method1("ascontiguousarray", (arr, np.getattr("float64")?))
         .or_arg(|e| arg_err(py, field, format!("not an array of numbers ({e})")))?;
     let arr = arr
-        .cast_into::<numpy::PyArrayDyn<f64>>()
+        .cast_into::<PyArrayDyn<f64>>()
         .map_err(|_| arg_err(py, field, "not an array of float64"))?;
-    let shape = arr.shape().to_vec();
-    let ro = arr.readonly();
-    let data = ro.as_slice().map_err(|e| arg_err(py, field, e))?.to_vec();
+    Ok(arr.readonly())
+}
+
+/// `obj` as a C-contiguous float64 array ([`readonly_f64`]): its shape and
+/// its entries, copied.
+pub(crate) fn float_array(obj: &Bound<'_, PyAny>, field: &str) -> PyResult<(Vec<usize>, Vec<f64>)> {
+    let ro = readonly_f64(obj, field)?;
+    let shape = ro.shape().to_vec();
+    let data = ro
+        .as_slice()
+        .map_err(|e| arg_err(obj.py(), field, e))?
+        .to_vec();
     Ok((shape, data))
 }
 
@@ -144,16 +182,26 @@ pub(crate) fn polygons(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<Polygon>>
     Ok(out)
 }
 
-/// Obstacle velocities, `(n, 2)` (m/s); `None` or an empty array: none
-/// (every obstacle at rest).
-pub(crate) fn velocities(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<Vector2<f64>>> {
+/// Obstacle velocities, `(k, 2)` (m/s), for `obstacles` obstacles; `None`:
+/// none (every obstacle at rest). A given count `k` other than `obstacles`
+/// is left to the controller, which answers `invalid_input`
+/// (`obstacle_velocity_count`): an empty array with obstacles too, passed on
+/// as `obstacles + 1` zero velocities, since an empty slice means "all at
+/// rest" to the controller.
+pub(crate) fn velocities(
+    obj: Option<&Bound<'_, PyAny>>,
+    obstacles: usize,
+) -> PyResult<Vec<Vector2<f64>>> {
     const FIELD: &str = "obstacle_velocities";
     let Some(obj) = obj.filter(|o| !o.is_none()) else {
         return Ok(Vec::new());
     };
     let (shape, d) = float_array(obj, FIELD)?;
-    if shape == [0] {
-        return Ok(Vec::new());
+    if shape == [0] || shape == [0, 2] {
+        return Ok(vec![
+            Vector2::zeros();
+            if obstacles > 0 { obstacles + 1 } else { 0 }
+        ]);
     }
     if shape.len() != 2 || shape[1] != 2 {
         return Err(arg_err(
@@ -165,6 +213,24 @@ pub(crate) fn velocities(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<Vector2
     Ok(d.chunks_exact(2)
         .map(|c| Vector2::new(c[0], c[1]))
         .collect())
+}
+
+/// The obstacles' velocity uncertainty radii (`(n,)`, m/s): empty for
+/// `None` or an empty array (every radius 0).
+pub(crate) fn radii(obj: Option<&Bound<'_, PyAny>>) -> PyResult<Vec<f64>> {
+    const FIELD: &str = "obstacle_velocity_radii";
+    let Some(obj) = obj.filter(|o| !o.is_none()) else {
+        return Ok(Vec::new());
+    };
+    let (shape, d) = float_array(obj, FIELD)?;
+    if shape.len() != 1 {
+        return Err(arg_err(
+            obj.py(),
+            FIELD,
+            format!("expected one radius per obstacle, shape (n,), got shape {shape:?}"),
+        ));
+    }
+    Ok(d)
 }
 
 // ------------------------------------------------------------------ arrays out

@@ -9,7 +9,10 @@
 //! * [`simulate`]: a closed-loop run of `ldcbf-sim` (the library behind
 //!   `ldcbf-sim run`), its logs as numpy columns and its summary;
 //! * [`load_scenario`]: a scenario, validated as `ldcbf-sim` loads it;
-//! * [`solve_qp`]: the dense dual active-set QP solver at its compiled sizes.
+//! * [`solve_qp`]: the dense dual active-set QP solver at its compiled sizes;
+//!   [`solve_dense`] and [`PyQpSolver`] (`QpSolver`): the same in qpsolvers'
+//!   problem form, numpy buffers read in place, `P` factored once for repeated
+//!   solves.
 //!
 //! Every bad argument raises a Python exception (`ArgumentError`, a
 //! `ValueError`, or its subclasses `ConfigError` and `ScenarioError`) whose
@@ -20,11 +23,12 @@
 //!
 //! Modules by concern: [`errors`] (the exceptions), [`convert`] (Python objects
 //! in, numpy arrays out), [`config`] (the settings dict), [`controller`],
-//! [`simulation`] (scenarios and runs), [`qp`].
+//! [`simulation`] (scenarios and runs), [`qp`], [`dense`].
 
 mod config;
 mod controller;
 mod convert;
+mod dense;
 mod errors;
 mod qp;
 mod simulation;
@@ -33,6 +37,7 @@ use pyo3::prelude::*;
 
 use config::{CONFIG_FIELDS, default_config, humanoid_config};
 use controller::PyController;
+use dense::{PyQpSolver, solve_dense};
 use errors::{ArgumentError, ConfigError, ScenarioError};
 use qp::{QP_SIZES, solve_qp};
 use simulation::{load_scenario, simulate};
@@ -45,6 +50,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(simulate, m)?)?;
     m.add_function(wrap_pyfunction!(load_scenario, m)?)?;
     m.add_function(wrap_pyfunction!(solve_qp, m)?)?;
+    m.add_function(wrap_pyfunction!(solve_dense, m)?)?;
+    m.add_class::<PyQpSolver>()?;
     m.add_function(wrap_pyfunction!(default_config, m)?)?;
     m.add_function(wrap_pyfunction!(humanoid_config, m)?)?;
     m.add("ArgumentError", py.get_type::<ArgumentError>())?;

@@ -91,15 +91,29 @@ START = dict(
 
 
 def test_at_rest_is_no_velocities():
-    a, b, c = (Controller(HUMANOID) for _ in range(3))
+    a, b = (Controller(HUMANOID) for _ in range(2))
     for t in (0.0, 0.1, 0.3):
         args = dict(START, time_in_step=t)
         none = a.step(**args)
         zeros = b.step(**args, obstacle_velocities=[[0.0, 0.0]])
-        empty = c.step(**args, obstacle_velocities=np.zeros((0, 2)))
-        for o in (zeros, empty):
-            assert o["foot_target"].tobytes() == none["foot_target"].tobytes()
-            assert bits(o["info"]["cost"]) == bits(none["info"]["cost"])
+        assert zeros["foot_target"].tobytes() == none["foot_target"].tobytes()
+        assert bits(zeros["info"]["cost"]) == bits(none["info"]["cost"])
+
+
+@pytest.mark.parametrize("empty", [[], np.zeros((0, 2)), np.zeros(0)])
+def test_no_velocities_for_obstacles_is_a_count_mismatch(empty):
+    """An empty array given with obstacles is a count mismatch like any
+    other (None is "all at rest"); without obstacles it is the empty list."""
+    out = Controller(HUMANOID).step(**START, obstacle_velocities=empty)
+    assert (out["status"], out["input_error"]) == (
+        "invalid_input",
+        "obstacle_velocity_count",
+    )
+    assert out["info"]["source"] == "hold"
+    free = dict(START, obstacles=[])
+    out = Controller(HUMANOID).step(**free, obstacle_velocities=empty)
+    ref = Controller(HUMANOID).step(**free)
+    assert out["foot_target"].tobytes() == ref["foot_target"].tobytes()
 
 
 def test_bad_velocities_are_the_controllers_answer():
@@ -116,3 +130,30 @@ def test_bad_velocities_are_the_controllers_answer():
 def test_bad_velocity_shapes_name_the_argument(bad):
     with pytest.raises(ldcbf_nav.ArgumentError, match="obstacle_velocities"):
         Controller().step(**START, obstacle_velocities=bad)
+
+
+def test_velocity_radii_widen_the_barrier_and_bad_ones_are_the_controllers_answer():
+    """`obstacle_velocity_radii`: zeros (or None) are the known velocities bit
+    for bit; a radius moves the plan (the set the person can reach); a NaN,
+    negative or miscounted radius is an input error with the hold command."""
+    ctl = Controller()
+    v = [[0.0, 0.0]]
+    known = ctl.step(**START, obstacle_velocities=v)
+    ctl.reset()
+    zeros = ctl.step(**START, obstacle_velocities=v, obstacle_velocity_radii=[0.0])
+    assert zeros["foot_target"].tobytes() == known["foot_target"].tobytes()
+    ctl.reset()
+    wide = ctl.step(**START, obstacle_velocities=v, obstacle_velocity_radii=[1.5])
+    assert wide["status"] != "invalid_input"
+    assert wide["plan"]["states"].tobytes() != known["plan"]["states"].tobytes()
+    for bad, name in (
+        ([math.nan], "obstacle_velocity_radius"),
+        ([-0.1], "obstacle_velocity_radius"),
+        ([0.1, 0.2], "obstacle_velocity_radius_count"),
+    ):
+        out = Controller().step(**START, obstacle_velocities=v, obstacle_velocity_radii=bad)
+        assert out["status"] == "invalid_input"
+        assert out["input_error"] == name
+        assert out["info"]["source"] == "hold"
+    with pytest.raises(ldcbf_nav.ArgumentError, match="obstacle_velocity_radii"):
+        Controller().step(**START, obstacle_velocity_radii=[[0.1]])

@@ -13,6 +13,8 @@
 //! * [`DenseProblem::stacked`] gives it as one row list, equalities first, then
 //!   `G`, then the finite bounds ([`Stacked`]): the solvers' input, in whose
 //!   order all multipliers come ([`Stacked::split_multipliers`] maps them back).
+//!   [`ProblemView`] is the same problem borrowed (slices): it defines the
+//!   stacked order once and writes the rows straight into the solver's types.
 //! * [`solve_clarabel`] solves it with Clarabel (verbose off, tight tolerances).
 //! * [`solve_own`] solves it with [`DualActiveSet`] at a fixed size, [`solve_own_dyn`] with the run-time-sized instance (no
 //!   equality rows).
@@ -41,6 +43,7 @@ mod npz;
 mod problem;
 mod random;
 mod stacked;
+mod view;
 
 pub use check::{
     AGREEMENT_TOL, Candidate, Farkas, StackedAgreement, StackedKkt, compare_stacked, farkas_holds,
@@ -51,6 +54,7 @@ pub use equivalence::{Agreement, Kkt, compare, kkt, solve_own, solve_own_dyn};
 pub use problem::{DenseProblem, ProblemError, SizedQp};
 pub use random::{QpKind, random_problem};
 pub use stacked::{Multipliers, RowOrigin, Stacked};
+pub use view::ProblemView;
 
 #[cfg(test)]
 mod tests;

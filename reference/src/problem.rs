@@ -1,9 +1,7 @@
 //! The dense QP [`DenseProblem`]: built from the controller's assembly or
 //! storage types and shaped back into them (the npz layout is in `npz.rs`).
 
-use ldcbf_controller::nalgebra::{
-    Const, DMatrix, DefaultAllocator, Dim, Dyn, OMatrix, OVector, SMatrix, U1,
-};
+use ldcbf_controller::nalgebra::{Const, DMatrix, DefaultAllocator, Dim, Dyn, OMatrix, SMatrix};
 use ldcbf_controller::{
     Assembly, DenseQp, DenseQpDyn, DenseQpOf, DualActiveSet, HessianError, QpAllocator,
 };
@@ -228,69 +226,7 @@ impl DenseProblem {
 
     /// [`DenseProblem::validate`] with `what` (`field`, `key`) naming the members.
     pub(crate) fn check(&self, what: &'static str) -> Result<(), ProblemError> {
-        let (n, m, me) = (self.n, self.m, self.me);
-        let vector = |v: &[f64]| if v.is_empty() { 0 } else { n };
-        // (key, values, rows, columns of a matrix)
-        let members: [(&str, &[f64], usize, Option<usize>); 8] = [
-            ("P", &self.P, n, Some(n)),
-            ("q", &self.q, n, None),
-            ("G", &self.G, m, Some(n)),
-            ("h", &self.h, m, None),
-            ("A", &self.A, me, Some(n)),
-            ("b", &self.b, me, None),
-            ("lb", &self.lb, vector(&self.lb), None),
-            ("ub", &self.ub, vector(&self.ub), None),
-        ];
-        for (key, v, rows, cols) in members {
-            if rows.checked_mul(cols.unwrap_or(1)) != Some(v.len()) {
-                let shape = match cols {
-                    Some(c) => format!("{rows} x {c}"),
-                    None => format!("{rows}"),
-                };
-                return Err(ProblemError::MemberLength {
-                    naming: what,
-                    key,
-                    len: v.len(),
-                    shape,
-                    n,
-                    m,
-                    me,
-                });
-            }
-            for (k, &x) in v.iter().enumerate() {
-                let bad = match (key, x) {
-                    (_, x) if x.is_nan() => "NaN",
-                    ("lb", f64::INFINITY) => "+inf (a lower bound no x meets)",
-                    ("ub", f64::NEG_INFINITY) => "-inf (an upper bound no x meets)",
-                    ("lb" | "ub", _) => continue,
-                    (_, x) if x.is_infinite() => "infinite",
-                    _ => continue,
-                };
-                let at = match cols {
-                    Some(c) => format!("[{}, {}]", k / c, k % c),
-                    None => format!("[{k}]"),
-                };
-                return Err(ProblemError::MemberValue {
-                    naming: what,
-                    key,
-                    at,
-                    bad,
-                });
-            }
-        }
-        if !self.lb.is_empty() && !self.ub.is_empty() {
-            for (j, (l, u)) in self.lb.iter().zip(&self.ub).enumerate() {
-                if l > u {
-                    return Err(ProblemError::Bounds {
-                        naming: what,
-                        index: j,
-                        lower: *l,
-                        upper: *u,
-                    });
-                }
-            }
-        }
-        Ok(())
+        self.view().check(what)
     }
 
     /// Objective `1/2 x'Px + q'x` (NaN when `x` or the members have the wrong
@@ -360,34 +296,6 @@ impl DenseProblem {
     where
         DefaultAllocator: QpAllocator<V, C>,
     {
-        let n = nv.value();
-        let rows = self.rows();
-        if self.n != n || rows > nc.value() {
-            return Err(ProblemError::SolverSize {
-                n: self.n,
-                rows,
-                nv: n,
-                nc: nc.value(),
-            });
-        }
-        if Some(self.P.len()) != n.checked_mul(n) || self.q.len() != n {
-            return Err(ProblemError::NotValidated { n });
-        }
-        let st = self.stacked();
-        let H = OMatrix::<f64, V, V>::from_fn_generic(nv, nv, |i, j| self.P[i * n + j]);
-        let mut qp = DenseQpOf::<V, C>::with_q_generic(
-            OVector::<f64, V>::from_fn_generic(nv, U1, |i, _| self.q[i]),
-            nc,
-        );
-        for i in 0..st.m {
-            let g = OVector::<f64, V>::from_fn_generic(nv, U1, |j, _| st.G[i * n + j]);
-            let pushed = if i < st.me {
-                qp.push_equality(&g, st.h[i])
-            } else {
-                qp.push_row(&g, st.h[i])
-            };
-            pushed.map_err(|_| ProblemError::RowCapacity)?;
-        }
-        Ok((H, qp))
+        self.view().to_qp(nv, nc)
     }
 }

@@ -88,7 +88,6 @@ impl DenseProblem {
     /// wrong length read as NaN ([`DenseProblem::validate`] reports them).
     pub fn stacked(&self) -> Stacked {
         let n = self.n;
-        let at = |v: &[f64], k: usize| v.get(k).copied().unwrap_or(f64::NAN);
         let mut st = Stacked {
             n,
             me: self.me,
@@ -97,27 +96,13 @@ impl DenseProblem {
             h: Vec::with_capacity(self.rows()),
             origin: Vec::with_capacity(self.rows()),
         };
-        let push = |st: &mut Stacked, row: &mut dyn Iterator<Item = f64>, h, o| {
-            st.G.extend(row);
-            st.h.push(h);
+        let view = self.view();
+        let mut g = vec![0.0; n];
+        for o in view.origins() {
+            st.h.push(view.row_into(o, &mut g));
+            st.G.extend_from_slice(&g);
             st.origin.push(o);
             st.m += 1;
-        };
-        for i in 0..self.me {
-            let mut row = (0..n).map(|j| at(&self.A, i * n + j));
-            push(&mut st, &mut row, at(&self.b, i), RowOrigin::Eq(i));
-        }
-        for i in 0..self.m {
-            let mut row = (0..n).map(|j| at(&self.G, i * n + j));
-            push(&mut st, &mut row, at(&self.h, i), RowOrigin::Ineq(i));
-        }
-        for (j, &u) in self.ub.iter().enumerate().filter(|(_, u)| u.is_finite()) {
-            let mut row = (0..n).map(|k| if k == j { 1.0 } else { 0.0 });
-            push(&mut st, &mut row, u, RowOrigin::Upper(j));
-        }
-        for (j, &l) in self.lb.iter().enumerate().filter(|(_, l)| l.is_finite()) {
-            let mut row = (0..n).map(|k| if k == j { -1.0 } else { 0.0 });
-            push(&mut st, &mut row, -l, RowOrigin::Lower(j));
         }
         st
     }
@@ -144,23 +129,6 @@ impl Stacked {
             .iter()
             .filter(|o| matches!(o, RowOrigin::Ineq(_)))
             .count();
-        let mut out = Multipliers {
-            eq: vec![0.0; self.me],
-            ineq: vec![0.0; ineq],
-            lower: vec![0.0; self.n],
-            upper: vec![0.0; self.n],
-        };
-        for (&o, &v) in self.origin.iter().zip(y) {
-            let slot = match o {
-                RowOrigin::Eq(i) => out.eq.get_mut(i),
-                RowOrigin::Ineq(i) => out.ineq.get_mut(i),
-                RowOrigin::Upper(j) => out.upper.get_mut(j),
-                RowOrigin::Lower(j) => out.lower.get_mut(j),
-            };
-            if let Some(s) = slot {
-                *s = v;
-            }
-        }
-        Ok(out)
+        crate::view::split(self.origin.iter().copied(), self.n, self.me, ineq, y)
     }
 }

@@ -189,6 +189,7 @@ fn check_case<const N: usize, const NV: usize, const NC: usize>(
         ),
         obstacles: &polys,
         obstacle_velocities: &[],
+        obstacle_velocity_radii: &[],
         speed_cap: ldcbf_controller::NO_SPEED_CAP,
     };
     let mut ctl =

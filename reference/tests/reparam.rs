@@ -325,6 +325,7 @@ fn compare_with_spec<const N: usize, const NV: usize, const NC: usize>(
             goal: c.goal,
             obstacles: &polys,
             obstacle_velocities: &[],
+            obstacle_velocity_radii: &[],
             speed_cap: ldcbf_controller::NO_SPEED_CAP,
         };
         let mut ctl = Controller::<N, NV, NC, 8>::new(cfg).expect("valid configuration");

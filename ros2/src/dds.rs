@@ -204,13 +204,9 @@ pub fn spin(params: &Params, mut nav: NavNode, idle: Option<Duration>) -> Result
         // Scans and odometry before gait states: a gait state waits for them.
         for s in scan.as_ref().map(drain).unwrap_or_default() {
             any = true;
-            match nav.on_scan(s) {
-                Ok(Some(m)) => {
-                    out.publish(m)?;
-                    cycles += 1;
-                }
-                Ok(None) => {}
-                Err(e) => eprintln!("ldcbf-ros2: scan refused: {e:#}"),
+            if let Some(m) = nav.on_scan(s) {
+                out.publish(m)?;
+                cycles += 1;
             }
         }
         for o in drain(&odom) {
@@ -226,6 +222,9 @@ pub fn spin(params: &Params, mut nav: NavNode, idle: Option<Duration>) -> Result
                 out.publish(m)?;
                 cycles += 1;
             }
+        }
+        for line in nav.take_log() {
+            eprintln!("ldcbf-ros2: {line}");
         }
         if any {
             last_input = Instant::now();

@@ -4,6 +4,7 @@
 //! * [`msgs`]: the ROS 2 messages (standard ones and `ldcbf_msgs`), field for
 //!   field;
 //! * [`node`]: the node's logic without DDS (messages <-> controller, the cycle);
+//! * [`guard`]: refused inputs (counted, logged) and clock jumps;
 //! * [`params`]: the YAML parameter file (ROS 2 layout);
 //! * [`record`]: the inputs of an `ldcbf-sim` run as messages, with the
 //!   commands the node must answer (the DDS test's data);
@@ -12,6 +13,7 @@
 //! * [`dds`]: topics, QoS and the node's loop on DDS.
 
 pub mod dds;
+pub mod guard;
 pub mod msgs;
 pub mod node;
 pub mod params;
@@ -27,7 +29,7 @@ use crate::node::NavNode;
 use crate::params::Params;
 
 /// The node of `params`: the controller configured by the map scenario, its
-/// obstacles as the known map (or, with `perception: lidar`, its `[lidar]`
+/// obstacles (and their velocities) as the known map (or, with `perception: lidar`, its `[lidar]`
 /// settings for the perception of `/scan`).
 pub fn nav_node(params: &Params) -> Result<NavNode> {
     let sc = load(
@@ -40,7 +42,8 @@ pub fn nav_node(params: &Params) -> Result<NavNode> {
     .with_context(|| format!("map {}", params.map))?;
     let ctl = RobotController::new(sc.config)
         .map_err(|e| anyhow::anyhow!("map {}: controller: {e}", params.map))?;
-    let nav = NavNode::new(ctl, sc.obstacles, &params.frame_id);
+    let nav = NavNode::moving(ctl, sc.obstacles, &sc.velocities, &params.frame_id)
+        .with_context(|| format!("map {}", params.map))?;
     Ok(if params.lidar {
         nav.with_lidar(sc.lidar)
     } else {

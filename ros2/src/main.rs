@@ -41,12 +41,22 @@ enum Command {
     Record {
         /// Scenario name or path.
         scenario: String,
-        /// Output JSON file.
+        /// Output JSON file (written atomically; an existing file is
+        /// replaced only if it is an earlier recording).
         file: PathBuf,
         /// Scenario overrides, as `ldcbf-sim run --set`.
         #[arg(long = "set", value_name = "KEY=VALUE")]
         sets: Vec<String>,
     },
+}
+
+/// Whether the file at `p` is an earlier `record` output (it may be
+/// replaced): it begins as [`ldcbf_ros2::record::Played`]'s JSON does.
+fn is_recording(p: &std::path::Path) -> bool {
+    use std::io::Read as _;
+    const HEAD: &[u8] = b"{\"scenario\":";
+    let mut head = [0u8; HEAD.len()];
+    std::fs::File::open(p).is_ok_and(|mut f| f.read_exact(&mut head).is_ok() && head == HEAD)
 }
 
 fn params(cli: &Cli) -> Result<Params> {
@@ -110,13 +120,12 @@ fn main_result(cli: Cli) -> Result<()> {
                     .with_context(|| format!("--set {s}: expected KEY=VALUE"))?;
                 kv.push((k.to_string(), v.to_string()));
             }
+            ldcbf_sim::report::check_output_file(&file, is_recording)
+                .with_context(|| format!("{}", file.display()))?;
             let played = ldcbf_ros2::record::play(&scenario, &kv, &params.frame_id)?;
             let text = serde_json::to_string(&played)?;
-            let tmp = file.with_extension("json.tmp");
-            std::fs::write(&tmp, text)
-                .with_context(|| format!("{}: cannot write", tmp.display()))?;
-            std::fs::rename(&tmp, &file)
-                .with_context(|| format!("{}: cannot write", file.display()))?;
+            ldcbf_sim::report::write_output_file(&file, &text, is_recording)
+                .with_context(|| format!("{}", file.display()))?;
             println!(
                 "{}: {} cycles ({} equal to the run's command bit for bit)",
                 file.display(),

@@ -2,14 +2,82 @@
 //! (`<node name>: ros__parameters: {...}`, nested maps for dotted names), as
 //! `ros2 run ... --ros-args --params-file FILE` would read it. Example:
 //! `ros2/config/ldcbf_nav.yaml`.
+//!
+//! The node's section is `ldcbf_nav:`, `/ldcbf_nav:` or the wildcard `/**:`
+//! (applied first; the node's own sections override it); sections of other
+//! nodes are ignored, as ROS 2 ignores them. Refused before anything is
+//! built: a file that is not a regular file of at most
+//! [`ldcbf_sim::scenario::limits::MAX_FILE_BYTES`] (a device, a FIFO: the
+//! simulator's rule for its input files), a YAML alias (`*name`, also `<<:`
+//! merges: expanded, a few lines make gigabytes), nesting deeper than
+//! [`MAX_DEPTH`], a second YAML document, two topics with one name (every
+//! topic carries its own message type), a topic name that is not a ROS 2
+//! name.
 
 use std::path::Path;
 
 use anyhow::{Context, Result, bail};
-use yaml_rust2::{Yaml, YamlLoader};
+use yaml_rust2::parser::Parser;
+use yaml_rust2::{Event, Yaml, YamlLoader};
 
 /// The node's name in the parameter file and on the graph.
 pub const NODE_NAME: &str = "ldcbf_nav";
+
+/// Deepest nesting of maps and lists in a parameter file (the node's keys
+/// need 4: `ldcbf_nav.ros__parameters.topics.goal`).
+pub const MAX_DEPTH: usize = 16;
+
+/// Checks the YAML events of `text` (named `file`) without building
+/// anything: one document, no alias, at most [`MAX_DEPTH`] levels.
+fn check_events(file: &str, text: &str) -> Result<()> {
+    let mut parser = Parser::new_from_str(text);
+    let (mut docs, mut depth) = (0usize, 0usize);
+    loop {
+        let (ev, mark) = parser
+            .next_token()
+            .map_err(|e| anyhow::anyhow!("{file}: not YAML: {e}"))?;
+        let line = mark.line();
+        match ev {
+            Event::StreamEnd => return Ok(()),
+            Event::DocumentStart => {
+                docs += 1;
+                if docs > 1 {
+                    bail!(
+                        "{file}: line {line}: a second YAML document (`---`); a parameter file has one"
+                    );
+                }
+            }
+            Event::Alias(_) => bail!(
+                "{file}: line {line}: a YAML alias (`*name` or a `<<:` merge); \
+                 parameter files may not use aliases"
+            ),
+            Event::MappingStart(..) | Event::SequenceStart(..) => {
+                depth += 1;
+                if depth > MAX_DEPTH {
+                    bail!("{file}: line {line}: nested more than {MAX_DEPTH} levels deep");
+                }
+            }
+            Event::MappingEnd | Event::SequenceEnd => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+    }
+}
+
+/// Whether `name` is an absolute ROS 2 topic name: `/` then tokens of
+/// letters, digits and `_` separated by single `/`, none starting with a
+/// digit, no trailing `/`.
+pub fn valid_topic_name(name: &str) -> bool {
+    let Some(rest) = name.strip_prefix('/') else {
+        return false;
+    };
+    !rest.is_empty()
+        && rest.split('/').all(|t| {
+            t.chars()
+                .next()
+                .is_some_and(|c| c.is_ascii_alphabetic() || c == '_')
+                && t.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+        })
+}
 
 /// Topic names of the node.
 #[derive(Clone, Debug, PartialEq)]
@@ -93,22 +161,67 @@ fn string(file: &str, v: &Yaml, name: &str) -> Result<String> {
 }
 
 impl Params {
-    /// Parses the text of a parameter file named `file`; keys not given keep
-    /// their defaults, unknown keys are errors (naming the file and the key).
+    /// Parses the text of a parameter file named `file` (module docs); keys
+    /// not given keep their defaults, unknown keys are errors (naming the
+    /// file and the key).
     pub fn parse(file: &str, text: &str) -> Result<Params> {
+        check_events(file, text)?;
         let docs = YamlLoader::load_from_str(text).with_context(|| format!("{file}: not YAML"))?;
         let root = docs.first().with_context(|| format!("{file}: empty"))?;
-        let node = field(file, root, NODE_NAME, "the top level")?
-            .with_context(|| format!("{file}: no `{NODE_NAME}:` node"))?;
-        let p = field(file, node, "ros__parameters", NODE_NAME)?
-            .with_context(|| format!("{file}: {NODE_NAME}: no `ros__parameters:`"))?;
+        let Yaml::Hash(top) = root else {
+            bail!("{file}: the top level: expected a map of node names");
+        };
+        let ours = |k: &str| k == NODE_NAME || k.strip_prefix('/') == Some(NODE_NAME);
+        // The wildcard first, then the node's own sections in file order.
+        let sections: Vec<(&str, &Yaml)> = top
+            .iter()
+            .filter_map(|(k, v)| Some((k.as_str()?, v)))
+            .filter(|(k, _)| *k == "/**")
+            .chain(
+                top.iter()
+                    .filter_map(|(k, v)| Some((k.as_str()?, v)))
+                    .filter(|(k, _)| ours(k)),
+            )
+            .collect();
+        if sections.is_empty() {
+            bail!("{file}: no `{NODE_NAME}:`, `/{NODE_NAME}:` or `/**:` section");
+        }
         let mut out = Params::default();
+        for (section, node) in sections {
+            out.apply(file, section, node)?;
+        }
+        let t = &out.topics;
+        let names = [
+            ("goal", &t.goal),
+            ("odom", &t.odom),
+            ("gait_state", &t.gait_state),
+            ("scan", &t.scan),
+            ("command", &t.command),
+            ("footsteps", &t.footsteps),
+            ("markers", &t.markers),
+            ("diagnostics", &t.diagnostics),
+        ];
+        for (i, (a, na)) in names.iter().enumerate() {
+            if let Some((b, _)) = names[..i].iter().find(|(_, nb)| nb == na) {
+                bail!(
+                    "{file}: topics.{a} and topics.{b} are both {na}; every topic carries its own message type"
+                );
+            }
+        }
+        Ok(out)
+    }
+
+    /// Applies the section `section` (`node`: its `ros__parameters:` map).
+    fn apply(&mut self, file: &str, section: &str, node: &Yaml) -> Result<()> {
+        let out = self;
+        let p = field(file, node, "ros__parameters", section)?
+            .with_context(|| format!("{file}: {section}: no `ros__parameters:`"))?;
         let Yaml::Hash(h) = p else {
-            bail!("{file}: {NODE_NAME}.ros__parameters: expected a map");
+            bail!("{file}: {section}.ros__parameters: expected a map");
         };
         for (k, v) in h {
             let key = k.as_str().unwrap_or("?");
-            let name = format!("{NODE_NAME}.ros__parameters.{key}");
+            let name = format!("{section}.ros__parameters.{key}");
             match key {
                 "map" => out.map = string(file, v, &name)?,
                 "frame_id" => out.frame_id = string(file, v, &name)?,
@@ -162,21 +275,37 @@ impl Params {
                             _ => bail!("{file}: {tname}: unknown topic"),
                         };
                         *slot = string(file, tv, &tname)?;
-                        if !slot.starts_with('/') {
-                            bail!("{file}: {tname}: expected an absolute name (`/...`)");
+                        if !valid_topic_name(slot) {
+                            bail!(
+                                "{file}: {tname}: `{}` is not an absolute ROS 2 topic name (`/name`, letters, digits and `_`)",
+                                ldcbf_sim::scenario::limits::shorten(slot, 80)
+                            );
                         }
                     }
+                }
+                "use_sim_time" => {
+                    // ROS 2's standard parameter (often under `/**`): the
+                    // node runs on its inputs' stamps either way.
+                    v.as_bool()
+                        .with_context(|| format!("{file}: {name}: expected true or false"))?;
                 }
                 _ => bail!("{file}: {name}: unknown parameter"),
             }
         }
-        Ok(out)
+        Ok(())
     }
 
-    /// Reads and parses a parameter file.
+    /// Reads and parses a parameter file: a regular file of at most
+    /// [`ldcbf_sim::scenario::limits::MAX_FILE_BYTES`], UTF-8 (the
+    /// simulator's rule for its input files).
     pub fn load(path: &Path) -> Result<Params> {
-        let text = std::fs::read_to_string(path)
-            .with_context(|| format!("{}: cannot read", path.display()))?;
-        Params::parse(&path.display().to_string(), &text)
+        use ldcbf_sim::scenario::limits::{MAX_FILE_BYTES, read_regular_file};
+        let file = path.display().to_string();
+        let bytes = read_regular_file(path, MAX_FILE_BYTES).map_err(|e| match e.kind() {
+            std::io::ErrorKind::InvalidInput => anyhow::anyhow!("{file}: {e}"),
+            _ => anyhow::anyhow!("{file}: cannot read: {e}"),
+        })?;
+        let text = String::from_utf8(bytes).map_err(|_| anyhow::anyhow!("{file}: not UTF-8"))?;
+        Params::parse(&file, &text)
     }
 }

@@ -113,7 +113,7 @@ pub fn play(scenario: &str, sets: &[(String, String)], frame_id: &str) -> Result
     )?;
     let rec = Recording::from_run(scenario, &res)?;
     let ctl = RobotController::new(sc.config).map_err(|e| anyhow::anyhow!("{scenario}: {e}"))?;
-    let mut nav = NavNode::new(ctl, sc.obstacles.clone(), frame_id);
+    let mut nav = NavNode::moving(ctl, sc.obstacles.clone(), &sc.velocities, frame_id)?;
     let goal = PoseStamped {
         header: Header {
             stamp: Time::default(),

@@ -7,7 +7,8 @@
 //! runs it against the node over DDS (two processes, the closed loop).
 //! No disturbances. In a LiDAR scenario (`perception = "lidar"`) it also
 //! publishes a scan of the true map per cycle (the simulator's LiDAR, from the
-//! CoM, zero angle along the heading) for a node with `perception: lidar`.
+//! CoM, zero angle along the heading; people where they are at that time)
+//! for a node with `perception: lidar`.
 
 use anyhow::Result;
 use ldcbf_controller::Side;
@@ -15,7 +16,7 @@ use ldcbf_controller::nalgebra::Vector2;
 use ldcbf_sim::scenario::Scenario;
 use ldcbf_sim::sense::{Lidar, Perception};
 use ldcbf_sim::sim::PLANT_DT;
-use ldcbf_sim::world::Polygon;
+use ldcbf_sim::world::moving::MovingMap;
 use ldcbf_sim::{Plant, PlantParams};
 
 use crate::msgs::{FootstepCommand, GaitState, Header, LaserScan, Point, Pose, PoseStamped, Time};
@@ -32,7 +33,8 @@ pub struct Robot {
     success_radius: f64,
     time_limit: f64,
     command: Option<(Vector2<f64>, f64)>,
-    lidar: Option<(Lidar, Vec<Polygon>)>,
+    /// The LiDAR and the true map (its people move as in the simulator).
+    lidar: Option<(Lidar, MovingMap)>,
 }
 
 /// How a walk of the stand-in ended.
@@ -59,7 +61,8 @@ impl Robot {
             Perception::Lidar => Some((
                 Lidar::new(sc.lidar.clone(), sc.seed)
                     .map_err(|e| anyhow::anyhow!("{}: {e}", sc.name))?,
-                sc.obstacles.clone(),
+                MovingMap::new(&sc.obstacles, &sc.velocities)
+                    .map_err(|e| anyhow::anyhow!("{}: {e}", sc.name))?,
             )),
             _ => None,
         };
@@ -138,7 +141,8 @@ impl Robot {
             turning_rate: p.turning_rate,
         };
         let scan = self.lidar.as_mut().map(|(l, map)| {
-            let hits = l.scan_rays(p.position, p.heading, map);
+            map.set_time(p.time());
+            let hits = l.scan_rays(p.position, p.heading, map.obstacles());
             crate::scan::laser_scan(gait.header.stamp, p.position, &hits, l.params().range)
         });
         (odom, gait, scan)

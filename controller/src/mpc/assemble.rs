@@ -54,15 +54,23 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             heading: theta0,
             margin: self.barrier_margin,
         });
-        out.select_obstacles(&p0, way, cfg, horizon, obstacles, input.obstacle_velocities)?;
+        out.select_obstacles(
+            &p0,
+            way,
+            cfg,
+            horizon,
+            obstacles,
+            (input.obstacle_velocities, input.obstacle_velocity_radii),
+        )?;
 
         // 4-5. Cost and rows.
         out.qp.clear();
         let (q, c) = self.model.gradient::<NV>(&input.goal);
         out.qp.q = q;
         out.cost_constant = c;
-        // Near a moving obstacle, no faster than the robot can stop in one
-        // step, reached as fast as it can brake.
+        // Near a moving obstacle (or one of uncertain velocity), no faster
+        // than the robot can stop in one step, reached as fast as it can
+        // brake.
         let vx_max = self.forward_speed_bounds(
             &out.obstacles[..out.n_obstacles.min(NOBS)],
             input.obstacle_velocities,

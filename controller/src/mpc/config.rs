@@ -97,6 +97,21 @@ pub struct Config {
     /// grid cells (LiDAR) a one-cell piece in front of a wall otherwise gives a
     /// half-plane across the way.
     pub turn_vertex_normals: bool,
+    /// Use the obstacles' velocity uncertainty radii
+    /// ([`CycleInput::obstacle_velocity_radii`](super::CycleInput::obstacle_velocity_radii)):
+    /// the barrier holds against the set a person can reach (docs/maths.md
+    /// §2.7) and the robot walks no faster than it can stop in one step near
+    /// one. `false`: every radius is taken as 0 (constant-velocity
+    /// prediction with no margin, the baseline). Default `true`: a caller
+    /// that gives no radii sees no change.
+    pub velocity_margin: bool,
+    /// `v_max`: the largest speed of a person of uncertain velocity, m/s
+    /// (> 0; docs/maths.md §2.7). Default 1.5 (a brisk walk).
+    pub person_speed_max: f64,
+    /// `a_max`: the largest acceleration of a person of uncertain velocity,
+    /// m/s^2 (>= 0; docs/maths.md §2.7). Default 0.5 (a walk started or
+    /// stopped within about 3 s).
+    pub person_accel_max: f64,
 }
 
 impl Default for Config {
@@ -128,6 +143,9 @@ impl Default for Config {
             warm_start: true,
             tol_primal: 1e-10,
             turn_vertex_normals: false,
+            velocity_margin: true,
+            person_speed_max: 1.5,
+            person_accel_max: 0.5,
         }
     }
 }
@@ -183,6 +201,9 @@ impl Config {
         warm_start: false,
         tol_primal: 0.0,
         turn_vertex_normals: false,
+        velocity_margin: false,
+        person_speed_max: 0.0,
+        person_accel_max: 0.0,
     };
 
     /// This configuration with the iteration budgets (`max_iter`,
@@ -334,6 +355,12 @@ impl Config {
             && !(r.is_finite() && r > 0.0 && r <= 1.0)
         {
             return err("capture_fraction", "must be in (0, 1] when set");
+        }
+        if !pos(self.person_speed_max) {
+            return err("person_speed_max", "must be finite and > 0");
+        }
+        if !nonneg(self.person_accel_max) {
+            return err("person_accel_max", "must be finite and >= 0");
         }
         if let Err((field, requirement)) = self.qp_settings().validate() {
             return err(field, requirement);

@@ -86,7 +86,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         let mut u = SVector::<f64, NV>::zeros();
         for k in 0..N {
             let th = pred.heading.theta[k];
-            let (s, c) = (libm::sin(th), libm::cos(th));
+            let (s, c) = libm::sincos(th);
             let xi = v / self.lip.beta;
             let lon = crate::linalg::clamp(c * xi.x + s * xi.y, -l, l);
             let lat = crate::linalg::clamp(-s * xi.x + c * xi.y, -l, l);

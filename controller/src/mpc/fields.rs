@@ -75,7 +75,7 @@ macro_rules! config_fields {
 }
 
 /// The number of [`Config`] fields.
-const FIELD_COUNT: usize = 26;
+const FIELD_COUNT: usize = 29;
 
 config_fields!(
     gravity: Real,
@@ -104,6 +104,9 @@ config_fields!(
     warm_start: Flag,
     tol_primal: Real,
     turn_vertex_normals: Flag,
+    velocity_margin: Flag,
+    person_speed_max: Real,
+    person_accel_max: Real,
 );
 
 #[cfg(test)]

@@ -32,7 +32,9 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
     /// obstacle could meet within the horizon (its signed distance from
     /// `p_0` is at most `(|u| + vx_max) (tau + N T)`, `u` its velocity,
     /// `velocities[index]`, world frame W, none or zero: at rest; `tau` the
-    /// time to `p_0`, s). Then the bound comes down to the one-step stopping
+    /// time to `p_0`, s; for an obstacle of uncertain velocity at most
+    /// `vx_max (tau + N T)` plus the farthest it may walk by then,
+    /// [`Reach::travel`](crate::reach::Reach::travel)). Then the bound comes down to the one-step stopping
     /// speed `stop = beta tanh(beta T) l_max` (0.46 m/s for Table I) as fast
     /// as the robot can brake: entry `k` is `min(vx_max, max(stop, s_{k+1} +
     /// turn + 0.02))` with `s_0 = |v_0|`, `s_{k+1} = cosh(beta T) s_k - beta
@@ -58,6 +60,11 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         let mut out = [cfg.vx_max; N];
         let horizon = tau + N as f64 * cfg.step_duration;
         let near = active.iter().any(|o| {
+            let reach = &o.half_plane.reach;
+            if reach.is_uncertain() {
+                // Within the farthest the person may walk, plus the robot.
+                return o.distance <= cfg.vx_max * horizon + reach.travel(horizon);
+            }
             velocities.get(o.index as usize).is_some_and(|u| {
                 let speed = crate::linalg::sqrt(u.norm_squared());
                 speed > 0.0 && o.distance <= (speed + cfg.vx_max) * horizon
@@ -84,7 +91,8 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
     }
 
     /// The safety rows (LDCBF and foot clearance) of `work.qp` that belong to
-    /// a moving obstacle (`HalfPlane::rate != 0`), by row: on a cycle that
+    /// a moving obstacle ([`HalfPlane::moves`](crate::HalfPlane::moves): a
+    /// nonzero rate or an uncertain velocity), by row: on a cycle that
     /// gives way they are relaxed before the static ones
     /// ([`crate::relax`], "Moving rows first").
     pub(super) fn moving_rows<const NOBS: usize>(work: &Assembly<N, NV, NC, NOBS>) -> [bool; NC] {
@@ -94,7 +102,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             if let RowKind::Ldcbf(j) | RowKind::FootClearance(j) = id.kind {
                 *o = active
                     .iter()
-                    .any(|ob| ob.index == j && ob.half_plane.rate != 0.0);
+                    .any(|ob| ob.index == j && ob.half_plane.moves());
             }
         }
         out
@@ -104,7 +112,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
     /// whose infeasibility certificate `certificate` (one weight per row of
     /// `work.qp`, as [`crate::qp::QpSolution::lambda`] of the infeasible
     /// solve) weighs a safety row (LDCBF or foot clearance) of a moving
-    /// obstacle (`HalfPlane::rate != 0`): `p_0 + GIVE_WAY_DISTANCE a`, `a`
+    /// obstacle ([`HalfPlane::moves`](crate::HalfPlane::moves)): `p_0 + GIVE_WAY_DISTANCE a`, `a`
     /// the unit vector along the certificate-weighted sum of those rows'
     /// normals `eta` (from the obstacle to the robot, world frame W); `p_0`
     /// itself (stand) when that sum vanishes. `None` when no such row is
@@ -128,7 +136,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             }
             if let Some(ob) = active
                 .iter()
-                .find(|o| o.index == index && o.half_plane.rate != 0.0)
+                .find(|o| o.index == index && o.half_plane.moves())
             {
                 moving = true;
                 away += ob.half_plane.eta * y;

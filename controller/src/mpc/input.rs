@@ -113,6 +113,7 @@ impl RecordedInput {
             goal: self.goal,
             obstacles,
             obstacle_velocities: &[],
+            obstacle_velocity_radii: &[],
             speed_cap: self.speed_cap,
         }
     }
@@ -164,6 +165,22 @@ pub struct CycleInput<'a, const V: usize> {
     /// speed of at most [`MAX_RATE`] (else [`InputError::ObstacleVelocity`]);
     /// the velocities of obstacles the cycle does not select are not read.
     pub obstacle_velocities: &'a [Vector2<f64>],
+    /// Velocity uncertainty radius of each obstacle, m/s, world frame:
+    /// `u_i` says the true velocity of `obstacles[i]` lies within `u_i` of
+    /// `obstacle_velocities[i]` (zero when that slice is empty), in any
+    /// direction. `u_i > 0` treats the obstacle as a person whose position
+    /// lies in the reachable set of docs/maths.md §2.7 (the barrier's margin
+    /// grows with it over the horizon, and the robot walks no faster than it
+    /// can stop in one step nearby); `u_i = 0` as an obstacle whose velocity
+    /// is known and constant (the rows of a moving obstacle, bit for bit).
+    /// Empty: every radius 0. Otherwise its length must equal
+    /// `obstacles.len()` (else [`InputError::ObstacleVelocityRadiusCount`]),
+    /// and the radius of every obstacle the cycle selects must be finite, at
+    /// least 0 and at most [`MAX_RATE`] (else
+    /// [`InputError::ObstacleVelocityRadius`]); the radii of obstacles the
+    /// cycle does not select are not read. Ignored (every radius 0) when
+    /// [`Config::velocity_margin`](super::Config::velocity_margin) is off.
+    pub obstacle_velocity_radii: &'a [f64],
     /// Speed cap, m/s: an upper bound on the CoM velocity along the heading
     /// at every planned step end (`lon' v_{k+1}`, the walking-velocity row
     /// [`RowKind::VelLonUpper`](crate::constraints::RowKind::VelLonUpper)),
@@ -205,6 +222,12 @@ pub enum InputError {
     /// The velocity of a selected obstacle is not finite or its speed exceeds
     /// [`MAX_RATE`].
     ObstacleVelocity,
+    /// [`CycleInput::obstacle_velocity_radii`] is neither empty nor as long
+    /// as [`CycleInput::obstacles`].
+    ObstacleVelocityRadiusCount,
+    /// The velocity uncertainty radius of a selected obstacle is not finite,
+    /// negative or larger than [`MAX_RATE`].
+    ObstacleVelocityRadius,
     /// Not a measurement: the controller has no valid configuration yet (it
     /// is [`Controller::UNCONFIGURED`](super::Controller::UNCONFIGURED) and
     /// no [`Controller::configure`](super::Controller::configure) has
@@ -223,6 +246,12 @@ impl core::fmt::Display for InputError {
                 "obstacle velocities are neither empty nor one per obstacle"
             }
             InputError::ObstacleVelocity => "an obstacle velocity is not finite or out of range",
+            InputError::ObstacleVelocityRadiusCount => {
+                "obstacle velocity radii are neither empty nor one per obstacle"
+            }
+            InputError::ObstacleVelocityRadius => {
+                "an obstacle velocity radius is not finite, negative or out of range"
+            }
             InputError::NotConfigured => "the controller is not configured",
         })
     }
@@ -271,6 +300,11 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             || input.obstacle_velocities.len() == input.obstacles.len())
         {
             return Err(InputError::ObstacleVelocityCount);
+        }
+        if !(input.obstacle_velocity_radii.is_empty()
+            || input.obstacle_velocity_radii.len() == input.obstacles.len())
+        {
+            return Err(InputError::ObstacleVelocityRadiusCount);
         }
         let t_step = cfg.step_duration;
         let t_in = crate::linalg::clamp(input.time_in_step, 0.0, t_step);

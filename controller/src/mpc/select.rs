@@ -16,6 +16,7 @@ use super::{Assembly, Config, Controller, CycleInput, InputError, MAX_RATE};
 use crate::constraints::HalfPlane;
 use crate::geometry::{ConvexPolygon, closest_point_point_polygon};
 use crate::qp::QpBackend;
+use crate::reach::Reach;
 
 /// The disk, world frame W, that holds every obstacle a cycle can select:
 /// [`Controller::obstacle_query`] for a caller that keeps its map in a spatial
@@ -78,6 +79,7 @@ impl ActiveObstacle {
             c: Vector2::new(0.0, 0.0),
             eta: Vector2::new(0.0, 0.0),
             rate: 0.0,
+            reach: Reach::NONE,
         },
     };
 }
@@ -136,10 +138,17 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
     /// With `turn` ([`Config::turn_vertex_normals`]) the half-plane of an
     /// obstacle at rest whose point closest to `p0` is a vertex is turned
     /// along the cycle's [`Way`] (`turned_normal`).
+    /// With [`Config::velocity_margin`], an obstacle of velocity uncertainty
+    /// radius `radii[index] > 0` (m/s; none: 0) is also selected up to
+    /// `r_active` plus the excess of its reach over the horizon
+    /// ([`Reach::shift`] along the normal minus `vx_max horizon`), and its
+    /// half-plane carries that [`Reach`] (docs/maths.md §2.7).
     /// Writes `obstacles`, `n_obstacles` and `obstacles_truncated`.
     /// `Err(InputError::ObstacleVelocity)` when a selected obstacle's
-    /// velocity is missing, not finite or faster than [`MAX_RATE`] (the
-    /// selection is then incomplete and must not be used).
+    /// velocity is missing, not finite or faster than [`MAX_RATE`],
+    /// `Err(InputError::ObstacleVelocityRadius)` when its radius is missing,
+    /// negative, not finite or larger than [`MAX_RATE`] (the selection is
+    /// then incomplete and must not be used).
     pub(super) fn select_obstacles<'o, const V: usize>(
         &mut self,
         p0: &Vector2<f64>,
@@ -147,7 +156,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
         cfg: &Config,
         horizon: f64,
         obstacles: impl Iterator<Item = (usize, &'o ConvexPolygon<V>)>,
-        velocities: &[Vector2<f64>],
+        (velocities, radii): (&[Vector2<f64>], &[f64]),
     ) -> Result<(), InputError> {
         self.n_obstacles = 0;
         self.obstacles_truncated = false;
@@ -160,31 +169,66 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
             // False for a NaN distance (impossible for validated polygons):
             // such an obstacle is skipped.
             let within = |radius: f64| cp.signed_distance <= radius;
+            let velocity = velocities.get(idx);
+            // The radius as given (validated once selected; NaN counts as 0
+            // until then).
+            let spread = if cfg.velocity_margin {
+                radii.get(idx).copied().unwrap_or(0.0)
+            } else {
+                0.0
+            };
+            let reach = |speed: f64, spread: f64| Reach {
+                spread,
+                speed,
+                speed_max: cfg.person_speed_max,
+                accel: cfg.person_accel_max,
+            };
             if !within(cfg.r_active) {
                 // Beyond `r_active` (which holds an obstacle closing in no
                 // faster than the robot walks), one closing in faster than
-                // `vx_max` gains the excess over the horizon.
-                let closing = velocities.get(idx).map_or(0.0, |u| cp.normal.dot(u));
+                // `vx_max` gains the excess over the horizon; one of
+                // uncertain velocity the excess of its reach.
+                let closing = velocity.map_or(0.0, |u| cp.normal.dot(u));
                 let excess = (closing - cfg.vx_max).max(0.0);
-                if !within(cfg.r_active + excess * horizon) {
+                let mut gain = excess * horizon;
+                if spread > 0.0 {
+                    let speed = velocity.map_or(0.0, |u| crate::linalg::sqrt(u.norm_squared()));
+                    let far = reach(speed, spread).shift(closing, horizon) - cfg.vx_max * horizon;
+                    gain = gain.max(far);
+                }
+                if !within(cfg.r_active + gain) {
                     continue;
                 }
             }
-            let rate = if velocities.is_empty() {
-                0.0
+            let (rate, speed) = if velocities.is_empty() {
+                (0.0, 0.0)
             } else {
-                let u = velocities.get(idx).ok_or(InputError::ObstacleVelocity)?;
+                let u = velocity.ok_or(InputError::ObstacleVelocity)?;
                 let speed = crate::linalg::sqrt(u.norm_squared());
                 if speed.is_nan() || speed > MAX_RATE {
                     return Err(InputError::ObstacleVelocity);
                 }
                 // `+ 0.0` turns the -0 of a zero velocity into +0, so that an
                 // obstacle at rest is recorded as with an empty slice.
-                cp.normal.dot(u) + 0.0
+                (cp.normal.dot(u) + 0.0, speed)
+            };
+            if !radii.is_empty() {
+                let r = radii.get(idx).ok_or(InputError::ObstacleVelocityRadius)?;
+                // `!(..)` is also true for NaN.
+                if !(*r >= 0.0 && *r <= MAX_RATE) {
+                    return Err(InputError::ObstacleVelocityRadius);
+                }
+            }
+            let reach = if spread > 0.0 {
+                reach(speed, spread)
+            } else {
+                Reach::NONE
             };
             // (A moving obstacle's rate is along the closest-point normal.)
             let eta = match &turn {
-                Some(w) if rate == 0.0 => turned_normal(p0, w.goal, w.heading, poly, &cp, w.margin),
+                Some(w) if rate == 0.0 && !reach.is_uncertain() => {
+                    turned_normal(p0, w.goal, w.heading, poly, &cp, w.margin)
+                }
                 _ => cp.normal,
             };
             let cand = ActiveObstacle {
@@ -194,6 +238,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
                     c: cp.point,
                     eta,
                     rate,
+                    reach,
                 },
             };
             // Insertion into the sorted list (bounded by NOBS), after every kept

@@ -37,6 +37,7 @@ fn input<'a>(obstacles: &'a [Poly]) -> CycleInput<'a, 16> {
         goal: Vector2::new(5.0, 0.0),
         obstacles,
         obstacle_velocities: &[],
+        obstacle_velocity_radii: &[],
         speed_cap: crate::NO_SPEED_CAP,
     }
 }

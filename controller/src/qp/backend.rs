@@ -4,7 +4,10 @@
 
 use nalgebra::SVector;
 
-use super::{DenseQp, DualActiveSet, QpSolution, Reprobe};
+use super::dense::DenseQp;
+use super::reprobe::Reprobe;
+use super::solver::DualActiveSet;
+use crate::solution::QpSolution;
 
 /// Something that solves the controller's QPs: the type parameter `B` of
 /// [`Controller`](crate::Controller), [`OwnSolver`] (the dual active-set

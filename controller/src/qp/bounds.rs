@@ -17,7 +17,7 @@ use nalgebra::Dyn;
 use nalgebra::allocator::Allocator;
 use nalgebra::{Const, DefaultAllocator, Dim, OVector, U1};
 
-use super::DenseQpOf;
+use super::dense::DenseQpOf;
 use crate::linalg::columns;
 
 /// Which rows of a QP's `G` are simple bounds, for any row capacity `NC`

@@ -8,8 +8,12 @@ use nalgebra::Dyn;
 use nalgebra::allocator::Allocator;
 use nalgebra::{Const, DefaultAllocator, Dim, OVector, U1};
 
-use super::{DenseQpOf, DualActiveSetOf, QpAllocator, SimpleBoundsOf, ZERO_ROW2};
+use super::bounds::SimpleBoundsOf;
+use super::dense::DenseQpOf;
+use super::settings::ZERO_ROW2;
+use super::solver::DualActiveSetOf;
 use crate::linalg::{column, columns, dot_d};
+use crate::solution::QpAllocator;
 
 /// Per-row data of a constraint matrix `G` used by a solve: squared Euclidean
 /// norms `|g_i|^2` and reciprocal norms in the metric of `H^-1`,

@@ -46,17 +46,16 @@
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector, U1};
 
 use super::bounds::BoundRows;
+use super::dense::DenseQpOf;
+use super::kept::Kept;
+use super::norms::RowNormsOf;
 use super::orthogonal::Orthogonal;
-use super::resolve::{Kept, ResolveStop, resolve};
+use super::resolve::{ResolveStop, resolve};
+use super::solver::DualActiveSetOf;
 use super::spans::row_spans;
-use super::{DenseQpOf, DualActiveSetOf, HOT_START_MIN_NV, HessianError, QpAllocator, RowNormsOf};
 use crate::active_set::{self, Iterate};
-use crate::linalg::{column_mut, copy};
-use crate::solution::{QpSolutionOf, QpStatus};
-
-/// The proximal weight relative to the largest entry of `H` (DAQP's default
-/// `eps_prox` is `1e-6`).
-pub const PROX_EPS: f64 = 1e-6;
+use crate::linalg::copy;
+use crate::solution::{QpAllocator, QpSolutionOf, QpStatus};
 
 /// The proximal iterations stop when the stationarity residual they leave,
 /// `eps |x_{k+1} - x_k|_inf`, is at most this times `max(1, |q|_inf)`.
@@ -64,34 +63,6 @@ pub const PROX_TOL: f64 = 1e-10;
 
 /// At most this many proximal solves per solve.
 pub const PROX_MAX_OUTER: u32 = 100;
-
-/// Whether the proximal iterations are compiled in for `NV` variables (a
-/// constant for the static sizes).
-#[inline(always)]
-pub(super) fn proximal_capable<NV: Dim>() -> bool {
-    NV::try_to_usize().is_none_or(|n| n >= HOT_START_MIN_NV)
-}
-
-/// The Cholesky factor of `H + eps I` and `eps`, for an `H` without one of
-/// its own (symmetric and finite, checked by the caller).
-pub(super) fn regularised<NV: Dim>(
-    H: &OMatrix<f64, NV, NV>,
-) -> Result<(nalgebra::linalg::Cholesky<f64, NV>, f64), HessianError>
-where
-    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
-{
-    let amax = H.amax();
-    let eps = PROX_EPS * if amax > 0.0 { amax } else { 1.0 };
-    let n = H.nrows();
-    let mut Hr = H.clone();
-    for j in 0..n {
-        if let Some(d) = column_mut(Hr.as_mut_slice(), n, j).and_then(|c| c.get_mut(j)) {
-            *d += eps;
-        }
-    }
-    let chol = nalgebra::linalg::Cholesky::new(Hr).ok_or(HessianError::NotPositiveDefinite)?;
-    Ok((chol, eps))
-}
 
 impl<NV: Dim, NC: Dim> DualActiveSetOf<NV, NC>
 where

@@ -27,45 +27,23 @@
 //! resuming count as iterations.
 //!
 //! A single solve (`solve`, `solve_prepared`, `solve_bounded`) keeps its
-//! factor in its own frame instead (`qp/store.rs`).
+//! factor in its own frame instead (`qp/store.rs`). The probes' entry point,
+//! `DualActiveSetOf::solve_reprobe`, is `qp/solve.rs`.
 
 use nalgebra::allocator::Allocator;
 use nalgebra::{
     ArrayStorage, Const, DefaultAllocator, Dim, OMatrix, OVector, SMatrix, SVector, U1,
 };
 
-#[cfg(not(target_os = "none"))]
-use super::guess::GuessWork;
-use super::resolve::{Kept, ResolveStop, resolve};
-use super::store::Begin;
-use super::{DenseQpOf, DualActiveSetOf, QpAllocator, RowNormsOf};
+use super::dense::DenseQpOf;
+use super::gram::GuessWork;
+use super::kept::{Kept, Pending};
+use super::norms::RowNormsOf;
+use super::resolve::{ResolveStop, resolve};
+use super::solver::DualActiveSetOf;
+use super::store::{Begin, Parts, Store};
 use crate::active_set::Iterate;
-use crate::solution::{QpSolutionOf, QpStatus};
-
-/// A start from scratch (`J = L^-T`, `R = 0`) not yet written: on hosts,
-/// for the sizes with the hot start, a solve from scratch sets `J` and `R`
-/// only when it first needs them (`Orthogonal::settle`: before its first
-/// direction, add, drop or hot-start step), so a solve the hot start's
-/// guess ends (which reads neither) writes nothing, and a restart of the
-/// controller's next QP ([`ReprobeOf::restart`]) copies nothing.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Pending {
-    /// `J` and `R` still hold what an earlier solve left; the start from
-    /// scratch is to be set before they are read.
-    pub unset: bool,
-    /// The columns `0..r_cols` of `R` may be nonzero, the others are zero
-    /// (an add writes column `nact` of `R`, a drop zeroes the column it
-    /// vacates): setting `R = 0` zeroes only those.
-    pub r_cols: usize,
-}
-
-impl Pending {
-    /// Nothing to set, `R = 0`.
-    pub(super) const NONE: Pending = Pending {
-        unset: false,
-        r_cols: 0,
-    };
-}
+use crate::solution::{QpAllocator, QpStatus};
 
 /// The factor of a solve's active rows: storage for the solve, and what it
 /// leaves for the next one of the same QP's rows (module docs).
@@ -284,7 +262,7 @@ where
     DefaultAllocator: QpAllocator<NV, NC>,
 {
     /// Euclidean row norms of the QP and the `H^-1` norms found so far.
-    norms: RowNormsOf<NC>,
+    pub(super) norms: RowNormsOf<NC>,
     /// The factor of the last probe.
     pub(super) carry: Carry<NV>,
 }
@@ -382,50 +360,61 @@ where
     }
 }
 
-impl<NV: Dim, NC: Dim> DualActiveSetOf<NV, NC>
+impl<NV: Dim> Store<NV> for &mut Carry<NV>
 where
-    DefaultAllocator: QpAllocator<NV, NC>,
+    DefaultAllocator: nalgebra::allocator::Allocator<NV> + nalgebra::allocator::Allocator<NV, NV>,
 {
-    /// [`DualActiveSetOf::solve_selected`] (the rows `enabled` of `qp` with
-    /// the right-hand side `h`, at most `budget` adds plus drops) as one of
-    /// a series of probes of the same QP that share `state` (module docs):
-    /// the row norms are computed once, by [`ReprobeOf::new`], and each probe
-    /// after the first continues from the factor of the active rows the one
-    /// before ended with. The same optimum, or the same proof of emptiness
-    /// (a Farkas certificate, possibly another one), as `solve_selected`; the
-    /// marks `prefer` choose among violated rows as there. `state` must
-    /// have been built for this `qp`'s rows `G` (and `m`) and used only with
-    /// this solver's `H`.
-    /// Where the proximal iterations run (a semidefinite `H`), each probe is
-    /// `solve_selected` with the shared row norms.
-    pub fn solve_reprobe(
-        &self,
-        qp: &DenseQpOf<NV, NC>,
-        h: &OVector<f64, NC>,
-        enabled: &[bool],
-        prefer: &[bool],
-        budget: u32,
-        state: &mut ReprobeOf<NV, NC>,
-    ) -> QpSolutionOf<NV, NC> {
-        let nc = qp.h.shape_generic().0;
-        let mut excluded = OVector::<bool, NC>::from_element_generic(nc, U1, true);
-        for (x, &on) in excluded.as_mut_slice().iter_mut().zip(enabled) {
-            *x = !on;
+    /// Nothing: the factor is the carry's.
+    type Own = ();
+
+    const RESUMES: bool = true;
+
+    #[inline(always)]
+    fn own<NC: Dim>(&self, _solver: &DualActiveSetOf<NV, NC>) -> Self::Own
+    where
+        DefaultAllocator: QpAllocator<NV, NC>,
+    {
+    }
+
+    #[inline(always)]
+    fn start<NC: Dim>(&mut self, at: Begin<'_, NV, NC>) -> Result<(OVector<f64, NV>, u32), QpStatus>
+    where
+        DefaultAllocator: QpAllocator<NV, NC>,
+    {
+        Carry::start(self, at)
+    }
+
+    #[inline(always)]
+    fn parts<'s>(&'s mut self, _own: &'s mut Self::Own) -> Parts<'s, NV> {
+        let carry = &mut **self;
+        #[cfg(not(target_os = "none"))]
+        let guess = Some(&mut carry.guess);
+        #[cfg(target_os = "none")]
+        let guess = None;
+        let Carry {
+            J,
+            R,
+            kept,
+            valid,
+            pending,
+            ..
+        } = carry;
+        let kept = if *valid { Some(&*kept) } else { None };
+        (J, R, kept, guess, Some(pending))
+    }
+
+    #[inline(always)]
+    fn keep(&mut self, it: Option<&Iterate<NV>>, guessed: bool) {
+        match it {
+            Some(it) if !guessed => Carry::keep(self, it),
+            // The guess wrote nothing to `J` and `R`.
+            Some(_) => self.valid = false,
+            None => {
+                self.valid = false;
+                if cfg!(not(target_os = "none")) {
+                    self.pending.r_cols = self.R.ncols();
+                }
+            }
         }
-        let max_iter = budget.min(self.settings.max_iter);
-        if self.proximal() {
-            return self.solve_proximal(qp, h, excluded, &mut state.norms, (), prefer, max_iter);
-        }
-        self.solve_with(
-            qp,
-            &qp.q,
-            h,
-            excluded,
-            &mut state.norms,
-            (),
-            prefer,
-            max_iter,
-            &mut state.carry,
-        )
     }
 }

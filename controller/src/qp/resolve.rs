@@ -1,4 +1,6 @@
-//! The proximal iterations after the first (`qp/proximal.rs`) keep the
+//! The resumed start of a solve: from a kept factor, the pair the dual
+//! method starts from (Goldfarb & Idnani's S-pair). The proximal iterations
+//! after the first (`qp/proximal.rs`) keep the
 //! active set's factor: the Hessian `H + eps I` and the rows are the same in
 //! every proximal solve, only the linear term `q_k = q - eps x_k` changes, so
 //! the orthogonal factor `J = L^-T Q`, `R` of the last solve's active rows
@@ -13,7 +15,7 @@
 //!   the iteration) and the minimiser formed again. That is a pair the dual
 //!   method starts from (Goldfarb & Idnani's S-pair: `x` optimal on the
 //!   active rows, multipliers `>= 0`);
-//! * [`Orthogonal`](super::orthogonal::Orthogonal) with the kept rows ([`Resume`]): the factor handed to
+//! * `Orthogonal` (`qp/orthogonal.rs`) with the kept rows (`qp/kept.rs`): the factor handed to
 //!   [`crate::active_set::iterate`], which continues from that pair with its
 //!   normal scans, adds and drops (only where a row is violated).
 //!
@@ -24,29 +26,12 @@
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
-use super::QpAllocator;
-use super::orthogonal::{back_substitute, givens_drop};
-use super::proximal::proximal_capable;
+use super::kept::Kept;
+use super::settings::proximal_capable;
+use super::updates::{back_substitute, back_substitute_by_columns, givens_drop};
 use crate::active_set::remove_at;
 use crate::linalg::{column, columns, dot_d};
-
-/// The active rows a proximal solve ended with (the order of the factor's
-/// columns), `nact` of them, the first `neq` equality rows.
-#[derive(Clone, Debug)]
-pub(super) struct Kept<NV: Dim>
-where
-    DefaultAllocator: nalgebra::allocator::Allocator<NV>,
-{
-    /// Active rows (first `nact` valid).
-    pub act: OVector<u16, NV>,
-    /// Their multipliers at the start of the next solve (formed by
-    /// [`resolve`]).
-    pub mult: OVector<f64, NV>,
-    /// Number of active rows.
-    pub nact: usize,
-    /// Number of equality rows at their head.
-    pub neq: usize,
-}
+use crate::solution::QpAllocator;
 
 /// The minimiser on the `nact` active rows `act` held as equalities, for the
 /// linear term `q`, from the factor `J`, `R` of those rows (module docs):
@@ -122,41 +107,6 @@ where
     xs.iter()
         .chain(mult.as_slice().iter().take(nact))
         .all(|v| v.is_finite())
-}
-
-/// `r[..nact] = R^-1 d[..nact]` for the upper-triangular leading
-/// `nact x nact` block of `R`, by columns, in place in `r` (`r = d`, then
-/// from the last row up `r_i /= R_ii` and `r[..i] -= r_i R[..i, i]`: a
-/// contiguous column, independent lanes). The products of
-/// `orthogonal::back_substitute` in another order (other rounding), without
-/// its chain of dependent subtractions per row.
-pub(super) fn back_substitute_by_columns<NV: Dim>(
-    R: &OMatrix<f64, NV, NV>,
-    d: &[f64],
-    nact: usize,
-    r: &mut [f64],
-) where
-    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
-{
-    let n = R.nrows();
-    let nact = nact.min(n);
-    crate::linalg::copy(r, d.get(..nact).unwrap_or(&[]));
-    for i in (0..nact).rev() {
-        let (Some(col), Some((ri_slot, above))) = (
-            column(R.as_slice(), n, i),
-            r.get_mut(..=i).and_then(|h| h.split_last_mut()),
-        ) else {
-            continue;
-        };
-        let Some(&rii) = col.get(i) else {
-            continue;
-        };
-        let ri = *ri_slot / rii;
-        *ri_slot = ri;
-        for (wk, &rk) in above.iter_mut().zip(col) {
-            *wk -= ri * rk;
-        }
-    }
 }
 
 /// Why [`resolve`] stopped the solve.
@@ -237,46 +187,4 @@ where
         kept.nact = nact - 1;
     }
     Err(ResolveStop::Numerical)
-}
-
-/// The active rows a solve resumes from, as a type parameter of
-/// [`Orthogonal`](super::orthogonal::Orthogonal) (as [`BoundRows`](super::bounds::BoundRows) for the
-/// bounds): `()` for a solve that iterates from scratch (no resume hook, and
-/// the iteration's own scan with no test for spans), `Option<&Kept>` for the
-/// proximal iterations' solves and the probes (`qp/reprobe.rs`), whose scan
-/// reads the rows' spans where they are given and which resume from the
-/// kept rows ([`ActiveSetFactor::resume`](crate::active_set::ActiveSetFactor::resume)).
-pub(super) trait Resume<NV: Dim>
-where
-    DefaultAllocator: nalgebra::allocator::Allocator<NV>,
-{
-    /// Whether the solve may resume (and its scan reads spans).
-    const RESUMES: bool;
-
-    /// The rows and multipliers to resume from, if any.
-    fn kept(&self) -> Option<&Kept<NV>>;
-}
-
-impl<NV: Dim> Resume<NV> for ()
-where
-    DefaultAllocator: nalgebra::allocator::Allocator<NV>,
-{
-    const RESUMES: bool = false;
-
-    #[inline(always)]
-    fn kept(&self) -> Option<&Kept<NV>> {
-        None
-    }
-}
-
-impl<NV: Dim> Resume<NV> for Option<&Kept<NV>>
-where
-    DefaultAllocator: nalgebra::allocator::Allocator<NV>,
-{
-    const RESUMES: bool = true;
-
-    #[inline(always)]
-    fn kept(&self) -> Option<&Kept<NV>> {
-        *self
-    }
 }

@@ -1,5 +1,8 @@
 //! What a solve may be told ([`QpSettings`]: tolerances, the iteration
-//! limit, the hot start) and why a Hessian is refused ([`HessianError`]).
+//! limit, the hot start) and why a Hessian is refused ([`HessianError`]);
+//! the thresholds that decide what is compiled in for a size.
+
+use nalgebra::Dim;
 
 /// Error from [`DualActiveSetOf::new`](super::DualActiveSetOf::new): the Hessian cannot be used.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -85,4 +88,28 @@ impl QpSettings {
         }
         Ok(())
     }
+}
+
+/// Rows whose squared Euclidean norm is not above this (it is 0 for an exactly
+/// zero row or one whose squares underflow, `|g| < ~1e-162`) are treated as zero
+/// rows: satisfied when `h_i >= -tol`, infeasible otherwise.
+pub(crate) const ZERO_ROW2: f64 = 0.0;
+
+/// Smallest number of variables for which [`QpSettings::hot_start`] and
+/// equality rows are compiled into a static instance (the controller's
+/// horizons `N >= 8`; `Dyn` instances use the same threshold at run time).
+/// Below it, scanning the marked rows first gets most of the gain, and the
+/// hot start's code (3.8 KiB of Thumb at `NV = 6`) would not fit the
+/// firmware's 64 KiB of flash (`docs/horizon.md`).
+pub const HOT_START_MIN_NV: usize = 16;
+
+/// The proximal weight relative to the largest entry of `H` (DAQP's default
+/// `eps_prox` is `1e-6`).
+pub const PROX_EPS: f64 = 1e-6;
+
+/// Whether the proximal iterations are compiled in for `NV` variables (a
+/// constant for the static sizes).
+#[inline(always)]
+pub(super) fn proximal_capable<NV: Dim>() -> bool {
+    NV::try_to_usize().is_none_or(|n| n >= HOT_START_MIN_NV)
 }

@@ -8,9 +8,9 @@ use core::marker::PhantomData;
 use nalgebra::Dyn;
 use nalgebra::{ArrayStorage, Const, Dim, OMatrix, OVector, SMatrix, U1};
 
-use super::proximal::{self, proximal_capable};
-use super::{HOT_START_MIN_NV, HessianError, QpAllocator, QpSettings};
-use crate::linalg::{column, columns, columns_mut, dot, dot_d};
+use super::settings::{HOT_START_MIN_NV, HessianError, PROX_EPS, QpSettings, proximal_capable};
+use crate::linalg::{column, column_mut, columns, columns_mut, dot, dot_d};
+use crate::solution::QpAllocator;
 use nalgebra::{DefaultAllocator, allocator::Allocator};
 
 /// The solver: the factored Hessian and the settings, for any dimension types
@@ -115,7 +115,7 @@ where
         }
         let (chol, prox) = match nalgebra::linalg::Cholesky::new(H.clone()) {
             Some(chol) => (chol, 0.0),
-            None if proximal_capable::<NV>() => proximal::regularised(H)?,
+            None if proximal_capable::<NV>() => regularised(H)?,
             None => return Err(HessianError::NotPositiveDefinite),
         };
         let L = chol.l();
@@ -322,4 +322,25 @@ where
         }
         x
     }
+}
+
+/// The Cholesky factor of `H + eps I` and `eps`, for an `H` without one of
+/// its own (symmetric and finite, checked by the caller).
+pub(super) fn regularised<NV: Dim>(
+    H: &OMatrix<f64, NV, NV>,
+) -> Result<(nalgebra::linalg::Cholesky<f64, NV>, f64), HessianError>
+where
+    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
+{
+    let amax = H.amax();
+    let eps = PROX_EPS * if amax > 0.0 { amax } else { 1.0 };
+    let n = H.nrows();
+    let mut Hr = H.clone();
+    for j in 0..n {
+        if let Some(d) = column_mut(Hr.as_mut_slice(), n, j).and_then(|c| c.get_mut(j)) {
+            *d += eps;
+        }
+    }
+    let chol = nalgebra::linalg::Cholesky::new(Hr).ok_or(HessianError::NotPositiveDefinite)?;
+    Ok((chol, eps))
 }

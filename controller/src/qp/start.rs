@@ -1,5 +1,5 @@
 //! The checks every solve starts with (`solve_start!`), shared by
-//! `DualActiveSetOf::solve_with` (`qp/solve.rs`) and the proximal
+//! `DualActiveSetOf::solve_with` (`qp/dual.rs`) and the proximal
 //! iterations (`qp/proximal.rs`).
 
 /// The checks every solve starts with, written once for
@@ -67,7 +67,7 @@ macro_rules! solve_start {
             .take($m)
             .enumerate()
             .position(|(i, ((&hi, &n2), &out))| {
-                !out && n2 <= $crate::qp::ZERO_ROW2
+                !out && n2 <= $crate::qp::settings::ZERO_ROW2
                     && $crate::active_set::zero_row_contradicts(hi, $tol, i < $me)
             });
         if let Some(i) = zero_infeasible {
@@ -83,7 +83,7 @@ macro_rules! solve_start {
             .zip(norm2.iter())
             .take($me)
         {
-            if n2 <= $crate::qp::ZERO_ROW2 {
+            if n2 <= $crate::qp::settings::ZERO_ROW2 {
                 *b = true;
             }
         }

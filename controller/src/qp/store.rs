@@ -1,22 +1,21 @@
 //! Where a solve keeps its factor `J`, `R` ([`Store`]): a single solve
 //! (`solve`, `solve_prepared`, `solve_bounded`) holds it in its own frame,
 //! started from scratch and dropped at its end ([`Local`]); a probe of the
-//! relaxation holds it in the [`Carry`] it shares with the probes before and
-//! after it (`qp/reprobe.rs`). `DualActiveSetOf::solve_with` is generic over
+//! relaxation holds it in the `Carry` it shares with the probes before and
+//! after it (`qp/reprobe.rs`, with its `Store`). `DualActiveSetOf::solve_with` is generic over
 //! the two, so a single solve compiles as a solve with its factor in local
 //! variables: no `Carry` built, moved or read through a pointer, no kept
 //! rows to test, and nothing left for a next solve. The controller's cycle
 //! solves only probes, so its builds (and the firmware's) hold only the
-//! [`Carry`] instance.
+//! `Carry` instance.
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
-use super::guess::GuessWork;
-use super::reprobe::{Carry, Pending};
-use super::resolve::Kept;
-use super::{DualActiveSetOf, QpAllocator};
+use super::gram::GuessWork;
+use super::kept::{Kept, Pending};
+use super::solver::DualActiveSetOf;
 use crate::active_set::Iterate;
-use crate::solution::QpStatus;
+use crate::solution::{QpAllocator, QpStatus};
 
 /// The factor of a solve: `J`, `R`, the active rows it may resume from,
 /// the hot start's guess's kept workspace (`None`: the guess's own zeroed
@@ -72,7 +71,7 @@ where
         DefaultAllocator: QpAllocator<NV, NC>;
 
     /// The starting iterate and the drops made resuming, or the status that
-    /// ends the solve ([`Carry`]'s; from scratch, this default: the
+    /// ends the solve (`Carry`'s, `qp/reprobe.rs`; from scratch, this default: the
     /// unconstrained minimiser, no drops).
     #[inline(always)]
     fn start<NC: Dim>(&mut self, at: Begin<'_, NV, NC>) -> Result<(OVector<f64, NV>, u32), QpStatus>
@@ -119,63 +118,4 @@ where
 
     #[inline(always)]
     fn keep(&mut self, _it: Option<&Iterate<NV>>, _guessed: bool) {}
-}
-
-impl<NV: Dim> Store<NV> for &mut Carry<NV>
-where
-    DefaultAllocator: nalgebra::allocator::Allocator<NV> + nalgebra::allocator::Allocator<NV, NV>,
-{
-    /// Nothing: the factor is the carry's.
-    type Own = ();
-
-    const RESUMES: bool = true;
-
-    #[inline(always)]
-    fn own<NC: Dim>(&self, _solver: &DualActiveSetOf<NV, NC>) -> Self::Own
-    where
-        DefaultAllocator: QpAllocator<NV, NC>,
-    {
-    }
-
-    #[inline(always)]
-    fn start<NC: Dim>(&mut self, at: Begin<'_, NV, NC>) -> Result<(OVector<f64, NV>, u32), QpStatus>
-    where
-        DefaultAllocator: QpAllocator<NV, NC>,
-    {
-        Carry::start(self, at)
-    }
-
-    #[inline(always)]
-    fn parts<'s>(&'s mut self, _own: &'s mut Self::Own) -> Parts<'s, NV> {
-        let carry = &mut **self;
-        #[cfg(not(target_os = "none"))]
-        let guess = Some(&mut carry.guess);
-        #[cfg(target_os = "none")]
-        let guess = None;
-        let Carry {
-            J,
-            R,
-            kept,
-            valid,
-            pending,
-            ..
-        } = carry;
-        let kept = if *valid { Some(&*kept) } else { None };
-        (J, R, kept, guess, Some(pending))
-    }
-
-    #[inline(always)]
-    fn keep(&mut self, it: Option<&Iterate<NV>>, guessed: bool) {
-        match it {
-            Some(it) if !guessed => Carry::keep(self, it),
-            // The guess wrote nothing to `J` and `R`.
-            Some(_) => self.valid = false,
-            None => {
-                self.valid = false;
-                if cfg!(not(target_os = "none")) {
-                    self.pending.r_cols = self.R.ncols();
-                }
-            }
-        }
-    }
 }

@@ -1,12 +1,13 @@
-//! The updates of the orthogonal factor `J`, `R` of [`Orthogonal`](super::orthogonal::Orthogonal)
-//! (`qp/orthogonal.rs`): a row added by one Householder reflection
-//! ([`householder_add`]), a row dropped by Givens rotations
-//! ([`givens_drop`]), and the back substitution on `R`
-//! ([`back_substitute`]).
+//! The updates of the orthogonal factor `J`, `R` of the active set (the
+//! bottom of the solver; the factor itself is `qp/orthogonal.rs`): a row
+//! added by one Householder reflection ([`householder_add`]), a row dropped
+//! by Givens rotations ([`givens_drop`]), and the back substitution on `R`
+//! by rows ([`back_substitute`]) or by columns
+//! ([`back_substitute_by_columns`]).
 
 use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
 
-use crate::linalg::{column_mut, columns_in, columns_in_mut, givens};
+use crate::linalg::{column, column_mut, columns_in, columns_in_mut, givens};
 
 /// `r[..nact] = R^-1 d[..nact]` by back substitution on the leading
 /// `nact x nact` block of the upper-triangular `R` (`r` comes zeroed). The
@@ -216,5 +217,40 @@ where
         let (x, y) = (*a, *b);
         *a = c * x + s * y;
         *b = -s * x + c * y;
+    }
+}
+
+/// `r[..nact] = R^-1 d[..nact]` for the upper-triangular leading
+/// `nact x nact` block of `R`, by columns, in place in `r` (`r = d`, then
+/// from the last row up `r_i /= R_ii` and `r[..i] -= r_i R[..i, i]`: a
+/// contiguous column, independent lanes). The products of
+/// `orthogonal::back_substitute` in another order (other rounding), without
+/// its chain of dependent subtractions per row.
+pub(super) fn back_substitute_by_columns<NV: Dim>(
+    R: &OMatrix<f64, NV, NV>,
+    d: &[f64],
+    nact: usize,
+    r: &mut [f64],
+) where
+    DefaultAllocator: nalgebra::allocator::Allocator<NV, NV>,
+{
+    let n = R.nrows();
+    let nact = nact.min(n);
+    crate::linalg::copy(r, d.get(..nact).unwrap_or(&[]));
+    for i in (0..nact).rev() {
+        let (Some(col), Some((ri_slot, above))) = (
+            column(R.as_slice(), n, i),
+            r.get_mut(..=i).and_then(|h| h.split_last_mut()),
+        ) else {
+            continue;
+        };
+        let Some(&rii) = col.get(i) else {
+            continue;
+        };
+        let ri = *ri_slot / rii;
+        *ri_slot = ri;
+        for (wk, &rk) in above.iter_mut().zip(col) {
+            *wk -= ri * rk;
+        }
     }
 }

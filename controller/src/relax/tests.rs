@@ -193,6 +193,7 @@ fn relaxations_are_minimal_in_priority_order() {
             goal: dir * 10.0,
             obstacles: &obstacles[..n_obs],
             obstacle_velocities: &[],
+            obstacle_velocity_radii: &[],
             speed_cap: crate::NO_SPEED_CAP,
         };
         ctl.assemble(&input, None, &mut asm).unwrap();
@@ -459,6 +460,7 @@ fn pushed(capture_fraction: Option<f64>, forward: f64, lateral: f64) -> crate::C
         goal: Vector2::new(20.0, 0.0),
         obstacles: &[],
         obstacle_velocities: &[],
+        obstacle_velocity_radii: &[],
         speed_cap: crate::NO_SPEED_CAP,
     };
     ctl.step(&input, None)
@@ -561,6 +563,7 @@ fn a_conflict_ahead_leaves_the_side_wall_its_margin() {
         goal: Vector2::new(10.0, 10.0),
         obstacles: &obstacles,
         obstacle_velocities: &[],
+        obstacle_velocity_radii: &[],
         speed_cap: crate::NO_SPEED_CAP,
     };
     let solver = ctl.solver();
@@ -666,6 +669,7 @@ fn give_way_marks_change_the_path_not_the_answer() {
             goal: -dir,
             obstacles: &obstacles[..n_obs],
             obstacle_velocities: &[],
+            obstacle_velocity_radii: &[],
             speed_cap: crate::NO_SPEED_CAP,
         };
         ctl.assemble(&input, None, &mut asm).unwrap();
@@ -746,6 +750,7 @@ fn a_person_gives_way_before_the_walls() {
         goal: Vector2::new(-0.5, -1.5),
         obstacles: &obstacles,
         obstacle_velocities: &velocities,
+        obstacle_velocity_radii: &[],
         speed_cap: crate::NO_SPEED_CAP,
     };
     let solver = ctl.solver();

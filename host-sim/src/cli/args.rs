@@ -52,7 +52,8 @@ pub(crate) enum Command {
     /// heading, y to its left): seed; push_time [s], push_period [s, 0 = once],
     /// push_forward, push_lateral [m/s, body frame], push_alternate [bool];
     /// plant_com_height [m]; foot_sigma [m, per world axis]; noise_position [m],
-    /// noise_velocity [m/s], noise_heading [rad].
+    /// noise_velocity [m/s], noise_heading [rad]; velocity_error [m/s, the
+    /// known people's velocities handed over this wrong, with this radius].
     Robustness(RobustnessArgs),
 }
 

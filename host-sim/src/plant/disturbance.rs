@@ -21,6 +21,14 @@
 //!   Gaussian noise of standard deviation `noise_position` (m, per world axis),
 //!   `noise_velocity` (m/s, per world axis) and `noise_heading` (rad). The plant,
 //!   the end conditions, the LiDAR and the clearance use the true state.
+//! * **Wrong people's velocities**: with known velocities (`perception =
+//!   "known"`), each moving obstacle's velocity handed to the controller is
+//!   off by `velocity_error` (m/s) in a direction drawn once per obstacle
+//!   (uniform), and the controller is given `velocity_error` as that
+//!   obstacle's velocity uncertainty radius
+//!   (`ldcbf_controller::CycleInput::obstacle_velocity_radii`): an estimate
+//!   wrong by up to the radius the tracker states, as the barrier's reachable
+//!   set assumes (docs/maths.md §2.7).
 //!
 //! Randomness: a ChaCha8 generator (as the scenario generator) seeded from both
 //! the scenario seed and the disturbance `seed`
@@ -36,6 +44,7 @@ use rand_chacha::rand_core::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
 use serde::{Deserialize, Serialize};
 
+use crate::world::moving::MAX_SPEED;
 use crate::world::setting::SettingError;
 
 /// Settings of the disturbances (the `[disturbance]` table; all off by default).
@@ -76,6 +85,10 @@ pub struct DisturbanceParams {
     /// Standard deviation of the measured heading, rad.
     #[serde(default)]
     pub noise_heading: f64,
+    /// Error of each moving obstacle's velocity handed to the controller
+    /// with known velocities, m/s (module docs; 0 = exact).
+    #[serde(default)]
+    pub velocity_error: f64,
 }
 
 /// Names of the `[disturbance]` fields (for `--set` help and messages).
@@ -91,6 +104,7 @@ pub const DISTURBANCE_FIELDS: &[&str] = &[
     "noise_position",
     "noise_velocity",
     "noise_heading",
+    "velocity_error",
 ];
 
 /// Smallest `push_period`, s: at most one push per 10 ms.
@@ -133,6 +147,13 @@ impl DisturbanceParams {
                 "must be finite and > 0 m",
             ));
         }
+        let e = self.velocity_error;
+        if !(e.is_finite() && (0.0..=MAX_SPEED).contains(&e)) {
+            return Err(SettingError::new(
+                "velocity_error",
+                format!("must be finite, >= 0 and <= {MAX_SPEED} m/s"),
+            ));
+        }
         let sigma = |v: f64| v.is_finite() && v >= 0.0;
         for (name, v) in [
             ("foot_sigma", self.foot_sigma),
@@ -165,11 +186,13 @@ impl DisturbanceParams {
         self.has_push()
             || self.has_noise()
             || self.foot_sigma > 0.0
+            || self.velocity_error > 0.0
             || self.plant_com_height.is_some_and(|h| h != model_com_height)
     }
 }
 
-/// The generator of one stream (`stream` 0: foot errors, 1: estimation noise)
+/// The generator of one stream (`stream` 0: foot errors, 1: estimation
+/// noise, 2: the directions of the people's velocity errors)
 /// for a scenario seed and a disturbance seed: ChaCha8 with the 32-byte key
 /// `scenario_seed | disturbance_seed | "DISTURB\0" | 0` (little endian), so it
 /// is independent of the scenario generator's and the LiDAR's streams.
@@ -321,6 +344,24 @@ impl Disturber {
         target + e
     }
 
+    /// The velocity errors of `n` obstacles (m/s, world frame): each of
+    /// length `velocity_error` in a uniform direction, drawn from stream 2 of
+    /// this run's seeds (module docs); zeros when `velocity_error` is 0.
+    pub fn velocity_errors(&self, scenario_seed: u64, n: usize) -> Vec<Vector2<f64>> {
+        let e = self.params.velocity_error;
+        if e <= 0.0 {
+            return vec![Vector2::zeros(); n];
+        }
+        let mut rng = disturbance_rng(scenario_seed, self.params.seed, 2);
+        (0..n)
+            .map(|_| {
+                let a = rand_distr::Uniform::new(0.0, core::f64::consts::TAU)
+                    .map_or(0.0, |u| u.sample(&mut rng));
+                Vector2::new(a.cos(), a.sin()) * e
+            })
+            .collect()
+    }
+
     /// The measured CoM position (m), velocity (m/s) and heading (rad) for the
     /// true ones (all world frame).
     pub fn measure(
@@ -371,6 +412,8 @@ mod tests {
         assert_eq!(bad(&|p| p.noise_velocity = f64::NAN), "noise_velocity");
         assert_eq!(bad(&|p| p.noise_heading = f64::INFINITY), "noise_heading");
         assert_eq!(bad(&|p| p.noise_position = -1.0), "noise_position");
+        assert_eq!(bad(&|p| p.velocity_error = -0.1), "velocity_error");
+        assert_eq!(bad(&|p| p.velocity_error = f64::NAN), "velocity_error");
         assert_eq!(bad(&|p| p.plant_com_height = Some(0.0)), "plant_com_height");
         assert_eq!(bad(&|p| p.push_lateral = 0.3), "push_time");
         assert_eq!(

@@ -36,6 +36,7 @@
 mod logs;
 mod mapping;
 pub mod mcap;
+mod output_file;
 pub mod plot;
 mod summary;
 #[cfg(test)]
@@ -43,6 +44,7 @@ mod tests;
 
 pub use logs::{OutputDir, write_logs};
 pub use mapping::{MappingSummary, mapping_line, summarize_mapping};
+pub use output_file::{check_output_file, write_output_file};
 pub use summary::{
     ComputeStats, Summary, compute_stats, human_summary, nearest_rank, percentile, summarize,
 };

@@ -29,6 +29,61 @@ pub const MAX_MAGNITUDE: f64 = 1e6;
 /// come from a `[generator]`).
 pub const MAX_FILE_BYTES: u64 = 1 << 24;
 
+/// The one rule for every file the tools read (scenarios, `qp solve`'s npz
+/// files, `deadline --instructions`, the files of a study directory): a
+/// regular file (a symbolic link to one is followed) of at most `max_bytes`.
+/// A directory, a device, a FIFO or a socket is refused before it is opened,
+/// so nothing blocks on a FIFO or reads a device for ever. Returns the size,
+/// bytes. The error's kind is `NotFound` for a missing file; its message says
+/// what is wrong, without the path (the caller names it).
+pub fn check_regular_file(path: &std::path::Path, max_bytes: u64) -> std::io::Result<u64> {
+    check_metadata(&std::fs::metadata(path)?, max_bytes)
+}
+
+/// [`check_regular_file`] on metadata already read.
+fn check_metadata(meta: &std::fs::Metadata, max_bytes: u64) -> std::io::Result<u64> {
+    if meta.is_dir() {
+        return Err(refuse("is a directory, not a file".into()));
+    }
+    if !meta.is_file() {
+        return Err(refuse(
+            "is not a regular file (a device, a FIFO or a socket)".into(),
+        ));
+    }
+    if meta.len() > max_bytes {
+        return Err(too_big(meta.len(), max_bytes));
+    }
+    Ok(meta.len())
+}
+
+/// An error of [`check_regular_file`]: the input is refused.
+fn refuse(message: String) -> std::io::Error {
+    std::io::Error::new(std::io::ErrorKind::InvalidInput, message)
+}
+
+/// The error of a file of `len` bytes over `max_bytes`.
+fn too_big(len: u64, max_bytes: u64) -> std::io::Error {
+    refuse(format!(
+        "is {len} bytes, more than the {max_bytes} bytes read from one file"
+    ))
+}
+
+/// Reads the file at `path` after [`check_regular_file`]; the opened file is
+/// checked again and the read stops after `max_bytes + 1` bytes, so a file
+/// swapped or grown between the check and the read is refused too.
+pub fn read_regular_file(path: &std::path::Path, max_bytes: u64) -> std::io::Result<Vec<u8>> {
+    use std::io::Read as _;
+    check_regular_file(path, max_bytes)?;
+    let file = std::fs::File::open(path)?;
+    check_metadata(&file.metadata()?, max_bytes)?;
+    let mut bytes = Vec::new();
+    file.take(max_bytes + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > max_bytes {
+        return Err(too_big(bytes.len() as u64, max_bytes));
+    }
+    Ok(bytes)
+}
+
 /// Longest piece of user text an error message repeats, characters.
 pub const MAX_ECHO: usize = 80;
 

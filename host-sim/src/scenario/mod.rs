@@ -73,6 +73,7 @@
 //! noise_position = 0.0     # m, std. dev. of the measured CoM position per world axis
 //! noise_velocity = 0.0     # m/s, std. dev. of the measured CoM velocity per world axis
 //! noise_heading = 0.0      # rad, std. dev. of the measured heading
+//! velocity_error = 0.0     # m/s, known velocities handed over this wrong (and this uncertain)
 //! ```
 //!
 //! `--set disturbance.<field>=value` sets one of them (e.g.
@@ -377,26 +378,20 @@ pub fn load(spec: &str, opts: &LoadOptions) -> Result<Scenario, ScenarioError> {
 /// Loads and validates the scenario file at `path`.
 pub fn load_path(path: &Path, opts: &LoadOptions) -> Result<Scenario, ScenarioError> {
     let file = path.display().to_string();
-    if let Ok(m) = std::fs::metadata(path)
-        && m.len() > limits::MAX_FILE_BYTES
-    {
-        return Err(ScenarioError {
-            file,
-            field: "(file)".into(),
-            line: None,
-            message: format!(
-                "is {} bytes, larger than the {} bytes a scenario file may have",
-                m.len(),
-                limits::MAX_FILE_BYTES
-            ),
-        });
-    }
-    let text = std::fs::read_to_string(path).map_err(|e| ScenarioError {
+    let fail = |message: String| ScenarioError {
         file: file.clone(),
         field: "(file)".into(),
         line: None,
-        message: format!("cannot read: {e}"),
+        message,
+    };
+    let bytes = limits::read_regular_file(path, limits::MAX_FILE_BYTES).map_err(|e| {
+        fail(match e.kind() {
+            std::io::ErrorKind::InvalidInput => e.to_string(),
+            _ => format!("cannot read: {e}"),
+        })
     })?;
+    let text = String::from_utf8(bytes)
+        .map_err(|_| fail("cannot read: stream did not contain valid UTF-8".into()))?;
     parse_str(&text, &file, opts)
 }
 

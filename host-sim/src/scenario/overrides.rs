@@ -60,6 +60,11 @@ pub struct ControllerOverrides {
     /// and `planner = "rrt_star"` (the occupancy map and a planned path),
     /// off otherwise (the paper's normal).
     pub turn_vertex_normals: Option<bool>,
+    /// `Config::velocity_margin`: `false` is the constant-velocity
+    /// prediction with no uncertainty margin (the tracker's radii ignored).
+    pub velocity_margin: Option<bool>,
+    pub person_speed_max: Option<f64>,
+    pub person_accel_max: Option<f64>,
 }
 
 /// The robot's fields of [`Config`]: set in `[robot]`
@@ -102,7 +107,10 @@ impl ControllerOverrides {
             max_gait_relaxation,
             warm_start,
             tol_primal,
-            turn_vertex_normals
+            turn_vertex_normals,
+            velocity_margin,
+            person_speed_max,
+            person_accel_max
         );
         if let Some(r) = self.capture_fraction {
             c.capture_fraction = (r != 0.0).then_some(r);

@@ -16,7 +16,9 @@
 //!   distance `<= eps`) and `min_points` (a point is a core point when at least
 //!   `min_points` points, itself included, are within `eps`). Border points join
 //!   the first cluster that reaches them; noise points (in no cluster) are
-//!   dropped. O(n^2), fine for a few hundred points per scan.
+//!   dropped. Neighbours through a grid of `eps` cells, each point queued
+//!   once: O(n) memory, O(n k) time for k neighbours per point (the ROS 2
+//!   node caps the rays of a scan, docs/ros2.md).
 //! * [`infer_obstacles`]: each cluster is cut into convex pieces, in the scan's
 //!   own order (one sensor, rays sorted by angle). The method is the classic
 //!   line-extraction pipeline for 2D range scans:
@@ -97,12 +99,15 @@ use serde::{Deserialize, Serialize};
 use crate::world::setting::SettingError;
 use crate::world::{MAX_VERTICES, Polygon};
 
+mod assign;
 mod dbscan;
 pub mod detect;
 pub mod faces;
 mod infer;
 mod map;
 pub mod movers;
+#[cfg(test)]
+mod patterns;
 #[cfg(test)]
 mod tests;
 pub mod track;

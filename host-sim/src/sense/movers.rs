@@ -11,11 +11,25 @@
 //!    `min_points` ([`super::dbscan`]); each cluster becomes its
 //!    convex hull ([`super::cluster_polygon`], thin clusters as
 //!    `min_thickness` rectangles).
-//!    A cluster too large to be one person is split at the moving tracks'
-//!    predicted positions (its points within [`TrackParams::max_extent`] of
-//!    one go to the nearest: people walking close together, or past a wall).
+//!    A cluster wider than one person (a vertex farther than
+//!    [`TrackParams::person_extent`] from its centre: a person's radius is
+//!    0.2-0.3 m) is split, first where the scan breaks inside it (two hits
+//!    next in ray order with a ray between them that hit something else or
+//!    nothing, or more than [`TrackParams::segment_jump`] apart: the gap
+//!    between two people walking side by side, the depth step from a near
+//!    person to a far one), then, for a piece still wider, at the tracks
+//!    that predict into it (two or more person-sized tracks, or one moving
+//!    track, within [`TrackParams::person_extent`] of its hits: each hit
+//!    within [`TrackParams::max_extent`] of one goes to the nearest, the
+//!    rest stay one piece: people walking so close that no ray passes
+//!    between them, or a person passing a wall). Last, a piece
+//!    still wider than a person but at most [`TrackParams::group_extent`]
+//!    and not straight (people are round, a wall's face is flat) is cut
+//!    into person-wide pieces along its principal axis: a group never seen
+//!    apart.
 //! 2. **Tracking** ([`super::track::Tracker::classify`]): global nearest
-//!    neighbour association of the hulls' vertex centres with a distance gate,
+//!    neighbour association of the hulls' vertex centres (Hungarian method,
+//!    Mahalanobis and distance gates),
 //!    a constant-velocity Kalman filter per track, confirmation after
 //!    [`TrackParams::confirm`] updates, dropped after [`TrackParams::max_age`]
 //!    s without a measurement ([`TrackParams::max_coast`] for a moving
@@ -70,6 +84,63 @@ pub struct MoverScan {
     pub obstacles: Vec<Polygon>,
     /// The velocity of each of `obstacles`, m/s (zero while tentative).
     pub velocities: Vec<Vector2<f64>>,
+    /// The velocity uncertainty radius of each of `obstacles`, m/s (the
+    /// controller's `ldcbf_controller::CycleInput::obstacle_velocity_radii`):
+    /// the true velocity is within it of `velocities[i]`, in any direction, while the
+    /// track's model holds ([`super::track::Track::velocity_radius`]:
+    /// [`TrackParams::walking_speed`] while tentative, from the track's
+    /// covariance when moving or coasting).
+    pub velocity_radii: Vec<f64>,
+}
+
+/// The breaks of the scan in cluster `m` (indices into `points`, in ray
+/// order; `ray_of[i]` is point `i`'s ray of `n_rays`): two points next in
+/// ray order (cyclically) break the cluster when a ray between them hit
+/// something else or nothing, or when they are more than `jump` (m) apart
+/// (the jump-distance segmentation of laser people detectors). Pieces of
+/// fewer than `min_points` points join the piece before them. Returns the
+/// pieces (one, `m`, without a break).
+fn breaks(
+    points: &[Vector2<f64>],
+    ray_of: &[usize],
+    n_rays: usize,
+    m: &[usize],
+    jump: f64,
+    min_points: usize,
+) -> Vec<Vec<usize>> {
+    let n = m.len();
+    let is_break = |k: usize| {
+        let (a, b) = (m[k], m[(k + 1) % n]);
+        let next_ray = (ray_of[a] + 1) % n_rays.max(1);
+        ray_of[b] != next_ray || (points[a] - points[b]).norm() > jump
+    };
+    let cuts: Vec<usize> = (0..n).filter(|&k| n > 1 && is_break(k)).collect();
+    if cuts.len() < 2 {
+        // No break, or one (a cluster's two ends in ray order): one piece.
+        return vec![m.to_vec()];
+    }
+    let mut out: Vec<Vec<usize>> = Vec::new();
+    for (c, &k) in cuts.iter().enumerate() {
+        let end = cuts[(c + 1) % cuts.len()];
+        let mut piece = Vec::new();
+        let mut q = (k + 1) % n;
+        loop {
+            piece.push(m[q]);
+            if q == end {
+                break;
+            }
+            q = (q + 1) % n;
+        }
+        match out.last_mut() {
+            Some(last) if piece.len() < min_points => last.extend(piece),
+            _ => out.push(piece),
+        }
+    }
+    if out.len() > 1 && out[0].len() < min_points {
+        let first = out.remove(0);
+        out.last_mut().expect("more than one piece").extend(first);
+    }
+    out
 }
 
 /// The detector and tracker of things that move (module docs).
@@ -114,43 +185,153 @@ impl Movers {
         cluster_polygon(&pts, self.min_thickness, self.max_vertices)
     }
 
-    /// Each cluster of `members` (indices into `points`) with its hull;
-    /// clusters too large to be one person (not [`person_sized`]) are split at
-    /// the moving tracks: each point within `max_extent` of a moving track's
-    /// predicted position goes to the nearest such track's piece, the rest
-    /// stay one piece (people walking close together, or past a wall, seen
-    /// as one cluster).
-    fn split_at_tracks(
+    /// The pieces of the clusters `members` (indices into `points`, each in
+    /// ray order; `ray_of[i]` is point `i`'s ray of `n_rays`), each with its
+    /// hull (module docs, step 1): a cluster wider than one person
+    /// ([`TrackParams::person_extent`]) is broken where the scan breaks
+    /// ([`breaks`]), and a piece still wider is split at the tracks that
+    /// predict into it ([`Movers::split_at_tracks`]).
+    fn pieces(
         &self,
         t: f64,
         points: &[Vector2<f64>],
+        ray_of: &[usize],
+        n_rays: usize,
         members: Vec<Vec<usize>>,
     ) -> Vec<(Vec<usize>, Polygon)> {
-        let movers = self.tracker.moving_at(t);
-        let reach = self.tracker.params().max_extent;
+        let pr = self.tracker.params();
+        let people = self.tracker.people_at(t);
         let mut out = Vec::with_capacity(members.len());
         for m in members {
             let hull = self.hull(points, &m);
-            if movers.is_empty() || person_sized(&hull, reach) {
+            if person_sized(&hull, pr.person_extent) {
                 out.push((m, hull));
                 continue;
             }
-            let mut parts: Vec<Vec<usize>> = vec![Vec::new(); movers.len() + 1];
-            for &i in &m {
-                let nearest = movers
-                    .iter()
-                    .enumerate()
-                    .map(|(k, q)| (k, (points[i] - q).norm()))
-                    .filter(|&(_, d)| d <= reach)
-                    .min_by(|a, b| a.1.total_cmp(&b.1));
-                parts[nearest.map_or(movers.len(), |(k, _)| k)].push(i);
+            for seg in breaks(points, ray_of, n_rays, &m, pr.segment_jump, self.min_points) {
+                let h = self.hull(points, &seg);
+                if person_sized(&h, pr.person_extent) {
+                    out.push((seg, h));
+                    continue;
+                }
+                for part in self.split_at_tracks(points, seg, h, &people) {
+                    out.extend(self.split_by_size(points, part));
+                }
             }
-            out.extend(parts.into_iter().filter(|p| !p.is_empty()).map(|p| {
-                let h = self.hull(points, &p);
-                (p, h)
-            }));
         }
         out
+    }
+
+    /// The piece `part` split by the size of a person when it is wider than
+    /// one ([`TrackParams::person_extent`]), at most
+    /// [`TrackParams::group_extent`] wide, and not straight (its hits' RMS
+    /// distance from their principal line more than
+    /// [`TrackParams::line_rms`]: people's outlines are round, a wall's face
+    /// is flat): into `k = ceil(span / (2 person_extent))` pieces of equal
+    /// length along the principal axis (`span` the hits' extent along it).
+    /// People touching so closely that no ray passes between them, never
+    /// seen apart; each piece then gets a track of its own.
+    fn split_by_size(
+        &self,
+        points: &[Vector2<f64>],
+        part: (Vec<usize>, Polygon),
+    ) -> Vec<(Vec<usize>, Polygon)> {
+        let pr = self.tracker.params();
+        let (m, hull) = part;
+        if m.len() < 2 * self.min_points
+            || person_sized(&hull, pr.person_extent)
+            || !person_sized(&hull, pr.group_extent)
+        {
+            return vec![(m, hull)];
+        }
+        let n = m.len() as f64;
+        let mean = m.iter().fold(Vector2::zeros(), |a, &i| a + points[i]) / n;
+        let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+        for &i in &m {
+            let d = points[i] - mean;
+            sxx += d.x * d.x;
+            sxy += d.x * d.y;
+            syy += d.y * d.y;
+        }
+        // The principal axis of the scatter and the variance across it.
+        let (a, b, c) = (sxx / n, sxy / n, syy / n);
+        let disc = (0.25 * (a - c) * (a - c) + b * b).sqrt();
+        let across = (0.5 * (a + c) - disc).max(0.0);
+        if across.sqrt() <= pr.line_rms {
+            return vec![(m, hull)];
+        }
+        let angle = 0.5 * (2.0 * b).atan2(a - c);
+        let axis = Vector2::new(angle.cos(), angle.sin());
+        let s: Vec<f64> = m.iter().map(|&i| (points[i] - mean).dot(&axis)).collect();
+        let (lo, hi) = s
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(l, h), &v| (l.min(v), h.max(v)));
+        let k = ((hi - lo) / (2.0 * pr.person_extent)).ceil().max(1.0);
+        let mut parts: Vec<Vec<usize>> = vec![Vec::new(); k as usize];
+        for (&i, &si) in m.iter().zip(&s) {
+            let bin = (((si - lo) / (hi - lo) * k) as usize).min(parts.len() - 1);
+            parts[bin].push(i);
+        }
+        parts
+            .into_iter()
+            .filter(|p| !p.is_empty())
+            .map(|p| {
+                let h = self.hull(points, &p);
+                (p, h)
+            })
+            .collect()
+    }
+
+    /// The piece `m` (hull `hull`) split at the tracks of `people` (their
+    /// positions now, m) that predict into it: with two or more such tracks,
+    /// or one moving track, each point within [`TrackParams::max_extent`] of
+    /// one goes to the nearest one's piece, the rest stay one piece (people
+    /// walking close together, or past a wall); otherwise `m` whole.
+    fn split_at_tracks(
+        &self,
+        points: &[Vector2<f64>],
+        m: Vec<usize>,
+        hull: Polygon,
+        people: &[(u64, Vector2<f64>, bool)],
+    ) -> Vec<(Vec<usize>, Polygon)> {
+        let pr = self.tracker.params();
+        let inside: Vec<Vector2<f64>> = people
+            .iter()
+            .filter(|(_, q, _)| {
+                m.iter()
+                    .any(|&i| (points[i] - q).norm() <= pr.person_extent)
+            })
+            .map(|(_, q, _)| *q)
+            .collect();
+        let moving = people
+            .iter()
+            .filter(|(_, q, mv)| {
+                *mv && m
+                    .iter()
+                    .any(|&i| (points[i] - q).norm() <= pr.person_extent)
+            })
+            .count();
+        if inside.len() < 2 && moving == 0 {
+            return vec![(m, hull)];
+        }
+        let mut parts: Vec<Vec<usize>> = vec![Vec::new(); inside.len() + 1];
+        for &i in &m {
+            let nearest = inside
+                .iter()
+                .enumerate()
+                .map(|(k, q)| (k, (points[i] - q).norm()))
+                .filter(|&(_, d)| d <= pr.max_extent)
+                .min_by(|a, b| a.1.total_cmp(&b.1));
+            parts[nearest.map_or(inside.len(), |(k, _)| k)].push(i);
+        }
+        parts
+            .into_iter()
+            .filter(|p| !p.is_empty())
+            .map(|p| {
+                let h = self.hull(points, &p);
+                (p, h)
+            })
+            .collect()
     }
 
     /// One scan at time `t` (s, non-decreasing): `rays[k]` is ray `k`'s hit
@@ -160,7 +341,7 @@ impl Movers {
         let points: Vec<Vector2<f64>> = rays.iter().flatten().copied().collect();
         let labels = dbscan(&points, self.eps, self.min_points);
         let (pieces, hulls): (Vec<_>, Vec<_>) = self
-            .split_at_tracks(t, &points, members(&labels))
+            .pieces(t, &points, &ray_of, rays.len(), members(&labels))
             .into_iter()
             .unzip();
         let motions = self.tracker.classify(t, &hulls);
@@ -185,6 +366,7 @@ impl Movers {
             }
             out.obstacles.push(hull);
             out.velocities.push(v);
+            out.velocity_radii.push(self.tracker.velocity_radius(*id));
         }
         // Noise points (in no cluster: a silhouette's grazing edge) next to a
         // hull kept out of the map are kept out with it.
@@ -210,6 +392,8 @@ impl Movers {
                 let v = tr.velocity();
                 out.obstacles.push(translated(hull, tr.position() - then));
                 out.velocities.push(v * (MAX_SPEED / v.norm()).min(1.0));
+                out.velocity_radii
+                    .push(tr.velocity_radius(self.tracker.params()));
             }
         }
         out
@@ -296,6 +480,7 @@ mod tests {
             let scan = movers.observe(t, &rays);
             assert_eq!(scan.kept_out.len(), rays.len());
             assert_eq!(scan.obstacles.len(), scan.velocities.len());
+            assert_eq!(scan.obstacles.len(), scan.velocity_radii.len());
             map.update_keeping_out(origin, 0.0, &rays, params.range, tol, 0.05, &scan.kept_out);
             for hull in &scan.obstacles {
                 map.clear_polygon(hull, map.resolution);

@@ -9,10 +9,17 @@
 //!    [`TrackParams::accel_noise`] m^2/s^3, the discrete model of Bar-Shalom,
 //!    Li and Kirubarajan, "Estimation with Applications to Tracking and
 //!    Navigation", 2001, section 6.2.2) is predicted to `t`.
-//! 3. **Data association**: global nearest neighbour, greedy: all
-//!    (track, piece) pairs whose predicted-to-measured distance is within the
-//!    gate [`TrackParams::gate`] are taken by increasing distance, each track
-//!    and each piece at most once.
+//! 3. **Data association**: global nearest neighbour (`sense/assign.rs`):
+//!    a (track, piece) pair is inside the gate when the piece's centre is
+//!    within [`TrackParams::gate`] m of the track's prediction and within
+//!    the squared Mahalanobis distance [`TrackParams::gate_chi2`] in the
+//!    innovation covariance (a settled track gates tightly, a new or coasting
+//!    one widely); the pairs are chosen by the Hungarian method to minimise
+//!    the summed squared Mahalanobis distance, a track left unmatched
+//!    costing the gate (Blackman and Popoli, 1999, section 6.4; the ROS leg
+//!    tracker of Leigh et al. associates so). Greedy nearest-first pairing
+//!    lets one track take the piece its neighbour needs when two people walk
+//!    close together; the global optimum does not.
 //! 4. **Update**: a matched track's filter is updated with `z` (measurement
 //!    noise [`TrackParams::measurement_sigma`] m per axis); an unmatched piece
 //!    starts a track at rest with a wide velocity prior; a track not matched
@@ -29,6 +36,15 @@
 //!    Moving is sticky: a track that got a velocity once keeps giving its
 //!    current estimate for as long as it lives, whatever the size of the
 //!    piece it is matched with.
+//! 6. **Velocity uncertainty** ([`Track::velocity_radius`]): with each
+//!    velocity a radius (m/s) the true velocity is within, in any
+//!    direction, while the model holds: the [`TrackParams::velocity_chi2`]
+//!    confidence disk of the filter's velocity block (its largest
+//!    eigenvalue), at most the speed plus [`TrackParams::walking_speed`];
+//!    [`TrackParams::walking_speed`] for a piece not known to move (a new,
+//!    unconfirmed or just re-found track, handed over at rest). A coasting
+//!    track's covariance grows with every prediction, and so does its
+//!    radius.
 //!
 //! The tracker only sees the pieces it is given; it keeps no map. In the
 //! closed loop the pieces are the convex hulls of each scan's DBSCAN clusters,
@@ -37,6 +53,7 @@
 
 use ldcbf_controller::nalgebra::{Matrix2, Matrix4, Vector2, Vector4};
 
+use super::assign::assign;
 use crate::world::Polygon;
 use crate::world::moving::{MAX_SPEED, vertex_centre as centre};
 
@@ -50,6 +67,11 @@ pub struct TrackParams {
     /// Largest distance between a track's predicted position and a piece's
     /// centre for the two to be associated, m.
     pub gate: f64,
+    /// Largest squared Mahalanobis distance of a piece's centre from a
+    /// track's prediction (in the innovation covariance) for the two to be
+    /// associated (chi-square, 2 degrees of freedom; 13.8 keeps 99.9 % of
+    /// the right pairs); also the cost of leaving a track unmatched.
+    pub gate_chi2: f64,
     /// White-noise acceleration spectral density of the constant-velocity
     /// model, m^2/s^3.
     pub accel_noise: f64,
@@ -72,6 +94,31 @@ pub struct TrackParams {
     /// are reported as at rest (the centre of a piece at rest jitters with
     /// the noise and the view).
     pub significance: f64,
+    /// The speed a person may walk at, m/s: the velocity uncertainty radius
+    /// of a piece whose motion is not known ([`Track::velocity_radius`]).
+    pub walking_speed: f64,
+    /// Chi-square quantile (2 degrees of freedom) of the velocity
+    /// uncertainty radius ([`Track::velocity_radius`]; 9.21: 99 %).
+    pub velocity_chi2: f64,
+    /// Largest distance of a cluster's vertex from its centre for the
+    /// cluster to be one person, m: a wider cluster is split
+    /// ([`crate::sense::movers`]); a person's radius is 0.2-0.3 m.
+    pub person_extent: f64,
+    /// Two consecutive hits of a cluster (in ray order) farther apart than
+    /// this, or with a ray between them that hit something else or nothing,
+    /// are a break between two things ([`crate::sense::movers`]), m.
+    pub segment_jump: f64,
+    /// Largest distance of a piece's vertex from its centre for the piece
+    /// to be cut into person-wide pieces by size ([`crate::sense::movers`]:
+    /// two or three people side by side), m.
+    pub group_extent: f64,
+    /// A piece whose hits' RMS distance from their principal line is at
+    /// most this is straight (a wall's face), and is not cut by size, m.
+    pub line_rms: f64,
+    /// A piece at most this thick across and longer than 0.4 m is a flat
+    /// face ([`flat`]): never a person, m (a wall's hull is the LiDAR's
+    /// `min_thickness`, 0.05 m, plus its noise).
+    pub flat_width: f64,
 }
 
 impl Default for TrackParams {
@@ -79,6 +126,7 @@ impl Default for TrackParams {
         TrackParams {
             cluster_eps: 0.15,
             gate: 0.5,
+            gate_chi2: 13.8,
             accel_noise: 0.1,
             measurement_sigma: 0.05,
             initial_speed_sigma: 1.0,
@@ -88,6 +136,13 @@ impl Default for TrackParams {
             max_extent: 0.5,
             min_speed: 0.15,
             significance: 2.0,
+            walking_speed: 1.5,
+            velocity_chi2: 9.21,
+            person_extent: 0.35,
+            segment_jump: 0.12,
+            group_extent: 1.0,
+            line_rms: 0.04,
+            flat_width: 0.065,
         }
     }
 }
@@ -112,6 +167,10 @@ pub struct Track {
     /// lives (a person who slows, or whose visible outline shifts its
     /// centre against the walk, is not turned into a wall).
     pub moving: bool,
+    /// The last piece matched with the track was person-sized
+    /// ([`TrackParams::max_extent`]): the track may be a person, and a
+    /// cluster it predicts into is split at it ([`crate::sense::movers`]).
+    pub small: bool,
 }
 
 impl Track {
@@ -145,10 +204,40 @@ impl Track {
         self.time = t;
     }
 
+    /// The innovation covariance of a centre measured with `sigma` (m per
+    /// axis): the position block of the covariance plus `R = sigma^2 I`
+    /// (`H = [I 0]`), m^2.
+    pub fn innovation_covariance(&self, sigma: f64) -> Matrix2<f64> {
+        self.covariance.fixed_view::<2, 2>(0, 0) + Matrix2::identity() * (sigma * sigma)
+    }
+
+    /// The velocity uncertainty radius, m/s: the true velocity is within it
+    /// of [`Track::velocity`] while the filter's model holds. The radius of
+    /// the `p.velocity_chi2` confidence disk of the velocity block `P_v` of
+    /// the covariance (its largest eigenvalue, a circle around the ellipse:
+    /// `sqrt(chi2 * lambda_max(P_v))`), at most the speed plus
+    /// [`TrackParams::walking_speed`] (a person walks no faster); a track not
+    /// confirmed yet ([`TrackParams::confirm`]) or not moving gets
+    /// [`TrackParams::walking_speed`] (handed over at rest, it may walk off
+    /// in any direction).
+    pub fn velocity_radius(&self, p: &TrackParams) -> f64 {
+        if !self.moving {
+            return p.walking_speed;
+        }
+        let pv = self.covariance.fixed_view::<2, 2>(2, 2);
+        let (a, b, c) = (pv[(0, 0)], 0.5 * (pv[(0, 1)] + pv[(1, 0)]), pv[(1, 1)]);
+        let lambda = 0.5 * (a + c) + (0.25 * (a - c) * (a - c) + b * b).sqrt();
+        let r = (p.velocity_chi2 * lambda.max(0.0)).sqrt();
+        if r.is_finite() {
+            r.min(self.velocity().norm() + p.walking_speed)
+        } else {
+            p.walking_speed
+        }
+    }
+
     fn update(&mut self, z: Vector2<f64>, sigma: f64) {
-        // H = [I 0]: the innovation covariance is the position block plus R.
         let p = self.covariance;
-        let s = p.fixed_view::<2, 2>(0, 0) + Matrix2::identity() * (sigma * sigma);
+        let s = self.innovation_covariance(sigma);
         let Some(s_inv) = s.try_inverse() else {
             return;
         };
@@ -204,13 +293,34 @@ impl Tracker {
         &self.tracks
     }
 
-    /// The positions of the moving tracks ([`Track::moving`]) predicted to
-    /// time `t` (s) at their estimated velocities, m, world frame.
-    pub fn moving_at(&self, t: f64) -> Vec<Vector2<f64>> {
+    /// The velocity uncertainty radius of track `id`, m/s
+    /// ([`Track::velocity_radius`]); [`TrackParams::walking_speed`] for a
+    /// track that does not live.
+    pub fn velocity_radius(&self, id: u64) -> f64 {
         self.tracks
             .iter()
-            .filter(|tr| tr.moving)
-            .map(|tr| tr.position() + tr.velocity() * (t - tr.time).max(0.0))
+            .find(|tr| tr.id == id)
+            .map_or(self.params.walking_speed, |tr| {
+                tr.velocity_radius(&self.params)
+            })
+    }
+
+    /// The tracks that may be people ([`Track::small`], or moving) at time
+    /// `t` (s): each one's id, its position (m; moving tracks predicted at
+    /// their estimated velocities, the others where they were last seen) and
+    /// whether it moves ([`Track::moving`]).
+    pub fn people_at(&self, t: f64) -> Vec<(u64, Vector2<f64>, bool)> {
+        self.tracks
+            .iter()
+            .filter(|tr| tr.small || tr.moving)
+            .map(|tr| {
+                let dt = if tr.moving {
+                    (t - tr.time).max(0.0)
+                } else {
+                    0.0
+                };
+                (tr.id, tr.position() + tr.velocity() * dt, tr.moving)
+            })
             .collect()
     }
 
@@ -227,6 +337,27 @@ impl Tracker {
             .collect()
     }
 
+    /// The association of the predicted tracks with the piece centres `z`
+    /// (m): per track, its piece or `None` (module docs, step 3).
+    fn associate(&self, z: &[Vector2<f64>]) -> Vec<Option<usize>> {
+        let pr = &self.params;
+        let cost: Vec<Vec<Option<f64>>> = self
+            .tracks
+            .iter()
+            .map(|tr| {
+                let s_inv = tr.innovation_covariance(pr.measurement_sigma).try_inverse();
+                z.iter()
+                    .map(|zj| {
+                        let y = zj - tr.position();
+                        let d2 = s_inv.map(|si| (y.transpose() * si * y)[(0, 0)])?;
+                        (y.norm() <= pr.gate && d2 <= pr.gate_chi2).then_some(d2)
+                    })
+                    .collect()
+            })
+            .collect();
+        assign(&cost, pr.gate_chi2)
+    }
+
     /// As [`Tracker::update`], with what the tracker knows of each piece:
     /// [`Motion::Moving`] with the velocity [`Tracker::update`] gives,
     /// [`Motion::AtRest`] for a confirmed track (or a piece too large to be a
@@ -238,21 +369,9 @@ impl Tracker {
             tr.predict(t, pr.accel_noise);
         }
         let z: Vec<Vector2<f64>> = pieces.iter().map(centre).collect();
-        let mut pairs: Vec<(f64, usize, usize)> = Vec::new();
-        for (i, tr) in self.tracks.iter().enumerate() {
-            for (j, zj) in z.iter().enumerate() {
-                let d = (tr.position() - zj).norm();
-                if d <= pr.gate {
-                    pairs.push((d, i, j));
-                }
-            }
-        }
-        pairs.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)).then(a.2.cmp(&b.2)));
         let mut track_of: Vec<Option<usize>> = vec![None; pieces.len()];
-        let mut used = vec![false; self.tracks.len()];
-        for (_, i, j) in pairs {
-            if !used[i] && track_of[j].is_none() {
-                used[i] = true;
+        for (i, j) in self.associate(&z).into_iter().enumerate() {
+            if let Some(j) = j {
                 track_of[j] = Some(i);
                 self.tracks[i].update(z[j], pr.measurement_sigma);
             }
@@ -273,6 +392,7 @@ impl Tracker {
                     last_update: t,
                     updates: 1,
                     moving: false,
+                    small: false,
                 });
                 self.next_id += 1;
                 *slot = Some(self.tracks.len() - 1);
@@ -284,7 +404,8 @@ impl Tracker {
             .zip(&track_of)
             .map(|(p, slot)| {
                 let tr = &mut self.tracks[slot.expect("every piece has a track")];
-                let small = person_sized(p, pr.max_extent);
+                let small = person_sized(p, pr.max_extent) && !flat(p, pr.flat_width);
+                tr.small = small;
                 // Bounded as the scenario's obstacles are (a wrong
                 // association must not hand the controller an absurd speed).
                 let v = tr.velocity();
@@ -327,6 +448,32 @@ impl Tracker {
 pub fn person_sized(p: &Polygon, max_extent: f64) -> bool {
     let c = centre(p);
     p.vertices().iter().all(|v| (v - c).norm() <= max_extent)
+}
+
+/// Whether `p` is a flat face, not a person: longer than most of a
+/// person's outline (some vertex farther than 0.2 m from its centre) and at
+/// most `width` (m) across (its smallest extent over its edges' normals;
+/// the outline of a person of radius 0.2-0.3 m seen over a chord of 0.4 m
+/// bulges at least 0.076 m). A
+/// person's outline is round: the piece of a wall cut off by the shadow of
+/// a person walking in front of it slides along the wall with the shadow,
+/// and is not a person.
+pub fn flat(p: &Polygon, width: f64) -> bool {
+    let v = p.vertices();
+    let c = centre(p);
+    if v.iter().all(|q| (q - c).norm() <= 0.2) {
+        return false;
+    }
+    let thinnest = (0..v.len())
+        .map(|k| {
+            let e = v[(k + 1) % v.len()] - v[k];
+            let n = Vector2::new(-e.y, e.x) / e.norm().max(f64::MIN_POSITIVE);
+            v.iter()
+                .map(|q| (q - v[k]).dot(&n).abs())
+                .fold(0.0, f64::max)
+        })
+        .fold(f64::MAX, f64::min);
+    thinnest <= width
 }
 
 /// What the tracker knows of a piece ([`Tracker::classify`]).

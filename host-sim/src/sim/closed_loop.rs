@@ -62,6 +62,16 @@ pub(super) struct Loop<'s, B: QpBackend<NV, NC>> {
     /// tracking, their velocities (the map's pieces at rest, then the people).
     seen: Vec<Polygon>,
     seen_velocities: Vec<Vector2<f64>>,
+    /// The velocity uncertainty radius of each of `seen`, m/s (0 for the
+    /// map's pieces; the tracker's for the people,
+    /// [`crate::sense::movers::MoverScan::velocity_radii`]).
+    seen_radii: Vec<f64>,
+    /// With known velocities and `disturbance.velocity_error`: each
+    /// obstacle's velocity error (m/s, zero at rest), the velocities handed
+    /// to the controller (true plus error) and their radii (m/s).
+    velocity_errors: Vec<Vector2<f64>>,
+    estimates: Vec<Vector2<f64>>,
+    estimate_radii: Vec<f64>,
     /// With LiDAR, the cycle's capture-step speed cap, m/s
     /// ([`super::capture`]; [`NO_SPEED_CAP`] when off).
     speed_cap: f64,
@@ -138,6 +148,7 @@ impl<'s, B: QpBackend<NV, NC> + Clone> Loop<'s, B> {
             heading: plant.heading,
             clearance: world.foot_clearance(&scenario.robot, plant.stance_foot, plant.heading),
         }];
+        let velocity_errors = disturber.velocity_errors(scenario.seed, scenario.obstacles.len());
         Ok(Loop {
             scenario,
             options,
@@ -157,6 +168,10 @@ impl<'s, B: QpBackend<NV, NC> + Clone> Loop<'s, B> {
             current: 0,
             seen: Vec::new(),
             seen_velocities: Vec::new(),
+            seen_radii: Vec::new(),
+            velocity_errors,
+            estimates: Vec::new(),
+            estimate_radii: Vec::new(),
             speed_cap: NO_SPEED_CAP,
             progress: Progress {
                 best_distance: f64::INFINITY,
@@ -254,17 +269,40 @@ impl<'s, B: QpBackend<NV, NC> + Clone> Loop<'s, B> {
         if self.mapper.is_some() {
             self.perceive(&state);
         }
-        let (obstacles, velocities): (&[Polygon], &[Vector2<f64>]) = if self.mapper.is_some() {
+        // Known velocities (the oracle) are exact: no radii (every one 0).
+        type Seen<'a> = (&'a [Polygon], &'a [Vector2<f64>], &'a [f64]);
+        let (obstacles, velocities, radii): Seen<'_> = if self.mapper.is_some() {
             if self.scenario.lidar.track_moving {
-                (&self.seen, &self.seen_velocities)
+                (&self.seen, &self.seen_velocities, &self.seen_radii)
             } else {
-                (&self.seen, &[])
+                (&self.seen, &[], &[])
             }
         } else if self.world.is_static() {
             // Every obstacle at rest: the static controller, bit for bit.
-            (self.world.obstacles(), &[])
+            (self.world.obstacles(), &[], &[])
+        } else if self.scenario.disturbance.velocity_error > 0.0 {
+            // Wrong estimates of the people's velocities, by the radius given.
+            let truth = self.world.velocities();
+            let u = self.scenario.disturbance.velocity_error;
+            let moving = |v: &Vector2<f64>| *v != Vector2::zeros();
+            self.estimates.clear();
+            self.estimates.extend(
+                truth.iter().zip(&self.velocity_errors).map(
+                    |(v, e)| {
+                        if moving(v) { v + e } else { *v }
+                    },
+                ),
+            );
+            self.estimate_radii.clear();
+            self.estimate_radii
+                .extend(truth.iter().map(|v| if moving(v) { u } else { 0.0 }));
+            (
+                self.world.obstacles(),
+                &self.estimates,
+                &self.estimate_radii,
+            )
         } else {
-            (self.world.obstacles(), self.world.velocities())
+            (self.world.obstacles(), self.world.velocities(), &[])
         };
         let speed_cap = if self.mapper.is_some() {
             self.speed_cap
@@ -274,6 +312,7 @@ impl<'s, B: QpBackend<NV, NC> + Clone> Loop<'s, B> {
         let input = CycleInput {
             obstacles,
             obstacle_velocities: velocities,
+            obstacle_velocity_radii: radii,
             speed_cap,
             ..state.input(&self.plant, self.subgoals[self.current])
         };
@@ -292,7 +331,8 @@ impl<'s, B: QpBackend<NV, NC> + Clone> Loop<'s, B> {
     /// subgoals are replanned on it when due, and this cycle's obstacles are
     /// the map's pieces around the controller's [`ObstacleQuery`] (then, with
     /// people tracking, the people kept out of the map, with their
-    /// velocities), in `seen` and `seen_velocities`.
+    /// velocities and velocity uncertainty radii), in `seen`,
+    /// `seen_velocities` and `seen_radii`.
     ///
     /// [`ObstacleQuery`]: ldcbf_controller::ObstacleQuery
     fn perceive(&mut self, state: &Measured) {
@@ -340,10 +380,13 @@ impl<'s, B: QpBackend<NV, NC> + Clone> Loop<'s, B> {
             Err(_) => Vec::new(),
         };
         if self.scenario.lidar.track_moving {
-            let (people, v) = m.people();
             self.seen_velocities = vec![Vector2::zeros(); self.seen.len()];
-            self.seen.extend_from_slice(people);
-            self.seen_velocities.extend_from_slice(v);
+            self.seen_radii = vec![0.0; self.seen.len()];
+            if let Some(people) = m.people() {
+                self.seen.extend_from_slice(&people.obstacles);
+                self.seen_velocities.extend_from_slice(&people.velocities);
+                self.seen_radii.extend_from_slice(&people.velocity_radii);
+            }
         }
         if self.options.record_scans {
             self.scans.push(ScanRecord {
@@ -505,6 +548,7 @@ impl Measured {
             goal,
             obstacles: &[],
             obstacle_velocities: &[],
+            obstacle_velocity_radii: &[],
             speed_cap: NO_SPEED_CAP,
         }
     }

@@ -218,13 +218,11 @@ impl Mapper {
         capture::capture_cap(config, lip, input.com_position, (p0, v0), free)
     }
 
-    /// With `lidar.track_moving`, the last scan's people (hulls, world frame)
-    /// and their velocities (m/s), kept out of the map; empty otherwise.
-    pub(super) fn people(&self) -> (&[Polygon], &[Vector2<f64>]) {
-        match &self.movers {
-            Some((_, scan)) => (&scan.obstacles, &scan.velocities),
-            None => (&[], &[]),
-        }
+    /// With `lidar.track_moving`, the last scan's people kept out of the
+    /// map ([`MoverScan`]: hulls, world frame; velocities, m/s; velocity
+    /// uncertainty radii, m/s); `None` otherwise.
+    pub(super) fn people(&self) -> Option<&MoverScan> {
+        self.movers.as_ref().map(|(_, scan)| scan)
     }
 
     /// The controller's obstacles for a cycle whose selection disk is `q`

@@ -2,7 +2,9 @@
 //! cups, starts facing a wall, clutter around the goal, thin walls and
 //! needles (the `[generator]` kinds `corridor`, `doorway`, `cup`,
 //! `wall_start`, `clutter`, `thin`), and the families with people who walk
-//! (`crossing`, `headon`, `crowd`, `room_crossing`: [`crate::world::people`]).
+//! (`crossing`, `headon`, `crowd`, `room_crossing`: [`crate::world::people`];
+//! `group_crossing`, `headon_offset`, `occluded_person`, people hard to
+//! track: [`crate::world::people_hard`]).
 //!
 //! Each family draws, from a ChaCha8 generator seeded by the scenario's seed,
 //! the start (position and heading), the goal and the obstacles (convex
@@ -35,7 +37,7 @@ use rand_chacha::ChaCha8Rng;
 use rand_chacha::rand_core::{Rng, SeedableRng};
 
 use crate::world::Polygon;
-use crate::world::people;
+use crate::world::{people, people_hard};
 
 /// The family names (`[generator] kind`).
 pub const FAMILIES: &[&str] = &[
@@ -49,6 +51,9 @@ pub const FAMILIES: &[&str] = &[
     "headon",
     "crowd",
     "room_crossing",
+    "group_crossing",
+    "headon_offset",
+    "occluded_person",
 ];
 
 /// Largest number of draws before a family gives up.
@@ -350,6 +355,9 @@ pub fn generate(kind: &str, seed: u64, body_radius: f64) -> Result<Layout, Strin
             "headon" => people::headon(&mut d),
             "crowd" => people::crowd(&mut d, body_radius),
             "room_crossing" => people::room_crossing(&mut d),
+            "group_crossing" => people_hard::group_crossing(&mut d),
+            "headon_offset" => people_hard::headon_offset(&mut d),
+            "occluded_person" => people_hard::occluded_person(&mut d),
             _ => {
                 return Err(format!(
                     "unknown family {kind:?} (one of {})",

@@ -27,6 +27,7 @@ pub mod grid;
 pub mod moving;
 pub mod obstacle_index;
 pub mod people;
+pub mod people_hard;
 pub mod random;
 pub mod robot;
 pub mod setting;

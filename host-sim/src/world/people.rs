@@ -35,7 +35,12 @@ pub const NOMINAL_SPEED: f64 = 0.6;
 
 /// A person: a regular octagon of radius 0.2-0.25 m centred at `c`.
 fn person(d: &mut Draw, c: Vector2<f64>) -> Polygon {
-    let r = d.unif(0.2, 0.25);
+    body(d, c, 0.25)
+}
+
+/// A person: a regular octagon of radius 0.2 m to `r_max` centred at `c`.
+pub(super) fn body(d: &mut Draw, c: Vector2<f64>, r_max: f64) -> Polygon {
+    let r = d.unif(0.2, r_max);
     let rot = d.unif(0.0, core::f64::consts::FRAC_PI_4);
     Polygon::new(&regular_polygon([c.x, c.y], r, 8, rot)).expect("an octagon is convex")
 }

@@ -176,6 +176,20 @@ class DiagnosticArray(IdlStruct, typename=_t("diagnostic_msgs", "DiagnosticArray
 
 
 @dataclass
+class LaserScan(IdlStruct, typename=_t("sensor_msgs", "LaserScan")):
+    header: Header = field(default_factory=Header)
+    angle_min: float32 = 0.0
+    angle_max: float32 = 0.0
+    angle_increment: float32 = 0.0
+    time_increment: float32 = 0.0
+    scan_time: float32 = 0.0
+    range_min: float32 = 0.0
+    range_max: float32 = 0.0
+    ranges: sequence[float32] = field(default_factory=list)
+    intensities: sequence[float32] = field(default_factory=list)
+
+
+@dataclass
 class GaitState(IdlStruct, typename=_t("ldcbf_msgs", "GaitState")):
     header: Header = field(default_factory=Header)
     stance_side: uint8 = 0

@@ -1,0 +1,331 @@
+//! The tracking patterns of people who are hard to see, one test each: a
+//! LiDAR (the default: 360 rays, 3 m, 1 cm noise) on a robot walking along
+//! +x scans people (octagons) and walls at 20 Hz; [`Movers::observe`] hands
+//! over hulls with velocities and velocity uncertainty radii, and the tests
+//! check them against the truth. World frame W, metres, seconds.
+
+use ldcbf_controller::nalgebra::Vector2;
+
+use super::movers::{MoverScan, Movers};
+use super::track::TrackParams;
+use super::{Lidar, LidarParams};
+use crate::world::Polygon;
+use crate::world::moving::{translated, vertex_centre};
+use crate::world::random::regular_polygon;
+
+/// A person: an octagon of radius `r` at `c` (t = 0) walking at `v`, or
+/// following `path(t)` (a displacement from `c`) when given.
+/// A walk that is not at constant velocity: the displacement and the
+/// velocity at `t`.
+type Path = fn(f64) -> (Vector2<f64>, Vector2<f64>);
+
+struct Person {
+    body: Polygon,
+    v: Vector2<f64>,
+    /// Displacement at `t` when the walk is not at constant velocity.
+    path: Option<Path>,
+}
+
+impl Person {
+    fn walking(c: [f64; 2], r: f64, v: [f64; 2]) -> Self {
+        Person {
+            body: Polygon::new(&regular_polygon(c, r, 8, 0.2)).unwrap(),
+            v: Vector2::new(v[0], v[1]),
+            path: None,
+        }
+    }
+    /// Its body and velocity at `t`.
+    fn at(&self, t: f64) -> (Polygon, Vector2<f64>) {
+        match self.path {
+            Some(f) => {
+                let (d, v) = f(t);
+                (translated(&self.body, d), v)
+            }
+            None => (translated(&self.body, self.v * t), self.v),
+        }
+    }
+}
+
+/// One scan of a recorded walk: the time, what the movers handed over, and
+/// the people's true centres and velocities.
+struct Frame {
+    t: f64,
+    scan: MoverScan,
+    ids: Vec<u64>,
+    truth: Vec<(Vector2<f64>, Vector2<f64>)>,
+}
+
+/// Scans at 20 Hz for `secs` s from a robot at `robot_x0` walking along +x
+/// at `robot_speed` (m/s), among `people` and `walls`.
+fn record(
+    people: &[Person],
+    walls: &[Polygon],
+    robot_x0: f64,
+    robot_speed: f64,
+    secs: f64,
+) -> Vec<Frame> {
+    let params = LidarParams::default();
+    let mut lidar = Lidar::new(params.clone(), 11).unwrap();
+    let mut movers = Movers::new(&params, TrackParams::default());
+    let n = (secs / 0.05).round() as u32;
+    (0..n)
+        .map(|k| {
+            let t = 0.05 * f64::from(k);
+            let now: Vec<(Polygon, Vector2<f64>)> = people.iter().map(|p| p.at(t)).collect();
+            let mut world: Vec<Polygon> = now.iter().map(|(b, _)| *b).collect();
+            world.extend_from_slice(walls);
+            let origin = Vector2::new(robot_x0 + robot_speed * t, 0.0);
+            let rays = lidar.scan_rays(origin, 0.0, &world);
+            let scan = movers.observe(t, &rays);
+            let ids = movers.tracker().matched().to_vec();
+            let truth = now.iter().map(|(b, v)| (vertex_centre(b), *v)).collect();
+            Frame {
+                t,
+                scan,
+                ids,
+                truth,
+            }
+        })
+        .collect()
+}
+
+/// The obstacle of `scan` whose hull centre is nearest `c` within `reach`
+/// (m): its index.
+fn nearest(scan: &MoverScan, c: Vector2<f64>, reach: f64) -> Option<usize> {
+    scan.obstacles
+        .iter()
+        .enumerate()
+        .map(|(i, h)| (i, (vertex_centre(h) - c).norm()))
+        .filter(|&(_, d)| d <= reach)
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(i, _)| i)
+}
+
+/// Counts, over the frames from `from` s on, the scans in which person `k`
+/// was handed over as an obstacle of its own (its nearest hull is nearest no
+/// other person), and of those, the scans whose velocity was within `tol`
+/// (m/s) of the truth.
+fn own_and_right(frames: &[Frame], k: usize, from: f64, tol: f64) -> (usize, usize, usize) {
+    let (mut scans, mut own, mut right) = (0, 0, 0);
+    for f in frames.iter().filter(|f| f.t >= from) {
+        scans += 1;
+        let Some(i) = nearest(&f.scan, f.truth[k].0, 0.35) else {
+            continue;
+        };
+        let shared = f
+            .truth
+            .iter()
+            .enumerate()
+            .any(|(q, (c, _))| q != k && nearest(&f.scan, *c, 0.35) == Some(i));
+        if shared {
+            continue;
+        }
+        own += 1;
+        right += usize::from((f.scan.velocities[i] - f.truth[k].1).norm() <= tol);
+    }
+    (scans, own, right)
+}
+
+#[test]
+fn two_people_in_file_across_the_view_are_two_tracks() {
+    // Walking together along +y, 0.55 m apart along their walk: seen side by
+    // side from the robot, 0.11 m of gap between them (one DBSCAN cluster).
+    let people = [
+        Person::walking([2.4, -1.6], 0.22, [0.0, 0.5]),
+        Person::walking([2.4, -2.15], 0.22, [0.0, 0.5]),
+    ];
+    let frames = record(&people, &[], 0.0, 0.0, 8.0);
+    for k in 0..2 {
+        let (scans, own, right) = own_and_right(&frames, k, 2.0, 0.2);
+        assert!(
+            own * 10 >= scans * 9,
+            "person {k}: own hull in {own} of {scans}"
+        );
+        assert!(
+            right * 10 >= own * 9,
+            "person {k}: right velocity in {right} of {own}"
+        );
+    }
+}
+
+#[test]
+fn two_people_side_by_side_across_the_path_are_two_tracks() {
+    // Walking together along +y, 0.6 m apart along the robot's line: the far
+    // one seen beside the near one, at a different depth.
+    let people = [
+        Person::walking([2.0, -1.8], 0.22, [0.0, 0.5]),
+        Person::walking([2.6, -1.8], 0.22, [0.0, 0.5]),
+    ];
+    let frames = record(&people, &[], 0.0, 0.0, 8.0);
+    // Each person has their own hull with the right velocity whenever both
+    // are in view and the far one is not hidden.
+    for k in 0..2 {
+        let (scans, own, right) = own_and_right(&frames, k, 2.0, 0.2);
+        assert!(
+            own * 10 >= scans * 7,
+            "person {k}: own hull in {own} of {scans}"
+        );
+        assert!(
+            right * 10 >= own * 9,
+            "person {k}: right velocity in {right} of {own}"
+        );
+    }
+}
+
+#[test]
+fn a_person_walking_at_the_robot_gets_a_velocity_in_time() {
+    // Head-on, 2 cm off the line, 0.8 m/s, the robot walking at 0.4 m/s: the
+    // person enters the 3 m range 3 m ahead; the closing speed is 1.2 m/s.
+    let people = [Person::walking([4.0, 0.02], 0.22, [-0.8, 0.0])];
+    let frames = record(&people, &[], 0.0, 0.4, 2.5);
+    let seen = frames
+        .iter()
+        .find(|f| nearest(&f.scan, f.truth[0].0, 0.35).is_some())
+        .map(|f| f.t)
+        .expect("the person is seen");
+    let found = frames
+        .iter()
+        .find(|f| {
+            nearest(&f.scan, f.truth[0].0, 0.35)
+                .is_some_and(|i| (f.scan.velocities[i] - f.truth[0].1).norm() <= 0.25)
+        })
+        .map(|f| f.t)
+        .expect("the velocity is found");
+    // Within 0.6 s of first sight: the gap is still more than 1.5 m.
+    assert!(
+        found - seen <= 0.6,
+        "seen at {seen} s, velocity at {found} s"
+    );
+    // From then on every scan hands the velocity over within 0.3 m/s, and
+    // the truth within the uncertainty radius.
+    for f in frames.iter().filter(|f| f.t > found) {
+        let i = nearest(&f.scan, f.truth[0].0, 0.35).expect("the person stays in view");
+        let e = (f.scan.velocities[i] - f.truth[0].1).norm();
+        assert!(e <= 0.3, "t = {}: {e} m/s off", f.t);
+    }
+}
+
+/// The passing pair: the near person walks +y across 1.5 m ahead, the far
+/// one (1 m behind, 0.5 m/s) walks -y: seen from the robot the far one passes
+/// behind the near one.
+fn passing_pair() -> [Person; 2] {
+    [
+        Person::walking([1.5, -1.0], 0.22, [0.0, 0.5]),
+        Person::walking([2.5, 1.4], 0.22, [0.0, -0.5]),
+    ]
+}
+
+#[test]
+fn a_person_hidden_behind_another_coasts_and_is_found_again() {
+    let people = passing_pair();
+    let frames = record(&people, &[], 0.0, 0.0, 5.0);
+    // The far person's hull, while hidden, is handed over where the track
+    // predicts (coasting), and the track seen before is the track after.
+    let mut hidden = 0;
+    let mut ids_before = Vec::new();
+    let mut ids_after = Vec::new();
+    for f in &frames {
+        let c = f.truth[1].0;
+        // The bearing of the far person within the near one's shadow.
+        let b_far = c.y.atan2(c.x);
+        let n = f.truth[0].0;
+        let shadow = (b_far - n.y.atan2(n.x)).abs() < 0.22 / n.norm();
+        if shadow {
+            hidden += 1;
+            let i = nearest(&f.scan, c, 0.4).unwrap_or_else(|| {
+                panic!("t = {}: the hidden person at {c} is not handed over", f.t)
+            });
+            // The truth is within the coasting track's uncertainty radius.
+            let e = (f.scan.velocities[i] - f.truth[1].1).norm();
+            assert!(e <= f.scan.velocity_radii[i], "t = {}: {e} m/s off", f.t);
+        } else if let Some(i) = nearest(&f.scan, c, 0.3)
+            && i < f.ids.len()
+            && f.t > 1.0
+        {
+            if hidden == 0 {
+                ids_before.push(f.ids[i]);
+            } else {
+                ids_after.push(f.ids[i]);
+            }
+        }
+    }
+    assert!(hidden >= 5, "the far person was hidden in {hidden} scans");
+    let (before, after) = (ids_before.last(), ids_after.first());
+    assert!(
+        before.is_some() && before == after,
+        "track {before:?} then {after:?}"
+    );
+}
+
+#[test]
+fn a_person_emerging_from_behind_a_corner_gets_a_velocity_in_time() {
+    // A wall block to the left, its corner at x = 2.5; a person walks out
+    // from behind it (0.5 m past the corner) toward the line at 0.6 m/s.
+    let wall = Polygon::new(&[[0.5, 0.8], [2.5, 0.8], [2.5, 3.5], [0.5, 3.5]]).unwrap();
+    let people = [Person::walking([3.0, 2.5], 0.22, [0.0, -0.6])];
+    let frames = record(&people, &[wall], 0.0, 0.3, 5.0);
+    let seen = frames
+        .iter()
+        .find(|f| nearest(&f.scan, f.truth[0].0, 0.35).is_some())
+        .map(|f| f.t)
+        .expect("seen");
+    let found = frames
+        .iter()
+        .find(|f| {
+            nearest(&f.scan, f.truth[0].0, 0.35)
+                .is_some_and(|i| (f.scan.velocities[i] - f.truth[0].1).norm() <= 0.25)
+        })
+        .map(|f| f.t)
+        .expect("velocity found");
+    assert!(
+        found - seen <= 0.8,
+        "seen at {seen} s, velocity at {found} s"
+    );
+    // The wall is never handed over as moving.
+    for f in &frames {
+        for (h, v) in f.scan.obstacles.iter().zip(&f.scan.velocities) {
+            let c = vertex_centre(h);
+            if c.x < 2.4 && c.y > 0.8 {
+                assert_eq!(*v, Vector2::zeros(), "t = {}: the wall at {c} moves", f.t);
+            }
+        }
+    }
+}
+
+/// Walks +y from (2.5, -2) at 0.6 m/s for 3 s, stands 2 s, walks on.
+fn stop_and_go(t: f64) -> (Vector2<f64>, Vector2<f64>) {
+    let v = Vector2::new(0.0, 0.6);
+    if t < 3.0 {
+        (v * t, v)
+    } else if t < 5.0 {
+        (v * 3.0, Vector2::zeros())
+    } else {
+        (v * (t - 2.0), v)
+    }
+}
+
+#[test]
+fn a_person_who_stops_and_walks_on_is_followed() {
+    let people = [Person {
+        body: Polygon::new(&regular_polygon([2.5, -2.0], 0.22, 8, 0.2)).unwrap(),
+        v: Vector2::zeros(),
+        path: Some(stop_and_go),
+    }];
+    let frames = record(&people, &[], 0.0, 0.0, 7.5);
+    let (mut scans, mut inside) = (0, 0);
+    for f in frames.iter().filter(|f| f.t > 1.0) {
+        let Some(i) = nearest(&f.scan, f.truth[0].0, 0.35) else {
+            continue;
+        };
+        let e = (f.scan.velocities[i] - f.truth[0].1).norm();
+        // Within 0.8 s of a change of pace the estimate follows it.
+        let settled = [3.0, 5.0].iter().all(|c| !(*c..c + 0.8).contains(&f.t));
+        if settled {
+            assert!(e <= 0.25, "t = {}: {e} m/s off", f.t);
+        }
+        scans += 1;
+        inside += usize::from(e <= f.scan.velocity_radii[i]);
+    }
+    // The truth is within the uncertainty radius (also through the stop).
+    assert!(inside * 100 >= scans * 95, "inside in {inside} of {scans}");
+}
