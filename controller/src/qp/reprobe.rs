@@ -36,6 +36,7 @@ use nalgebra::{
 };
 
 use super::dense::DenseQpOf;
+#[cfg(not(target_os = "none"))]
 use super::gram::GuessWork;
 use super::kept::{Kept, Pending};
 use super::norms::RowNormsOf;

@@ -6,7 +6,9 @@
 //! start's steps (the guess, `qp/guess.rs`; the adds without a step; the
 //! multipliers and the move onto the marked rows).
 
-use nalgebra::{DefaultAllocator, Dim, OMatrix, OVector};
+#[cfg(not(target_os = "none"))]
+use nalgebra::OVector;
+use nalgebra::{DefaultAllocator, Dim, OMatrix};
 
 use super::bounds::BoundRows;
 use super::kept::{Kept, Resume};
