@@ -55,6 +55,64 @@ pub(crate) enum Command {
     /// noise_velocity [m/s], noise_heading [rad]; velocity_error [m/s, the
     /// known people's velocities handed over this wrong, with this radius].
     Robustness(RobustnessArgs),
+    /// The crowd-navigation benchmark (CrowdNav, Chen et al. ICRA 2019):
+    /// circle or square crossing with ORCA humans, speeds and time limit
+    /// scaled to the robot's walking speed; prints one Markdown row
+    /// (success, collisions, timeout, navigation time, discomfort, minimum
+    /// separation; docs/results.md).
+    Crowdnav(CrowdNavArgs),
+}
+
+// The options of `crowdnav` (a doc comment would be clap's help text).
+#[derive(clap::Args)]
+pub(crate) struct CrowdNavArgs {
+    /// The layout.
+    #[arg(long, value_enum, default_value = "circle")]
+    pub(crate) layout: CrowdNavLayoutArg,
+    /// Number of humans.
+    #[arg(long, default_value_t = 5,
+          value_parser = clap::value_parser!(u64).range(0..=crate::world::crowd::MAX_PEOPLE as u64))]
+    pub(crate) humans: u64,
+    /// Cases (seeds): `A..B` (B excluded), `A..=B`, or one seed.
+    #[arg(long, default_value = "0..500")]
+    pub(crate) cases: SeedRange,
+    /// The humans see the robot (default: invisible, CrowdNav's setting).
+    #[arg(long)]
+    pub(crate) robot_visible: bool,
+    /// Our controller's perception: the humans' true polygons and
+    /// velocities (`oracle`) or the LiDAR with tracking.
+    #[arg(long, value_enum, default_value = "oracle")]
+    pub(crate) perception: CrowdNavPerception,
+    /// Who walks: our controller or CrowdNav's ORCA robot.
+    #[arg(long, value_enum, default_value = "controller")]
+    pub(crate) robot: crate::studies::crowdnav::RobotPolicy,
+    /// Worker threads [default: one per core].
+    #[arg(long)]
+    pub(crate) jobs: Option<usize>,
+    /// Also write DIR/cases.csv (one row per case) and DIR/table.md.
+    #[arg(long)]
+    pub(crate) out: Option<PathBuf>,
+    /// Print the table's header before the row.
+    #[arg(long)]
+    pub(crate) header: bool,
+}
+
+/// The CrowdNav layouts on the command line.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub(crate) enum CrowdNavLayoutArg {
+    /// Circle crossing.
+    Circle,
+    /// Square crossing.
+    Square,
+}
+
+/// The perceptions of `crowdnav`.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+pub(crate) enum CrowdNavPerception {
+    /// The true polygons and velocities.
+    Oracle,
+    /// The LiDAR with tracking.
+    Lidar,
 }
 
 #[derive(Subcommand)]

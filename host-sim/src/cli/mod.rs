@@ -48,6 +48,7 @@ fn dispatch(command: Command) -> Result<()> {
         Command::Table(a) => batch::table(a),
         Command::Deadline(a) => studies::deadline(a),
         Command::Robustness(a) => studies::robustness(a),
+        Command::Crowdnav(a) => studies::crowdnav(a),
         Command::Qp {
             command: QpCommand::Solve(a),
         } => qp::solve(a),

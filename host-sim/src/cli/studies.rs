@@ -3,7 +3,9 @@
 
 use anyhow::Result;
 
-use super::args::{DeadlineArgs, RobustnessArgs, capped_jobs};
+use super::args::{
+    CrowdNavArgs, CrowdNavLayoutArg, CrowdNavPerception, DeadlineArgs, RobustnessArgs, capped_jobs,
+};
 use super::output::out;
 use crate::studies::deadline::{self, DeadlineRequest};
 use crate::studies::robustness::{self, RobustnessRequest};
@@ -65,5 +67,48 @@ pub(crate) fn robustness(args: RobustnessArgs) -> Result<()> {
         "{}",
         robustness::markdown(&robustness::run_robustness(&req)?)
     );
+    Ok(())
+}
+
+/// Runs the crowd-navigation benchmark and prints its Markdown row (with
+/// `--out`, also the cases' CSV and the table, written at once).
+pub(crate) fn crowdnav(args: CrowdNavArgs) -> Result<()> {
+    use crate::studies::crowdnav::{
+        CrowdNavRequest, TABLE_HEADER, csv, run_crowdnav, summarize, table_row,
+    };
+    use crate::world::crowd::families::CrowdNavLayout;
+    let req = CrowdNavRequest {
+        layout: match args.layout {
+            CrowdNavLayoutArg::Circle => CrowdNavLayout::Circle,
+            CrowdNavLayoutArg::Square => CrowdNavLayout::Square,
+        },
+        humans: args.humans as usize,
+        cases: args.cases.start..args.cases.end,
+        robot_visible: args.robot_visible,
+        perception: match args.perception {
+            CrowdNavPerception::Oracle => crate::sense::Perception::Known,
+            CrowdNavPerception::Lidar => crate::sense::Perception::Lidar,
+        },
+        robot: args.robot,
+        jobs: capped_jobs(
+            args.jobs
+                .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+        ),
+    };
+    let rows = run_crowdnav(&req)?;
+    let row = table_row(&req, &summarize(&rows));
+    if let Some(dir) = &args.out {
+        crate::studies::output::write_files(
+            dir,
+            &[
+                ("cases.csv", csv(&rows)),
+                ("table.md", format!("{TABLE_HEADER}\n{row}\n")),
+            ],
+        )?;
+    }
+    if args.header {
+        out!("{TABLE_HEADER}");
+    }
+    out!("{row}");
     Ok(())
 }

@@ -46,9 +46,20 @@
 //! velocity = [0.0, -0.5]   # any obstacle: constant velocity, m/s, world frame
 //!                          # (default at rest; speed <= 5 m/s; crate::world::moving)
 //!
+//! [[people]]               # a person who walks to a goal and reacts (crate::world::crowd)
+//! start = [6.0, -3.0]      # m, body centre at t = 0
+//! goal = [6.0, 3.0]        # m
+//! speed = 0.5              # m/s, preferred speed (default 0.6, the robot's nominal speed)
+//! radius = 0.3             # m (default 0.3, CrowdNav's)
+//! policy = "orca"          # "orca" (default), "social_force" or "constant_velocity"
+//! visible_robot = true     # the person sees the robot and avoids it (default true)
+//! group = 1                # optional: people of one group walk abreast
+//! stops = [[2.0, 4.0]]     # optional: intervals [t0, t1) of simulated time, s, standing
+//!
 //! [generator]              # optional: adds seeded random convex obstacles
 //! kind = "random_polygons" # or a family (crate::world::families: corridor, doorway,
-//!                          # cup, wall_start, clutter, thin), which also draws
+//!                          # cup, wall_start, clutter, thin, the people families, and
+//!                          # those of crate::world::crowd::families), which also draws
 //!                          # the start, heading and goal (the file's are replaced)
 //! count = 8
 //! min_gap = 0.0            # optional: minimum distance between two polygons, m
@@ -122,6 +133,8 @@ pub mod limits;
 mod overrides;
 mod parse;
 #[cfg(test)]
+mod people_tests;
+#[cfg(test)]
 mod tests;
 mod validate;
 #[cfg(test)]
@@ -171,6 +184,7 @@ pub fn random_scenario(seed: u64) -> Scenario {
         robot: RobotParams::default(),
         velocities: vec![Vector2::zeros(); obstacles.len()],
         obstacles,
+        people: Vec::new(),
     }
 }
 
@@ -230,6 +244,18 @@ pub struct Scenario {
     /// Each obstacle's constant velocity, m/s, world frame (zero at rest), one
     /// per obstacle ([`crate::world::moving`]).
     pub velocities: Vec<Vector2<f64>>,
+    /// The people who react ([`crate::world::crowd`]): the last
+    /// `people.len()` entries of `obstacles` are their bodies at their
+    /// starts, with `velocities` toward their goals at their speeds; the
+    /// closed loop steps them ([`crate::world::crowd::Crowd`]).
+    pub people: Vec<crate::world::crowd::Person>,
+}
+
+impl Scenario {
+    /// Index in `obstacles` of the first person who reacts.
+    pub fn people_from(&self) -> usize {
+        self.obstacles.len() - self.people.len()
+    }
 }
 
 /// A scenario that cannot be used: which file, which field, which line, why.

@@ -12,6 +12,7 @@ use super::{ControllerOverrides, ScenarioError, SideSpec, controller_fields};
 use crate::plan::{Planner, RrtParams};
 use crate::plant::disturbance::DisturbanceParams;
 use crate::sense::{LidarParams, Perception};
+use crate::world::crowd::Policy;
 use crate::world::random::RandomParams;
 use crate::world::robot::RobotParams;
 
@@ -45,6 +46,8 @@ pub(super) struct RawScenario {
     pub(super) controller: Spanned<ControllerOverrides>,
     #[serde(default)]
     pub(super) obstacles: Vec<Spanned<RawObstacle>>,
+    #[serde(default)]
+    pub(super) people: Vec<Spanned<RawPerson>>,
     #[serde(default)]
     pub(super) generator: Option<Spanned<RandomParams>>,
     #[serde(default = "spanned_default")]
@@ -97,6 +100,41 @@ pub(super) struct RawObstacle {
     pub(super) name: Option<String>,
 }
 
+/// A `[[people]]` entry: a person who walks to a goal
+/// ([`crate::world::crowd::Person`]).
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawPerson {
+    pub(super) start: Xy,
+    pub(super) goal: Xy,
+    #[serde(default = "default_person_speed")]
+    pub(super) speed: f64,
+    #[serde(default = "default_person_radius")]
+    pub(super) radius: f64,
+    #[serde(default)]
+    pub(super) policy: Policy,
+    #[serde(default = "default_true")]
+    pub(super) visible_robot: bool,
+    #[serde(default)]
+    pub(super) group: Option<u32>,
+    #[serde(default)]
+    pub(super) stops: Vec<Xy>,
+    /// Optional label, for humans.
+    #[serde(default)]
+    #[allow(dead_code)]
+    pub(super) name: Option<String>,
+}
+
+fn default_person_speed() -> f64 {
+    crate::world::people::NOMINAL_SPEED
+}
+fn default_person_radius() -> f64 {
+    crate::world::crowd::families::HUMAN_RADIUS
+}
+fn default_true() -> bool {
+    true
+}
+
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct RegularSpec {
@@ -124,6 +162,7 @@ pub(super) fn apply_set(table: &mut toml::Table, key: &str, value: &str) -> Resu
         "seed",
         "controller",
         "obstacles",
+        "people",
         "generator",
         "rrt_star",
         "lidar",

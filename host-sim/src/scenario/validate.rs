@@ -9,6 +9,8 @@ use toml::Spanned;
 
 use super::parse::{RawObstacle, RawScenario, line_of};
 use super::{ControllerOverrides, Scenario, ScenarioError};
+use crate::world::crowd::families as crowd_families;
+use crate::world::crowd::{MAX_PEOPLE, Person};
 use crate::world::families;
 use crate::world::moving::parse_velocity;
 use crate::world::random::{random_obstacles, regular_polygon};
@@ -72,6 +74,7 @@ pub(super) fn validate(
     let mut start_heading = st.heading;
     let mut goal = Vector2::new(g[0], g[1]);
     let (mut obstacles, mut velocities) = file_obstacles(&raw, src)?;
+    let mut people = file_people(&raw, src)?;
     let seed = seed.unwrap_or(raw.seed);
     let generator = match &raw.generator {
         None => None,
@@ -89,6 +92,14 @@ pub(super) fn validate(
                     .map_err(|m| src.err("generator", Some(gs.span()), m))?;
                 velocities.resize(obstacles.len() + extra.len(), Vector2::zeros());
                 obstacles.extend(extra);
+            } else if let Some(c) = crowd_families::generate(&p.kind, seed, robot.body_radius) {
+                let c = c.map_err(|m| src.err("generator", Some(gs.span()), m))?;
+                start = c.layout.start;
+                start_heading = c.layout.heading;
+                goal = c.layout.goal;
+                velocities.extend(c.layout.velocities_padded());
+                obstacles.extend(c.layout.obstacles);
+                people.extend(c.people);
             } else {
                 let layout = families::generate(&p.kind, seed, robot.body_radius)
                     .map_err(|m| src.err("generator", Some(gs.span()), m))?;
@@ -101,11 +112,23 @@ pub(super) fn validate(
             Some(p)
         }
     };
+    // The people who react follow every other obstacle, at their starts,
+    // with their initial preferred velocities (crate::world::crowd).
+    let people_from = obstacles.len();
+    for p in &people {
+        obstacles.push(p.polygon_at(p.start));
+        velocities.push(p.initial_velocity());
+    }
     let ends = [
         ("start", start, raw.start.span()),
         ("goal", goal, raw.goal.span()),
     ];
-    check_room_to_stand(&ends, &obstacles, raw.obstacles.len(), &robot, seed, src)?;
+    let names = Names {
+        n_file: raw.obstacles.len(),
+        people_from,
+        seed,
+    };
+    check_room_to_stand(&ends, &obstacles, &names, &robot, src)?;
     Ok(Scenario {
         name: raw.name,
         description: raw.description,
@@ -130,6 +153,7 @@ pub(super) fn validate(
         robot,
         obstacles,
         velocities,
+        people,
     })
 }
 
@@ -355,15 +379,72 @@ fn obstacle_polygon(
     })
 }
 
+/// How the obstacles of a scenario are named in messages: the first
+/// `n_file` are the file's `obstacles[i]`, those from `people_from` on are
+/// `people[j]`, the others generated with `seed`.
+struct Names {
+    n_file: usize,
+    people_from: usize,
+    seed: u64,
+}
+
+impl Names {
+    fn of(&self, i: usize) -> String {
+        if i < self.n_file {
+            format!("obstacles[{i}]")
+        } else if i >= self.people_from {
+            format!("people[{}]", i - self.people_from)
+        } else {
+            format!(
+                "generated obstacle {} (seed {})",
+                i - self.n_file,
+                self.seed
+            )
+        }
+    }
+}
+
+/// The file's `[[people]]`, checked (the error names `people[i].field`).
+fn file_people(raw: &RawScenario, src: Source<'_>) -> Result<Vec<Person>, ScenarioError> {
+    if raw.people.len() > MAX_PEOPLE {
+        return Err(src.err(
+            "people",
+            raw.people.first().map(|p| p.span()),
+            format!("{} people; at most {MAX_PEOPLE}", raw.people.len()),
+        ));
+    }
+    let mut out = Vec::with_capacity(raw.people.len());
+    for (i, rp) in raw.people.iter().enumerate() {
+        let r = rp.get_ref();
+        let p = Person {
+            start: Vector2::new(r.start.0[0], r.start.0[1]),
+            goal: Vector2::new(r.goal.0[0], r.goal.0[1]),
+            speed: r.speed,
+            radius: r.radius,
+            policy: r.policy,
+            sees_robot: r.visible_robot,
+            group: r.group,
+            stops: r.stops.iter().map(|s| s.0).collect(),
+        };
+        p.validate().map_err(|e| {
+            src.err(
+                &format!("people[{i}].{}", e.field),
+                Some(rp.span()),
+                e.requirement,
+            )
+        })?;
+        out.push(p);
+    }
+    Ok(out)
+}
+
 /// Impossible scenarios: the body (`robot.body_radius`) must fit at the start
-/// and at the goal. `ends` are `(field, position, span)`; the first `n_file`
-/// obstacles are the file's, the rest generated with `seed`.
+/// and at the goal. `ends` are `(field, position, span)`.
 fn check_room_to_stand(
     ends: &[(&str, Vector2<f64>, Range<usize>)],
     obstacles: &[Polygon],
-    n_file: usize,
+    names: &Names,
     robot: &RobotParams,
-    seed: u64,
     src: Source<'_>,
 ) -> Result<(), ScenarioError> {
     for (what, p, span) in ends {
@@ -373,11 +454,7 @@ fn check_room_to_stand(
             .map(|(i, o)| (i, closest_point_point_polygon(p, o).signed_distance))
             .find(|&(_, d)| d <= robot.body_radius)
         {
-            let name = if i < n_file {
-                format!("obstacles[{i}]")
-            } else {
-                format!("generated obstacle {} (seed {seed})", i - n_file)
-            };
+            let name = names.of(i);
             let how = if d <= 0.0 {
                 format!("is inside {name} ({:.3} m deep)", -d)
             } else {

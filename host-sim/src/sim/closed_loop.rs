@@ -16,6 +16,7 @@ use ldcbf_controller::{
 
 use super::contacts::{self, ContactMonitor};
 use super::mapping::{self, ReplanReason};
+use super::people::People;
 use super::{
     ActiveHalfPlane, CycleRecord, Footstep, HORIZON, MpcRate, NC, NV, Navigation, Outcome,
     PLANT_DT, Sample, ScanRecord, SimError, SimOptions, SimResult,
@@ -25,6 +26,7 @@ use crate::plant::disturbance::Disturber;
 use crate::plant::{Plant, PlantParams};
 use crate::scenario::Scenario;
 use crate::sense::Perception;
+use crate::world::crowd::RobotBody;
 use crate::world::moving::MovingMap;
 use crate::world::obstacle_index::{Candidates, ObstacleIndex};
 use crate::world::{MAX_VERTICES, Polygon};
@@ -41,6 +43,8 @@ pub(super) struct Loop<'s, B: QpBackend<NV, NC>> {
     /// The true map at the plant's time (moving obstacles,
     /// crate::world::moving), with the index of its obstacles at rest.
     world: MovingMap,
+    /// The people who react (`None` without), stepped every tick.
+    people: Option<People>,
     /// The index of the controller's candidates with a known static map (with
     /// LiDAR its few obstacles per scan are passed whole, and so is a map with
     /// moving obstacles).
@@ -127,8 +131,13 @@ impl<'s, B: QpBackend<NV, NC> + Clone> Loop<'s, B> {
             MpcRate::Hz(h) => Some(((1.0 / f64::from(h)) / PLANT_DT).round().max(1.0) as u64),
             MpcRate::PerStep => None,
         };
-        let world =
-            MovingMap::new(&scenario.obstacles, &scenario.velocities).map_err(SimError::Map)?;
+        let world = MovingMap::with_driven(
+            &scenario.obstacles,
+            &scenario.velocities,
+            scenario.people_from(),
+        )
+        .map_err(SimError::Map)?;
+        let people = People::new(&scenario.people, &world, scenario.people_from());
         let control_index = (scenario.perception == Perception::Known && world.is_static())
             .then(|| world.rest_index().clone());
         let on_map = crate::scenario::plans_on_map(scenario.planner, scenario.perception);
@@ -157,6 +166,7 @@ impl<'s, B: QpBackend<NV, NC> + Clone> Loop<'s, B> {
             plant,
             period,
             world,
+            people,
             control_index,
             candidates: Candidates::default(),
             mapper,
@@ -192,6 +202,14 @@ impl<'s, B: QpBackend<NV, NC> + Clone> Loop<'s, B> {
     pub(super) fn tick(&mut self) -> Option<Outcome> {
         if !self.world.is_static() {
             self.world.set_time(self.plant.time());
+        }
+        if let Some(people) = self.people.as_mut() {
+            let robot = RobotBody {
+                position: self.plant.position,
+                velocity: self.plant.velocity,
+                radius: self.scenario.robot.body_radius,
+            };
+            people.advance(self.plant.time(), PLANT_DT, &robot, &mut self.world);
         }
         // 0. Push.
         if let Some(dv) = self.disturber.push_at(self.plant.tick, self.plant.heading) {

@@ -38,6 +38,17 @@
 //! every foothold against their predicted positions, so such a landing is a
 //! controller failure (`docs/results.md`, "Moving obstacles").
 //!
+//! **People who react** ([`crate::world::crowd`]: ORCA, social force,
+//! constant velocity toward a goal, stops) are classified by the same rule,
+//! with the person's velocity at the contact's first tick (their current
+//! velocity in the map, [`MovingMap::place`], not a constant one): a person
+//! who stands at that tick (during a stop, or at the goal) counts as an
+//! obstacle at rest, so the contact is the robot's; a person who walks into
+//! a robot that stands, moves away or moves across is the person's. Whether
+//! the person sees the robot does not change the rule: a person who does
+//! not see it may walk into it, and that contact is the person's unless
+//! the robot was moving toward them.
+//!
 //! The robot's policy toward a person who walks into it is the controller's
 //! (`controller/src/mpc/give_way.rs`, docs/safety.md): near people it walks no
 //! faster than it can stop in one step, the barrier at each horizon step keeps

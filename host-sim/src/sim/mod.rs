@@ -11,7 +11,11 @@
 //! Each tick, in this order:
 //!
 //! Every tick first moves the moving obstacles to the plant's time
-//! ([`crate::world::moving`]: polygon at t = 0 plus velocity times time).
+//! ([`crate::world::moving`]: polygon at t = 0 plus velocity times time)
+//! and steps the people who react to it (`people.rs`,
+//! [`crate::world::crowd`]: they choose velocities at 20 Hz, seeing the
+//! robot's CoM and CoM velocity when they see the robot, and move every
+//! tick).
 //!
 //! 0. **Push.** A push of the scenario's `[disturbance]` due at this tick is
 //!    added to the plant's CoM velocity ([`crate::plant::disturbance`]), so everything
@@ -93,6 +97,7 @@ pub mod capture;
 mod closed_loop;
 mod contacts;
 mod options;
+mod people;
 pub use contacts::{Contact, ContactCause, ContactPart, STANDING_SPEED, contact_counts};
 pub use options::{MAX_TIMING_REPEATS, MpcRate, SimError, SimOptions, Solver};
 

@@ -87,6 +87,10 @@ impl Layout {
 pub(super) struct Draw(ChaCha8Rng);
 
 impl Draw {
+    /// The families' generator for `seed`.
+    pub(super) fn seeded(seed: u64) -> Draw {
+        Draw(ChaCha8Rng::seed_from_u64(seed ^ 0x4641_4d49_4c59)) // "FAMILY"
+    }
     pub(super) fn unif(&mut self, lo: f64, hi: f64) -> f64 {
         let u = (self.0.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
         lo + (hi - lo) * u
@@ -342,7 +346,7 @@ pub fn is_valid(layout: &Layout, r: f64) -> bool {
 /// The layout of family `kind` for `seed` and a body of radius
 /// `body_radius` (m): the first valid draw of the seeded generator.
 pub fn generate(kind: &str, seed: u64, body_radius: f64) -> Result<Layout, String> {
-    let mut d = Draw(ChaCha8Rng::seed_from_u64(seed ^ 0x4641_4d49_4c59)); // "FAMILY"
+    let mut d = Draw::seeded(seed);
     for _ in 0..MAX_DRAWS {
         let layout = match kind {
             "corridor" => corridor(&mut d),

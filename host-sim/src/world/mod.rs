@@ -13,7 +13,9 @@
 //!   doorways, cups, wall starts, clutter, thin walls);
 //! * [`people`]: seeded families with people who walk (crossing, head-on,
 //!   crowd, a room crossed);
-//! * [`moving`]: obstacles with a constant velocity, the true map at any time.
+//! * [`moving`]: obstacles with a constant velocity, the true map at any time;
+//! * [`crowd`]: people who walk to goals and react (ORCA, social force),
+//!   and their seeded families (the crowd-navigation benchmark's among them).
 //!
 //! Frames and units: world frame W, metres, radians, as in the controller.
 
@@ -21,6 +23,7 @@ use ldcbf_controller::ConvexPolygon;
 use ldcbf_controller::geometry::closest_point_point_polygon;
 use ldcbf_controller::nalgebra::Vector2;
 
+pub mod crowd;
 pub mod exact;
 pub mod families;
 pub mod grid;

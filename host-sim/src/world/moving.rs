@@ -7,6 +7,10 @@
 //! walls, through each other and through the robot (contacts are counted,
 //! not resolved: [`MovingMap::body_contacts`], [`MovingMap::foot_contacts`]).
 //!
+//! People who react ([`crate::world::crowd`]) are moved by the closed loop
+//! instead ([`MovingMap::with_driven`], [`MovingMap::place`]): their
+//! polygons and current velocities are whatever the crowd's state is.
+//!
 //! [`MovingMap`] holds the map at one time, [`MovingMap::set_time`] moves it,
 //! and it answers the clearance questions of the 1 kHz loop against the true
 //! positions: the obstacles at rest through an R-tree built once
@@ -91,6 +95,8 @@ pub struct MovingMap {
     rest_index: ObstacleIndex,
     current: Vec<Polygon>,
     time: f64,
+    /// Obstacles from this index on are placed by the caller.
+    driven_from: usize,
 }
 
 impl MovingMap {
@@ -98,15 +104,24 @@ impl MovingMap {
     /// `velocities` (m/s; a shorter list leaves the rest at rest). `Err` if
     /// the index cannot hold the map.
     pub fn new(obstacles: &[Polygon], velocities: &[Vector2<f64>]) -> Result<Self, String> {
+        Self::with_driven(obstacles, velocities, obstacles.len())
+    }
+
+    /// [`MovingMap::new`] where the obstacles from index `driven_from` on
+    /// are moved by the caller ([`MovingMap::place`]: people who react,
+    /// [`crate::world::crowd`]) rather than by their velocities, and count
+    /// as moving whatever their velocity.
+    pub fn with_driven(
+        obstacles: &[Polygon],
+        velocities: &[Vector2<f64>],
+        driven_from: usize,
+    ) -> Result<Self, String> {
         let velocities: Vec<Vector2<f64>> = (0..obstacles.len())
             .map(|i| velocities.get(i).copied().unwrap_or_else(Vector2::zeros))
             .collect();
-        let moving: Vec<usize> = (0..obstacles.len())
-            .filter(|&i| velocities[i] != Vector2::zeros())
-            .collect();
-        let rest_ids: Vec<usize> = (0..obstacles.len())
-            .filter(|&i| velocities[i] == Vector2::zeros())
-            .collect();
+        let moves = |i: usize| i >= driven_from || velocities[i] != Vector2::zeros();
+        let moving: Vec<usize> = (0..obstacles.len()).filter(|&i| moves(i)).collect();
+        let rest_ids: Vec<usize> = (0..obstacles.len()).filter(|&i| !moves(i)).collect();
         let rest: Vec<Polygon> = rest_ids.iter().map(|&i| obstacles[i]).collect();
         Ok(MovingMap {
             rest_index: ObstacleIndex::new(&rest)?,
@@ -117,6 +132,7 @@ impl MovingMap {
             rest,
             current: obstacles.to_vec(),
             time: 0.0,
+            driven_from,
         })
     }
 
@@ -125,11 +141,24 @@ impl MovingMap {
         self.moving.is_empty()
     }
 
-    /// Moves every moving obstacle to its position at time `t` (s).
+    /// Moves every moving obstacle to its position at time `t` (s) (those
+    /// placed by the caller stay where [`MovingMap::place`] put them).
     pub fn set_time(&mut self, t: f64) {
         self.time = t;
         for &i in &self.moving {
-            self.current[i] = translated(&self.initial[i], self.velocities[i] * t);
+            if i < self.driven_from {
+                self.current[i] = translated(&self.initial[i], self.velocities[i] * t);
+            }
+        }
+    }
+
+    /// Puts the caller-driven obstacle `i` at its initial polygon moved by
+    /// `shift` (m), with velocity `velocity` (m/s). Ignored for an obstacle
+    /// not driven by the caller.
+    pub fn place(&mut self, i: usize, shift: Vector2<f64>, velocity: Vector2<f64>) {
+        if i >= self.driven_from && i < self.current.len() {
+            self.current[i] = translated(&self.initial[i], shift);
+            self.velocities[i] = velocity;
         }
     }
 

@@ -114,13 +114,15 @@ impl RandomParams {
     pub fn validate(&self) -> Result<(), SettingError> {
         if self.kind != "random_polygons"
             && !crate::world::families::FAMILIES.contains(&self.kind.as_str())
+            && !crate::world::crowd::families::FAMILIES.contains(&self.kind.as_str())
         {
             return Err(SettingError::new(
                 "kind",
                 format!(
-                    "unknown generator kind {:?} (\"random_polygons\" or a family: {})",
+                    "unknown generator kind {:?} (\"random_polygons\" or a family: {}, {})",
                     self.kind,
-                    crate::world::families::FAMILIES.join(", ")
+                    crate::world::families::FAMILIES.join(", "),
+                    crate::world::crowd::families::FAMILIES.join(", ")
                 ),
             ));
         }
