@@ -273,7 +273,7 @@ impl Crowd {
                             velocity: self.velocities[i],
                             radius: p.radius,
                         },
-                        preferred[i],
+                        orca::perturbed(preferred[i]),
                         p.speed,
                         &others,
                         &self.orca_walls,

@@ -8,7 +8,8 @@
 //! time horizon [`TIME_HORIZON`] (5 s) for agents and for obstacles, the
 //! agent's radius plus 0.01 m, the maximum speed the preferred speed, equal
 //! responsibility for every agent (each takes half of a pairwise
-//! avoidance). A wall is a closed `dodgy_2d` obstacle (its vertices
+//! avoidance), the preferred velocity turned by 0.01 rad ([`perturbed`]).
+//! A wall is a closed `dodgy_2d` obstacle (its vertices
 //! counter-clockwise: solid inside), kept at the agent's radius.
 
 use std::borrow::Cow;
@@ -27,6 +28,22 @@ pub const MAX_NEIGHBOURS: usize = 10;
 pub const TIME_HORIZON: f64 = 5.0;
 /// Added to every agent's radius, m (CrowdNav's `radius + 0.01`).
 pub const RADIUS_PAD: f64 = 0.01;
+
+/// The angle every ORCA person's preferred velocity is turned by, rad.
+pub const PERTURBATION: f64 = 0.01;
+
+/// `preferred` turned counter-clockwise by [`PERTURBATION`]. Two ORCA
+/// agents walking exactly head-on choose exactly opposite velocities and
+/// stop face to face for ever (a symmetric deadlock; RVO2's own examples
+/// perturb the preferred velocities at random for this); the fixed turn
+/// breaks the symmetry deterministically (both keep to the same side).
+pub fn perturbed(preferred: Vector2<f64>) -> Vector2<f64> {
+    let (s, c) = PERTURBATION.sin_cos();
+    Vector2::new(
+        c * preferred.x - s * preferred.y,
+        s * preferred.x + c * preferred.y,
+    )
+}
 
 fn v2(p: Vector2<f64>) -> Vec2 {
     Vec2::new(p.x as f32, p.y as f32)

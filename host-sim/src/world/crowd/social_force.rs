@@ -21,9 +21,12 @@
 //! * the speed is capped at [`MAX_SPEED_FACTOR`] = 1.3 times the preferred
 //!   speed.
 //!
-//! As in the paper, pedestrians are points: the potentials are in the
-//! distances between centres (the radii are not used). The velocity is
-//! integrated by explicit Euler over the people's decision period.
+//! In the paper pedestrians are points; our people have bodies, so the
+//! potentials are taken in the distances between body surfaces (the centre
+//! distance less both radii, and the wall distance less the radius), as the
+//! later form of the model does (Helbing, Farkas & Vicsek, Nature 407, 487,
+//! 2000: `r_ab - d_ab`). The velocity is integrated by explicit Euler over
+//! the people's decision period.
 
 use ldcbf_controller::closest_point_point_polygon;
 use ldcbf_controller::nalgebra::Vector2;
@@ -58,8 +61,16 @@ fn semi_minor(r: Vector2<f64>, step: Vector2<f64>) -> f64 {
 }
 
 /// The repulsion of a pedestrian at `r = r_a - r_b` walking at `v_b`, m/s^2
-/// (minus the gradient of `V(b)`, by central differences of `b`).
-pub fn pedestrian_force(r: Vector2<f64>, v_b: Vector2<f64>) -> Vector2<f64> {
+/// (minus the gradient of `V(b)`, by central differences of `b`), the two
+/// bodies' radii summing to `radii` (m): `r` is first shortened by `radii`
+/// (to at least 1 mm).
+pub fn pedestrian_force(r: Vector2<f64>, v_b: Vector2<f64>, radii: f64) -> Vector2<f64> {
+    let n = r.norm();
+    let r = if n > 1e-9 {
+        r * ((n - radii).max(1e-3) / n)
+    } else {
+        Vector2::new(1e-3, 0.0)
+    };
     let step = v_b * STEP_TIME;
     let h = 1e-6;
     let grad = Vector2::new(
@@ -106,7 +117,7 @@ pub fn velocity(
     };
     let mut a = (preferred - me.velocity) / TAU;
     for o in others {
-        let f = pedestrian_force(me.position - o.position, o.velocity);
+        let f = pedestrian_force(me.position - o.position, o.velocity, me.radius + o.radius);
         a += f * weight(e, f);
     }
     for w in walls {
@@ -116,6 +127,12 @@ pub fn velocity(
             // Inside a wall: pushed out through the nearest side.
             r_ab = -r_ab;
         }
+        let d = r_ab.norm();
+        let r_ab = if d > 1e-9 {
+            r_ab * ((d - me.radius).max(1e-3) / d)
+        } else {
+            r_ab
+        };
         let f = wall_force(r_ab);
         a += f * weight(e, f);
     }

@@ -55,15 +55,16 @@ fn orca_people_walking_head_on_pass_without_touching() {
         );
         let (gap, _) = run(&mut c, 30.0, None);
         assert!(gap >= -1e-3, "offset {offset}: gap {gap}");
-        assert!((c.positions()[0] - v(4.0, offset)).norm() < 0.05, "arrived");
-        assert!((c.positions()[1] - v(-4.0, 0.0)).norm() < 0.05, "arrived");
+        let at = (c.positions()[0], c.positions()[1]);
+        assert!((at.0 - v(4.0, offset)).norm() < 0.05, "offset {offset}: {at:?}");
+        assert!((at.1 - v(-4.0, 0.0)).norm() < 0.05, "offset {offset}: {at:?}");
     }
 }
 
 #[test]
 fn orca_people_keep_off_the_walls() {
-    // A wall across the way: the person stops in front of it (or walks round
-    // it) and never enters it.
+    // A wall across the way: ORCA is local, so the person stops in front of
+    // it (or slides round it), but never enters it.
     let wall = rect(1.0, -0.6, 1.3, 0.6);
     let mut c = Crowd::new(
         vec![
@@ -75,7 +76,7 @@ fn orca_people_keep_off_the_walls() {
     let (gap, wall_gap) = run(&mut c, 30.0, None);
     assert!(wall_gap >= -0.02, "into the wall by {wall_gap}");
     assert!(gap >= -1e-3, "gap {gap}");
-    assert!(c.positions()[0].x > 1.3, "walked round it");
+    assert!(c.positions()[0].x < 1.0 || c.positions()[0].y.abs() > 0.6);
 }
 
 #[test]
