@@ -12,7 +12,10 @@ use ldcbf_sim::studies::crowdnav::{
 use ldcbf_sim::world::crowd::families::CrowdNavLayout;
 
 #[test]
-#[cfg_attr(debug_assertions, ignore = "a closed loop: run with --release (.ci/run does)")]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "a closed loop: run with --release (.ci/run does)"
+)]
 fn the_hand_written_people_walk_and_the_robot_walks_into_none() {
     let sc = load("people-walk", &LoadOptions::default()).unwrap();
     assert_eq!(sc.people.len(), 4);
@@ -28,11 +31,19 @@ fn the_hand_written_people_walk_and_the_robot_walks_into_none() {
     // more) is not the clearance a few seconds later, when the ORCA crosser
     // stands on the robot's line.
     let at = |t: f64| r.samples[(t / 1e-3) as usize].clearance;
-    assert!(at(0.0) > 3.0 && at(3.0) < at(0.0) - 0.5, "{} {}", at(0.0), at(3.0));
+    assert!(
+        at(0.0) > 3.0 && at(3.0) < at(0.0) - 0.5,
+        "{} {}",
+        at(0.0),
+        at(3.0)
+    );
 }
 
 #[test]
-#[cfg_attr(debug_assertions, ignore = "closed loops: run with --release (.ci/run does)")]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "closed loops: run with --release (.ci/run does)"
+)]
 fn a_few_crowdnav_cases_run_for_both_robots() {
     for robot in [RobotPolicy::Controller, RobotPolicy::Orca] {
         for visible in [false, true] {

@@ -52,7 +52,12 @@ fn bad_people_are_errors_naming_the_file_and_the_field() {
     for (from, to, field, what) in [
         ("speed = 0.5", "speed = -1.0", "people[0].speed", "(0, 5]"),
         ("speed = 0.5", "speed = 9.0", "people[0].speed", "(0, 5]"),
-        ("speed = 0.5", "radius = 0.0", "people[0].radius", "[0.05, 1]"),
+        (
+            "speed = 0.5",
+            "radius = 0.0",
+            "people[0].radius",
+            "[0.05, 1]",
+        ),
         ("[[1.0, 2.0]]", "[[2.0, 1.0]]", "people[0].stops", "t0 < t1"),
         ("\"social_force\"", "\"sfm\"", "people[0].policy", "orca"),
         ("group = 2", "group = -1", "people[1].group", ""),

@@ -249,7 +249,13 @@ fn controller_case(req: &CrowdNavRequest, seed: u64) -> Result<CaseRow, CrowdNav
         .iter()
         .map(|s| s.clearance - sc.robot.body_radius)
         .collect();
-    Ok(CaseRow::new(seed, reached, contacts, &seps, crate::sim::PLANT_DT))
+    Ok(CaseRow::new(
+        seed,
+        reached,
+        contacts,
+        &seps,
+        crate::sim::PLANT_DT,
+    ))
 }
 
 /// Runs every case of `req` (in parallel on `req.jobs` threads), in seed
@@ -296,7 +302,11 @@ pub fn table_row(req: &CrowdNavRequest, s: &Summary) -> String {
     format!(
         "| {layout} | {} | {robot} | {perception} | {} | {} | {:.3} | {:.3} | {:.3} | {:.3} | {:.2} | {:.4} | {:.3} |",
         req.humans,
-        if req.robot_visible { "visible" } else { "invisible" },
+        if req.robot_visible {
+            "visible"
+        } else {
+            "invisible"
+        },
         s.cases,
         s.success,
         s.robot_collision,

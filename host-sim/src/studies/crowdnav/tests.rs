@@ -69,7 +69,10 @@ fn the_summary_counts_each_outcome() {
     ];
     let s = summarize(&rows);
     assert_eq!(s.cases, 4);
-    assert_eq!((s.success, s.collision, s.robot_collision, s.timeout), (0.25, 0.5, 0.25, 0.25));
+    assert_eq!(
+        (s.success, s.collision, s.robot_collision, s.timeout),
+        (0.25, 0.5, 0.25, 0.25)
+    );
     assert_eq!(s.nav_time, 10.0, "successes only");
     // Below 0.2 m: one half of case 0, one of case 1, one of case 2.
     assert_eq!(s.discomfort, 3.0 / 8.0);

@@ -175,9 +175,9 @@ fn crowdnav(d: &mut Draw, layout: CrowdNavLayout, n: usize, body_radius: f64) ->
                 };
                 let g = loop {
                     let g = Vector2::new(d.unif(0.0, half) * -sign, d.unif(-half, half));
-                    let clash = agents.iter().any(|(_, og, r)| {
-                        (g - og).norm() < HUMAN_RADIUS + r + DISCOMFORT_DIST
-                    });
+                    let clash = agents
+                        .iter()
+                        .any(|(_, og, r)| (g - og).norm() < HUMAN_RADIUS + r + DISCOMFORT_DIST);
                     if !clash {
                         break g;
                     }
@@ -208,8 +208,7 @@ fn orca_crowd(d: &mut Draw, n: usize) -> CrowdLayout {
         let speed = d.unif(0.3, 0.7);
         let r = d.unif(0.25, 0.3);
         let apart = people.iter().all(|q| (q.start - p).norm() >= 0.8);
-        if apart && (p - start).norm() >= 1.0 && (p - goal).norm() >= 1.0 && (g - p).norm() > 1.0
-        {
+        if apart && (p - start).norm() >= 1.0 && (p - goal).norm() >= 1.0 && (g - p).norm() > 1.0 {
             people.push(Person {
                 radius: r,
                 ..Person::new(p, g, speed)

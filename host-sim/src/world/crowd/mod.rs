@@ -258,9 +258,8 @@ impl Crowd {
 
     /// Every person's new velocity, from the state now.
     fn decide(&mut self, robot: Option<&RobotBody>) {
-        let preferred: Vec<Vector2<f64>> = (0..self.people.len())
-            .map(|i| self.preferred(i))
-            .collect();
+        let preferred: Vec<Vector2<f64>> =
+            (0..self.people.len()).map(|i| self.preferred(i)).collect();
         let new: Vec<Vector2<f64>> = (0..self.people.len())
             .map(|i| {
                 let p = &self.people[i];

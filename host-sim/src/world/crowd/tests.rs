@@ -56,8 +56,14 @@ fn orca_people_walking_head_on_pass_without_touching() {
         let (gap, _) = run(&mut c, 30.0, None);
         assert!(gap >= -1e-3, "offset {offset}: gap {gap}");
         let at = (c.positions()[0], c.positions()[1]);
-        assert!((at.0 - v(4.0, offset)).norm() < 0.05, "offset {offset}: {at:?}");
-        assert!((at.1 - v(-4.0, 0.0)).norm() < 0.05, "offset {offset}: {at:?}");
+        assert!(
+            (at.0 - v(4.0, offset)).norm() < 0.05,
+            "offset {offset}: {at:?}"
+        );
+        assert!(
+            (at.1 - v(-4.0, 0.0)).norm() < 0.05,
+            "offset {offset}: {at:?}"
+        );
     }
 }
 
@@ -128,7 +134,10 @@ fn a_visible_robot_is_avoided_an_invisible_one_is_not() {
         if sees {
             assert!(closest >= -1e-3, "{policy:?}: {closest}");
         } else {
-            assert!(closest < -0.5, "walks through the invisible robot: {closest}");
+            assert!(
+                closest < -0.5,
+                "walks through the invisible robot: {closest}"
+            );
         }
     }
 }
@@ -152,12 +161,19 @@ fn constant_velocity_people_walk_through_and_stop_when_told() {
     let b = with(Policy::ConstantVelocity, v(3.0, 0.0), v(0.0, 0.0));
     let mut c = Crowd::new(vec![a.clone(), b], &[]);
     let (gap, _) = run(&mut c, 1.5, None);
-    assert!((c.positions()[0].x - 0.6).abs() < 0.04, "{}", c.positions()[0]);
+    assert!(
+        (c.positions()[0].x - 0.6).abs() < 0.04,
+        "{}",
+        c.positions()[0]
+    );
     run(&mut c, 0.45, None);
     assert!((c.positions()[0].x - 0.6).abs() < 0.04, "standing");
     let (gap2, _) = run(&mut c, 10.0, None);
     assert!(gap.min(gap2) < -0.5, "they walk through each other");
-    assert!((c.positions()[0] - v(3.0, 0.0)).norm() < 0.01, "at its goal");
+    assert!(
+        (c.positions()[0] - v(3.0, 0.0)).norm() < 0.01,
+        "at its goal"
+    );
     a.stops = vec![[2.0, 1.0]];
     assert_eq!(a.validate().unwrap_err().field, "stops");
 }
@@ -179,8 +195,8 @@ fn a_group_walks_abreast() {
     for _ in 0..800 {
         c.step(DT, None);
         let y: Vec<f64> = c.positions().iter().map(|p| p.y).collect();
-        let spread = y.iter().cloned().fold(f64::MIN, f64::max)
-            - y.iter().cloned().fold(f64::MAX, f64::min);
+        let spread =
+            y.iter().cloned().fold(f64::MIN, f64::max) - y.iter().cloned().fold(f64::MAX, f64::min);
         assert!(spread < 0.7, "spread {spread} at {}", c.time());
     }
 }
