@@ -6,7 +6,7 @@ use anyhow::Result;
 use super::args::{
     CrowdNavArgs, CrowdNavLayoutArg, CrowdNavPerception, DeadlineArgs, RobustnessArgs, capped_jobs,
 };
-use super::output::out;
+use super::output::{out, outln};
 use crate::studies::deadline::{self, DeadlineRequest};
 use crate::studies::robustness::{self, RobustnessRequest};
 
@@ -107,8 +107,8 @@ pub(crate) fn crowdnav(args: CrowdNavArgs) -> Result<()> {
         )?;
     }
     if args.header {
-        out!("{TABLE_HEADER}");
+        outln!("{TABLE_HEADER}");
     }
-    out!("{row}");
+    outln!("{row}");
     Ok(())
 }
