@@ -67,7 +67,10 @@ fn a_few_crowdnav_cases_run_for_both_robots() {
             }
             let s = summarize(&rows);
             println!("{robot:?} visible {visible}: {s:?}");
-            if robot == RobotPolicy::Controller {
+            // Measured: with known velocities and a visible robot, no
+            // robot-caused contact in 100 cases (docs/results.md); with an
+            // invisible robot 6 of 100 cases have one, so none is asserted.
+            if robot == RobotPolicy::Controller && visible {
                 assert_eq!(s.robot_collision, 0.0, "{rows:?}");
             }
             // The humans cross the robot's way: it comes within the
