@@ -39,6 +39,7 @@ use ldcbf_controller::{Assembly, DualActiveSet, QpSolution};
 mod check;
 mod clarabel_solve;
 mod equivalence;
+mod npy_header;
 mod npz;
 mod problem;
 mod random;
@@ -51,6 +52,7 @@ pub use check::{
 };
 pub use clarabel_solve::{ClarabelBackend, RefSolution, RefStatus, solve_clarabel};
 pub use equivalence::{Agreement, Kkt, compare, kkt, solve_own, solve_own_dyn};
+pub use npz::{MAX_NPZ_BYTES, MAX_QP_ROWS, MAX_QP_VARIABLES};
 pub use problem::{DenseProblem, ProblemError, SizedQp};
 pub use random::{QpKind, random_problem};
 pub use stacked::{Multipliers, RowOrigin, Stacked};

@@ -3,6 +3,7 @@
 
 use std::path::Path;
 
+use crate::npy_header::{NpyHeader, parse_npy_header};
 use crate::problem::{DenseProblem, ProblemError};
 
 impl DenseProblem {
@@ -35,12 +36,13 @@ impl DenseProblem {
                 _ => format!("cannot open: {e}"),
             })
         })?;
+        let mut left = MAX_NPZ_BYTES;
         let mut read = |key: &str, required: bool| -> Result<Member, ProblemError> {
             let at = |m: String| fail(format!("key `{key}`: {m}"));
             if !required && !npz.array_names().any(|n| n == key) {
                 return Ok(Err("is missing"));
             }
-            let bytes = read_npz_member(&mut npz, key).map_err(at)?;
+            let bytes = read_npz_member(&mut npz, key, &mut left).map_err(at)?;
             if !required && is_pickled_none(&bytes) {
                 return Ok(Err("is a pickled None"));
             }
@@ -79,6 +81,11 @@ impl DenseProblem {
         if n != n2 {
             return Err(bad("P", &ps, "[n, n]".into()));
         }
+        if n > MAX_QP_VARIABLES {
+            return Err(fail(format!(
+                "key `P`: {n} variables, more than the {MAX_QP_VARIABLES} a QP file may have"
+            )));
+        }
         if qs[..] != [n] {
             return Err(bad("q", &qs, format!("[{n}] (the size of `P`)")));
         }
@@ -106,6 +113,11 @@ impl DenseProblem {
             };
             if c != n {
                 return Err(bad(mk, &ms, format!("[{rows}, {n}]")));
+            }
+            if r > MAX_QP_ROWS {
+                return Err(fail(format!(
+                    "key `{mk}`: {r} rows, more than the {MAX_QP_ROWS} a QP file may have"
+                )));
             }
             if vs[..] != [r] {
                 return Err(bad(vk, &vs, format!("[{r}] (the rows of `{mk}`)")));
@@ -188,15 +200,26 @@ impl DenseProblem {
 /// absent (`is missing`, `is a pickled None`, `is empty`).
 type Member = Result<(Vec<u64>, Vec<f64>), &'static str>;
 
-/// Largest `.npy` member read from an npz file, bytes (the QPs of this project
-/// are a few kB; the cap keeps a corrupt size field from exhausting memory).
-const MAX_NPY_BYTES: u64 = 1 << 28;
+/// Most bytes the `.npy` members of one npz file may decompress to, all
+/// members together: 64 MiB (the QPs of this project have a few kB). A member over what is left is refused from its declared size,
+/// before it is read, and its read stops there whatever it declares, so a
+/// small compressed file cannot make the reader allocate more.
+pub const MAX_NPZ_BYTES: u64 = 64 << 20;
+
+/// Most variables `n` of a QP read from an npz file (the dense solver's
+/// factor is `n x n`; the project's QPs have at most 60).
+pub const MAX_QP_VARIABLES: u64 = 1000;
+
+/// Most constraint rows (`m` of `G`, `me` of `A`, each) of a QP read from an
+/// npz file.
+pub const MAX_QP_ROWS: u64 = 8000;
 
 /// The bytes of `<key>.npy` in `npz`, read to the end so that the zip CRC is
 /// checked (a truncated or corrupted member is an error, not wrong numbers).
 fn read_npz_member<R: std::io::Read + std::io::Seek>(
     npz: &mut npyz::npz::NpzArchive<R>,
     key: &str,
+    left: &mut u64,
 ) -> Result<Vec<u8>, String> {
     use std::io::Read as _;
     if !npz.array_names().any(|n| n == key) {
@@ -206,34 +229,30 @@ fn read_npz_member<R: std::io::Read + std::io::Seek>(
         .zip_archive()
         .by_name(&format!("{key}.npy"))
         .map_err(|e| format!("cannot read: {e}"))?;
-    if member.size() > MAX_NPY_BYTES {
-        return Err(format!(
-            "{} bytes, more than the {MAX_NPY_BYTES} read",
-            member.size()
-        ));
+    let too_big = |size: u64| {
+        format!(
+            "decompresses to {size} bytes, more than the {} bytes left of the \
+             {MAX_NPZ_BYTES} one npz file may decompress to",
+            *left
+        )
+    };
+    if member.size() > *left {
+        return Err(too_big(member.size()));
     }
     let mut bytes = Vec::new();
     member
-        .take(MAX_NPY_BYTES + 1)
+        .take(*left + 1)
         .read_to_end(&mut bytes)
         .map_err(|e| format!("truncated or corrupted ({e})"))?;
+    if bytes.len() as u64 > *left {
+        return Err(too_big(bytes.len() as u64));
+    }
+    *left -= bytes.len() as u64;
     Ok(bytes)
 }
 
-/// The value text after `'key':` in an `.npy` header dict.
-fn npy_header_value<'a>(header: &'a str, key: &str) -> Result<&'a str, String> {
-    let at = header
-        .find(&format!("'{key}'"))
-        .or_else(|| header.find(&format!("\"{key}\"")))
-        .ok_or_else(|| format!("the .npy header has no `{key}`"))?;
-    let rest = header[at + key.len() + 2..].trim_start();
-    rest.strip_prefix(':')
-        .map(str::trim_start)
-        .ok_or_else(|| format!("malformed .npy header near `{key}`"))
-}
-
-/// The header dict of an `.npy` array and the offset of its data.
-fn npy_header(bytes: &[u8]) -> Result<(&str, usize), String> {
+/// The header dict of an `.npy` array, parsed, and the offset of its data.
+fn npy_header(bytes: &[u8]) -> Result<(NpyHeader, usize), String> {
     let not_npy = || "not an .npy array (no NPY header)".to_string();
     if bytes.len() < 10 || &bytes[..6] != b"\x93NUMPY" {
         return Err(not_npy());
@@ -253,7 +272,7 @@ fn npy_header(bytes: &[u8]) -> Result<(&str, usize), String> {
         .get(start..start.saturating_add(len))
         .and_then(|h| core::str::from_utf8(h).ok())
         .ok_or_else(|| "truncated or malformed .npy header".to_string())?;
-    Ok((header, start + len))
+    Ok((parse_npy_header(header)?, start + len))
 }
 
 /// Whether an `.npy` member is a pickled `None`, the qpbenchmark marker of an
@@ -265,10 +284,7 @@ fn is_pickled_none(bytes: &[u8]) -> bool {
     let Ok((header, start)) = npy_header(bytes) else {
         return false;
     };
-    let is = |key, want: &[&str]| {
-        npy_header_value(header, key).is_ok_and(|v| want.iter().any(|w| v.starts_with(w)))
-    };
-    if !is("descr", &["'|O'", "\"|O\""]) || !is("shape", &["()"]) {
+    if header.descr != "|O" || !header.shape.is_empty() {
         return false;
     }
     let mut data = &bytes[start..];
@@ -303,40 +319,17 @@ fn is_pickled_none(bytes: &[u8]) -> bool {
 /// member holds.
 pub(crate) fn parse_npy_f64(bytes: &[u8]) -> Result<(Vec<u64>, bool, Vec<f64>), String> {
     let (header, start) = npy_header(bytes)?;
-    let descr = npy_header_value(header, "descr")?;
-    let big_endian = if descr.starts_with("'<f8'") || descr.starts_with("\"<f8\"") {
-        false
-    } else if descr.starts_with("'>f8'") || descr.starts_with("\">f8\"") {
-        true
-    } else {
-        let shown: String = descr.chars().take_while(|&c| c != ',').collect();
-        return Err(format!("dtype {shown} is not float64 ('<f8')"));
+    let big_endian = match header.descr.as_str() {
+        "<f8" => false,
+        ">f8" => true,
+        other => {
+            return Err(format!(
+                "dtype '{}' is not float64 ('<f8')",
+                other.chars().take(40).collect::<String>()
+            ));
+        }
     };
-    let order = npy_header_value(header, "fortran_order")?;
-    let fortran = if order.starts_with("True") {
-        true
-    } else if order.starts_with("False") {
-        false
-    } else {
-        return Err("malformed `fortran_order` in the .npy header".into());
-    };
-    let shape_text = npy_header_value(header, "shape")?;
-    let shape_text = shape_text
-        .strip_prefix('(')
-        .and_then(|t| t.split_once(')'))
-        .map(|(inside, _)| inside)
-        .ok_or_else(|| "malformed `shape` in the .npy header".to_string())?;
-    let mut shape = Vec::new();
-    for d in shape_text
-        .split(',')
-        .map(str::trim)
-        .filter(|d| !d.is_empty())
-    {
-        shape.push(
-            d.parse::<u64>()
-                .map_err(|_| format!("malformed `shape` ({shape_text}) in the .npy header"))?,
-        );
-    }
+    let (shape, fortran) = (header.shape, header.fortran_order);
     let data = &bytes[start..];
     let need = shape
         .iter()

@@ -476,6 +476,15 @@ impl SolveOptions {
 /// [`SolveOptions::validate`].
 pub fn solve_file(file: &Path, opts: &SolveOptions) -> Result<QpRow> {
     opts.validate()?;
+    use crate::scenario::limits::{MAX_TABLE_BYTES, check_regular_file};
+    if let Err(e) = check_regular_file(file, MAX_TABLE_BYTES)
+        && e.kind() != std::io::ErrorKind::NotFound
+    {
+        return Err(QpBenchError::Read(ProblemError::File {
+            file: file.display().to_string(),
+            reason: e.to_string(),
+        }));
+    }
     let p = DenseProblem::from_npz(file).map_err(QpBenchError::Read)?;
     // The solver's rows: `A` (equalities), `G` and the finite bounds.
     let rows = p.rows();
