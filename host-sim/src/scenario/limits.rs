@@ -25,9 +25,16 @@ pub const MAX_KEY_LEN: usize = 256;
 /// Integers (seeds, counts) are not bound here; their own fields check them.
 pub const MAX_MAGNITUDE: f64 = 1e6;
 
-/// Largest scenario file, bytes (the shipped ones have a few kB; large maps
-/// come from a `[generator]`).
+/// Largest scenario file, `deadline --instructions` CSV or study
+/// `summary.json`, bytes (the shipped scenarios have a few kB; large maps come
+/// from a `[generator]`). Read by [`read_regular_file`].
 pub const MAX_FILE_BYTES: u64 = 1 << 24;
+
+/// Largest `runs.csv` of a study directory (`table`, `merge`) and npz file
+/// (`qp solve`; what it decompresses to is capped apart), bytes: a row of
+/// `runs.csv` has under 300 bytes, so the 1,000,000 seeds of the largest
+/// study fit.
+pub const MAX_TABLE_BYTES: u64 = 1 << 29;
 
 /// The one rule for every file the tools read (scenarios, `qp solve`'s npz
 /// files, `deadline --instructions`, the files of a study directory): a
@@ -82,6 +89,31 @@ pub fn read_regular_file(path: &std::path::Path, max_bytes: u64) -> std::io::Res
         return Err(too_big(bytes.len() as u64, max_bytes));
     }
     Ok(bytes)
+}
+
+/// Most obstacles with a velocity (people) in one scenario: each is checked
+/// against the body and the feet at every 1 kHz tick, cast by every LiDAR ray
+/// and predicted by the controller, so the wall time grows with their number
+/// (docs/cli-errors.md gives the measured cost).
+pub const MAX_MOVING_OBSTACLES: usize = 1000;
+
+/// Largest `lidar.map.resolution` with the LiDAR perception, m, whatever the
+/// body (docs/cli-errors.md gives the runs that set it; [`max_map_cell`]).
+pub const MAX_MAP_CELL: f64 = 0.1;
+
+/// Largest `lidar.map.resolution` for a robot whose CoM the controller keeps
+/// `barrier_margin` (m) from every piece of the map: [`MAX_MAP_CELL`], and a
+/// cell's diagonal at most the barrier margin (`r sqrt 2 <= m`) when it is
+/// positive. A piece is a whole cell, so the cell holding the CoM must never
+/// hold a wall while the body keeps its margin: a wall point in it is within a
+/// diagonal of the CoM. (A point robot at `delta = 0` has no margin; the
+/// fixed bound alone applies.)
+pub fn max_map_cell(barrier_margin: f64) -> f64 {
+    if barrier_margin > 0.0 {
+        MAX_MAP_CELL.min(barrier_margin / core::f64::consts::SQRT_2)
+    } else {
+        MAX_MAP_CELL
+    }
 }
 
 /// Longest piece of user text an error message repeats, characters.
@@ -181,6 +213,27 @@ mod tests {
         let s = shorten(&long, MAX_ECHO);
         assert!(s.starts_with(&"é".repeat(MAX_ECHO)), "{s}");
         assert!(s.ends_with("... (20000 bytes in all)"), "{s}");
+    }
+
+    #[test]
+    fn only_regular_files_within_the_size_are_read() {
+        let dir = std::env::temp_dir().join(format!("ldcbf-limits-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let f = dir.join("f.txt");
+        std::fs::write(&f, "12345").unwrap();
+        assert_eq!(read_regular_file(&f, 5).unwrap(), b"12345");
+        let big = read_regular_file(&f, 4).unwrap_err();
+        assert!(
+            big.to_string().contains("5 bytes, more than the 4"),
+            "{big}"
+        );
+        let d = read_regular_file(&dir, 100).unwrap_err();
+        assert!(d.to_string().contains("is a directory"), "{d}");
+        let dev = check_regular_file(std::path::Path::new("/dev/null"), 100).unwrap_err();
+        assert!(dev.to_string().contains("not a regular file"), "{dev}");
+        let missing = read_regular_file(&dir.join("no"), 100).unwrap_err();
+        assert_eq!(missing.kind(), std::io::ErrorKind::NotFound);
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     #[test]

@@ -276,10 +276,12 @@ pub fn read_instructions(path: &Path) -> Result<FirmwareInstructions, Instructio
     if path.is_dir() {
         return Err(InstructionsError::Directory { path: path_buf() });
     }
-    let bytes = std::fs::read(path).map_err(|source| InstructionsError::Read {
-        path: path_buf(),
-        source,
-    })?;
+    let bytes =
+        crate::scenario::limits::read_regular_file(path, crate::scenario::limits::MAX_FILE_BYTES)
+            .map_err(|source| InstructionsError::Read {
+            path: path_buf(),
+            source,
+        })?;
     let text =
         String::from_utf8(bytes).map_err(|_| InstructionsError::NotText { path: path_buf() })?;
     if text.trim().is_empty() {

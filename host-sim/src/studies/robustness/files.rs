@@ -23,7 +23,7 @@ pub fn is_robustness_dir(dir: &Path) -> bool {
     struct Kind {
         kind: String,
     }
-    std::fs::read_to_string(dir.join("summary.json"))
+    read(&dir.join("summary.json"))
         .ok()
         .and_then(|t| serde_json::from_str::<Kind>(&t).ok())
         .is_some_and(|k| k.kind == KIND)
@@ -138,9 +138,22 @@ pub fn read_dir(dir: &Path) -> Result<(RobustnessMeta, Vec<(usize, RobustRun)>)>
 
 /// Reads a file of a study directory as text.
 fn read(path: &Path) -> Result<String> {
-    std::fs::read_to_string(path).map_err(|error| RobustnessError::File {
+    use crate::scenario::limits::{MAX_FILE_BYTES, MAX_TABLE_BYTES, read_regular_file};
+    let max = if path.ends_with("runs.csv") {
+        MAX_TABLE_BYTES
+    } else {
+        MAX_FILE_BYTES
+    };
+    let file = |error| RobustnessError::File {
         path: path.to_path_buf(),
         error,
+    };
+    let bytes = read_regular_file(path, max).map_err(file)?;
+    String::from_utf8(bytes).map_err(|_| {
+        file(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            "not a text file (invalid UTF-8)",
+        ))
     })
 }
 
