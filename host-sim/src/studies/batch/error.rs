@@ -184,6 +184,39 @@ pub enum BatchError {
         /// Field `meta.runs`.
         runs: usize,
     },
+    /// `summary.json` names impossible shards: a merge's list holds 0, or a
+    /// merge is not the whole study's shard `1/1`.
+    #[error(
+        "{}: field `meta.merged_shards`: {merged:?} with shard {shard} (a merge is shard 1/1 \
+         and holds shards numbered from 1)",
+        path.display()
+    )]
+    Shards {
+        /// The file.
+        path: PathBuf,
+        /// Field `meta.shard`.
+        shard: Shard,
+        /// Field `meta.merged_shards`.
+        merged: Vec<u32>,
+    },
+    /// A shard's `runs.csv` does not hold every seed of its shard.
+    #[error(
+        "{}: {rows} rows, but shard {shard} of seeds {seeds} has {own} seeds (a shard holds \
+         every seed of its shard)",
+        path.display()
+    )]
+    ShardSeeds {
+        /// The file.
+        path: PathBuf,
+        /// Rows read.
+        rows: usize,
+        /// Field `meta.shard`.
+        shard: Shard,
+        /// Field `meta.seeds`.
+        seeds: SeedRange,
+        /// Seeds of the shard.
+        own: u64,
+    },
     /// The directories do not merge: none, of another study, or a shard
     /// twice.
     #[error(transparent)]

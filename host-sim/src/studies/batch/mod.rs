@@ -49,7 +49,7 @@ pub use error::BatchError;
 pub use seeds::{JOBS_PER_CORE, MAX_SEEDS, SeedRange, Shard, cap_jobs};
 
 use crate::plan::Planner;
-use crate::scenario::{LoadOptions, load};
+use crate::scenario::{LoadOptions, limits, load};
 use crate::sense::Perception;
 use crate::sim::{MpcRate, SimOptions, Solver, run};
 
@@ -235,6 +235,44 @@ impl RunRow {
             self.plan_p50_ms,
             self.plan_max_ms
         )
+    }
+
+    /// Checks a row read from the `runs.csv` of a directory of `meta`: its
+    /// seed lies in the study's range and in the directory's shard (for a
+    /// merge, in the range), and it claims success only as a run can: the
+    /// goal reached, no contact the robot caused, and a collision only when a
+    /// person caused a contact.
+    fn check(&self, meta: &BatchMeta) -> Result<(), String> {
+        let range = meta.seeds;
+        if !(range.start..range.end).contains(&self.seed) {
+            return Err(format!(
+                "seed {} is outside the study's seeds {range}",
+                self.seed
+            ));
+        }
+        if meta.merged_shards.is_empty() && !meta.shard.holds(self.seed - range.start) {
+            return Err(format!(
+                "seed {} is not in shard {} of seeds {range}",
+                self.seed, meta.shard
+            ));
+        }
+        if self.success
+            && (self.outcome != "goal_reached"
+                || self.contacts_robot > 0
+                || self.collision && self.contacts_person == 0)
+        {
+            return Err(format!(
+                "seed {}: success with outcome {:?}, collision {}, {} contacts caused by the \
+                 robot and {} by people (a success reaches the goal, and any collision is a \
+                 person's)",
+                self.seed,
+                self.outcome,
+                u8::from(self.collision),
+                self.contacts_robot,
+                self.contacts_person
+            ));
+        }
+        Ok(())
     }
 
     fn parse(line: &str) -> Result<Self, String> {
@@ -602,7 +640,12 @@ pub fn read_dir(dir: &Path) -> Result<(BatchMeta, Aggregate, Vec<RunRow>)> {
                 name: name.to_string(),
             });
         }
-        let bytes = match std::fs::read(&p) {
+        let max = if name == "runs.csv" {
+            limits::MAX_TABLE_BYTES
+        } else {
+            limits::MAX_FILE_BYTES
+        };
+        let bytes = match limits::read_regular_file(&p, max) {
             Ok(b) => b,
             Err(error) => return Err(BatchError::Read { path: p, error }),
         };
@@ -636,12 +679,29 @@ pub fn read_dir(dir: &Path) -> Result<(BatchMeta, Aggregate, Vec<RunRow>)> {
             line: text.lines().count(),
         });
     }
+    let meta = &sf.meta;
+    if !meta.merged_shards.is_empty() && meta.shard != Shard::ALL || meta.merged_shards.contains(&0)
+    {
+        return Err(BatchError::Shards {
+            path: sj,
+            shard: meta.shard,
+            merged: meta.merged_shards.clone(),
+        });
+    }
     let mut rows = Vec::new();
+    let mut seen = std::collections::HashSet::new();
     for (i, l) in lines.enumerate() {
         if l.trim().is_empty() {
             continue;
         }
-        match RunRow::parse(l) {
+        let row = RunRow::parse(l).and_then(|r| {
+            r.check(meta)?;
+            if !seen.insert(r.seed) {
+                return Err(format!("seed {} appears twice", r.seed));
+            }
+            Ok(r)
+        });
+        match row {
             Ok(r) => rows.push(r),
             Err(error) => {
                 return Err(BatchError::Row {
@@ -652,11 +712,22 @@ pub fn read_dir(dir: &Path) -> Result<(BatchMeta, Aggregate, Vec<RunRow>)> {
             }
         }
     }
-    if rows.len() != sf.meta.runs {
+    if rows.len() != meta.runs {
         return Err(BatchError::RowCount {
             path: csv,
             rows: rows.len(),
-            runs: sf.meta.runs,
+            runs: meta.runs,
+        });
+    }
+    // A shard as `batch` wrote it holds every seed of its shard.
+    let own = meta.shard.items(meta.seeds.len());
+    if meta.merged_shards.is_empty() && rows.len() as u64 != own {
+        return Err(BatchError::ShardSeeds {
+            path: csv,
+            rows: rows.len(),
+            shard: meta.shard,
+            seeds: meta.seeds,
+            own,
         });
     }
     Ok((sf.meta, sf.aggregate, rows))

@@ -30,8 +30,10 @@ pub fn cap_jobs(requested: usize) -> (usize, Option<String>) {
     }
 }
 
-/// A half-open range of seeds `start..end`.
+/// A half-open range of seeds `start..end`. Read from a file, it is checked
+/// as when parsed from `--seeds` (not empty, at most [`MAX_SEEDS`] seeds).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(try_from = "RangeFields")]
 pub struct SeedRange {
     /// First seed.
     pub start: u64,
@@ -86,8 +88,38 @@ impl core::str::FromStr for SeedRange {
     }
 }
 
-/// Shard `index` of `count` (1-based: `1/4` .. `4/4`).
+/// The fields of a [`SeedRange`] as a file holds them, before the checks.
+#[derive(Deserialize)]
+struct RangeFields {
+    start: u64,
+    end: u64,
+}
+
+impl TryFrom<RangeFields> for SeedRange {
+    type Error = String;
+    fn try_from(f: RangeFields) -> Result<Self, String> {
+        format!("{}..{}", f.start, f.end).parse()
+    }
+}
+
+/// The fields of a [`Shard`] as a file holds them, before the checks.
+#[derive(Deserialize)]
+struct ShardFields {
+    index: u32,
+    count: u32,
+}
+
+impl TryFrom<ShardFields> for Shard {
+    type Error = String;
+    fn try_from(f: ShardFields) -> Result<Self, String> {
+        format!("{}/{}", f.index, f.count).parse()
+    }
+}
+
+/// Shard `index` of `count` (1-based: `1/4` .. `4/4`). Read from a file, it
+/// is checked as when parsed from `--shard` (`1 <= index <= count`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(try_from = "ShardFields")]
 pub struct Shard {
     /// Which shard, `1..=count`.
     pub index: u32,
@@ -104,6 +136,17 @@ impl Shard {
         (range.start..range.end)
             .filter(|s| self.holds(s - range.start))
             .collect()
+    }
+
+    /// How many of the `len` items of a study (0-based `0..len`) belong to
+    /// this shard ([`Shard::holds`]).
+    pub fn items(&self, len: u64) -> u64 {
+        let first = u64::from(self.index - 1);
+        if len > first {
+            (len - first).div_ceil(u64::from(self.count))
+        } else {
+            0
+        }
     }
 
     /// Whether item `k` (0-based) of a study belongs to this shard: `k mod

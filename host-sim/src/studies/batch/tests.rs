@@ -60,3 +60,37 @@ fn rows_round_trip_through_csv() {
     };
     assert_eq!(RunRow::parse(&r.csv()).unwrap(), r);
 }
+
+#[test]
+fn shards_and_ranges_read_from_a_file_are_checked_as_when_parsed() {
+    let shard = |j: &str| serde_json::from_str::<Shard>(j);
+    assert_eq!(
+        shard(r#"{"index": 2, "count": 3}"#).unwrap(),
+        Shard { index: 2, count: 3 }
+    );
+    for bad in [
+        r#"{"index": 0, "count": 3}"#,
+        r#"{"index": 5, "count": 3}"#,
+        r#"{"index": 1, "count": 0}"#,
+    ] {
+        let e = shard(bad).unwrap_err().to_string();
+        assert!(e.contains("out of range"), "{bad}: {e}");
+    }
+    let range = |j: &str| serde_json::from_str::<SeedRange>(j);
+    assert_eq!(range(r#"{"start": 3, "end": 7}"#).unwrap().len(), 4);
+    assert!(range(r#"{"start": 3, "end": 3}"#).is_err());
+    assert!(range(r#"{"start": 0, "end": 1000001}"#).is_err());
+    // Shard::items counts what Shard::seeds lists.
+    for count in 1..5 {
+        for index in 1..=count {
+            let s = Shard { index, count };
+            for len in 0..9 {
+                let r = SeedRange {
+                    start: 10,
+                    end: 10 + len,
+                };
+                assert_eq!(s.items(len), s.seeds(r).len() as u64, "{s} of {len}");
+            }
+        }
+    }
+}
