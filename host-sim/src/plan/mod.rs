@@ -69,6 +69,7 @@ mod tree;
 use crate::world::Polygon;
 use crate::world::grid::{GridTooLarge, MAX_CELLS, OccupancyGrid, dist, grid_search};
 use crate::world::setting::SettingError;
+pub use tree::MAX_TREE_WORK;
 use tree::grow_tree;
 
 /// Global planner (docs/maths.md §5).
@@ -317,6 +318,8 @@ pub enum PlanError {
         /// Tree size at the end.
         nodes: usize,
     },
+    /// The caller's stop callback asked to stop (Ctrl-C).
+    Stopped,
 }
 
 impl core::fmt::Display for PlanError {
@@ -337,6 +340,7 @@ impl core::fmt::Display for PlanError {
                 f,
                 "no path to the goal in a tree of {nodes} nodes, even with the obstacles inflated by the body radius alone (more rrt_star.iterations may help)"
             ),
+            PlanError::Stopped => f.write_str("planning stopped"),
         }
     }
 }
@@ -370,14 +374,16 @@ pub fn attempt_resolution(resolution: f64, margin: f64) -> f64 {
 /// Plans from `start` to `goal` around `obstacles` for a robot whose body is a
 /// disk of `body_radius` (m), retrying with smaller margins (see the module
 /// docs). The same arguments always give the same plan; the error is the last
-/// attempt's.
+/// attempt's. Each attempt's tree does at most [`MAX_TREE_WORK`] work,
+/// and `stop` is polled every few samples: when it returns true the planning
+/// ends with [`PlanError::Stopped`] (the closed loop passes its cancel flag).
 pub fn plan(
-    start: Vector2<f64>,
-    goal: Vector2<f64>,
+    (start, goal): (Vector2<f64>, Vector2<f64>),
     obstacles: &[Polygon],
     params: &RrtParams,
     body_radius: f64,
     seed: u64,
+    stop: &dyn Fn() -> bool,
 ) -> Result<Route, PlanError> {
     params.validate().map_err(PlanError::Settings)?;
     if !(body_radius.is_finite() && body_radius >= 0.0) {
@@ -390,13 +396,19 @@ pub fn plan(
     let mut last = PlanError::NoPath { nodes: 0 };
     for (k, &m) in margins.iter().enumerate() {
         let res = attempt_resolution(params.resolution, m);
-        match plan_once(start, goal, obstacles, params, body_radius + m, res, seed) {
+        let attempt = Attempt {
+            inflation: body_radius + m,
+            resolution: res,
+            seed,
+            stop,
+        };
+        match plan_once(start, goal, obstacles, params, &attempt) {
             Ok(mut p) => {
                 p.margin_used = m;
                 p.attempts = k as u32 + 1;
                 return Ok(p);
             }
-            Err(e @ PlanError::GridTooLarge { .. }) => return Err(e),
+            Err(e @ (PlanError::GridTooLarge { .. } | PlanError::Stopped)) => return Err(e),
             Err(e) => last = e,
         }
     }
@@ -453,6 +465,18 @@ fn nearest_free(grid: &OccupancyGrid, p: [f64; 2], reach: f64) -> Option<[f64; 2
     best.map(|(c, _)| c)
 }
 
+/// What one attempt of [`plan`] varies, and what it shares.
+struct Attempt<'a> {
+    /// The obstacles' inflation, m.
+    inflation: f64,
+    /// The grid's cell side, m.
+    resolution: f64,
+    /// The tree's seed.
+    seed: u64,
+    /// The caller's stop callback.
+    stop: &'a dyn Fn() -> bool,
+}
+
 /// One RRT* attempt on a grid of obstacles inflated by `inflation` (m) with
 /// cells of `resolution` (m): the grid, its free start and goal, the tree,
 /// the path to the goal (the grid search when the tree misses it) and the
@@ -462,10 +486,9 @@ fn plan_once(
     goal: Vector2<f64>,
     obstacles: &[Polygon],
     params: &RrtParams,
-    inflation: f64,
-    resolution: f64,
-    seed: u64,
+    attempt: &Attempt<'_>,
 ) -> Result<Route, PlanError> {
+    let (inflation, resolution, seed) = (attempt.inflation, attempt.resolution, attempt.seed);
     let grid = planning_grid(start, goal, obstacles, params, inflation, resolution)?;
     let reach = inflation + 2.0 * resolution;
     let goal_in = [goal.x, goal.y];
@@ -482,7 +505,8 @@ fn plan_once(
     } else {
         nearest_free(&grid, goal_in, reach).ok_or(PlanError::GoalBlocked)?
     };
-    let tree = grow_tree(&grid, params, s, g, seed);
+    let tree = grow_tree(&grid, params, (s, g), seed, attempt.stop, MAX_TREE_WORK)
+        .ok_or(PlanError::Stopped)?;
     let to_v = |p: [f64; 2]| Vector2::new(p[0], p[1]);
     let (mut path, total, searched) = match tree.join(&grid, params, g) {
         Some((last, total)) => (tree.path_to(last), total, false),
@@ -571,8 +595,8 @@ mod tests {
             ..RrtParams::default()
         };
         let (s, g) = (Vector2::new(0.0, 0.0), Vector2::new(5.0, 0.0));
-        let a = plan(s, g, &obs, &p, 0.25, 3).unwrap();
-        let b = plan(s, g, &obs, &p, 0.25, 3).unwrap();
+        let a = plan((s, g), &obs, &p, 0.25, 3, &|| false).unwrap();
+        let b = plan((s, g), &obs, &p, 0.25, 3, &|| false).unwrap();
         assert_eq!((a.attempts, a.margin_used, a.inflation), (1, 0.15, 0.4));
         assert_eq!(a.subgoals, b.subgoals);
         assert_eq!(a.tree.nodes, b.tree.nodes);
@@ -597,15 +621,44 @@ mod tests {
     }
 
     #[test]
+    fn planning_stops_when_asked_and_its_work_is_bounded() {
+        let obs = [square([2.5, 0.0], 1.0)];
+        let (s, g) = (Vector2::new(0.0, 0.0), Vector2::new(5.0, 0.0));
+        let huge = RrtParams {
+            iterations: 1_000_000,
+            neighbor_radius: 1e6,
+            ..RrtParams::default()
+        };
+        let polls = std::cell::Cell::new(0);
+        let stop = || {
+            polls.set(polls.get() + 1);
+            polls.get() > 3
+        };
+        let stopped = plan((s, g), &obs, &huge, 0.25, 3, &stop);
+        assert!(matches!(stopped, Err(PlanError::Stopped)), "{stopped:?}");
+        assert_eq!(polls.get(), 4);
+        // A small budget stops the growth long before the million samples.
+        let grid = planning_grid(s, g, &obs, &huge, 0.4, 0.1).unwrap();
+        let budget = 5_000_000;
+        let t = grow_tree(&grid, &huge, ([0.0, 0.0], [5.0, 0.0]), 3, &|| false, budget).unwrap();
+        assert!(
+            t.nodes.len() > 10 && t.nodes.len() < 10_000,
+            "{}",
+            t.nodes.len()
+        );
+        assert!(t.work >= budget, "{}", t.work);
+    }
+
+    #[test]
     fn blocked_start_is_an_error() {
         let obs = [square([0.0, 0.0], 1.0)];
         let e = plan(
-            Vector2::new(0.0, 0.0),
-            Vector2::new(5.0, 0.0),
+            (Vector2::new(0.0, 0.0), Vector2::new(5.0, 0.0)),
             &obs,
             &RrtParams::default(),
             0.25,
             0,
+            &|| false,
         )
         .unwrap_err();
         assert_eq!(e, PlanError::StartBlocked);
@@ -656,7 +709,7 @@ mod tests {
             (1.6, 0.0),
         ] {
             let obs = doorway(w, y);
-            let p = plan(s, g, &obs, &RrtParams::default(), r, 7)
+            let p = plan((s, g), &obs, &RrtParams::default(), r, 7, &|| false)
                 .unwrap_or_else(|e| panic!("door {w} m at y = {y}: {e}"));
             let c = path_clearance(s, &p.subgoals, &obs);
             assert!(c >= r - 1e-9, "door {w} m: path {c} m from a wall");
@@ -671,7 +724,7 @@ mod tests {
         }
         // A door narrower than the body is not passed.
         let obs = doorway(2.0 * r - 0.02, 0.0);
-        assert!(plan(s, g, &obs, &RrtParams::default(), r, 7).is_err());
+        assert!(plan((s, g), &obs, &RrtParams::default(), r, 7, &|| false).is_err());
     }
 
     #[test]
@@ -681,7 +734,7 @@ mod tests {
         for d in [0.3, 0.45, 0.6] {
             let s = Vector2::new(2.0 - d, 0.0);
             let g = Vector2::new(4.0, 0.0);
-            let p = plan(s, g, &obs, &RrtParams::default(), 0.25, 11)
+            let p = plan((s, g), &obs, &RrtParams::default(), 0.25, 11, &|| false)
                 .unwrap_or_else(|e| panic!("start {d} m from the wall: {e}"));
             let blocked = d < 0.25 + 0.15 + 0.05;
             assert_eq!(p.entry.is_some(), blocked, "start {d} m");

@@ -21,17 +21,33 @@ pub(super) struct Growing {
     pub(super) parent: Vec<Option<usize>>,
     pub(super) cost: Vec<f64>,
     children: Vec<Vec<usize>>,
+    /// Work done so far: nodes visited by the scans plus points tested along
+    /// segments (the upper bound of each test), for [`MAX_TREE_WORK`].
+    pub(super) work: u64,
 }
 
+/// Most work one RRT* attempt may do, in nodes scanned plus points tested
+/// along segments: the tree stops growing once it is spent (deterministic: a
+/// count, not a clock). The default settings on the shipped maps use under
+/// 1 % of it; `iterations = 1000000` with a `neighbor_radius` spanning the
+/// map would use about 1e12 (hours).
+pub const MAX_TREE_WORK: u64 = 2_000_000_000;
+
+/// The samples between two calls of the stop callback of [`grow_tree`].
+const STOP_POLL: u32 = 64;
+
 /// `params.iterations` RRT* samples from root `s` (goal `g` sampled with
-/// probability `params.goal_bias`), on the free cells of `grid`, seeded.
+/// probability `params.goal_bias`), on the free cells of `grid`, seeded; fewer
+/// once `budget` work ([`MAX_TREE_WORK`] when planning) is spent. `None` when `stop` returned true (polled
+/// every few samples).
 pub(super) fn grow_tree(
     grid: &OccupancyGrid,
     params: &RrtParams,
-    s: [f64; 2],
-    g: [f64; 2],
+    (s, g): ([f64; 2], [f64; 2]),
     seed: u64,
-) -> Growing {
+    stop: &dyn Fn() -> bool,
+    budget: u64,
+) -> Option<Growing> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5252_545f_5354_4152); // "RRT_STAR"
     let mut unif = move || (rng.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64);
     let (bx0, by0) = (grid.origin.x, grid.origin.y);
@@ -44,9 +60,16 @@ pub(super) fn grow_tree(
         parent: vec![None],
         cost: vec![0.0],
         children: vec![Vec::new()],
+        work: 0,
     };
     let mut near: Vec<usize> = Vec::new();
-    for _ in 0..params.iterations {
+    for i in 0..params.iterations {
+        if i % STOP_POLL == 0 && stop() {
+            return None;
+        }
+        if tree.work >= budget {
+            break;
+        }
         let sample = if unif() < params.goal_bias {
             g
         } else {
@@ -54,7 +77,12 @@ pub(super) fn grow_tree(
         };
         tree.extend(grid, params, sample, &mut near);
     }
-    tree
+    Some(tree)
+}
+
+/// Points [`OccupancyGrid::segment_free`] tests at most on `a`-`b`.
+fn segment_work(grid: &OccupancyGrid, a: [f64; 2], b: [f64; 2]) -> u64 {
+    (dist(a, b) / (0.25 * grid.resolution)).ceil().max(1.0) as u64 + 1
 }
 
 impl Growing {
@@ -70,6 +98,7 @@ impl Growing {
         near: &mut Vec<usize>,
     ) {
         let (best, best_d2) = self.nearest(sample);
+        self.work += 2 * self.nodes.len() as u64;
         let d = best_d2.sqrt();
         if d < 1e-9 {
             return;
@@ -80,6 +109,7 @@ impl Growing {
             from[0] + t * (sample[0] - from[0]),
             from[1] + t * (sample[1] - from[1]),
         ];
+        self.work += segment_work(grid, from, new);
         if !grid.is_free(new) || !grid.segment_free(from, new) {
             return;
         }
@@ -96,6 +126,9 @@ impl Growing {
         let mut c_new = self.cost[best] + dist(from, new) * w_new;
         for &k in near.iter() {
             let c = self.cost[k] + dist(self.nodes[k], new) * w_new;
+            if c < c_new {
+                self.work += segment_work(grid, self.nodes[k], new);
+            }
             if c < c_new && grid.segment_free(self.nodes[k], new) {
                 par = k;
                 c_new = c;
@@ -114,6 +147,9 @@ impl Growing {
             }
             let c = c_new
                 + dist(new, self.nodes[k]) * weight(grid, params.clearance_cap, self.nodes[k]);
+            if c + 1e-12 < self.cost[k] {
+                self.work += segment_work(grid, new, self.nodes[k]);
+            }
             if c + 1e-12 < self.cost[k] && grid.segment_free(new, self.nodes[k]) {
                 self.reparent(k, j, c);
             }

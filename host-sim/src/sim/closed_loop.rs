@@ -580,12 +580,12 @@ fn global_plan(scenario: &Scenario, world: &MovingMap, on_map: bool) -> Navigati
     if scenario.planner == Planner::RrtStar && !on_map {
         let t0 = Instant::now();
         let res = crate::plan::plan(
-            scenario.start,
-            scenario.goal,
+            (scenario.start, scenario.goal),
             world.rest_obstacles(),
             &scenario.rrt,
             scenario.robot.body_radius,
             scenario.seed,
+            &|| super::cancel::check().is_err(),
         );
         navigation.plan_time_ns = u64::try_from(t0.elapsed().as_nanos()).unwrap_or(u64::MAX);
         match res {
