@@ -161,7 +161,9 @@ impl OutputDir {
     /// symbolic link resolved to its directory, so that the output is written
     /// through the link and the link stays), its parent, its name and the
     /// parent directories that do not exist yet (innermost first).
-    fn plan(final_path: &Path) -> std::io::Result<(PathBuf, PathBuf, String, Vec<PathBuf>)> {
+    fn plan(
+        final_path: &Path,
+    ) -> std::io::Result<(PathBuf, PathBuf, std::ffi::OsString, Vec<PathBuf>)> {
         let err = |m: String| Err(std::io::Error::other(m));
         let raw = final_path.as_os_str().as_encoded_bytes();
         if raw.is_empty()
@@ -194,7 +196,6 @@ impl OutputDir {
         };
         let Some(name) = final_path
             .file_name()
-            .and_then(|s| s.to_str())
             .filter(|s| !s.is_empty() && *s != "." && *s != "..")
         else {
             return err("has no usable last component (give a directory name)".into());
@@ -231,7 +232,12 @@ impl OutputDir {
                 Err(e) => return err(format!("{}: {e}", p.display())),
             }
         }
-        Ok((final_path.to_path_buf(), parent, name.to_string(), missing))
+        Ok((
+            final_path.to_path_buf(),
+            parent,
+            name.to_os_string(),
+            missing,
+        ))
     }
 
     /// Creates the temporary directory for `final_path` (and its parents).
@@ -240,7 +246,7 @@ impl OutputDir {
         let mut dir = OutputDir {
             given: final_path.to_path_buf(),
             final_path: resolved,
-            tmp: parent.join(format!(".{name}.tmp-{}", std::process::id())),
+            tmp: parent.join(tmp_name(&name)),
             made: Vec::new(),
             committed: false,
         };
@@ -290,6 +296,38 @@ impl OutputDir {
     }
 }
 
+/// Longest part of the final name kept in the temporary sibling's name, bytes:
+/// with the dot, `.tmp-`, a counter and a process id the name stays under the
+/// 255 bytes a file name may have.
+const TMP_NAME_KEEP: usize = 200;
+
+/// The temporary sibling of a directory named `name`: `.<name>.tmp-<pid>`, or,
+/// for a name over [`TMP_NAME_KEEP`] bytes, its first bytes (whole
+/// characters) and a counter of this process, `.<start>~<n>.tmp-<pid>`, so
+/// that a name of up to 255 bytes (any bytes: it need not be UTF-8) gets a
+/// sibling the file system takes, and two long names that begin alike get
+/// two siblings.
+fn tmp_name(name: &std::ffi::OsStr) -> std::ffi::OsString {
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    static LONG: AtomicUsize = AtomicUsize::new(0);
+    let pid = std::process::id();
+    let bytes = name.as_encoded_bytes();
+    let mut out = std::ffi::OsString::from(".");
+    if bytes.len() <= TMP_NAME_KEEP {
+        out.push(name);
+    } else {
+        let lossy = name.to_string_lossy();
+        let mut cut = TMP_NAME_KEEP.min(lossy.len());
+        while !lossy.is_char_boundary(cut) {
+            cut -= 1;
+        }
+        out.push(&lossy[..cut]);
+        out.push(format!("~{}", LONG.fetch_add(1, Ordering::Relaxed)));
+    }
+    out.push(format!(".tmp-{pid}"));
+    out
+}
+
 /// An existing output path may be replaced: an empty directory, a previous run
 /// or batch (a `summary.json`) or a previous QP export (only `cycle_NNNNN.npz`).
 fn replaceable(p: &Path) -> bool {
@@ -316,6 +354,34 @@ impl Drop for OutputDir {
             for p in &self.made {
                 let _ = std::fs::remove_dir(p);
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::os::unix::ffi::OsStrExt;
+
+    #[test]
+    fn temporary_names_fit_a_file_name_and_keep_any_bytes() {
+        let pid = std::process::id();
+        let short = tmp_name(std::ffi::OsStr::new("out"));
+        assert_eq!(short, std::ffi::OsString::from(format!(".out.tmp-{pid}")));
+        let raw = std::ffi::OsStr::from_bytes(b"o-\xff");
+        assert_eq!(tmp_name(raw).as_bytes()[..4], *b".o-\xff");
+        let long = "é".repeat(127); // 254 bytes
+        let (a, b) = (
+            tmp_name(std::ffi::OsStr::new(&long)),
+            tmp_name(std::ffi::OsStr::new(&long)),
+        );
+        assert_ne!(a, b, "two long names that begin alike get two siblings");
+        for t in [a, b] {
+            assert!(t.len() <= 255, "{} bytes", t.len());
+            assert!(
+                t.to_str()
+                    .is_some_and(|t| t.starts_with(&format!(".{}~", "é".repeat(100))))
+            );
         }
     }
 }
