@@ -68,6 +68,7 @@ pub(super) fn validate(
     check_scalars(&raw, src)?;
     check_settings(&raw, src)?;
     let (config, overrides, robot) = controller_config(&raw, src)?;
+    check_map_holds_robot(&raw, &config, src)?;
     let st = raw.start.get_ref();
     let g = raw.goal.get_ref().0;
     let mut start = Vector2::new(st.x, st.y);
@@ -129,6 +130,13 @@ pub(super) fn validate(
         seed,
     };
     check_room_to_stand(&ends, &obstacles, &names, &robot, src)?;
+    // (The people who react steer: their paths are not straight lines.)
+    check_paths_in_range(
+        obstacles.get(..people_from).unwrap_or(&obstacles),
+        velocities.get(..people_from).unwrap_or(&velocities),
+        &raw,
+        src,
+    )?;
     Ok(Scenario {
         name: raw.name,
         description: raw.description,
@@ -155,6 +163,65 @@ pub(super) fn validate(
         velocities,
         people,
     })
+}
+
+/// At most [`super::limits::MAX_MOVING_OBSTACLES`] obstacles move, and every
+/// moving obstacle stays inside the coordinate limit
+/// ([`ldcbf_controller::geometry::MAX_COORDINATE`], 1e6 m, what a polygon may
+/// hold) until `time_limit`: a person who would cross it is refused here, not
+/// moved back to their start during the run.
+fn check_paths_in_range(
+    obstacles: &[Polygon],
+    velocities: &[Vector2<f64>],
+    raw: &RawScenario,
+    src: Source<'_>,
+) -> Result<(), ScenarioError> {
+    use ldcbf_controller::geometry::MAX_COORDINATE;
+    let moving = velocities
+        .iter()
+        .filter(|v| **v != Vector2::zeros())
+        .count();
+    if moving > super::limits::MAX_MOVING_OBSTACLES {
+        return Err(src.err(
+            "obstacles",
+            None,
+            format!(
+                "{moving} moving obstacles, more than the {} a scenario may hold (each is \
+                 checked at every 1 kHz tick)",
+                super::limits::MAX_MOVING_OBSTACLES
+            ),
+        ));
+    }
+    let t = *raw.time_limit.get_ref();
+    for (i, (o, v)) in obstacles.iter().zip(velocities).enumerate() {
+        if *v == Vector2::zeros() {
+            continue;
+        }
+        // The first time a vertex reaches the limit, s.
+        let leaves = o
+            .vertices()
+            .iter()
+            .flat_map(|p| [(p.x, v.x), (p.y, v.y)])
+            .filter(|&(_, vc)| vc != 0.0)
+            .map(|(c, vc)| (MAX_COORDINATE * vc.signum() - c) / vc)
+            .fold(f64::INFINITY, f64::min);
+        if leaves < t {
+            let (field, span) = match raw.obstacles.get(i) {
+                Some(ob) => (format!("obstacles[{i}].velocity"), Some(ob.span())),
+                None => ("generator".to_string(), None),
+            };
+            return Err(src.err(
+                &field,
+                span,
+                format!(
+                    "obstacle {i} moving at [{}, {}] m/s crosses the coordinate limit \
+                     {MAX_COORDINATE:e} m at t = {leaves:.3} s, before time_limit = {t} s",
+                    v.x, v.y
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// `name`: it names the output directory.
@@ -248,6 +315,71 @@ fn check_settings(raw: &RawScenario, src: Source<'_>) -> Result<(), ScenarioErro
         if let Err(e) = check {
             return Err(src.table_err(table, e.field, e.requirement));
         }
+    }
+    Ok(())
+}
+
+/// With `perception = "lidar"`, the `[lidar.map]` settings under which the
+/// map's frontier holds the robot (docs/safety.md, "The map's edge"; the
+/// bounds in docs/cli-errors.md). `m` below is the barrier margin, the
+/// distance the controller keeps the CoM from every piece
+/// ([`Config::barrier_margin`]: body radius, `delta` and the arc between
+/// step ends), and `r` the cell side:
+///
+/// * `padding >= m + 2 r`: the first box (start and goal grown by `padding`)
+///   holds the start and the goal with the box's outermost ring, never
+///   cleared, at least `m` and a cell away, so the robot starts inside a
+///   frontier it cannot cross. A box that cannot grow (`grow = false`, or a
+///   `max_cells` that refuses the growth) is that box for the whole run; with
+///   `padding = 0` and start and goal on one row the map is one row of ring
+///   cells, with no frontier at all, and the robot walked through a wall the
+///   LiDAR saw.
+/// * `unknown_radius >= m + 2 r`: a frontier cell is handed to the controller
+///   before the CoM is within `m` of it (0, "never", turns the frontier off).
+/// * `resolution <=` [`super::limits::max_map_cell`]`(m)`.
+fn check_map_holds_robot(
+    raw: &RawScenario,
+    config: &Config,
+    src: Source<'_>,
+) -> Result<(), ScenarioError> {
+    if *raw.perception.get_ref() != crate::sense::Perception::Lidar {
+        return Ok(());
+    }
+    let map = &raw.lidar.get_ref().map;
+    let m = config.barrier_margin();
+    let r = map.resolution;
+    let need = m + 2.0 * r;
+    let why = |what: &str, got: f64| {
+        format!(
+            "{got} m is less than the {need:.4} m the frontier needs to hold the robot ({what}: \
+             the barrier margin {m:.4} m (body radius, delta, the CoM's arc) plus two cells \
+             of {r} m)"
+        )
+    };
+    let max_cell = super::limits::max_map_cell(m);
+    if r > max_cell {
+        return Err(src.table_err(
+            "lidar",
+            "map.resolution",
+            format!(
+                "{r} m is above the {max_cell:.4} m a map cell may have for the safety \
+                 promise with a barrier margin of {m:.4} m (docs/cli-errors.md)"
+            ),
+        ));
+    }
+    if map.padding < need {
+        return Err(src.table_err(
+            "lidar",
+            "map.padding",
+            why("the first box's edge", map.padding),
+        ));
+    }
+    if map.unknown_radius < need {
+        return Err(src.table_err(
+            "lidar",
+            "map.unknown_radius",
+            why("the frontier handed to the controller", map.unknown_radius),
+        ));
     }
     Ok(())
 }

@@ -18,8 +18,9 @@ pub struct MapParams {
     /// first box is the map for the whole run, cells outside it unknown).
     pub grow: bool,
     /// The most cells the map may hold, in `1..=MAX_CELLS` (20,000,000, 160 MB
-    /// at 8 bytes a cell); the default is that bound. A growth past it is
-    /// refused: the map keeps its box (module docs).
+    /// at 8 bytes a cell; a run that plans on such a map peaks near 35 bytes a
+    /// cell, docs/cli-errors.md); the default is that bound. A growth past it
+    /// is refused: the map keeps its box (module docs).
     pub max_cells: usize,
     /// Probability of a hit (OctoMap's default 0.7).
     pub p_hit: f64,
