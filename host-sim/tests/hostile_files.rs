@@ -135,7 +135,7 @@ fn npy_headers_are_read_as_numpy_reads_them() {
             "given twice",
         ),
         (
-            "{'descr': '<f8', 'fortran_order': False, 'shape': (6, 6), 'extra': 1, }",
+            "{'descr': '<f8', 'fortran_order': False, 'shape': (6, 6), 'extra': 'x', }",
             "unexpected key",
         ),
         ("{'descr': '<f8', 'shape': (6, 6), }", "no `fortran_order`"),

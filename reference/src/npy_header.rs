@@ -250,7 +250,7 @@ mod tests {
             ),
             ("{'descr': '<f8', 'shape': (2,)}", "no `fortran_order`"),
             (
-                "{'descr': '<f8', 'fortran_order': False, 'shape': (2,), 'x': 1}",
+                "{'descr': '<f8', 'fortran_order': False, 'shape': (2,), 'x': 'y'}",
                 "unexpected key",
             ),
             (
