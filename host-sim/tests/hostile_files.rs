@@ -96,7 +96,7 @@ fn npz_with_p(p: Vec<u8>) -> Vec<u8> {
 /// The header of a `.npy` array written by hand: `dict` as the header text.
 fn npy_raw(dict: &str, data: &[u8]) -> Vec<u8> {
     let mut h = dict.to_string();
-    while (10 + h.len() + 1) % 64 != 0 {
+    while !(10 + h.len() + 1).is_multiple_of(64) {
         h.push(' ');
     }
     h.push('\n');

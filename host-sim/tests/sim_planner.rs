@@ -97,14 +97,23 @@ fn rrt_star_is_deterministic_for_a_seed_and_stays_clear() {
         ..sc.rrt.clone()
     };
     let r = sc.robot.body_radius;
-    let a = plan(sc.start, sc.goal, &sc.obstacles, &params, r, 11).unwrap();
-    let b = plan(sc.start, sc.goal, &sc.obstacles, &params, r, 11).unwrap();
+    let a = plan((sc.start, sc.goal), &sc.obstacles, &params, r, 11, &|| {
+        false
+    })
+    .unwrap();
+    let b = plan((sc.start, sc.goal), &sc.obstacles, &params, r, 11, &|| {
+        false
+    })
+    .unwrap();
     assert_eq!(a.tree.nodes, b.tree.nodes);
     assert_eq!(a.tree.parent, b.tree.parent);
     assert_eq!(a.path, b.path);
     assert_eq!(a.subgoals, b.subgoals);
     assert_eq!(a.cost, b.cost);
-    let c = plan(sc.start, sc.goal, &sc.obstacles, &params, r, 12).unwrap();
+    let c = plan((sc.start, sc.goal), &sc.obstacles, &params, r, 12, &|| {
+        false
+    })
+    .unwrap();
     assert_ne!(a.tree.nodes, c.tree.nodes, "another seed, another tree");
     // Every point of the subgoal polyline keeps the body radius plus the margin
     // to the true obstacles, up to half a cell diagonal (the grid's resolution).
