@@ -198,8 +198,11 @@ fn worst_case_iterations_stay_within_the_configured_budget() {
 }
 
 /// The default set covers every shipped scenario but the `random` family
-/// (which the 200 seeds cover) and the layout families of
-/// `ldcbf_sim::world::families` (run by `batch` and `host-sim/tests/sim_body.rs`), and the
+/// (which the 200 seeds cover), the layout families of
+/// `ldcbf_sim::world::families` (run by `batch` and `host-sim/tests/sim_body.rs`),
+/// the families of people who react of `ldcbf_sim::world::crowd::families`
+/// (run by `batch` and `host-sim/tests/sim_crowd.rs`, which also runs the
+/// example of people who react, `people-walk`), and the
 /// large maps (`LARGE_MAP_CASES`, run by `host-sim/tests/obstacle_index.rs`): a new
 /// scenario file must be added to `SHIPPED_CASES`.
 #[test]
@@ -212,11 +215,15 @@ fn shipped_cases_cover_every_shipped_scenario() {
     let cases = shipped_cases();
     let is_family = |n: &str| {
         let sc = ldcbf_sim::scenario::load(n, &Default::default()).unwrap();
-        sc.generator
-            .is_some_and(|g| ldcbf_sim::world::families::FAMILIES.contains(&g.kind.as_str()))
+        sc.generator.is_some_and(|g| {
+            let kind = g.kind.as_str();
+            ldcbf_sim::world::families::FAMILIES.contains(&kind)
+                || ldcbf_sim::world::crowd::families::FAMILIES.contains(&kind)
+        })
     };
     for n in names.iter().filter(|n| {
         n.as_str() != "random"
+            && n.as_str() != "people-walk"
             && !ldcbf_sim::studies::deadline::LARGE_MAP_CASES.contains(&n.as_str())
             && !is_family(n)
     }) {
