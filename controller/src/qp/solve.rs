@@ -52,7 +52,7 @@ where
     /// row of `J`. The same result as `solve`, bit for bit (status,
     /// iterations, active set, `x`, multipliers or certificate, objective).
     /// `bounds` detected for another number of rows gives
-    /// [`QpStatus::NumericalError`].
+    /// [`QpStatus::NumericalError`](crate::solution::QpStatus::NumericalError).
     pub fn solve_bounded(
         &self,
         qp: &DenseQpOf<NV, NC>,
@@ -84,7 +84,7 @@ where
     /// only the enabled rows, in the same order, without copying them: the
     /// relaxation scheme ([`crate::relax`]) solves its probes so, with no
     /// second QP in memory. Every row of `qp` must be finite, enabled or not
-    /// (else [`QpStatus::NumericalError`]). At most `budget` adds plus drops
+    /// (else [`QpStatus::NumericalError`](crate::solution::QpStatus::NumericalError)). At most `budget` adds plus drops
     /// (a caller's remaining budget, as the relaxation's budget of a cycle),
     /// and at most [`QpSettings::max_iter`](super::QpSettings::max_iter).
     pub fn solve_selected(
@@ -104,7 +104,7 @@ where
     /// [`DualActiveSetOf::solve`] with the row data prepared by
     /// [`DualActiveSetOf::prepare_rows`] from a QP with the same rows of `G` (same
     /// `m`; `q` and `h` may differ). Same result as `solve`, less work per call.
-    /// A `rows` prepared for a different `m` gives [`QpStatus::NumericalError`].
+    /// A `rows` prepared for a different `m` gives [`QpStatus::NumericalError`](crate::solution::QpStatus::NumericalError).
     pub fn solve_prepared(
         &self,
         qp: &DenseQpOf<NV, NC>,

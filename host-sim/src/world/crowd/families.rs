@@ -5,7 +5,7 @@
 //! from them, the passage checked on the walls alone).
 //!
 //! Speeds are scaled to the robot's walking speed
-//! [`NOMINAL_SPEED`](crate::world::people::NOMINAL_SPEED) (0.6 m/s), and
+//! [`NOMINAL_SPEED`] (0.6 m/s), and
 //! crossings are timed against it as in [`crate::world::people`]. Unless the
 //! table says otherwise the people walk by ORCA and see the robot, radius
 //! 0.25-0.3 m.
