@@ -451,56 +451,159 @@ pub(super) fn hull_of(points: &[Vector2<f64>]) -> Vec<Vector2<f64>> {
     out
 }
 
-/// Width of a convex polygon (CCW, >= 3 vertices): the smallest extent across
-/// any of its edges, m.
-fn width(h: &[Vector2<f64>]) -> f64 {
+/// Whether a convex polygon (CCW, >= 3 vertices) is at least `t` thick: its
+/// width (the smallest extent across any of its edges, m) is `>= t`. Each
+/// edge needs one vertex at least `t` from its line; the search starts at
+/// the last edge's witness, which moves on around the polygon with the edges
+/// (about two vertices an edge instead of all of them: a LiDAR ring of
+/// thousands of points gives a hull of thousands of vertices).
+pub(super) fn at_least_thick(h: &[Vector2<f64>], t: f64) -> bool {
+    if t.is_nan() {
+        return false;
+    }
+    if t <= 0.0 {
+        return true;
+    }
     let n = h.len();
-    (0..n)
-        .map(|i| {
-            let (a, b) = (h[i], h[(i + 1) % n]);
-            let e = (b - a).normalize();
-            h.iter()
-                .map(|p| (p - a).x * -e.y + (p - a).y * e.x)
-                .fold(0.0, f64::max)
-        })
-        .fold(f64::INFINITY, f64::min)
+    let mut witness = 0;
+    for i in 0..n {
+        let (a, b) = (h[i], h[(i + 1) % n]);
+        let e = (b - a).normalize();
+        let Some(k) = (0..n)
+            .map(|s| (witness + s) % n)
+            .find(|&k| (h[k] - a).x * -e.y + (h[k] - a).y * e.x >= t)
+        else {
+            return false;
+        };
+        witness = k;
+    }
+    true
 }
 
 /// Conservative simplification of a CCW convex polygon to at most `max`
 /// vertices: repeatedly remove the edge whose two neighbours, extended, meet
-/// with the smallest added triangle. The result contains the input.
+/// with the smallest added triangle (ties: the edge that starts at the
+/// earliest vertex of `hull`). The result contains the input.
+///
+/// O(n log n) for `n` hull vertices: the collapses wait in a heap and only
+/// the four edges around a removed one are recomputed (a LiDAR ring of
+/// thousands of points gives a hull of thousands of vertices; the scan of
+/// every edge per removal took a third of a second there, docs/ros2.md).
 pub fn simplify_outer(hull: &[Vector2<f64>], max: usize) -> Vec<Vector2<f64>> {
-    let mut h = hull.to_vec();
-    while h.len() > max.max(3) {
-        let n = h.len();
-        let mut best: Option<(usize, Vector2<f64>, f64)> = None;
-        for i in 0..n {
-            // Edge (h[i], h[i+1]) collapses: extend (h[i-1], h[i]) and (h[i+1], h[i+2]).
-            let (p0, p1, p2, p3) = (h[(i + n - 1) % n], h[i], h[(i + 1) % n], h[(i + 2) % n]);
-            let (d1, d2) = (p1 - p0, p3 - p2);
-            let den = d1.x * d2.y - d1.y * d2.x;
-            if den <= 1e-15 {
-                continue; // the extensions diverge (turn of pi or more)
-            }
-            let w = p2 - p1;
-            let t = (w.x * d2.y - w.y * d2.x) / den;
-            if t < 0.0 {
-                continue;
-            }
-            let q = p1 + d1 * t;
-            let area = 0.5 * cross3(p1, q, p2).abs();
-            if best.is_none_or(|(_, _, a)| area < a) {
-                best = Some((i, q, area));
-            }
+    use std::cmp::Reverse;
+    use std::collections::BinaryHeap;
+
+    let n = hull.len();
+    let target = max.max(3);
+    if n <= target {
+        return hull.to_vec();
+    }
+    let mut p = hull.to_vec();
+    let mut next: Vec<usize> = (0..n).map(|i| (i + 1) % n).collect();
+    let mut prev: Vec<usize> = (0..n).map(|i| (i + n - 1) % n).collect();
+    let mut alive = vec![true; n];
+    // The version of each vertex's edge: a heap entry of an older one is stale.
+    let mut version = vec![0u32; n];
+    let mut heap = BinaryHeap::new();
+    let collapse = |p: &[Vector2<f64>], next: &[usize], prev: &[usize], i: usize| {
+        let (i0, i2) = (prev[i], next[i]);
+        collapse_edge(p[i0], p[i], p[i2], p[next[i2]])
+    };
+    for i in 0..n {
+        if let Some((area, q)) = collapse(&p, &next, &prev, i) {
+            heap.push(Reverse(Collapse {
+                area,
+                i,
+                version: 0,
+                q,
+            }));
         }
-        let Some((i, q, _)) = best else {
+    }
+    let mut len = n;
+    while len > target {
+        let Some(Reverse(c)) = heap.pop() else {
             break;
         };
-        let j = (i + 1) % n;
-        h[i] = q;
-        h.remove(j);
+        if !alive[c.i] || version[c.i] != c.version {
+            continue;
+        }
+        // Edge (i, j) collapses to the point q.
+        let (i, j) = (c.i, next[c.i]);
+        p[i] = c.q;
+        let k = next[j];
+        next[i] = k;
+        prev[k] = i;
+        alive[j] = false;
+        len -= 1;
+        for e in [prev[prev[i]], prev[i], i, k] {
+            version[e] += 1;
+            if let Some((area, q)) = collapse(&p, &next, &prev, e) {
+                heap.push(Reverse(Collapse {
+                    area,
+                    i: e,
+                    version: version[e],
+                    q,
+                }));
+            }
+        }
     }
-    h
+    (0..n).filter(|&i| alive[i]).map(|i| p[i]).collect()
+}
+
+/// Where the edge `(p1, p2)` collapses when its neighbours `(p0, p1)` and
+/// `(p2, p3)` are extended: their meeting point `q` and the area of the
+/// triangle `p1 q p2` it adds; `None` when the extensions do not meet ahead
+/// (a turn of pi or more).
+fn collapse_edge(
+    p0: Vector2<f64>,
+    p1: Vector2<f64>,
+    p2: Vector2<f64>,
+    p3: Vector2<f64>,
+) -> Option<(f64, Vector2<f64>)> {
+    let (d1, d2) = (p1 - p0, p3 - p2);
+    let den = d1.x * d2.y - d1.y * d2.x;
+    if den <= 1e-15 {
+        return None;
+    }
+    let w = p2 - p1;
+    let t = (w.x * d2.y - w.y * d2.x) / den;
+    if t < 0.0 {
+        return None;
+    }
+    let q = p1 + d1 * t;
+    Some((0.5 * cross3(p1, q, p2).abs(), q))
+}
+
+/// A pending collapse of the edge that starts at vertex `i` (heap order:
+/// the smallest area, then the earliest vertex).
+struct Collapse {
+    area: f64,
+    i: usize,
+    version: u32,
+    q: Vector2<f64>,
+}
+
+impl PartialEq for Collapse {
+    fn eq(&self, other: &Self) -> bool {
+        self.cmp(other) == std::cmp::Ordering::Equal
+    }
+}
+
+impl Eq for Collapse {}
+
+impl PartialOrd for Collapse {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Collapse {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.area
+            .total_cmp(&other.area)
+            .then(self.i.cmp(&other.i))
+            .then(self.version.cmp(&other.version))
+    }
 }
 
 /// The thin-obstacle rectangle of a point set: aligned with its longest chord
@@ -552,7 +655,7 @@ pub fn cluster_polygon(
 ) -> Polygon {
     let to_arr = |v: &[Vector2<f64>]| v.iter().map(|p| [p.x, p.y]).collect::<Vec<_>>();
     let hull = hull_of(points);
-    if hull.len() >= 3 && width(&hull) >= min_thickness {
+    if hull.len() >= 3 && at_least_thick(&hull, min_thickness) {
         let h = simplify_outer(&hull, max_vertices.clamp(4, MAX_VERTICES));
         if let Ok(p) = Polygon::new(&to_arr(&h)) {
             return p;

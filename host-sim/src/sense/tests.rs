@@ -22,6 +22,165 @@ fn simplification_contains_the_input() {
     }
 }
 
+/// The quadratic form of [`simplify_outer`] (every edge scanned per
+/// removal), as it was before the heap: the reference of the test below.
+fn simplify_outer_by_scans(hull: &[Vector2<f64>], max: usize) -> Vec<Vector2<f64>> {
+    let mut h = hull.to_vec();
+    while h.len() > max.max(3) {
+        let n = h.len();
+        let mut best: Option<(usize, Vector2<f64>, f64)> = None;
+        for i in 0..n {
+            let (p0, p1, p2, p3) = (h[(i + n - 1) % n], h[i], h[(i + 1) % n], h[(i + 2) % n]);
+            let (d1, d2) = (p1 - p0, p3 - p2);
+            let den = d1.x * d2.y - d1.y * d2.x;
+            if den <= 1e-15 {
+                continue;
+            }
+            let w = p2 - p1;
+            let t = (w.x * d2.y - w.y * d2.x) / den;
+            if t < 0.0 {
+                continue;
+            }
+            let q = p1 + d1 * t;
+            let c = (q - p1).x * (p2 - p1).y - (q - p1).y * (p2 - p1).x;
+            let area = 0.5 * c.abs();
+            if best.is_none_or(|(_, _, a)| area < a) {
+                best = Some((i, q, area));
+            }
+        }
+        let Some((i, q, _)) = best else {
+            break;
+        };
+        let j = (i + 1) % n;
+        h[i] = q;
+        h.remove(j);
+    }
+    h
+}
+
+/// The heap's simplification is the scans' one, bit for bit (same vertices in
+/// the same order), on hulls of random point sets, of rings of many points
+/// (where equal areas tie) and of a LiDAR-like arc, for every vertex budget.
+#[test]
+fn simplification_by_heap_equals_the_scans() {
+    let mut s = 0x9e37_79b9_7f4a_7c15u64;
+    let mut rnd = move || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    };
+    let mut sets: Vec<Vec<Vector2<f64>>> = Vec::new();
+    for k in 0..60 {
+        let n = 5 + k * 3;
+        sets.push(
+            (0..n)
+                .map(|_| v(4.0 * rnd() - 2.0, 3.0 * rnd() - 1.5))
+                .collect(),
+        );
+    }
+    for n in [7, 16, 100, 257, 600] {
+        sets.push(
+            (0..n)
+                .map(|i| {
+                    let a = core::f64::consts::TAU * i as f64 / n as f64;
+                    v(0.6 * a.cos(), 0.6 * a.sin())
+                })
+                .collect(),
+        );
+        sets.push(
+            (0..n)
+                .map(|i| {
+                    let a = 2.0 * i as f64 / n as f64;
+                    let r = 1.0 + 0.01 * rnd();
+                    v(3.0 + r * a.cos(), r * a.sin())
+                })
+                .collect(),
+        );
+    }
+    for pts in &sets {
+        let hull = infer::hull_of(pts);
+        for max in [0, 3, 4, 5, 8, 12, 40] {
+            let a = simplify_outer(&hull, max);
+            let b = simplify_outer_by_scans(&hull, max);
+            let bits = |h: &[Vector2<f64>]| {
+                h.iter()
+                    .map(|p| (p.x.to_bits(), p.y.to_bits()))
+                    .collect::<Vec<_>>()
+            };
+            assert_eq!(
+                bits(&a),
+                bits(&b),
+                "{} hull vertices, max {max}",
+                hull.len()
+            );
+        }
+    }
+}
+
+/// `at_least_thick` decides as the width computed over every edge and
+/// vertex did (`width >= t`), on random hulls, thin slivers and rings, for
+/// thresholds around each hull's width (its exact value included).
+#[test]
+fn thickness_test_equals_the_width() {
+    fn width(h: &[Vector2<f64>]) -> f64 {
+        let n = h.len();
+        (0..n)
+            .map(|i| {
+                let (a, b) = (h[i], h[(i + 1) % n]);
+                let e = (b - a).normalize();
+                h.iter()
+                    .map(|p| (p - a).x * -e.y + (p - a).y * e.x)
+                    .fold(0.0, f64::max)
+            })
+            .fold(f64::INFINITY, f64::min)
+    }
+    let mut s = 0x2545_f491_4f6c_dd1du64;
+    let mut rnd = move || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    };
+    for k in 0..200 {
+        let n = 3 + k % 50;
+        let (sx, sy) = if k % 3 == 0 { (2.0, 0.02) } else { (1.0, 1.0) };
+        let pts: Vec<_> = (0..n)
+            .map(|i| {
+                if k % 5 == 0 {
+                    let a = core::f64::consts::TAU * i as f64 / n as f64;
+                    v(sx * a.cos(), sy * a.sin())
+                } else {
+                    v(sx * rnd(), sy * rnd())
+                }
+            })
+            .collect();
+        let hull = infer::hull_of(&pts);
+        if hull.len() < 3 {
+            continue;
+        }
+        let w = width(&hull);
+        for t in [
+            0.0,
+            -1.0,
+            f64::NAN,
+            w,
+            w * 0.5,
+            w * (1.0 - 1e-12),
+            w * (1.0 + 1e-12),
+            2.0 * w,
+            0.05,
+        ] {
+            assert_eq!(
+                infer::at_least_thick(&hull, t),
+                w >= t,
+                "width {w}, t {t}, {} vertices",
+                hull.len()
+            );
+        }
+    }
+}
+
 fn poly(pts: &[[f64; 2]]) -> Polygon {
     Polygon::new(pts).unwrap()
 }
