@@ -554,7 +554,7 @@ pub fn simplify_outer(hull: &[Vector2<f64>], max: usize) -> Vec<Vector2<f64>> {
 /// `(p2, p3)` are extended: their meeting point `q` and the area of the
 /// triangle `p1 q p2` it adds; `None` when the extensions do not meet ahead
 /// (a turn of pi or more).
-fn collapse_edge(
+pub(super) fn collapse_edge(
     p0: Vector2<f64>,
     p1: Vector2<f64>,
     p2: Vector2<f64>,

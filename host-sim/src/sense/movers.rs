@@ -185,6 +185,22 @@ impl Movers {
         cluster_polygon(&pts, self.min_thickness, self.max_vertices)
     }
 
+    /// The non-empty `parts` (indices into `points`), each with its hull.
+    fn hulls_of(
+        &self,
+        points: &[Vector2<f64>],
+        parts: Vec<Vec<usize>>,
+    ) -> Vec<(Vec<usize>, Polygon)> {
+        parts
+            .into_iter()
+            .filter(|p| !p.is_empty())
+            .map(|p| {
+                let h = self.hull(points, &p);
+                (p, h)
+            })
+            .collect()
+    }
+
     /// The pieces of the clusters `members` (indices into `points`, each in
     /// ray order; `ray_of[i]` is point `i`'s ray of `n_rays`), each with its
     /// hull (module docs, step 1): a cluster wider than one person
@@ -272,14 +288,7 @@ impl Movers {
             let bin = (((si - lo) / (hi - lo) * k) as usize).min(parts.len() - 1);
             parts[bin].push(i);
         }
-        parts
-            .into_iter()
-            .filter(|p| !p.is_empty())
-            .map(|p| {
-                let h = self.hull(points, &p);
-                (p, h)
-            })
-            .collect()
+        self.hulls_of(points, parts)
     }
 
     /// The piece `m` (hull `hull`) split at the tracks of `people` (their
@@ -295,23 +304,16 @@ impl Movers {
         people: &[(u64, Vector2<f64>, bool)],
     ) -> Vec<(Vec<usize>, Polygon)> {
         let pr = self.tracker.params();
-        let inside: Vec<Vector2<f64>> = people
+        // The tracks that predict into the piece, and whether each moves.
+        let (inside, moves): (Vec<Vector2<f64>>, Vec<bool>) = people
             .iter()
             .filter(|(_, q, _)| {
                 m.iter()
                     .any(|&i| (points[i] - q).norm() <= pr.person_extent)
             })
-            .map(|(_, q, _)| *q)
-            .collect();
-        let moving = people
-            .iter()
-            .filter(|(_, q, mv)| {
-                *mv && m
-                    .iter()
-                    .any(|&i| (points[i] - q).norm() <= pr.person_extent)
-            })
-            .count();
-        if inside.len() < 2 && moving == 0 {
+            .map(|(_, q, mv)| (*q, *mv))
+            .unzip();
+        if inside.len() < 2 && !moves.contains(&true) {
             return vec![(m, hull)];
         }
         let mut parts: Vec<Vec<usize>> = vec![Vec::new(); inside.len() + 1];
@@ -324,14 +326,7 @@ impl Movers {
                 .min_by(|a, b| a.1.total_cmp(&b.1));
             parts[nearest.map_or(inside.len(), |(k, _)| k)].push(i);
         }
-        parts
-            .into_iter()
-            .filter(|p| !p.is_empty())
-            .map(|p| {
-                let h = self.hull(points, &p);
-                (p, h)
-            })
-            .collect()
+        self.hulls_of(points, parts)
     }
 
     /// One scan at time `t` (s, non-decreasing): `rays[k]` is ray `k`'s hit

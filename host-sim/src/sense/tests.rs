@@ -22,28 +22,30 @@ fn simplification_contains_the_input() {
     }
 }
 
-/// The quadratic form of [`simplify_outer`] (every edge scanned per
-/// removal), as it was before the heap: the reference of the test below.
+/// Seeded uniform numbers in [0, 1) (xorshift64).
+fn uniform(mut s: u64) -> impl FnMut() -> f64 {
+    move || {
+        s ^= s << 13;
+        s ^= s >> 7;
+        s ^= s << 17;
+        (s >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// The quadratic form of [`simplify_outer`] (every edge rescanned per
+/// removal, each collapse by `collapse_edge`), as it was before the heap: the
+/// reference of the test below.
 fn simplify_outer_by_scans(hull: &[Vector2<f64>], max: usize) -> Vec<Vector2<f64>> {
     let mut h = hull.to_vec();
     while h.len() > max.max(3) {
         let n = h.len();
         let mut best: Option<(usize, Vector2<f64>, f64)> = None;
         for i in 0..n {
-            let (p0, p1, p2, p3) = (h[(i + n - 1) % n], h[i], h[(i + 1) % n], h[(i + 2) % n]);
-            let (d1, d2) = (p1 - p0, p3 - p2);
-            let den = d1.x * d2.y - d1.y * d2.x;
-            if den <= 1e-15 {
+            let Some((area, q)) =
+                infer::collapse_edge(h[(i + n - 1) % n], h[i], h[(i + 1) % n], h[(i + 2) % n])
+            else {
                 continue;
-            }
-            let w = p2 - p1;
-            let t = (w.x * d2.y - w.y * d2.x) / den;
-            if t < 0.0 {
-                continue;
-            }
-            let q = p1 + d1 * t;
-            let c = (q - p1).x * (p2 - p1).y - (q - p1).y * (p2 - p1).x;
-            let area = 0.5 * c.abs();
+            };
             if best.is_none_or(|(_, _, a)| area < a) {
                 best = Some((i, q, area));
             }
@@ -63,13 +65,7 @@ fn simplify_outer_by_scans(hull: &[Vector2<f64>], max: usize) -> Vec<Vector2<f64
 /// (where equal areas tie) and of a LiDAR-like arc, for every vertex budget.
 #[test]
 fn simplification_by_heap_equals_the_scans() {
-    let mut s = 0x9e37_79b9_7f4a_7c15u64;
-    let mut rnd = move || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rnd = uniform(0x9e37_79b9_7f4a_7c15);
     let mut sets: Vec<Vec<Vector2<f64>>> = Vec::new();
     for k in 0..60 {
         let n = 5 + k * 3;
@@ -135,13 +131,7 @@ fn thickness_test_equals_the_width() {
             })
             .fold(f64::INFINITY, f64::min)
     }
-    let mut s = 0x2545_f491_4f6c_dd1du64;
-    let mut rnd = move || {
-        s ^= s << 13;
-        s ^= s >> 7;
-        s ^= s << 17;
-        (s >> 11) as f64 / (1u64 << 53) as f64
-    };
+    let mut rnd = uniform(0x2545_f491_4f6c_dd1d);
     for k in 0..200 {
         let n = 3 + k % 50;
         let (sx, sy) = if k % 3 == 0 { (2.0, 0.02) } else { (1.0, 1.0) };
