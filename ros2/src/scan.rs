@@ -154,7 +154,7 @@ pub fn perceive(
             ..Perceived::default()
         });
     };
-    let people = movers.observe(t, &r);
+    let people = movers.observe(t, origin, &r);
     for (ray, out) in r.iter_mut().zip(&people.kept_out) {
         if *out {
             *ray = None;

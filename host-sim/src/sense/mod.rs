@@ -111,6 +111,7 @@ mod patterns;
 #[cfg(test)]
 mod tests;
 pub mod track;
+pub mod walls;
 
 pub use dbscan::{clusters, dbscan};
 pub use infer::{

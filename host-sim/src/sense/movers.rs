@@ -72,6 +72,7 @@ use super::LidarParams;
 use super::dbscan::{dbscan, members};
 use super::infer::cluster_polygon;
 use super::track::{Motion, TrackParams, Tracker, person_sized};
+use super::walls::wall_hits;
 use crate::world::Polygon;
 use crate::world::moving::{MAX_SPEED, translated};
 
@@ -154,6 +155,9 @@ pub struct Movers {
     min_points: usize,
     min_thickness: f64,
     max_vertices: usize,
+    /// The LiDAR's settings, for the wall faces taken out of each scan
+    /// ([`super::walls`]).
+    lidar: LidarParams,
     /// The last hull of each moving track, with the track's id and its
     /// position then (m): a track that coasts is handed over as that hull
     /// moved with it.
@@ -170,6 +174,7 @@ impl Movers {
             min_points: lidar.min_points,
             min_thickness: lidar.min_thickness,
             max_vertices: lidar.max_vertices,
+            lidar: lidar.clone(),
             last: Vec::new(),
         }
     }
@@ -329,11 +334,27 @@ impl Movers {
         self.hulls_of(points, parts)
     }
 
-    /// One scan at time `t` (s, non-decreasing): `rays[k]` is ray `k`'s hit
-    /// point (m) or `None`.
-    pub fn observe(&mut self, t: f64, rays: &[Option<Vector2<f64>>]) -> MoverScan {
-        let ray_of: Vec<usize> = (0..rays.len()).filter(|&k| rays[k].is_some()).collect();
-        let points: Vec<Vector2<f64>> = rays.iter().flatten().copied().collect();
+    /// One scan at time `t` (s, non-decreasing) taken from `origin` (m):
+    /// `rays[k]` is ray `k`'s hit point (m) or `None`. The hits on a wall's
+    /// face ([`super::walls::wall_hits`], [`TrackParams::wall_length`]) are
+    /// left to the map.
+    pub fn observe(
+        &mut self,
+        t: f64,
+        origin: Vector2<f64>,
+        rays: &[Option<Vector2<f64>>],
+    ) -> MoverScan {
+        let wall = wall_hits(
+            rays,
+            origin,
+            &self.lidar,
+            self.tracker.params().wall_length,
+            self.min_points,
+        );
+        let ray_of: Vec<usize> = (0..rays.len())
+            .filter(|&k| rays[k].is_some() && !wall[k])
+            .collect();
+        let points: Vec<Vector2<f64>> = ray_of.iter().filter_map(|&k| rays[k]).collect();
         let labels = dbscan(&points, self.eps, self.min_points);
         let (pieces, hulls): (Vec<_>, Vec<_>) = self
             .pieces(t, &points, &ray_of, rays.len(), members(&labels))
@@ -472,7 +493,7 @@ mod tests {
             let mut world: Vec<Polygon> = now.iter().map(|(p, _)| *p).collect();
             world.push(wall);
             let rays = lidar.scan_rays(origin, 0.0, &world);
-            let scan = movers.observe(t, &rays);
+            let scan = movers.observe(t, origin, &rays);
             assert_eq!(scan.kept_out.len(), rays.len());
             assert_eq!(scan.obstacles.len(), scan.velocities.len());
             assert_eq!(scan.obstacles.len(), scan.velocity_radii.len());

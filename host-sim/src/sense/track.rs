@@ -119,6 +119,11 @@ pub struct TrackParams {
     /// face ([`flat`]): never a person, m (a wall's hull is the LiDAR's
     /// `min_thickness`, 0.05 m, plus its noise).
     pub flat_width: f64,
+    /// Hits on a straight face at least this long are a wall's, never a
+    /// person's, and are left to the map ([`crate::sense::walls`]), m: a
+    /// person's outline is round, and the straight faces of the simulator's
+    /// people (octagons of radius at most 0.3 m) are at most 0.23 m long.
+    pub wall_length: f64,
 }
 
 impl Default for TrackParams {
@@ -143,6 +148,7 @@ impl Default for TrackParams {
             group_extent: 1.0,
             line_rms: 0.04,
             flat_width: 0.065,
+            wall_length: 0.5,
         }
     }
 }

@@ -162,7 +162,7 @@ impl Mapper {
         self.last_update = Some(time);
         let people: &[bool] = match self.movers.as_mut() {
             Some((movers, scan)) => {
-                *scan = movers.observe(time, &rays);
+                *scan = movers.observe(time, origin, &rays);
                 &scan.kept_out
             }
             None => &[],
