@@ -463,7 +463,13 @@ pub fn push_gait_rows<const N: usize, const NV: usize, const NC: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::reach::Reach;
+    use crate::reach::{Reach, ReachLimits};
+
+    const LIM: ReachLimits = ReachLimits {
+        speed_max: 1.5,
+        accel: 0.5,
+        grow: 0.8,
+    };
 
     fn model() -> (Lip, Condensed<3>) {
         let lip = Lip::new(9.81, 1.0, 0.4);
@@ -672,7 +678,7 @@ mod tests {
         };
         let mut qp = DenseQp::<6, 16>::default();
         for k in 0..3 {
-            push_ldcbf_row(&mut qp, &m, &hp, gamma, delta, &at(k)).unwrap();
+            push_ldcbf_row(&mut qp, &m, &hp, &LIM, gamma, delta, &at(k)).unwrap();
         }
         for k in 0..3 {
             // row value = -(h(p_{k+1}) - (1-gamma) h(p_k))
@@ -681,10 +687,10 @@ mod tests {
         }
         // gamma = 1: plain h(p_{k+1}) >= 0.
         let mut qp1 = DenseQp::<6, 16>::default();
-        push_ldcbf_row(&mut qp1, &m, &hp, 1.0, delta, &at(1)).unwrap();
+        push_ldcbf_row(&mut qp1, &m, &hp, &LIM, 1.0, delta, &at(1)).unwrap();
         assert!((row_value(&qp1, 0, &u) + hp.h(&traj[2].0, delta)).abs() < 1e-13);
         let mut qpf = DenseQp::<6, 16>::default();
-        push_foot_row(&mut qpf, &m, &hp, 0.05, &at(2)).unwrap();
+        push_foot_row(&mut qpf, &m, &hp, &LIM, 0.05, &at(2)).unwrap();
         let e = -(hp.eta.dot(&(f[2] - hp.c)) - 0.05);
         assert!((row_value(&qpf, 0, &u) - e).abs() < 1e-13);
     }

@@ -69,7 +69,7 @@ pub mod relax;
 mod solution;
 
 pub use nalgebra;
-pub use reach::Reach;
+pub use reach::{Reach, ReachLimits};
 
 pub use constraints::{Condensed, HalfPlane, RowId, RowKind};
 pub use geometry::{

@@ -14,10 +14,22 @@
 //! reaches at most [`Reach::shift`]`(eta'v_hat, t) = min(eta'v_hat t +
 //! r(t), v_max t)` beyond where the obstacle is now: the barrier's
 //! half-plane moves by that much ([`crate::HalfPlane::h_at`]).
+//!
+//! The set grows only over [`ReachLimits::grow`] seconds (the step the robot
+//! is about to take and the one that can stop it,
+//! [`Config::person_reach_time`](crate::mpc::Config::person_reach_time)):
+//! after that its radius stays `r(grow)` and it travels with the estimate.
+//! The controller plans again every cycle from a new scan, so the later steps
+//! of the horizon are a plan, not a commitment; a set that kept growing over
+//! the whole horizon (1.6-2 s) asks the robot to back away from every person
+//! standing still within about 2 m, and stood the robot still in front of
+//! doors and among people standing at their goals (docs/maths.md §2.7).
 
 /// What is known of an obstacle's velocity, for the set it can reach
 /// (module docs). `spread = 0` is an obstacle whose velocity is known and
-/// constant ([`Reach::NONE`]): it reaches only its predicted path.
+/// constant ([`Reach::NONE`]): it reaches only its predicted path. The
+/// bounds every person shares are the [`ReachLimits`] (from the
+/// configuration), passed to each method.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Reach {
     /// `u`: the radius around the estimate that holds the true velocity,
@@ -25,12 +37,22 @@ pub struct Reach {
     pub spread: f64,
     /// `|v_hat|`: the estimated speed, m/s.
     pub speed: f64,
-    /// `v_max`: the obstacle's largest speed, m/s, `> 0`
+}
+
+/// The bounds of every person of uncertain velocity (module docs;
+/// [`Config::reach_limits`](crate::mpc::Config::reach_limits)).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReachLimits {
+    /// `v_max`: the largest speed, m/s, `> 0`
     /// ([`Config::person_speed_max`](crate::mpc::Config::person_speed_max)).
     pub speed_max: f64,
-    /// `a_max`: the obstacle's largest acceleration, m/s^2, `>= 0`
+    /// `a_max`: the largest acceleration, m/s^2, `>= 0`
     /// ([`Config::person_accel_max`](crate::mpc::Config::person_accel_max)).
     pub accel: f64,
+    /// The time over which the set grows, s (finite, `> 0`): beyond it its
+    /// radius stays `r(grow)` (module docs;
+    /// [`Config::person_reach_time`](crate::mpc::Config::person_reach_time)).
+    pub grow: f64,
 }
 
 impl Reach {
@@ -38,8 +60,6 @@ impl Reach {
     pub const NONE: Reach = Reach {
         spread: 0.0,
         speed: 0.0,
-        speed_max: 0.0,
-        accel: 0.0,
     };
 
     /// Whether the velocity is uncertain (`spread > 0`): otherwise the set is
@@ -53,23 +73,25 @@ impl Reach {
     /// With `w = v_max + |v_hat|` (the largest difference between a velocity
     /// of speed at most `v_max` and `v_hat`) and `u' = min(u, w)`: `u' t +
     /// a_max t^2 / 2` up to `t* = (w - u') / a_max`, then `w t - (w -
-    /// u')^2 / (2 a_max)`; `u' t` when `a_max = 0` or `u' = w`.
+    /// u')^2 / (2 a_max)`; `u' t` when `a_max = 0` or `u' = w`. Beyond
+    /// [`ReachLimits::grow`] it stays `r(grow)`.
     // Not inlined: one copy in the firmware's flash (64 KiB), not one per row.
     #[inline(never)]
-    pub fn radius(&self, t: f64) -> f64 {
+    pub fn radius(&self, lim: &ReachLimits, t: f64) -> f64 {
         if t.is_nan() || t <= 0.0 {
             return 0.0;
         }
-        let w = self.speed_max + self.speed;
+        let t = if t > lim.grow { lim.grow } else { t };
+        let w = lim.speed_max + self.speed;
         let u = self.spread.min(w);
         let gap = w - u;
-        if !(gap > 0.0 && self.accel > 0.0) {
+        if !(gap > 0.0 && lim.accel > 0.0) {
             return u * t;
         }
-        if t * self.accel <= gap {
-            u * t + 0.5 * self.accel * t * t
+        if t * lim.accel <= gap {
+            u * t + 0.5 * lim.accel * t * t
         } else {
-            w * t - 0.5 * gap * gap / self.accel
+            w * t - 0.5 * gap * gap / lim.accel
         }
     }
 
@@ -78,10 +100,10 @@ impl Reach {
     /// v_max t)` with `rate = eta'v_hat` (m/s).
     // Not inlined: one copy in the firmware's flash (64 KiB), not one per row.
     #[inline(never)]
-    pub fn shift(&self, rate: f64, t: f64) -> f64 {
+    pub fn shift(&self, lim: &ReachLimits, rate: f64, t: f64) -> f64 {
         let t = if t > 0.0 { t } else { 0.0 };
-        let predicted = rate * t + self.radius(t);
-        let farthest = self.speed_max * t;
+        let predicted = rate * t + self.radius(lim, t);
+        let farthest = lim.speed_max * t;
         if predicted < farthest {
             predicted
         } else {
@@ -90,18 +112,25 @@ impl Reach {
     }
 
     /// The largest of [`Reach::shift`] over the times `[t0, t1]` (s), or a
-    /// bound above it, m: `min(max(f(t0), f(t1)), v_max t1)` with `f(t) =
-    /// rate t + r(t)`, which is convex (so its largest value on the interval
-    /// is at an end) while `v_max t` grows.
+    /// bound above it, m: `min(max(f(t0), f(t1), f(grow)), v_max t1)` with
+    /// `f(t) = rate t + r(t)`, which is convex up to [`ReachLimits::grow`]
+    /// and affine after it (so its largest value on the interval is at an end
+    /// or at `grow`, counted when inside) while `v_max t` grows.
     // Not inlined: one copy in the firmware's flash (64 KiB), not one per row.
     #[inline(never)]
-    pub fn shift_over(&self, rate: f64, (t0, t1): (f64, f64)) -> f64 {
+    pub fn shift_over(&self, lim: &ReachLimits, rate: f64, (t0, t1): (f64, f64)) -> f64 {
         let t0 = if t0 > 0.0 { t0 } else { 0.0 };
         let t1 = if t1 > t0 { t1 } else { t0 };
-        let f = |t: f64| rate * t + self.radius(t);
+        let f = |t: f64| rate * t + self.radius(lim, t);
         let (a, b) = (f(t0), f(t1));
-        let predicted = if a > b { a } else { b };
-        let farthest = self.speed_max * t1;
+        let mut predicted = if a > b { a } else { b };
+        if t0 < lim.grow && lim.grow < t1 {
+            let c = f(lim.grow);
+            if c > predicted {
+                predicted = c;
+            }
+        }
+        let farthest = lim.speed_max * t1;
         if predicted < farthest {
             predicted
         } else {
@@ -110,9 +139,10 @@ impl Reach {
     }
 
     /// The farthest the obstacle gets from where it is now within `t` (s),
-    /// in any direction, m: `min(|v_hat| t + r(t), v_max t)`.
-    pub fn travel(&self, t: f64) -> f64 {
-        self.shift(self.speed, t)
+    /// in any direction, as the set of [`Reach::shift`] goes, m:
+    /// `min(|v_hat| t + r(t), v_max t)`.
+    pub fn travel(&self, lim: &ReachLimits, t: f64) -> f64 {
+        self.shift(lim, self.speed, t)
     }
 }
 
@@ -122,35 +152,34 @@ mod tests {
     use nalgebra::Vector2;
     use proptest::prelude::*;
 
+    /// No cap within the tests' times.
+    const LIM: ReachLimits = ReachLimits {
+        speed_max: 1.5,
+        accel: 1.0,
+        grow: 1e6,
+    };
+
     fn reach(spread: f64, speed: f64) -> Reach {
-        Reach {
-            spread,
-            speed,
-            speed_max: 1.5,
-            accel: 1.0,
-        }
+        Reach { spread, speed }
     }
 
     #[test]
     fn the_radius_grows_as_the_acceleration_allows_then_at_the_largest_gap() {
         // u = 0.3, |v_hat| = 0.5: w = 2, t* = 1.7 s.
         let r = reach(0.3, 0.5);
-        assert_eq!(r.radius(0.0), 0.0);
-        assert_eq!(r.radius(-1.0), 0.0);
-        assert!((r.radius(1.0) - (0.3 + 0.5)).abs() < 1e-15);
+        assert_eq!(r.radius(&LIM, 0.0), 0.0);
+        assert_eq!(r.radius(&LIM, -1.0), 0.0);
+        assert!((r.radius(&LIM, 1.0) - (0.3 + 0.5)).abs() < 1e-15);
         let t_star = 1.7;
         let at = 0.3 * t_star + 0.5 * t_star * t_star;
-        assert!((r.radius(t_star) - at).abs() < 1e-12);
+        assert!((r.radius(&LIM, t_star) - at).abs() < 1e-12);
         // Beyond t*, it grows at w.
-        assert!((r.radius(3.0) - (at + 2.0 * (3.0 - t_star))).abs() < 1e-12);
+        assert!((r.radius(&LIM, 3.0) - (at + 2.0 * (3.0 - t_star))).abs() < 1e-12);
         // A spread at least w: w t from the start.
-        assert_eq!(reach(5.0, 0.5).radius(2.0), 4.0);
+        assert_eq!(reach(5.0, 0.5).radius(&LIM, 2.0), 4.0);
         // No acceleration: u t.
-        let still = Reach {
-            accel: 0.0,
-            ..reach(0.3, 0.5)
-        };
-        assert!((still.radius(2.0) - 0.6).abs() < 1e-15);
+        let still = ReachLimits { accel: 0.0, ..LIM };
+        assert!((reach(0.3, 0.5).radius(&still, 2.0) - 0.6).abs() < 1e-15);
     }
 
     #[test]
@@ -158,37 +187,60 @@ mod tests {
         // An unconfirmed cluster: at rest, spread at the walking speed.
         let r = reach(1.5, 0.0);
         for t in [0.0, 0.4, 0.8, 1.6] {
-            assert!((r.shift(0.0, t) - 1.5 * t).abs() < 1e-15, "{t}");
+            assert!((r.shift(&LIM, 0.0, t) - 1.5 * t).abs() < 1e-15, "{t}");
         }
         // Walking at 1 m/s towards the robot: the predicted path plus r(t),
         // never more than v_max t.
         let r = reach(0.1, 1.0);
-        let s = r.shift(1.0, 0.4);
+        let s = r.shift(&LIM, 1.0, 0.4);
         assert!((s - (0.4 + 0.04 + 0.08)).abs() < 1e-12, "{s}");
-        assert!((r.shift(1.0, 2.0) - 3.0).abs() < 1e-12);
+        assert!((r.shift(&LIM, 1.0, 2.0) - 3.0).abs() < 1e-12);
         // Away from the robot: still up to the reach of a turn back.
-        assert!(r.shift(-1.0, 1.0) > -1.0 && r.shift(-1.0, 1.0) < 0.0);
-        assert_eq!(r.travel(0.0), 0.0);
+        assert!(r.shift(&LIM, -1.0, 1.0) > -1.0 && r.shift(&LIM, -1.0, 1.0) < 0.0);
+        assert_eq!(r.travel(&LIM, 0.0), 0.0);
     }
 
     #[test]
     fn the_shift_over_a_step_bounds_the_shift_inside_it() {
+        let capped = ReachLimits { grow: 0.5, ..LIM };
         let r = reach(0.2, 1.2);
-        for rate in [-1.2, -0.6, 0.0, 0.7, 1.2] {
-            let over = r.shift_over(rate, (0.3, 0.7));
-            for k in 0..=100 {
-                let t = 0.3 + 0.4 * f64::from(k) / 100.0;
-                assert!(r.shift(rate, t) <= over + 1e-12, "{rate} {t}");
+        for lim in [LIM, capped] {
+            for rate in [-1.2, -0.6, 0.0, 0.7, 1.2] {
+                let over = r.shift_over(&lim, rate, (0.3, 0.7));
+                for k in 0..=100 {
+                    let t = 0.3 + 0.4 * f64::from(k) / 100.0;
+                    assert!(r.shift(&lim, rate, t) <= over + 1e-12, "{rate} {t}");
+                }
             }
         }
     }
 
+    #[test]
+    fn the_set_grows_until_its_grow_time_then_travels_with_the_estimate() {
+        let r = reach(0.47, 0.0);
+        let capped = ReachLimits { grow: 0.8, ..LIM };
+        for t in [0.0, 0.2, 0.5, 0.8] {
+            assert_eq!(r.radius(&capped, t), r.radius(&LIM, t), "{t}");
+        }
+        for t in [0.9, 1.6, 3.0] {
+            assert_eq!(r.radius(&capped, t), r.radius(&LIM, 0.8), "{t}");
+            assert!(r.radius(&capped, t) < r.radius(&LIM, t));
+        }
+        // Receding at 1 m/s: the shift peaks at the grow time, and the shift
+        // over a step around it counts that peak.
+        let r = reach(0.47, 1.0);
+        let peak = r.shift(&capped, -1.0, 0.8);
+        assert!(peak > r.shift(&capped, -1.0, 0.6) && peak > r.shift(&capped, -1.0, 1.0));
+        let over = r.shift_over(&capped, -1.0, (0.6, 1.0));
+        assert!(over >= peak && over <= peak + 1e-15, "{over} {peak}");
+    }
+
     proptest! {
         /// A person whose speed and acceleration stay within the bounds and
-        /// whose velocity starts within `u` of the estimate stays, at every
-        /// step end of a 2 s horizon, within `r(t)` of the predicted position
-        /// and within `shift(eta'v_hat, t)` of where they are now along any
-        /// normal `eta`. The walk: random accelerations (each held for 0.05 s,
+        /// whose velocity starts within `u` of the estimate stays, every
+        /// 0.05 s up to the grow time (at most 2 s), within `r(t)` of the
+        /// predicted position, within `travel(t)` of where they are now and
+        /// within `shift(eta'v_hat, t)` of it along any normal `eta`. The walk: random accelerations (each held for 0.05 s,
         /// integrated exactly) scaled to `a_max` and clipped to keep the speed
         /// within `v_max`, from a random start velocity in the disk.
         #[test]
@@ -199,10 +251,12 @@ mod tests {
             accel in 0.0f64..2.0,
             pushes in proptest::collection::vec((0.0f64..1.0, 0.0f64..core::f64::consts::TAU), 40),
             normal in 0.0f64..core::f64::consts::TAU,
+            grow in 0.05f64..2.5,
         ) {
             let speed_max = 1.5;
             let v_hat = Vector2::new(v_hat.1.cos(), v_hat.1.sin()) * v_hat.0;
-            let reach = Reach { spread, speed: v_hat.norm(), speed_max, accel };
+            let reach = Reach { spread, speed: v_hat.norm() };
+            let lim = ReachLimits { speed_max, accel, grow };
             // True start velocity: within `spread` of v_hat, then projected
             // onto the disk of speed v_max (which holds v_hat: the projection
             // keeps it within `spread` of v_hat).
@@ -232,11 +286,16 @@ mod tests {
                 v += a_used * dt;
                 t += dt;
                 let predicted = v_hat * t;
-                prop_assert!((x - predicted).norm() <= reach.radius(t) + 1e-9,
-                    "t {t}: off by {} > r {}", (x - predicted).norm(), reach.radius(t));
+                if t > grow {
+                    break;
+                }
+                prop_assert!((x - predicted).norm() <= reach.radius(&lim, t) + 1e-9,
+                    "t {t}: off by {} > r {}", (x - predicted).norm(), reach.radius(&lim, t));
+                prop_assert!(x.norm() <= reach.travel(&lim, t) + 1e-9,
+                    "t {t}: {} beyond the travel {}", x.norm(), reach.travel(&lim, t));
                 let along = eta.dot(&x);
-                prop_assert!(along <= reach.shift(eta.dot(&v_hat), t) + 1e-9,
-                    "t {t}: {along} beyond {}", reach.shift(eta.dot(&v_hat), t));
+                prop_assert!(along <= reach.shift(&lim, eta.dot(&v_hat), t) + 1e-9,
+                    "t {t}: {along} beyond {}", reach.shift(&lim, eta.dot(&v_hat), t));
             }
         }
     }

@@ -183,12 +183,11 @@ fn each_barrier_row_moves_by_the_reachable_set() {
         let reach = Reach {
             spread: u,
             speed: velocities[0].norm(),
-            speed_max: cfg.person_speed_max,
-            accel: cfg.person_accel_max,
         };
+        let lim = cfg.reach_limits();
         assert_eq!(hp.reach, reach);
         let tau = given.prediction.time_to_p0;
-        let extra = |t: f64| reach.shift(hp.rate, t) - hp.rate * t;
+        let extra = |t: f64| reach.shift(&lim, hp.rate, t) - hp.rate * t;
         let mut seen = 0;
         for (i, id) in given.rows.iter().enumerate().take(given.qp.m) {
             assert_eq!(*id, known.rows[i]);

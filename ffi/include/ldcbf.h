@@ -474,6 +474,11 @@ typedef struct LdcbfConfig {
    * Largest acceleration of a person of uncertain velocity, m/s^2 (>= 0).
    */
   double person_accel_max;
+  /**
+   * Time over which the set a person of uncertain velocity can reach
+   * grows, s (finite, > 0); beyond it the set travels with the estimate.
+   */
+  double person_reach_time;
 } LdcbfConfig;
 
 /**

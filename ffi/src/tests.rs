@@ -218,6 +218,7 @@ fn default_config_round_trips_to_the_rust_default() {
         velocity_margin: false,
         person_speed_max: 1.2,
         person_accel_max: 0.5,
+        person_reach_time: 1.2,
         ..Config::default()
     };
     assert_eq!(LdcbfConfig::from(&rust).to_config().unwrap(), rust);

@@ -218,6 +218,9 @@ pub struct LdcbfConfig {
     pub person_speed_max: f64,
     /// Largest acceleration of a person of uncertain velocity, m/s^2 (>= 0).
     pub person_accel_max: f64,
+    /// Time over which the set a person of uncertain velocity can reach
+    /// grows, s (finite, > 0); beyond it the set travels with the estimate.
+    pub person_reach_time: f64,
 }
 
 /// The measured state and the goal of one cycle (world frame).
@@ -397,6 +400,7 @@ impl From<&Config> for LdcbfConfig {
             velocity_margin: u8::from(c.velocity_margin),
             person_speed_max: c.person_speed_max,
             person_accel_max: c.person_accel_max,
+            person_reach_time: c.person_reach_time,
         }
     }
 }
@@ -440,6 +444,7 @@ impl LdcbfConfig {
             velocity_margin: margin,
             person_speed_max: self.person_speed_max,
             person_accel_max: self.person_accel_max,
+            person_reach_time: self.person_reach_time,
         })
     }
 }

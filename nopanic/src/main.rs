@@ -115,6 +115,7 @@ fn config(r: &[f64; 64]) -> Config {
         velocity_margin: r[59] > 0.0,
         person_speed_max: r[60],
         person_accel_max: r[61],
+        person_reach_time: r[63],
     }
 }
 

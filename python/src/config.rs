@@ -10,7 +10,7 @@ use crate::convert::*;
 use crate::errors::*;
 
 /// Names of the [`Config`] fields, in declaration order.
-pub(crate) const CONFIG_FIELDS: [&str; 29] = Config::FIELDS;
+pub(crate) const CONFIG_FIELDS: [&str; 30] = Config::FIELDS;
 
 /// `config` as a dict of all its fields, in declaration order (`None` for the
 /// options that are off).

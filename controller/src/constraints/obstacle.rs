@@ -9,7 +9,7 @@ use nalgebra::Vector2;
 
 use super::{Condensed, push_row};
 use crate::qp::DenseQp;
-use crate::reach::Reach;
+use crate::reach::{Reach, ReachLimits};
 
 /// A linearised obstacle: the half-plane `h(p) = eta'(p - c) - delta >= 0`,
 /// moving along its normal at `rate` (see [`HalfPlane::h_at`]).
@@ -27,7 +27,8 @@ pub struct HalfPlane {
     pub rate: f64,
     /// What is known of the obstacle's velocity ([`Reach`]): with a spread,
     /// the half-plane at time `t` is moved by [`Reach::shift`] instead (it
-    /// holds every position the obstacle can reach by then).
+    /// holds every position the obstacle can reach by then, up to
+    /// [`ReachLimits::grow`]; the limits are the methods' `lim`).
     pub reach: Reach,
 }
 
@@ -40,17 +41,17 @@ impl HalfPlane {
     /// `h_t(p) = eta'(p - c - u t) - delta = h(p) - rate t` (m): the
     /// half-plane of the obstacle moved for `t` seconds from the input's time.
     /// Equal to [`HalfPlane::h`] bit for bit when `rate` is 0.
-    pub fn h_at(&self, p: &Vector2<f64>, delta: f64, t: f64) -> f64 {
-        self.h(p, delta) - self.shift(t)
+    pub fn h_at(&self, lim: &ReachLimits, p: &Vector2<f64>, delta: f64, t: f64) -> f64 {
+        self.h(p, delta) - self.shift(lim, t)
     }
 
     /// How far the obstacle moves into the safe side by time `t` (m): `rate
     /// t`, exactly `+0` when `rate` is 0 (of either sign), so that
     /// subtracting it changes no bit of a static row; with an uncertain
     /// velocity the farthest its reachable set gets, [`Reach::shift`].
-    pub(crate) fn shift(&self, t: f64) -> f64 {
+    pub(crate) fn shift(&self, lim: &ReachLimits, t: f64) -> f64 {
         if self.reach.is_uncertain() {
-            self.reach.shift(self.rate, t)
+            self.reach.shift(lim, self.rate, t)
         } else if self.rate == 0.0 {
             0.0
         } else {
@@ -60,11 +61,11 @@ impl HalfPlane {
 
     /// The largest [`HalfPlane::shift`] over the times `[t0, t1]` (s), or a
     /// bound above it (m): a foot that stands through them must clear it.
-    pub(crate) fn shift_over(&self, t0: f64, t1: f64) -> f64 {
+    pub(crate) fn shift_over(&self, lim: &ReachLimits, t0: f64, t1: f64) -> f64 {
         if self.reach.is_uncertain() {
-            self.reach.shift_over(self.rate, (t0, t1))
+            self.reach.shift_over(lim, self.rate, (t0, t1))
         } else {
-            self.shift(t0).max(self.shift(t1))
+            self.shift(lim, t0).max(self.shift(lim, t1))
         }
     }
 
@@ -100,6 +101,7 @@ pub fn push_ldcbf_row<const N: usize, const NV: usize, const NC: usize>(
     qp: &mut DenseQp<NV, NC>,
     model: &Condensed<N>,
     hp: &HalfPlane,
+    lim: &ReachLimits,
     gamma: f64,
     delta: f64,
     step: &StepSpan,
@@ -117,7 +119,7 @@ pub fn push_ldcbf_row<const N: usize, const NV: usize, const NC: usize>(
     let (w0, c0) = model.position(k, p0, v0);
     let w = -w1 + w0 * (1.0 - gamma);
     let q0 = -c1 + c0 * (1.0 - gamma);
-    let motion = hp.shift(*t1) - (1.0 - gamma) * hp.shift(*t0);
+    let motion = hp.shift(lim, *t1) - (1.0 - gamma) * hp.shift(lim, *t0);
     push_row(
         qp,
         &hp.eta,
@@ -136,12 +138,13 @@ pub fn push_foot_row<const N: usize, const NV: usize, const NC: usize>(
     qp: &mut DenseQp<NV, NC>,
     model: &Condensed<N>,
     hp: &HalfPlane,
+    lim: &ReachLimits,
     delta_foot: f64,
     step: &StepSpan,
 ) -> Result<(), ()> {
     let (t0, t1) = step.times;
     let (w, f_const) = model.foot(step.k, &step.p0, &step.v0);
-    let motion = hp.shift_over(t0, t1);
+    let motion = hp.shift_over(lim, t0, t1);
     push_row(
         qp,
         &hp.eta,

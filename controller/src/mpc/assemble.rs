@@ -131,6 +131,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
             p0,
             v0,
         };
+        let lim = &self.limits;
         for ob in &out.obstacles[..out.n_obstacles.min(NOBS)] {
             for k in 0..N {
                 let i = out.qp.m;
@@ -138,6 +139,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                     &mut out.qp,
                     &self.model,
                     &ob.half_plane,
+                    lim,
                     cfg.gamma,
                     self.barrier_margin,
                     &step(k),
@@ -156,8 +158,9 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
                 for k in 0..N {
                     let i = out.qp.m;
                     let df = cfg.foot_margin(&ob.half_plane.eta, heading.theta[k]);
-                    ok &= push_foot_row(&mut out.qp, &self.model, &ob.half_plane, df, &step(k))
-                        .is_ok();
+                    ok &=
+                        push_foot_row(&mut out.qp, &self.model, &ob.half_plane, lim, df, &step(k))
+                            .is_ok();
                     if let Some(slot) = out.rows.get_mut(i) {
                         *slot = RowId {
                             kind: RowKind::FootClearance(ob.index),

@@ -112,6 +112,17 @@ pub struct Config {
     /// m/s^2 (>= 0; docs/maths.md §2.7). Default 0.5 (a walk started or
     /// stopped within about 3 s).
     pub person_accel_max: f64,
+    /// The time over which the set a person of uncertain velocity can reach
+    /// grows, s (finite, > 0; docs/maths.md §2.7,
+    /// [`ReachLimits::grow`](crate::ReachLimits::grow)): beyond it the set
+    /// keeps its radius and travels with the estimate. Default 0.8 (two
+    /// steps of the default `step_duration`: the CoM's path is fixed by the
+    /// stance foot until the next footstep lands, at most one step away, and
+    /// the step after can bring it to rest; the controller plans again every
+    /// cycle. 0.4 froze the robot less among people standing still but let
+    /// it step into a person on an unseen circle-crossing seed,
+    /// docs/results.md).
+    pub person_reach_time: f64,
 }
 
 impl Default for Config {
@@ -146,6 +157,7 @@ impl Default for Config {
             velocity_margin: true,
             person_speed_max: 1.5,
             person_accel_max: 0.5,
+            person_reach_time: 0.8,
         }
     }
 }
@@ -204,6 +216,7 @@ impl Config {
         velocity_margin: false,
         person_speed_max: 0.0,
         person_accel_max: 0.0,
+        person_reach_time: 0.0,
     };
 
     /// This configuration with the iteration budgets (`max_iter`,
@@ -266,6 +279,17 @@ impl Config {
         let across = (-eta.x * s + eta.y * c).abs();
         self.foot_clearance.unwrap_or(0.0)
             + 0.5 * (self.foot_length * along + self.foot_width * across)
+    }
+
+    /// The bounds of every person of uncertain velocity, for the set they
+    /// can reach (docs/maths.md §2.7): `person_speed_max`,
+    /// `person_accel_max`, `person_reach_time`.
+    pub fn reach_limits(&self) -> crate::ReachLimits {
+        crate::ReachLimits {
+            speed_max: self.person_speed_max,
+            accel: self.person_accel_max,
+            grow: self.person_reach_time,
+        }
     }
 
     /// The settings of the controller's QP solver: `tol_primal` and
@@ -361,6 +385,9 @@ impl Config {
         }
         if !nonneg(self.person_accel_max) {
             return err("person_accel_max", "must be finite and >= 0");
+        }
+        if !pos(self.person_reach_time) {
+            return err("person_reach_time", "must be finite and > 0");
         }
         if let Err((field, requirement)) = self.qp_settings().validate() {
             return err(field, requirement);

@@ -257,12 +257,13 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         warm: bool,
     ) -> CycleInfo {
         let pred = &work.prediction;
+        let lim = &self.limits;
         let min_h0 = work
             .active_obstacles()
             .iter()
             .map(|o| {
                 o.half_plane
-                    .h_at(&pred.p0, self.barrier_margin, pred.time_to_p0)
+                    .h_at(lim, &pred.p0, self.barrier_margin, pred.time_to_p0)
             })
             .fold(f64::INFINITY, f64::min);
         let inside = work

@@ -75,7 +75,7 @@ macro_rules! config_fields {
 }
 
 /// The number of [`Config`] fields.
-const FIELD_COUNT: usize = 29;
+const FIELD_COUNT: usize = 30;
 
 config_fields!(
     gravity: Real,
@@ -107,6 +107,7 @@ config_fields!(
     velocity_margin: Flag,
     person_speed_max: Real,
     person_accel_max: Real,
+    person_reach_time: Real,
 );
 
 #[cfg(test)]

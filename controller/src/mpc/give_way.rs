@@ -59,11 +59,12 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         let cfg = &self.config;
         let mut out = [cfg.vx_max; N];
         let horizon = tau + N as f64 * cfg.step_duration;
+        let lim = &self.limits;
         let near = active.iter().any(|o| {
             let reach = &o.half_plane.reach;
             if reach.is_uncertain() {
                 // Within the farthest the person may walk, plus the robot.
-                return o.distance <= cfg.vx_max * horizon + reach.travel(horizon);
+                return o.distance <= cfg.vx_max * horizon + reach.travel(lim, horizon);
             }
             velocities.get(o.index as usize).is_some_and(|u| {
                 let speed = crate::linalg::sqrt(u.norm_squared());

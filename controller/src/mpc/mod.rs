@@ -96,6 +96,7 @@ use nalgebra::{ArrayStorage, SVector, Vector2};
 use crate::constraints::{Condensed, RowId};
 use crate::lip::Lip;
 use crate::qp::{DualActiveSet, OwnSolver, QpBackend, Reprobe};
+use crate::reach::ReachLimits;
 
 /// Row capacity needed for horizon `n`, `nobs` obstacles, with or without the
 /// foot-clearance rows: `8 n + n nobs (x2 with foot clearance)`.
@@ -168,6 +169,8 @@ struct Core<const N: usize, const NV: usize, const NC: usize> {
     config: Config,
     /// [`Config::barrier_margin`], m (computed once at configure).
     barrier_margin: f64,
+    /// [`Config::reach_limits`] (computed once at configure).
+    limits: ReachLimits,
     lip: Lip,
     model: Condensed<N>,
     solver: DualActiveSet<NV, NC>,
@@ -179,6 +182,11 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         configured: false,
         config: Config::UNSET,
         barrier_margin: 0.0,
+        limits: ReachLimits {
+            speed_max: 0.0,
+            accel: 0.0,
+            grow: 0.0,
+        },
         lip: Lip::ZERO,
         model: Condensed::ZERO,
         solver: DualActiveSet::PLACEHOLDER,
@@ -313,6 +321,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize, B: QpB
         let core = &mut self.core;
         core.config = config;
         core.barrier_margin = barrier_margin;
+        core.limits = config.reach_limits();
         core.lip = lip;
         core.model = model;
         core.solver = solver;

@@ -99,8 +99,6 @@ impl ActiveObstacle {
         h.rate = o.rate;
         h.reach.spread = o.reach.spread;
         h.reach.speed = o.reach.speed;
-        h.reach.speed_max = o.reach.speed_max;
-        h.reach.accel = o.reach.accel;
     }
 }
 
@@ -197,12 +195,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
             } else {
                 0.0
             };
-            let reach = |speed: f64, spread: f64| Reach {
-                spread,
-                speed,
-                speed_max: cfg.person_speed_max,
-                accel: cfg.person_accel_max,
-            };
+            let reach = |speed: f64, spread: f64| Reach { spread, speed };
             if !within(cfg.r_active) {
                 // Beyond `r_active` (which holds an obstacle closing in no
                 // faster than the robot walks), one closing in faster than
@@ -213,7 +206,8 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
                 let mut gain = excess * horizon;
                 if spread > 0.0 {
                     let speed = velocity.map_or(0.0, |u| crate::linalg::sqrt(u.norm_squared()));
-                    let far = reach(speed, spread).shift(closing, horizon) - cfg.vx_max * horizon;
+                    let far = reach(speed, spread).shift(&cfg.reach_limits(), closing, horizon)
+                        - cfg.vx_max * horizon;
                     gain = gain.max(far);
                 }
                 if !within(cfg.r_active + gain) {

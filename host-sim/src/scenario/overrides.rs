@@ -65,6 +65,7 @@ pub struct ControllerOverrides {
     pub velocity_margin: Option<bool>,
     pub person_speed_max: Option<f64>,
     pub person_accel_max: Option<f64>,
+    pub person_reach_time: Option<f64>,
 }
 
 /// The robot's fields of [`Config`]: set in `[robot]`
@@ -110,7 +111,8 @@ impl ControllerOverrides {
             turn_vertex_normals,
             velocity_margin,
             person_speed_max,
-            person_accel_max
+            person_accel_max,
+            person_reach_time
         );
         if let Some(r) = self.capture_fraction {
             c.capture_fraction = (r != 0.0).then_some(r);
