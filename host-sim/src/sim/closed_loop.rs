@@ -81,6 +81,8 @@ pub(super) struct Loop<'s, B: QpBackend<NV, NC>> {
     speed_cap: f64,
     progress: Progress,
     cycles: Vec<CycleRecord>,
+    /// [`SimResult::obstacle_centres`].
+    obstacle_centres: Vec<Vec<Vector2<f64>>>,
     footsteps: Vec<Footstep>,
     samples: Vec<Sample>,
     scans: Vec<ScanRecord>,
@@ -190,6 +192,7 @@ impl<'s, B: QpBackend<NV, NC> + Clone> Loop<'s, B> {
                 max_ticks,
             },
             cycles: Vec::new(),
+            obstacle_centres: Vec::new(),
             footsteps,
             samples: Vec::with_capacity(max_ticks.min(1 << 20) as usize + 1),
             scans: Vec::new(),
@@ -442,6 +445,15 @@ impl<'s, B: QpBackend<NV, NC> + Clone> Loop<'s, B> {
         } else {
             Vec::new()
         };
+        if !self.world.is_static() {
+            self.obstacle_centres.push(
+                self.world
+                    .obstacles()
+                    .iter()
+                    .map(crate::world::moving::vertex_centre)
+                    .collect(),
+            );
+        }
         let plant = &self.plant;
         self.cycles.push(CycleRecord {
             index: self.cycles.len(),
@@ -539,6 +551,7 @@ impl<'s, B: QpBackend<NV, NC> + Clone> Loop<'s, B> {
             disturbance: self.disturber.log,
             contacts: self.contacts.contacts,
             mapping: self.mapper.map(|m| m.log),
+            obstacle_centres: self.obstacle_centres,
         }
     }
 }

@@ -288,6 +288,12 @@ pub struct SimResult {
     /// The occupancy map, its update times and the plans made on it (with
     /// `perception = "lidar"`; [`MappingLog`]).
     pub mapping: Option<MappingLog>,
+    /// Where the obstacles were at each control cycle (one entry per
+    /// [`SimResult::cycles`] entry): each obstacle's vertex centre, m, world
+    /// frame, in the scenario's order; empty when every obstacle is at rest.
+    /// The figures draw people who react where they were, not where a
+    /// constant velocity would have taken them.
+    pub obstacle_centres: Vec<Vec<Vector2<f64>>>,
 }
 
 impl SimResult {

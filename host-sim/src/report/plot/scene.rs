@@ -93,7 +93,8 @@ fn draw_half_planes<DB: DrawingBackend>(
 
 /// The obstacles of the true map (faded when the controller only perceives
 /// it). A moving obstacle is drawn where it is at `until` (s), with the trace
-/// of its centre since t = 0.
+/// of its centre since t = 0 (where the run recorded it,
+/// [`SimResult::obstacle_centres`]: people who react stop, turn and wait).
 fn draw_obstacles<DB: DrawingBackend>(
     chart: &mut MapChart<'_, DB>,
     r: &SimResult,
@@ -103,17 +104,28 @@ fn draw_obstacles<DB: DrawingBackend>(
     let sc = &r.scenario;
     let lidar = sc_perception(r) == Perception::Lidar;
     let fill = if lidar { 0.30 } else { 0.85 };
-    let positions = obstacles_at(sc, until);
-    for (o, (v, now)) in sc
+    let positions = obstacles_at(r, until);
+    let recorded = recorded_until(r, until);
+    for (i, (o, (v, now))) in sc
         .obstacles
         .iter()
         .zip(sc.velocities.iter().zip(&positions))
+        .enumerate()
     {
         if *v != Vector2::zeros() {
-            let (a, b) = (vertex_centre(o), vertex_centre(now));
+            let trace: Vec<(f64, f64)> = if recorded.is_empty() {
+                let (a, b) = (vertex_centre(o), vertex_centre(now));
+                vec![(a.x, a.y), (b.x, b.y)]
+            } else {
+                recorded
+                    .iter()
+                    .filter_map(|c| c.get(i))
+                    .map(|c| (c.x, c.y))
+                    .collect()
+            };
             chart
                 .draw_series(std::iter::once(PathElement::new(
-                    vec![(a.x, a.y), (b.x, b.y)],
+                    trace,
                     OBSTACLE_EDGE.mix(0.6).stroke_width(2),
                 )))
                 .map_err(e)?;
@@ -422,15 +434,34 @@ pub(super) fn outcome_text(r: &SimResult) -> String {
     )
 }
 
-/// Every obstacle of the scenario where it is at time `t` (s): the moving ones
-/// moved by their velocity times `t` ([`crate::world::moving`]).
-fn obstacles_at(sc: &crate::scenario::Scenario, t: f64) -> Vec<crate::world::Polygon> {
+/// The recorded obstacle centres ([`SimResult::obstacle_centres`]) of the
+/// cycles up to time `t` (s): empty when none were recorded.
+fn recorded_until(r: &SimResult, t: f64) -> &[Vec<Vector2<f64>>] {
+    let n = r
+        .cycles
+        .iter()
+        .take(r.obstacle_centres.len())
+        .take_while(|c| c.time <= t)
+        .count();
+    &r.obstacle_centres[..n]
+}
+
+/// Every obstacle of the scenario where it is at time `t` (s): where the
+/// run recorded it at the last cycle up to `t`
+/// ([`SimResult::obstacle_centres`]), else the moving ones moved by their
+/// velocity times `t` ([`crate::world::moving`]).
+fn obstacles_at(r: &SimResult, t: f64) -> Vec<crate::world::Polygon> {
+    let sc = &r.scenario;
+    let last = recorded_until(r, t).last();
     sc.obstacles
         .iter()
         .zip(&sc.velocities)
-        .map(|(o, v)| {
+        .enumerate()
+        .map(|(i, (o, v))| {
             if *v == Vector2::zeros() {
                 *o
+            } else if let Some(c) = last.and_then(|c| c.get(i)) {
+                crate::world::moving::translated(o, c - vertex_centre(o))
             } else {
                 crate::world::moving::translated(o, v * t)
             }
