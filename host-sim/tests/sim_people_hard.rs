@@ -5,31 +5,9 @@
 //! perceived map (`planner = "rrt_star"`) at `delta = 0.05`: the robot never
 //! moves into a person (`contacts_robot`). Release builds only (`.ci/run`).
 
-use ldcbf_sim::plan::Planner;
-use ldcbf_sim::sense::Perception;
-use ldcbf_sim::studies::batch::{Aggregate, BatchRequest, SeedRange, run_batch};
+mod people_batch;
 
-fn batch(family: &str, seeds: u64) -> Aggregate {
-    let tmp = tempfile::tempdir().unwrap();
-    let mut req = BatchRequest::new(
-        family,
-        SeedRange {
-            start: 0,
-            end: seeds,
-        },
-    );
-    req.perception = Some(Perception::Lidar);
-    req.planner = Some(Planner::RrtStar);
-    req.sets = vec![("delta".into(), "0.05".into())];
-    req.out = Some(tmp.path().join("b"));
-    let a = run_batch(&req).unwrap().aggregate;
-    println!(
-        "{family}: {} runs, success {}, reached {}, contacts robot {} person {}, \
-         min body clearance {:.3} m",
-        a.runs, a.success, a.reached, a.contacts_robot, a.contacts_person, a.min_body_clearance
-    );
-    a
-}
+use people_batch::lidar_batch;
 
 #[test]
 #[cfg_attr(
@@ -39,7 +17,7 @@ fn batch(family: &str, seeds: u64) -> Aggregate {
 fn lidar_tracking_no_robot_caused_contact_on_people_hard_to_see() {
     let mut failed = Vec::new();
     for family in ["group-crossing", "headon-offset", "occluded-person"] {
-        let a = batch(family, 20);
+        let a = lidar_batch(family, 0, 20);
         assert_eq!(a.runs, 20);
         if a.contacts_robot != 0 {
             failed.push(format!(
@@ -49,4 +27,23 @@ fn lidar_tracking_no_robot_caused_contact_on_people_hard_to_see() {
         }
     }
     assert!(failed.is_empty(), "{failed:?}");
+}
+
+/// Regression (`crowd` seed 249 of the unseen seeds 200..299, found with
+/// main 4f008a8): the robot walked into a person of the crowd with LiDAR
+/// tracking and the velocity margin. Not seen since the walls were taken
+/// out of the people detector and the reachable set stopped growing after
+/// `person_reach_time` (with the set grown over the whole horizon, 0
+/// robot-caused contacts too); the run differs from its first scans on, and
+/// the contact's cause was not isolated. One run: the robot moves into no
+/// person.
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "a closed loop with LiDAR: run with --release (.ci/run does)"
+)]
+fn crowd_seed_249_the_robot_walks_into_no_person() {
+    let a = lidar_batch("crowd", 249, 250);
+    assert_eq!(a.runs, 1);
+    assert_eq!(a.contacts_robot, 0, "{a:?}");
 }
