@@ -290,13 +290,13 @@ pub fn table_row(req: &CrowdNavRequest, s: &Summary) -> String {
         CrowdNavLayout::Square => "square",
     };
     let (robot, perception) = match req.robot {
-        RobotPolicy::Controller => (
-            "ours (CV prediction, no margin)",
-            match req.perception {
-                Perception::Known => "oracle",
-                Perception::Lidar => "LiDAR",
-            },
-        ),
+        // With the oracle the controller gets the true velocities (no
+        // radius: constant-velocity prediction, no margin); with the LiDAR
+        // the tracker's velocities and radii (the reachable-set margin).
+        RobotPolicy::Controller => match req.perception {
+            Perception::Known => ("ours (CV prediction, no margin)", "oracle"),
+            Perception::Lidar => ("ours (tracker, reachable-set margin)", "LiDAR"),
+        },
         RobotPolicy::Orca => ("ORCA (holonomic)", "oracle"),
     };
     format!(
