@@ -39,8 +39,10 @@ impl HalfPlane {
     }
 
     /// `h_t(p) = eta'(p - c - u t) - delta = h(p) - rate t` (m): the
-    /// half-plane of the obstacle moved for `t` seconds from the input's time.
-    /// Equal to [`HalfPlane::h`] bit for bit when `rate` is 0.
+    /// half-plane of the obstacle moved for `t` seconds from the input's time
+    /// (with an uncertain velocity, moved by [`Reach::shift`] within `lim`).
+    /// Equal to [`HalfPlane::h`] bit for bit when `rate` is 0 and the
+    /// velocity is known.
     pub fn h_at(&self, lim: &ReachLimits, p: &Vector2<f64>, delta: f64, t: f64) -> f64 {
         self.h(p, delta) - self.shift(lim, t)
     }
@@ -94,8 +96,9 @@ pub struct StepSpan {
 
 /// Appends the LDCBF row `h_{t1}(p_{k+1}) >= (1 - gamma) h_{t0}(p_k)` for
 /// the step `step` (its `k`, `(t0, t1)` and `x_0`), with `h_t` the
-/// half-plane moved to time `t` ([`HalfPlane::h_at`]; the times do not
-/// matter for an obstacle at rest, whose row is the static one bit for bit).
+/// half-plane moved to time `t` ([`HalfPlane::h_at`] with the person bounds
+/// `lim`; the times do not matter for an obstacle at rest, whose row is the
+/// static one bit for bit).
 #[allow(clippy::result_unit_err)]
 pub fn push_ldcbf_row<const N: usize, const NV: usize, const NC: usize>(
     qp: &mut DenseQp<NV, NC>,
