@@ -57,7 +57,7 @@ impl<const N: usize, const NV: usize, const NC: usize> Core<N, NV, NC> {
         out.select_obstacles(
             &p0,
             way,
-            cfg,
+            (cfg, &self.limits),
             horizon,
             obstacles,
             (input.obstacle_velocities, input.obstacle_velocity_radii),

@@ -16,7 +16,7 @@ use super::{Assembly, Config, Controller, CycleInput, InputError, MAX_RATE};
 use crate::constraints::HalfPlane;
 use crate::geometry::{ConvexPolygon, closest_point_point_polygon};
 use crate::qp::QpBackend;
-use crate::reach::Reach;
+use crate::reach::{Reach, ReachLimits};
 
 /// The disk, world frame W, that holds every obstacle a cycle can select:
 /// [`Controller::obstacle_query`] for a caller that keeps its map in a spatial
@@ -159,8 +159,9 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
     /// With [`Config::velocity_margin`], an obstacle of velocity uncertainty
     /// radius `radii[index] > 0` (m/s; none: 0) is also selected up to
     /// `r_active` plus the excess of its reach over the horizon
-    /// ([`Reach::shift`] along the normal minus `vx_max horizon`), and its
-    /// half-plane carries that [`Reach`] (docs/maths.md §2.7).
+    /// ([`Reach::shift`] within `lim`, the controller's [`ReachLimits`],
+    /// along the normal minus `vx_max horizon`), and its half-plane carries
+    /// that [`Reach`] (docs/maths.md §2.7).
     /// Writes `obstacles`, `n_obstacles` and `obstacles_truncated`.
     /// `Err(InputError::ObstacleVelocity)` when a selected obstacle's
     /// velocity is missing, not finite or faster than [`MAX_RATE`],
@@ -171,7 +172,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
         &mut self,
         p0: &Vector2<f64>,
         turn: Option<Way<'_>>,
-        cfg: &Config,
+        (cfg, lim): (&Config, &ReachLimits),
         horizon: f64,
         obstacles: impl Iterator<Item = (usize, &'o ConvexPolygon<V>)>,
         (velocities, radii): (&[Vector2<f64>], &[f64]),
@@ -195,7 +196,6 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
             } else {
                 0.0
             };
-            let reach = |speed: f64, spread: f64| Reach { spread, speed };
             if !within(cfg.r_active) {
                 // Beyond `r_active` (which holds an obstacle closing in no
                 // faster than the robot walks), one closing in faster than
@@ -206,8 +206,8 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
                 let mut gain = excess * horizon;
                 if spread > 0.0 {
                     let speed = velocity.map_or(0.0, |u| crate::linalg::sqrt(u.norm_squared()));
-                    let far = reach(speed, spread).shift(&cfg.reach_limits(), closing, horizon)
-                        - cfg.vx_max * horizon;
+                    let far =
+                        Reach { spread, speed }.shift(lim, closing, horizon) - cfg.vx_max * horizon;
                     gain = gain.max(far);
                 }
                 if !within(cfg.r_active + gain) {
@@ -234,7 +234,7 @@ impl<const N: usize, const NV: usize, const NC: usize, const NOBS: usize>
                 }
             }
             let reach = if spread > 0.0 {
-                reach(speed, spread)
+                Reach { spread, speed }
             } else {
                 Reach::NONE
             };

@@ -38,49 +38,7 @@ pub fn infer_obstacles(
     {
         label[usable[k]] = l;
     }
-    let dphi = core::f64::consts::TAU / n as f64;
-    let lambda = params.breakpoint_angle;
-    let linked = |a: usize, b: usize| -> bool {
-        let (Some(la), Some(lb)) = (label[a], label[b]) else {
-            return false;
-        };
-        let (Some(pa), Some(pb)) = (rays[a], rays[b]) else {
-            return false;
-        };
-        if la != lb {
-            return false;
-        }
-        if lambda <= dphi || n < 3 {
-            return true;
-        }
-        let ra = (pa - origin).norm();
-        let dmax = ra * dphi.sin() / (lambda - dphi).sin()
-            + 3.0 * core::f64::consts::SQRT_2 * params.noise_sigma;
-        (pb - pa).norm() <= dmax
-    };
-    // Start where a chain starts (a ray not linked to its predecessor), so
-    // that no chain wraps past the end of the scan; 0 if all are linked.
-    let start = (0..n).find(|&i| !linked((i + n - 1) % n, i)).unwrap_or(0);
-    let mut chains: Vec<Vec<usize>> = Vec::new(); // unwrapped ray indices
-    let mut cur: Vec<usize> = Vec::new();
-    for u in start..start + n {
-        let i = u % n;
-        if label[i].is_none() {
-            if !cur.is_empty() {
-                chains.push(std::mem::take(&mut cur));
-            }
-            continue;
-        }
-        if let Some(&last) = cur.last()
-            && !linked(last % n, i)
-        {
-            chains.push(std::mem::take(&mut cur));
-        }
-        cur.push(u);
-    }
-    if !cur.is_empty() {
-        chains.push(cur);
-    }
+    let chains = breakpoint_chains(rays, origin, params, |k| label[k]);
     let mut out = Vec::new();
     let ctx = PieceContext {
         origin,
@@ -276,6 +234,72 @@ fn ray_entry(h: &[Vector2<f64>], o: Vector2<f64>, d: Vector2<f64>, len: f64) -> 
         }
     }
     Some(t0)
+}
+
+/// The chains of consecutive rays of a scan (step 1 of the module docs of
+/// [`super`]): `rays[k]` is ray `k`'s hit point (m, from `origin`, the rays
+/// evenly spread over 360 degrees) or `None`; `group(k)` is ray `k`'s group
+/// (its DBSCAN cluster), `None` for a ray in no chain. Two consecutive rays
+/// are linked when both have a hit, they share a group, and (with `n >= 3`
+/// rays and the detector's angle `lambda` above one ray's) their hits are at
+/// most `r sin(dphi) / sin(lambda - dphi) + 3 sqrt(2) noise_sigma` apart (the
+/// adaptive breakpoint detector, `r` the first hit's range). Each chain is a
+/// run of linked rays as unwrapped ray indices `u` (ray `u % n`), starting
+/// where a chain starts so that none wraps past the end of the scan.
+pub(super) fn breakpoint_chains(
+    rays: &[Option<Vector2<f64>>],
+    origin: Vector2<f64>,
+    params: &LidarParams,
+    group: impl Fn(usize) -> Option<usize>,
+) -> Vec<Vec<usize>> {
+    let n = rays.len();
+    if n == 0 {
+        return Vec::new();
+    }
+    let dphi = core::f64::consts::TAU / n as f64;
+    let lambda = params.breakpoint_angle;
+    let linked = |a: usize, b: usize| -> bool {
+        let (Some(la), Some(lb)) = (group(a), group(b)) else {
+            return false;
+        };
+        let (Some(pa), Some(pb)) = (rays[a], rays[b]) else {
+            return false;
+        };
+        if la != lb {
+            return false;
+        }
+        if lambda <= dphi || n < 3 {
+            return true;
+        }
+        let ra = (pa - origin).norm();
+        let dmax = ra * dphi.sin() / (lambda - dphi).sin()
+            + 3.0 * core::f64::consts::SQRT_2 * params.noise_sigma;
+        (pb - pa).norm() <= dmax
+    };
+    // Start where a chain starts (a ray not linked to its predecessor), so
+    // that no chain wraps past the end of the scan; 0 if all are linked.
+    let start = (0..n).find(|&i| !linked((i + n - 1) % n, i)).unwrap_or(0);
+    let mut chains: Vec<Vec<usize>> = Vec::new();
+    let mut cur: Vec<usize> = Vec::new();
+    for u in start..start + n {
+        let i = u % n;
+        if group(i).is_none() {
+            if !cur.is_empty() {
+                chains.push(std::mem::take(&mut cur));
+            }
+            continue;
+        }
+        if let Some(&last) = cur.last()
+            && !linked(last % n, i)
+        {
+            chains.push(std::mem::take(&mut cur));
+        }
+        cur.push(u);
+    }
+    if !cur.is_empty() {
+        chains.push(cur);
+    }
+    chains
 }
 
 /// How far short of its hit a ray is taken as seen free, m:

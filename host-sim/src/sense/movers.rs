@@ -148,15 +148,9 @@ fn breaks(
 #[derive(Clone, Debug)]
 pub struct Movers {
     tracker: Tracker,
-    eps: f64,
-    /// The LiDAR's `eps`, m: noise points this close to a hull kept out are
-    /// kept out with it.
-    noise_reach: f64,
-    min_points: usize,
-    min_thickness: f64,
-    max_vertices: usize,
-    /// The LiDAR's settings, for the wall faces taken out of each scan
-    /// ([`super::walls`]).
+    /// The LiDAR's settings: clustering (`min_points`; `eps` also for the
+    /// noise points kept out with a hull), hulls, and the wall faces taken
+    /// out of each scan ([`super::walls`]).
     lidar: LidarParams,
     /// The last hull of each moving track, with the track's id and its
     /// position then (m): a track that coasts is handed over as that hull
@@ -168,12 +162,7 @@ impl Movers {
     /// With the clustering settings of `lidar` and the tracker's `track`.
     pub fn new(lidar: &LidarParams, track: TrackParams) -> Self {
         Movers {
-            tracker: Tracker::new(track.clone()),
-            eps: lidar.eps.min(track.cluster_eps),
-            noise_reach: lidar.eps,
-            min_points: lidar.min_points,
-            min_thickness: lidar.min_thickness,
-            max_vertices: lidar.max_vertices,
+            tracker: Tracker::new(track),
             lidar: lidar.clone(),
             last: Vec::new(),
         }
@@ -187,7 +176,7 @@ impl Movers {
     /// The hull of the points `members` of `points`.
     fn hull(&self, points: &[Vector2<f64>], members: &[usize]) -> Polygon {
         let pts: Vec<Vector2<f64>> = members.iter().map(|&i| points[i]).collect();
-        cluster_polygon(&pts, self.min_thickness, self.max_vertices)
+        cluster_polygon(&pts, self.lidar.min_thickness, self.lidar.max_vertices)
     }
 
     /// The non-empty `parts` (indices into `points`), each with its hull.
@@ -229,7 +218,14 @@ impl Movers {
                 out.push((m, hull));
                 continue;
             }
-            for seg in breaks(points, ray_of, n_rays, &m, pr.segment_jump, self.min_points) {
+            for seg in breaks(
+                points,
+                ray_of,
+                n_rays,
+                &m,
+                pr.segment_jump,
+                self.lidar.min_points,
+            ) {
                 let h = self.hull(points, &seg);
                 if person_sized(&h, pr.person_extent) {
                     out.push((seg, h));
@@ -259,7 +255,7 @@ impl Movers {
     ) -> Vec<(Vec<usize>, Polygon)> {
         let pr = self.tracker.params();
         let (m, hull) = part;
-        if m.len() < 2 * self.min_points
+        if m.len() < 2 * self.lidar.min_points
             || person_sized(&hull, pr.person_extent)
             || !person_sized(&hull, pr.group_extent)
         {
@@ -349,13 +345,15 @@ impl Movers {
             origin,
             &self.lidar,
             self.tracker.params().wall_length,
-            self.min_points,
+            self.lidar.min_points,
         );
         let ray_of: Vec<usize> = (0..rays.len())
             .filter(|&k| rays[k].is_some() && !wall[k])
             .collect();
         let points: Vec<Vector2<f64>> = ray_of.iter().filter_map(|&k| rays[k]).collect();
-        let labels = dbscan(&points, self.eps, self.min_points);
+        // The detector's radius, at most the map's (module docs, step 1).
+        let eps = self.lidar.eps.min(self.tracker.params().cluster_eps);
+        let labels = dbscan(&points, eps, self.lidar.min_points);
         let (pieces, hulls): (Vec<_>, Vec<_>) = self
             .pieces(t, &points, &ray_of, rays.len(), members(&labels))
             .into_iter()
@@ -389,7 +387,7 @@ impl Movers {
         for (i, l) in labels.iter().enumerate() {
             if l.is_none()
                 && out.obstacles.iter().any(|h| {
-                    closest_point_point_polygon(&points[i], h).signed_distance <= self.noise_reach
+                    closest_point_point_polygon(&points[i], h).signed_distance <= self.lidar.eps
                 })
             {
                 out.kept_out[ray_of[i]] = true;

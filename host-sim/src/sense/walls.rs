@@ -17,7 +17,8 @@
 //! first: consecutive rays whose hits are linked by the adaptive breakpoint
 //! detector (G. A. Borges and M.-J. Aldon, "Line extraction in 2D range
 //! images for mobile robotics", J. Intelligent and Robotic Systems 40, 2004;
-//! the link of [`super::infer_obstacles`], without its cluster condition)
+//! the chains of [`super::infer_obstacles`], `breakpoint_chains`, with every
+//! hit in one group)
 //! form chains; split and merge ([`super::split_and_merge`], tolerance the
 //! LiDAR's `line_tolerance`) cuts each chain into straight segments; the hits
 //! of a segment at least `min_length` long, with at least `min_points` hits,
@@ -28,6 +29,7 @@
 
 use ldcbf_controller::nalgebra::Vector2;
 
+use super::infer::breakpoint_chains;
 use super::{LidarParams, split_and_merge};
 
 /// One flag per ray of `rays` (`rays[k]` ray `k`'s hit point, m, or `None`,
@@ -43,50 +45,17 @@ pub fn wall_hits(
 ) -> Vec<bool> {
     let n = rays.len();
     let mut wall = vec![false; n];
-    if n < 3 {
-        return wall;
-    }
-    let dphi = core::f64::consts::TAU / n as f64;
-    // The detector's angle, at least two rays' worth (below one ray's the
-    // bound is not defined).
-    let lambda = params.breakpoint_angle.max(2.0 * dphi);
-    let slack = 3.0 * core::f64::consts::SQRT_2 * params.noise_sigma;
-    let linked = |a: usize, b: usize| -> bool {
-        let (Some(pa), Some(pb)) = (rays[a], rays[b]) else {
-            return false;
-        };
-        let ra = (pa - origin).norm();
-        (pb - pa).norm() <= ra * dphi.sin() / (lambda - dphi).sin() + slack
-    };
-    // Start where a chain starts, so that no chain wraps past the end of the
-    // scan (a scan that is one closed chain starts at ray 0).
-    let start = (0..n).find(|&i| !linked((i + n - 1) % n, i)).unwrap_or(0);
-    let mut chain: Vec<usize> = Vec::new();
-    let mut flush = |chain: &mut Vec<usize>| {
-        let p: Vec<Vector2<f64>> = chain.iter().filter_map(|&k| rays[k]).collect();
+    // One group: the chains break at missed rays and at the detector's jumps.
+    for chain in breakpoint_chains(rays, origin, params, |k| rays[k].map(|_| 0)) {
+        let p: Vec<Vector2<f64>> = chain.iter().filter_map(|&u| rays[u % n]).collect();
         for (a, b) in split_and_merge(&p, params.line_tolerance) {
             if b + 1 - a >= min_points && (p[b] - p[a]).norm() >= min_length {
-                for &k in &chain[a..=b] {
-                    wall[k] = true;
+                for &u in &chain[a..=b] {
+                    wall[u % n] = true;
                 }
             }
         }
-        chain.clear();
-    };
-    for u in start..start + n {
-        let k = u % n;
-        if rays[k].is_none() {
-            flush(&mut chain);
-            continue;
-        }
-        if let Some(&last) = chain.last()
-            && !linked(last, k)
-        {
-            flush(&mut chain);
-        }
-        chain.push(k);
     }
-    flush(&mut chain);
     wall
 }
 

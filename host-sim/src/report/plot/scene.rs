@@ -92,37 +92,27 @@ fn draw_half_planes<DB: DrawingBackend>(
 }
 
 /// The obstacles of the true map (faded when the controller only perceives
-/// it). A moving obstacle is drawn where it is at `until` (s), with the trace
-/// of its centre since t = 0 (where the run recorded it,
-/// [`SimResult::obstacle_centres`]: people who react stop, turn and wait).
+/// it), each where the run recorded it at the last cycle up to `until` (s),
+/// and the trace of the centre of each that moved since t = 0
+/// ([`SimResult::obstacle_centres`]: people who react stop, turn and wait).
 fn draw_obstacles<DB: DrawingBackend>(
     chart: &mut MapChart<'_, DB>,
     r: &SimResult,
     until: f64,
     legend: bool,
 ) -> Result<()> {
-    let sc = &r.scenario;
     let lidar = sc_perception(r) == Perception::Lidar;
     let fill = if lidar { 0.30 } else { 0.85 };
-    let positions = obstacles_at(r, until);
     let recorded = recorded_until(r, until);
-    for (i, (o, (v, now))) in sc
-        .obstacles
-        .iter()
-        .zip(sc.velocities.iter().zip(&positions))
-        .enumerate()
-    {
-        if *v != Vector2::zeros() {
-            let trace: Vec<(f64, f64)> = if recorded.is_empty() {
-                let (a, b) = (vertex_centre(o), vertex_centre(now));
-                vec![(a.x, a.y), (b.x, b.y)]
-            } else {
-                recorded
-                    .iter()
-                    .filter_map(|c| c.get(i))
-                    .map(|c| (c.x, c.y))
-                    .collect()
-            };
+    let positions = obstacles_at(r, recorded.last());
+    if let (Some(first), Some(last)) = (recorded.first(), recorded.last()) {
+        for (i, _) in first
+            .iter()
+            .zip(last)
+            .enumerate()
+            .filter(|(_, (a, b))| a != b)
+        {
+            let trace: Vec<(f64, f64)> = recorded.iter().map(|c| (c[i].x, c[i].y)).collect();
             chart
                 .draw_series(std::iter::once(PathElement::new(
                     trace,
@@ -446,25 +436,17 @@ fn recorded_until(r: &SimResult, t: f64) -> &[Vec<Vector2<f64>>] {
     &r.obstacle_centres[..n]
 }
 
-/// Every obstacle of the scenario where it is at time `t` (s): where the
-/// run recorded it at the last cycle up to `t`
-/// ([`SimResult::obstacle_centres`]), else the moving ones moved by their
-/// velocity times `t` ([`crate::world::moving`]).
-fn obstacles_at(r: &SimResult, t: f64) -> Vec<crate::world::Polygon> {
-    let sc = &r.scenario;
-    let last = recorded_until(r, t).last();
-    sc.obstacles
+/// Every obstacle of the scenario moved to its recorded centre `centres`
+/// (one per obstacle, [`SimResult::obstacle_centres`]); where it was at t = 0
+/// without one (a map at rest records none).
+fn obstacles_at(r: &SimResult, centres: Option<&Vec<Vector2<f64>>>) -> Vec<crate::world::Polygon> {
+    r.scenario
+        .obstacles
         .iter()
-        .zip(&sc.velocities)
         .enumerate()
-        .map(|(i, (o, v))| {
-            if *v == Vector2::zeros() {
-                *o
-            } else if let Some(c) = last.and_then(|c| c.get(i)) {
-                crate::world::moving::translated(o, c - vertex_centre(o))
-            } else {
-                crate::world::moving::translated(o, v * t)
-            }
+        .map(|(i, o)| match centres.and_then(|c| c.get(i)) {
+            Some(c) => crate::world::moving::translated(o, c - vertex_centre(o)),
+            None => *o,
         })
         .collect()
 }
