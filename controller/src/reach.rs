@@ -15,15 +15,14 @@
 //! r(t), v_max t)` beyond where the obstacle is now: the barrier's
 //! half-plane moves by that much ([`crate::HalfPlane::h_at`]).
 //!
-//! The set grows only over [`ReachLimits::grow`] seconds (the step the robot
-//! is about to take and the one that can stop it,
-//! [`Config::person_reach_time`](crate::mpc::Config::person_reach_time)):
+//! The set grows over [`ReachLimits::grow`] seconds
+//! ([`Config::person_reach_time`](crate::mpc::Config::person_reach_time)):
 //! after that its radius stays `r(grow)` and it travels with the estimate.
-//! The controller plans again every cycle from a new scan, so the later steps
-//! of the horizon are a plan, not a commitment; a set that kept growing over
-//! the whole horizon (1.6-2 s) asks the robot to back away from every person
-//! standing still within about 2 m, and stood the robot still in front of
-//! doors and among people standing at their goals (docs/maths.md §2.7).
+//! The default grows it over the whole horizon; a shorter time (0.8 s: the
+//! step being taken and the one that can stop the robot) stops the rows of a
+//! person standing still from asking the robot to back away within 2.5 m,
+//! but measured on unseen seeds it let the robot walk into people
+//! (docs/maths.md §2.7).
 
 /// What is known of an obstacle's velocity, for the set it can reach
 /// (module docs). `spread = 0` is an obstacle whose velocity is known and

@@ -476,7 +476,8 @@ typedef struct LdcbfConfig {
   double person_accel_max;
   /**
    * Time over which the set a person of uncertain velocity can reach
-   * grows, s (finite, > 0); beyond it the set travels with the estimate.
+   * grows, s (finite, > 0; 1000 by default: the whole horizon); beyond it
+   * the set travels with the estimate.
    */
   double person_reach_time;
 } LdcbfConfig;

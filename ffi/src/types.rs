@@ -219,7 +219,8 @@ pub struct LdcbfConfig {
     /// Largest acceleration of a person of uncertain velocity, m/s^2 (>= 0).
     pub person_accel_max: f64,
     /// Time over which the set a person of uncertain velocity can reach
-    /// grows, s (finite, > 0); beyond it the set travels with the estimate.
+    /// grows, s (finite, > 0; 1000 by default: the whole horizon); beyond it
+    /// the set travels with the estimate.
     pub person_reach_time: f64,
 }
 

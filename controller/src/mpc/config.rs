@@ -115,13 +115,11 @@ pub struct Config {
     /// The time over which the set a person of uncertain velocity can reach
     /// grows, s (finite, > 0; docs/maths.md §2.7,
     /// [`ReachLimits::grow`](crate::ReachLimits::grow)): beyond it the set
-    /// keeps its radius and travels with the estimate. Default 0.8 (two
-    /// steps of the default `step_duration`: the CoM's path is fixed by the
-    /// stance foot until the next footstep lands, at most one step away, and
-    /// the step after can bring it to rest; the controller plans again every
-    /// cycle. 0.4 froze the robot less among people standing still but let
-    /// it step into a person on an unseen circle-crossing seed,
-    /// docs/results.md).
+    /// keeps its radius and travels with the estimate. Default 1000 (longer
+    /// than any horizon: the set grows over the whole horizon). 0.8 s (the
+    /// step being taken and the one that can stop the robot) freed the robot
+    /// among people standing still, but on unseen seeds let it walk into
+    /// people where the whole-horizon set did not (docs/results.md).
     pub person_reach_time: f64,
 }
 
@@ -157,7 +155,7 @@ impl Default for Config {
             velocity_margin: true,
             person_speed_max: 1.5,
             person_accel_max: 0.5,
-            person_reach_time: 0.8,
+            person_reach_time: 1000.0,
         }
     }
 }

@@ -121,8 +121,12 @@ pub struct TrackParams {
     pub flat_width: f64,
     /// Hits on a straight face at least this long are a wall's, never a
     /// person's, and are left to the map ([`crate::sense::walls`]), m: a
-    /// person's outline is round, and the straight faces of the simulator's
-    /// people (octagons of radius at most 0.3 m) are at most 0.23 m long.
+    /// person's outline is round; the simulator's people are octagons of
+    /// radius at most 0.3 m, all turned alike, whose faces are at most 0.23
+    /// m long, and two of them side by side can line their faces up across
+    /// a gap the breakpoint detector links (about 0.25 m at 2 m): at 0.5 m
+    /// such pairs in a crowd were taken for walls (`crowd` seed 601: a
+    /// robot-caused contact), at 0.8 m none was.
     pub wall_length: f64,
 }
 
@@ -148,7 +152,7 @@ impl Default for TrackParams {
             group_extent: 1.0,
             line_rms: 0.04,
             flat_width: 0.065,
-            wall_length: 0.5,
+            wall_length: 0.8,
         }
     }
 }

@@ -72,7 +72,8 @@ mod tests {
     }
 
     fn wall_of(rays: &[Option<Vector2<f64>>], origin: Vector2<f64>) -> Vec<bool> {
-        wall_hits(rays, origin, &LidarParams::default(), 0.5, 3)
+        let length = crate::sense::track::TrackParams::default().wall_length;
+        wall_hits(rays, origin, &LidarParams::default(), length, 3)
     }
 
     #[test]
