@@ -115,6 +115,13 @@ def main(argv: Optional[List[str]] = None) -> int:
     lip.add_argument("scenario")
     lip.add_argument("--set", action="append", default=[], metavar="KEY=VALUE")
     lip.add_argument("--seed", type=int, default=None)
+    wp = sub.add_parser("walk-plan", help="walk a hand-made footstep plan, no controller (plan.KINDS)")
+    wp.add_argument("kind", help="in-place, straight or turn")
+    wp.add_argument("--steps", type=int, default=20, help="footsteps after the start [20]")
+    wp.add_argument("--stride", type=float, default=0.1, help="path advance per step, m [0.1]")
+    wp.add_argument("--turn", type=float, default=0.1, help="heading change per step (turn), rad [0.1]")
+    wp.add_argument("--step-duration", type=float, default=None, help="s [the derived configuration's]")
+    wp.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a sim.Options setting")
     args = parser.parse_args(argv)
     try:
         import ldcbf_nav
@@ -130,6 +137,16 @@ def main(argv: Optional[List[str]] = None) -> int:
                 split_sets(args.set)
                 rows = batch.run_batch(args.family, seeds, args.set, out, run_one)
                 print(batch.verdict(rows))
+                return 0
+            if args.command == "walk-plan":
+                from . import plan
+
+                option_sets, other = split_sets(args.set)
+                if other:
+                    raise ValueError(f"walk-plan: not a sim.Options setting: {', '.join(other)}")
+                T = args.step_duration or robot.derived_config()["step_duration"]
+                result = plan.walk(args.kind, args.steps, args.stride, args.turn, T, sim.Options(**option_sets))
+                print(" ".join(f"{k}={v}" for k, v in result.items()))
                 return 0
             if args.command == "lip":
                 lip_summary = run_lip(args.scenario, args.set, args.seed)

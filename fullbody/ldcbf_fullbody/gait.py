@@ -26,18 +26,23 @@ SWING_START = 0.1
 SWING_END = 0.85
 
 
-def swing_height(phase: float, height: float) -> float:
-    """The swing sole's height (m) at ``phase`` in [0, 1]: ``height`` at mid-step,
-    zero velocity at lift-off and touchdown."""
-    return height * 0.5 * (1.0 - math.cos(2.0 * math.pi * min(max(phase, 0.0), 1.0)))
+def swing_height(phase: float, height: float, lift: float = 0.0) -> float:
+    """The swing sole's height (m) at ``phase`` in [0, 1] of the step, the foot
+    lifting at ``lift`` and landing at 1: ``height`` midway, zero velocity at
+    lift-off and touchdown."""
+    s = (phase - lift) / (1.0 - lift)
+    return height * 0.5 * (1.0 - math.cos(2.0 * math.pi * min(max(s, 0.0), 1.0)))
 
 
 class Swing:
     """The swing foot's horizontal path (W, m): a minimum-jerk (quintic)
     motion to the latest target, re-planned each tick from the current
-    position, velocity and acceleration, ending at rest at ``SWING_END``."""
+    position, velocity and acceleration, moving between the fractions
+    ``begin`` and ``end`` of the step and ending at rest."""
 
-    def __init__(self, start: np.ndarray) -> None:
+    def __init__(self, start: np.ndarray, begin: float = SWING_START, end: float = SWING_END) -> None:
+        #: The fractions of the step between which the foot moves horizontally.
+        self.begin, self.end = begin, end
         self.x = np.array(start, dtype=float)
         self.v = np.zeros(2)
         self.a = np.zeros(2)
@@ -45,9 +50,9 @@ class Swing:
     def advance(self, target: np.ndarray, phase: float, dt: float, duration: float) -> np.ndarray:
         """Moves ``dt`` (s) along the re-planned path at ``phase`` (the fraction
         of the step of ``duration`` s done before this tick); returns (x, y)."""
-        if phase < SWING_START or phase >= SWING_END:
+        if phase < self.begin or phase >= self.end:
             return self.x.copy()
-        tau = (SWING_END - phase) * duration
+        tau = (self.end - phase) * duration
         if tau <= dt:
             self.x, self.v, self.a = np.array(target, dtype=float), np.zeros(2), np.zeros(2)
             return self.x.copy()

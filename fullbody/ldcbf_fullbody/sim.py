@@ -23,7 +23,7 @@ from typing import Any, Dict, List, Optional, Sequence
 import mujoco
 import numpy as np
 
-from . import gait, model, wbc
+from . import gait, model, robot, walker, wbc
 
 #: A fall: the pelvis origin below this height (m; standing: 0.714 m) ...
 FALL_HEIGHT = 0.45
@@ -32,48 +32,18 @@ FALL_TILT = math.radians(45.0)
 
 
 @dataclasses.dataclass
-class Options:
-    """Settings of a full-body run (``--set`` keys without a controller name)."""
+class Options(walker.Gait):
+    """Settings of a full-body run (``--set`` keys without a controller name);
+    the walking pattern's are ``walker.Gait``'s."""
 
     #: Height of the obstacles' prisms, m.
     obstacle_height: float = 1.5
-    #: Swing foot apex above the ground, m.
-    swing_height: float = 0.06
     #: Controller period, s (20 Hz).
     control_period: float = 0.05
-    #: Fraction of the gap between the measured CoM state and the LIP
-    #: reference closed at each control cycle (1: restart the reference at
-    #: the measurement).
-    reference_reset: float = 0.3
-    #: CoM feedback gain of the IK's CoM target: ``ref + gain (ref - measured)``
-    #: in the horizontal plane (0: open loop).
-    com_feedback: float = 1.0
-    #: DCM feedback gain of the IK's CoM target: ``+ gain (xi_ref - xi)`` with
-    #: the divergent component ``xi = c + c' / beta`` of the reference and of
-    #: the measurement, horizontal (0: none).
-    dcm_feedback: float = 0.0
-    #: Add the static gravity torques of the IK configuration (placo, on the
-    #: stance foot) to the servos as a feed-forward.
-    gravity_feedforward: bool = True
-    #: Swing-foot feedback gain: the IK's swing target is ``path + gain (path -
-    #: measured)`` in the horizontal plane (0: open loop).
-    swing_feedback: float = 1.0
     #: The swing foot follows the controller's target until this fraction of
     #: the step, then holds the last one (committed) to touchdown (1: never
-    #: frozen; the path itself ends at ``gait.SWING_END``).
+    #: frozen; the path itself stops moving horizontally at ``swing_end``).
     swing_freeze: float = 1.0
-    #: After a touchdown the new swing foot holds still until the next
-    #: control cycle plans it (False: it heads for the last target, which was
-    #: planned for the other foot).
-    hold_until_planned: bool = False
-    #: Smallest lateral distance (m) between the sole points, along the stance
-    #: foot's lateral axis: a controller target closer to (or across) the
-    #: stance foot is moved out to it (0: off). The controller has no such
-    #: row; the G1's legs cannot put the feet side by side.
-    min_foot_width: float = 0.0
-    #: The IK's stance foot is the measured stance foot (True) or where it
-    #: landed (False).
-    anchor_stance: bool = False
     #: MuJoCo's ``impratio`` with elliptic friction cones (0: MuJoCo's default
     #: pyramidal cones, impratio 1). Above 1 it makes friction harder, so the
     #: stance foot creeps less under the swing leg's reaction (MuJoCo's
@@ -136,6 +106,7 @@ class Body:
         self.robot_geoms = [g for g in range(m.ngeom) if m.geom_bodyid[g] != 0]
         self.is_obstacle = np.zeros(m.ngeom, dtype=bool)
         self.is_obstacle[self.obstacle_geoms] = True
+        self.floor = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_GEOM, "floor")
         self.actuated = [m.jnt_qposadr[m.actuator_trnid[a, 0]] for a in range(m.nu)]
         self.actuator_names = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_ACTUATOR, a) for a in range(m.nu)]
         self.link_names = [mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_BODY, b) for b in range(m.nbody)]
@@ -185,6 +156,35 @@ class Body:
         """A foot's heading (rad)."""
         return yaw_of(self.d.xmat[self.foot_body[side]].reshape(3, 3))
 
+    def zmp(self) -> Optional[np.ndarray]:
+        """The measured ZMP (x, y, m, W): the centre of pressure of the normal
+        contact forces between the robot and the floor (None in the air)."""
+        total, moment = 0.0, np.zeros(2)
+        f = np.zeros(6)
+        for i in range(self.d.ncon):
+            c = self.d.contact[i]
+            if c.geom1 != self.floor and c.geom2 != self.floor:
+                continue
+            mujoco.mj_contactForce(self.m, self.d, i, f)
+            total += f[0]
+            moment += f[0] * c.pos[:2]
+        return moment / total if total > 1e-6 else None
+
+    def foot_cop(self, side: str):
+        """A foot's centre of pressure on the floor (x, y, m, W) and its normal
+        force (N); (None, 0) in the air."""
+        total, moment = 0.0, np.zeros(2)
+        f = np.zeros(6)
+        b = self.foot_body[side]
+        for i in range(self.d.ncon):
+            c = self.d.contact[i]
+            if self.floor not in (c.geom1, c.geom2) or b not in (self.m.geom_bodyid[c.geom1], self.m.geom_bodyid[c.geom2]):
+                continue
+            mujoco.mj_contactForce(self.m, self.d, i, f)
+            total += f[0]
+            moment += f[0] * c.pos[:2]
+        return (moment / total, total) if total > 1e-6 else (None, 0.0)
+
     def fallen(self) -> bool:
         """Pelvis too low or torso tilted too far (``FALL_HEIGHT``, ``FALL_TILT``)."""
         tilt = math.acos(min(1.0, max(-1.0, self.d.xmat[self.torso][8])))
@@ -212,44 +212,18 @@ class Body:
         return best
 
 
-def separated(target: np.ndarray, stance: np.ndarray, stance_yaw: float, swing: str, width: float):
-    """The swing target (x, y, W) moved sideways, if needed, so that it lies at
-    least ``width`` (m) to the swing's side of the stance sole point along the
-    stance foot's lateral axis (no crossed or touching feet); returns the
-    target and whether it was moved."""
-    lateral = np.array([-math.sin(stance_yaw), math.cos(stance_yaw)]) * (1.0 if swing == "left" else -1.0)
-    gap = float((target - stance) @ lateral)
-    if width <= 0.0 or gap >= width:
-        return target, False
-    return target + (width - gap) * lateral, True
-
-
-def drive(
-    body: Body,
-    ik: wbc.WholeBodyIK,
-    options: Options,
-    left: np.ndarray,
-    right: np.ndarray,
-    com: np.ndarray,
-    yaw: float,
-    left_share: float,
-    com_velocity: Optional[np.ndarray] = None,
-    beta: float = 1.0,
-) -> None:
-    """One physics tick: the IK on the references (foot poses 4x4, CoM
-    reference (x, y, z), trunk yaw), the CoM feedback, the servos' targets
-    and feed-forward, then the MuJoCo step."""
-    measured = body.com()
-    target = np.array(com, dtype=float)
-    target[:2] += options.com_feedback * (target[:2] - measured[:2])
-    if options.dcm_feedback and com_velocity is not None:
-        xi_ref = com[:2] + com_velocity / beta
-        xi = measured[:2] + body.com_velocity()[:2] / beta
-        target[:2] += options.dcm_feedback * (xi_ref - xi)
-    ik.place(left, right, target, yaw)
-    q = ik.solve(1)
-    body.command(q, ik.gravity_torques(left_share) if options.gravity_feedforward else None)
-    mujoco.mj_step(body.m, body.d)
+def shift_weight(w: walker.Walker, options: Options) -> None:
+    """The start: from standing with the CoM between the soles, the CoM moves
+    ``initial_shift`` of the way over the walker's stance sole in
+    ``settle_time`` (double support, a quintic in time)."""
+    mid = (w.soles["left"] + w.soles["right"]) / 2.0
+    goal = mid + options.initial_shift * (w.soles[w.stance] - mid)
+    ticks = max(1, round(options.settle_time / w.dt))
+    sign = 1.0 if w.stance == "left" else -1.0
+    yaw = w.yaws[w.stance]
+    for k in range(ticks):
+        s = gait.smoothstep((k + 1) / ticks)
+        w.stand(mid + s * (goal - mid), yaw, 0.5 + 0.5 * options.initial_shift * s * sign)
 
 
 def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=None, trace=None) -> Dict[str, Any]:
@@ -268,42 +242,27 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
     dt = m.opt.timestep
     H = config["com_height"]
     T = config["step_duration"]
-    beta = math.sqrt(config["gravity"] / H)
     per_control = max(1, round(options.control_period / dt))
-    per_step = round(T / dt)
     goal = np.asarray(scenario["goal"], dtype=float)
     time_limit = options.time_limit if options.time_limit is not None else scenario["time_limit"]
 
-    # Start: standing in double support, CoM over the midpoint of the soles.
+    # Start: standing in double support, then the CoM over the stance sole.
     start = np.asarray(scenario["start"], dtype=float)
     heading = float(scenario["start_heading"])
-    stance = scenario["stance"]
     R = wbc.yaw_matrix(heading)
-    left = np.array([*start, 0.0]) + R @ [0.0, 0.1, 0.0]
-    right = np.array([*start, 0.0]) + R @ [0.0, -0.1, 0.0]
-    soles = {"left": left, "right": right}
-    yaws = {"left": heading, "right": heading}
+    soles = {side: start + (R @ [0.0, y, 0.0])[:2] for side, y in (("left", robot.STANCE_HALF_WIDTH), ("right", -robot.STANCE_HALF_WIDTH))}
     ik = wbc.WholeBodyIK(dt)
-    q = ik.settle(wbc.foot_pose(left, heading), wbc.foot_pose(right, heading), [*start, H], heading)
+    q = ik.settle(wbc.foot_pose([*soles["left"], 0.0], heading), wbc.foot_pose([*soles["right"], 0.0], heading), [*start, H], heading)
     body.set_pose(ik.robot.get_T_world_fbase(), q)
-    mid = np.array([*start, H])
-    shifted = mid + options.initial_shift * (np.array([*soles[stance][:2], H]) - mid)
-    settle_ticks = max(1, round(options.settle_time / dt))
-    for k in range(settle_ticks):
-        s = gait.smoothstep((k + 1) / settle_ticks)
-        share = 0.5 + 0.5 * options.initial_shift * s * (1.0 if stance == "left" else -1.0)
-        drive(body, ik, options, wbc.foot_pose(left, heading), wbc.foot_pose(right, heading), mid + s * (shifted - mid), heading, share)
+    w = walker.Walker(body, ik, options, H, config["gravity"], T, scenario["stance"], soles, {"left": heading, "right": heading})
+    shift_weight(w, options)
 
-    com = body.com()
-    p_ref, v_ref = com[:2].copy(), np.zeros(2)
-    swing = "right" if stance == "left" else "left"
-    swing_path = gait.Swing(soles[swing][:2])
-    target = soles[swing][:2].copy()
+    target = w.soles[w.swing].copy()
     latest = target.copy()
+    future: List[np.ndarray] = []
     omega = 0.0
+    next_omega = 0.0
     heading_ref = heading
-    stance_sole = soles[stance][:2].copy()
-    tick_in_step = 0
     steps: List[StepRecord] = []
     contacts: Dict[str, int] = {}
     first_contact: Optional[float] = None
@@ -322,7 +281,6 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
     reached = False
     fell = False
     status_counts: Dict[str, int] = {}
-    widened = 0
     t0 = time.perf_counter()
     t = 0.0
     tick = 0
@@ -337,27 +295,24 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
                 com_velocity=vel[:2],
                 heading=body.heading(),
                 turning_rate=omega,
-                stance_foot=stance_sole,
-                stance_side=stance,
-                time_in_step=tick_in_step * dt,
+                stance_foot=w.soles[w.stance],
+                stance_side=w.stance,
+                time_in_step=w.time_in_step,
                 goal=goal,
                 obstacles=obstacles,
             )
             last_status = out["status"]
             status_counts[last_status] = status_counts.get(last_status, 0) + 1
             latest = np.asarray(out["foot_target"], dtype=float)
-            if tick_in_step < options.swing_freeze * per_step:
-                target, moved = separated(latest, stance_sole, yaws[stance], swing, options.min_foot_width)
-                widened += int(moved)
+            if w.tick_in_step < options.swing_freeze * w.per_step:
+                target = latest
+                future = [np.asarray(f, dtype=float) for f in out["plan"]["feet"][1:]]
             if trace:
                 trace(
-                    f"t={t:6.3f} com {com.round(3)} v {vel[:2].round(2)} ref {p_ref.round(3)} "
-                    f"stance {stance} {stance_sole.round(3)} target {target.round(3)} swing {body.sole(swing).round(3)}"
+                    f"t={t:6.3f} com {com.round(3)} v {vel[:2].round(2)} ref {w.com_ref.round(3)} "
+                    f"stance {w.stance} {w.soles[w.stance].round(3)} target {target.round(3)} swing {body.sole(w.swing).round(3)}"
                 )
             next_omega = float(out["turning_rate"])
-            a = options.reference_reset
-            p_ref = p_ref + a * (com[:2] - p_ref)
-            v_ref = v_ref + a * (vel[:2] - v_ref)
             samples["t"].append(t)
             samples["com"].append(com.copy())
             samples["left"].append(body.sole("left").copy())
@@ -367,30 +322,16 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
                 reached = True
                 break
             min_clear = min(min_clear, body.clearance())
-        phase = tick_in_step / per_step
         # The heading integrates the turning rate in force (as in the LIP plant).
         heading_ref += omega * dt
-        p_ref, v_ref = gait.lip_flow(p_ref, v_ref, stance_sole, beta, dt)
-        xy = swing_path.advance(target, phase, dt, T)
-        xy = xy + options.swing_feedback * (xy - body.sole(swing)[:2])
-        swing_xyz = np.array([xy[0], xy[1], gait.swing_height((tick_in_step + 1) / per_step, options.swing_height)])
-        land_yaw = yaws[swing] + (heading_ref + omega * (T - (tick_in_step + 1) * dt) - yaws[swing]) * gait.smoothstep(phase)
-        # The IK's stance foot is where the body's stance foot is (flat on
-        # the ground), so that the swing foot is placed in the world's frame.
-        if options.anchor_stance:
-            stance_pose = wbc.foot_pose([*body.sole(stance)[:2], 0.0], body.foot_yaw(stance))
-        else:
-            stance_pose = wbc.foot_pose([*stance_sole, 0.0], yaws[stance])
-        swing_pose = wbc.foot_pose(swing_xyz, land_yaw)
-        left_pose, right_pose = (stance_pose, swing_pose) if stance == "left" else (swing_pose, stance_pose)
-        drive(body, ik, options, left_pose, right_pose, np.array([p_ref[0], p_ref[1], H]), heading_ref, 1.0 if stance == "left" else 0.0, v_ref, beta)
+        land_yaw = heading_ref + omega * (T - w.time_in_step - dt)
+        landing = w.tick(target, land_yaw, future, heading_ref)
         tick += 1
         t = tick * dt
         if renderer is not None and tick % per_frame == 0:
             camera.lookat[:] = body.com()
             renderer.update_scene(d, camera)
             frames.append(renderer.render().copy())
-        tick_in_step += 1
         for link in body.obstacle_contacts():
             contacts[link] = contacts.get(link, 0) + 1
             if first_contact is None:
@@ -398,30 +339,27 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
         if body.fallen():
             fell = True
             break
-        if tick_in_step >= per_step:
-            landed = body.sole(swing)
-            err = float(np.linalg.norm(landed[:2] - target))
+        if landing is not None:
+            err = float(np.linalg.norm(landing.sole[:2] - latest))
             com = body.com()
             steps.append(
-                StepRecord(len(steps) + 1, t, swing, target[0], target[1], latest[0], latest[1], swing_path.x[0], swing_path.x[1], landed[0], landed[1], body.foot_yaw(swing), err, com[0], com[1], last_status)
+                StepRecord(
+                    len(steps) + 1, t, landing.side, target[0], target[1], latest[0], latest[1], landing.path_end[0], landing.path_end[1],
+                    landing.sole[0], landing.sole[1], landing.yaw, err, com[0], com[1], last_status,
+                )
             )
             if log:
                 log(
-                    f"t={t:6.2f} step {len(steps):3d} {swing:5s} error {err * 100:5.1f} cm "
-                    f"target ({target[0]:.3f}, {target[1]:.3f}) landed ({landed[0]:.3f}, {landed[1]:.3f}) "
+                    f"t={t:6.2f} step {len(steps):3d} {landing.side:5s} error {err * 100:5.1f} cm "
+                    f"target ({latest[0]:.3f}, {latest[1]:.3f}) landed ({landing.sole[0]:.3f}, {landing.sole[1]:.3f}) "
                     f"com ({com[0]:.2f}, {com[1]:.2f})"
                 )
-            yaws[swing] = land_yaw
-            stance, swing = swing, stance
-            stance_sole = landed[:2].copy()
-            swing_path = gait.Swing(body.sole(swing)[:2])
-            if options.hold_until_planned:
-                # Until the controller plans this step, the new swing foot
-                # holds where it is (the last target was the other foot's).
-                target = swing_path.x.copy()
-                latest = target.copy()
-            tick_in_step = 0
             omega = next_omega
+            # The next swing foot's target is unknown until the next cycle:
+            # it holds where it stands.
+            target = w.soles[w.swing].copy()
+            latest = target.copy()
+            future = []
     wall = time.perf_counter() - t0
     errors = np.array([s.error for s in steps]) if steps else np.zeros(0)
     summary = {
@@ -440,7 +378,6 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
         "real_time_factor": t / wall if wall > 0 else None,
         "controller_status": status_counts,
         "ik_soft_feet_ticks": ik.soft_ticks,
-        "widened_targets": widened,
         "physics_dt": dt,
     }
     return {"frames": frames, "summary": summary, "steps": steps, "samples": samples, "tracked": tracked, "obstacles": obstacles, "goal": goal, "start": start}
