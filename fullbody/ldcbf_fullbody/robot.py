@@ -26,6 +26,13 @@ STEP_QUANTUM = 0.002
 #: 10.6 s, although with it most cycles' QPs are infeasible and solved by the
 #: priority scheme's relaxation of the gait rows.
 VY_MIN = 0.25
+#: Highest forward velocity at a step's end, m/s: not scaled from Table I
+#: (0.637 m/s at the G1's H) but what the body walks. Measured with no
+#: controller (``walk-plan straight``, docs/fullbody.md): 40 steps of 0.05 m
+#: (0.16 m/s) walked, 0.075 m (0.24 m/s) fell after 11 steps; in the loop,
+#: 0.2 walked 40 s of `simple`, `circles` and `paper` without a fall, 0.3
+#: fell on `circles`, the scaled value on all three.
+VX_MAX = 0.2
 #: Half the lateral distance between the sole points when standing, m.
 STANCE_HALF_WIDTH = 0.1
 #: The ankle-roll link's collision spheres (centre x, y in the link frame, m) and radius.
@@ -93,8 +100,8 @@ def derived_config() -> Dict[str, float]:
     limits of Table I (defined for a 1 m CoM height) scaled to ``H`` by
     Froude similarity (lengths times ``H``, times and velocities times
     ``sqrt(H)``, rates over ``sqrt(H)``; ``T`` rounded to ``STEP_QUANTUM``), which maps a LIP gait of one height
-    to the same dimensionless gait of the other; except ``vy_min``, set to
-    ``VY_MIN``."""
+    to the same dimensionless gait of the other; except ``vy_min`` and
+    ``vx_max``, set to ``VY_MIN`` and ``VX_MAX``."""
     import ldcbf_nav
 
     table = ldcbf_nav.default_config()
@@ -113,4 +120,5 @@ def derived_config() -> Dict[str, float]:
     for key in ("vx_min", "vx_max", "vy_min", "vy_max"):
         out[key] = table[key] * math.sqrt(r)
     out["vy_min"] = VY_MIN
+    out["vx_max"] = VX_MAX
     return out

@@ -44,6 +44,11 @@ class Options(walker.Gait):
     #: the step, then holds the last one (committed) to touchdown (1: never
     #: frozen; the path itself stops moving horizontally at ``swing_end``).
     swing_freeze: float = 1.0
+    #: Smallest lateral distance (m) between the sole points, along the stance
+    #: foot's lateral axis: a controller target closer to (or across) the
+    #: stance foot is moved out to it (0: off). The controller has no such
+    #: row; the G1's legs cannot put the feet side by side or cross them.
+    min_foot_width: float = 0.0
     #: MuJoCo's ``impratio`` with elliptic friction cones (0: MuJoCo's default
     #: pyramidal cones, impratio 1). Above 1 it makes friction harder, so the
     #: stance foot creeps less under the swing leg's reaction (MuJoCo's
@@ -212,6 +217,18 @@ class Body:
         return best
 
 
+def separated(target: np.ndarray, stance: np.ndarray, stance_yaw: float, swing: str, width: float):
+    """The swing target (x, y, W) moved sideways, if needed, so that it lies at
+    least ``width`` (m) to the swing's side of the stance sole point along the
+    stance foot's lateral axis (no crossed or touching feet); returns the
+    target and whether it was moved."""
+    lateral = np.array([-math.sin(stance_yaw), math.cos(stance_yaw)]) * (1.0 if swing == "left" else -1.0)
+    gap = float((target - stance) @ lateral)
+    if width <= 0.0 or gap >= width:
+        return target, False
+    return target + (width - gap) * lateral, True
+
+
 def shift_weight(w: walker.Walker, options: Options) -> None:
     """The start: from standing with the CoM between the soles, the CoM moves
     ``initial_shift`` of the way over the walker's stance sole in
@@ -281,6 +298,7 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
     reached = False
     fell = False
     status_counts: Dict[str, int] = {}
+    widened = 0
     t0 = time.perf_counter()
     t = 0.0
     tick = 0
@@ -305,7 +323,8 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
             status_counts[last_status] = status_counts.get(last_status, 0) + 1
             latest = np.asarray(out["foot_target"], dtype=float)
             if w.tick_in_step < options.swing_freeze * w.per_step:
-                target = latest
+                target, moved = separated(latest, w.soles[w.stance], w.yaws[w.stance], w.swing, options.min_foot_width)
+                widened += int(moved)
                 future = [np.asarray(f, dtype=float) for f in out["plan"]["feet"][1:]]
             if trace:
                 trace(
@@ -378,6 +397,7 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
         "real_time_factor": t / wall if wall > 0 else None,
         "controller_status": status_counts,
         "ik_soft_feet_ticks": ik.soft_ticks,
+        "widened_targets": widened,
         "physics_dt": dt,
     }
     return {"frames": frames, "summary": summary, "steps": steps, "samples": samples, "tracked": tracked, "obstacles": obstacles, "goal": goal, "start": start}

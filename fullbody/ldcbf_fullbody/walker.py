@@ -61,7 +61,7 @@ class Gait:
     foot_damping_leak: float = 0.2
     #: The swing foot moves horizontally until this fraction of its swing
     #: (lift-off 0, touchdown 1), then comes down vertically.
-    swing_end: float = 0.85
+    swing_end: float = 0.95
 
 
 def drive(body, ik: wbc.WholeBodyIK, gait_: Gait, left: np.ndarray, right: np.ndarray, com: np.ndarray, yaw: float, left_share: float, offsets: Optional[Dict[str, float]] = None) -> None:
