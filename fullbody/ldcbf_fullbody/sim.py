@@ -1,9 +1,10 @@
 """The full-body closed loop: the G1 in MuJoCo, our controller (``ldcbf_nav``)
 at 20 Hz on the measured state, placo's IK at the physics rate.
 
-Per physics tick (``dt`` = 2 ms): the gait references (``gait.py``) give both
-feet's poses and the CoM; the IK (``wbc.py``) turns them into joint targets;
-MuJoCo's position servos track them; link-obstacle contacts are counted.
+Per physics tick (``dt`` = 2 ms): the walker (``walker.py``: the ZMP preview
+CoM, the swing path, foot damping) gives both feet's poses and the CoM; the
+IK (``wbc.py``) turns them into joint targets; MuJoCo's position servos track
+them; link-obstacle contacts are counted.
 Every ``control_period`` the controller is given the *measured* CoM position
 and velocity (MuJoCo's whole-body CoM), the pelvis heading, the turning rate
 in force, the measured stance sole point, the time in the step, the goal and
