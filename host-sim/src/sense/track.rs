@@ -34,8 +34,12 @@
 //!    [`TrackParams::min_speed`] and [`TrackParams::significance`] standard
 //!    deviations of the filter's velocity estimate; otherwise zero (at rest).
 //!    Moving is sticky: a track that got a velocity once keeps giving its
-//!    current estimate for as long as it lives, whatever the size of the
-//!    piece it is matched with.
+//!    current estimate, whatever the size of the piece it is matched with,
+//!    until it has stayed within [`TrackParams::still_radius`] of one point
+//!    for [`TrackParams::still_time`] (a person standing, or a wall's end
+//!    whose visible part slid as the robot walked past): it is then at rest
+//!    until it leaves that disk; and a track matched with a flat face
+//!    ([`flat`]: never a person) is at rest.
 //! 6. **Velocity uncertainty** ([`Track::velocity_radius`]): with each
 //!    velocity a radius (m/s) the true velocity is within, in any
 //!    direction, while the model holds: the [`TrackParams::velocity_chi2`]
@@ -128,6 +132,21 @@ pub struct TrackParams {
     /// such pairs in a crowd were taken for walls (`crowd` seed 601: a
     /// robot-caused contact), at 0.8 m none was.
     pub wall_length: f64,
+    /// A track whose estimated position has stayed within this distance of
+    /// one point for [`TrackParams::still_time`] is at rest, m (see there).
+    pub still_radius: f64,
+    /// A track that has stayed within [`TrackParams::still_radius`] of one
+    /// point this long is at rest, and is given no velocity until it leaves
+    /// that disk, s: moving is sticky, and without this a thing that looked
+    /// like it moved once stayed a person for good. The visible part of a
+    /// wall's end (a door jamb) slides by up to its length as the robot
+    /// walks past, which looked like a significant speed (`door-emerge`
+    /// seed 700: a jamb given 0.05 m/s, whose reachable set with that of a
+    /// person standing beyond the door held the robot for 60 s); a person
+    /// who stands still this long is at rest too, until they walk on. A
+    /// track younger than this is not judged by it (a person who appears
+    /// gets a velocity as soon as it is significant).
+    pub still_time: f64,
 }
 
 impl Default for TrackParams {
@@ -153,6 +172,8 @@ impl Default for TrackParams {
             line_rms: 0.04,
             flat_width: 0.065,
             wall_length: 0.8,
+            still_radius: 0.3,
+            still_time: 2.0,
         }
     }
 }
@@ -172,6 +193,13 @@ pub struct Track {
     pub last_update: f64,
     /// Updates received (the first measurement included).
     pub updates: u32,
+    /// The point the estimated position has stayed within
+    /// [`TrackParams::still_radius`] of since `anchor_time` (s), m.
+    pub anchor: Vector2<f64>,
+    /// Since when the position has stayed near `anchor`, s.
+    pub anchor_time: f64,
+    /// When the track started, s.
+    pub born: f64,
     /// The track has been given a velocity ([`Motion::Moving`]) once: from
     /// then on it is moving, with its current estimate, for as long as it
     /// lives (a person who slows, or whose visible outline shifts its
@@ -401,6 +429,9 @@ impl Tracker {
                     time: t,
                     last_update: t,
                     updates: 1,
+                    anchor: z[j],
+                    anchor_time: t,
+                    born: t,
                     moving: false,
                     small: false,
                 });
@@ -414,13 +445,26 @@ impl Tracker {
             .zip(&track_of)
             .map(|(p, slot)| {
                 let tr = &mut self.tracks[slot.expect("every piece has a track")];
-                let small = person_sized(p, pr.max_extent) && !flat(p, pr.flat_width);
+                let is_flat = flat(p, pr.flat_width);
+                let small = person_sized(p, pr.max_extent) && !is_flat;
                 tr.small = small;
                 // Bounded as the scenario's obstacles are (a wrong
                 // association must not hand the controller an absurd speed).
                 let v = tr.velocity();
                 let v = v * (MAX_SPEED / v.norm()).min(1.0);
                 let sigma_v = (0.5 * (tr.covariance[(2, 2)] + tr.covariance[(3, 3)])).sqrt();
+                if (tr.position() - tr.anchor).norm() > pr.still_radius {
+                    tr.anchor = tr.position();
+                    tr.anchor_time = t;
+                }
+                // Old enough, and near one point for still_time: at rest.
+                let still = t - tr.born >= pr.still_time && t - tr.anchor_time >= pr.still_time;
+                // A flat face is never a person ([`flat`]): a track that
+                // moved (the visible part of a wall's end sliding as the
+                // robot walks past) and is now matched with one is at rest.
+                if still || is_flat {
+                    tr.moving = false;
+                }
                 if tr.moving {
                     // Sticky (module docs), also when the piece grew (people
                     // seen as one cluster that the split did not part).
@@ -429,7 +473,7 @@ impl Tracker {
                     Motion::AtRest
                 } else if tr.updates < pr.confirm {
                     Motion::Tentative
-                } else if v.norm() >= pr.min_speed.max(pr.significance * sigma_v) {
+                } else if v.norm() >= pr.min_speed.max(pr.significance * sigma_v) && !still {
                     tr.moving = true;
                     Motion::Moving(v)
                 } else {
