@@ -101,6 +101,21 @@ fn nearest(scan: &MoverScan, c: Vector2<f64>, reach: f64) -> Option<usize> {
         .map(|(i, _)| i)
 }
 
+/// Every hull handed over with a velocity: its scan's time and its centre.
+fn moving_hulls(frames: &[Frame]) -> Vec<(f64, Vector2<f64>)> {
+    frames
+        .iter()
+        .flat_map(|f| {
+            f.scan
+                .velocities
+                .iter()
+                .zip(&f.scan.obstacles)
+                .filter(|(v, _)| v.norm() > 0.0)
+                .map(move |(_, h)| (f.t, vertex_centre(h)))
+        })
+        .collect()
+}
+
 /// Counts, over the frames from `from` s on, the scans in which person `k`
 /// was handed over as an obstacle of its own (its nearest hull is nearest no
 /// other person), and of those, the scans whose velocity was within `tol`
@@ -354,20 +369,10 @@ fn walls_seen_at_a_slant_or_at_the_edge_of_the_range_are_no_people() {
         wall(5.0, 0.7, 5.2, 1.0),
     ];
     let frames = record(&[], &walls, 0.0, 0.5, 8.0);
-    let moving: Vec<(f64, usize)> = frames
-        .iter()
-        .flat_map(|f| {
-            f.scan
-                .velocities
-                .iter()
-                .enumerate()
-                .filter(|(_, v)| v.norm() > 0.0)
-                .map(move |(i, _)| (f.t, i))
-        })
-        .collect();
+    let moving = moving_hulls(&frames);
     assert!(
         moving.is_empty(),
-        "{} moving hulls handed over, the first at (t, index) {:?}",
+        "{} moving hulls handed over, the first (t, centre) {:?}",
         moving.len(),
         &moving[..moving.len().min(5)]
     );
@@ -399,16 +404,8 @@ fn the_jambs_of_a_door_beside_the_path_are_no_people() {
     for (x0, speed) in [(2.0, 0.4), (1.0, 0.3), (3.0, 0.25), (3.0, 0.5)] {
         // Up to 1 m past the door, at most 10 s.
         let frames = record(&[], &walls, x0, speed, ((7.0 - x0) / speed).min(10.0));
-        let moving: Vec<(f64, Vector2<f64>)> = frames
-            .iter()
-            .flat_map(|f| {
-                f.scan
-                    .velocities
-                    .iter()
-                    .zip(&f.scan.obstacles)
-                    .filter(|(v, _)| v.norm() > 0.0)
-                    .map(move |(_, h)| (f.t, vertex_centre(h)))
-            })
+        let moving: Vec<(f64, Vector2<f64>)> = moving_hulls(&frames)
+            .into_iter()
             .filter(|(_, c)| jambs.iter().any(|j| (c - j).norm() <= 0.4))
             .collect();
         assert!(
