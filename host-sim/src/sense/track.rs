@@ -200,10 +200,11 @@ pub struct Track {
     pub anchor_time: f64,
     /// When the track started, s.
     pub born: f64,
-    /// The track has been given a velocity ([`Motion::Moving`]) once: from
-    /// then on it is moving, with its current estimate, for as long as it
-    /// lives (a person who slows, or whose visible outline shifts its
-    /// centre against the walk, is not turned into a wall).
+    /// The track has been given a velocity ([`Motion::Moving`]): from then
+    /// on it is moving, with its current estimate (a person who slows, or
+    /// whose visible outline shifts its centre against the walk, is not
+    /// turned into a wall), until it stays still for
+    /// [`TrackParams::still_time`] or is matched with a flat face.
     pub moving: bool,
     /// The last piece matched with the track was person-sized
     /// ([`TrackParams::max_extent`]): the track may be a person, and a
