@@ -162,7 +162,7 @@ def main(argv: Optional[List[str]] = None) -> int:
                 return 0
             if args.command == "lip":
                 lip_summary = run_lip(args.scenario, args.set, args.seed)
-                keys = ("outcome", "steps", "sim_time", "min_body_clearance", "min_footstep_clearance", "contacts_robot")
+                keys = ("outcome", "steps", "sim_time", "final_distance", "status_counts", "min_body_clearance", "min_footstep_clearance", "contacts_robot")
                 print(" ".join(f"{k}={lip_summary[k]}" for k in keys))
                 return 0
             summary = run_one(args.scenario, args.set, args.out, args.seed, args.quiet)
