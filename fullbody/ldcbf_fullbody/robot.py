@@ -28,6 +28,12 @@ STEP_QUANTUM = 0.002
 #: (no goal reached in 40 s); 0.2 (a periodic step width of at least
 #: 0.183 m) leaves every LIP cycle optimal.
 VY_MIN = 0.2
+#: Lowest forward velocity at a step's end, m/s: not scaled from Table I
+#: (-0.08 m/s at the G1's H) but 0, no step that ends walking backwards.
+#: Measured (docs/fullbody.md): beside an obstacle the plan's feet went
+#: 0.15 to 0.28 m forwards and back on alternate steps and the body fell
+#: (`circles` with the planner at 73.4 s); with 0 it reached the goal.
+VX_MIN = 0.0
 #: The LDCBF margin ``delta`` (m): the body's CoM is not the LIP's (landing
 #: errors p95 about 8 cm), and the collision boxes of the hands swing outside
 #: the standing body's disk. With 0 the right wrist touched a pillar of
@@ -120,7 +126,7 @@ def derived_config() -> Dict[str, float]:
     Froude similarity (lengths times ``H``, times and velocities times
     ``sqrt(H)``, rates over ``sqrt(H)``; ``T`` rounded to ``STEP_QUANTUM``), which maps a LIP gait of one height
     to the same dimensionless gait of the other; except ``vy_min`` and
-    ``vx_max``, set to ``VY_MIN`` and ``VX_MAX`` (``VY_MIN`` below
+    ``vx_max`` and ``vx_min``, set to ``VY_MIN``, ``VX_MAX`` and ``VX_MIN`` (``VY_MIN`` below
     :func:`lateral_velocity_cap`), and ``delta`` (``DELTA``), the LDCBF
     margin for the body's tracking error."""
     import ldcbf_nav
@@ -142,6 +148,7 @@ def derived_config() -> Dict[str, float]:
         out[key] = table[key] * math.sqrt(r)
     out["vy_min"] = VY_MIN
     out["vx_max"] = VX_MAX
+    out["vx_min"] = VX_MIN
     out["delta"] = DELTA
     assert out["vy_min"] < lateral_velocity_cap(H, out["step_duration"], out["l_max"]), "vy_min above what l_max allows"
     return out
