@@ -56,12 +56,13 @@ class Options(walker.Gait):
     #: documentation recommends it against slip).
     impratio: float = 0.0
     #: With a planner: the controller is given the next subgoal when the CoM
-    #: is within this of the current one, m. The LIP plant's
-    #: ``rrt.switch_radius`` is 0.4; with it the body fell at 81 s of `paper`
-    #: 0.44 m before the first subgoal, the plan's feet going back and forth
-    #: as the controller slowed down for it (docs/fullbody.md); with 0.8 it
-    #: reached the goal.
-    switch_radius: float = 0.8
+    #: is within this of the current one, m (0.4: the LIP plant's
+    #: ``rrt.switch_radius``). Measured with the planner (docs/fullbody.md):
+    #: with 0.4 the body reached `circles` and fell on `paper` (81 s, 0.44 m
+    #: before the first subgoal, the plan's feet going back and forth as the
+    #: controller slowed down for it) and `simple`; with 0.8 it reached
+    #: `paper` and fell on `circles` and `simple`.
+    switch_radius: float = 0.4
     #: Frames per simulated second of an animation (0: none). Needs
     #: offscreen OpenGL (``MUJOCO_GL=egl``).
     animation_fps: float = 0.0
