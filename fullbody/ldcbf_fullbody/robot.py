@@ -20,12 +20,25 @@ TABLE_I_COM_HEIGHT = 1.0
 STEP_QUANTUM = 0.002
 #: Lowest lateral velocity at a step's end (times the stance sign), m/s: not
 #: scaled from Table I (0.08 m/s) but raised, so that the LIP's sway puts the
-#: feet wide enough apart for the G1's hips. Measured on `simple`
-#: (docs/fullbody.md): 0.08 put the swing foot 1 cm beside the stance foot
-#: and the body fell at 1.75 s; 0.18 and 0.2 fell at 1.7 s; 0.25 walked
-#: 10.6 s, although with it most cycles' QPs are infeasible and solved by the
-#: priority scheme's relaxation of the gait rows.
-VY_MIN = 0.25
+#: feet wide enough apart for the G1's hips, and kept below
+#: :func:`lateral_velocity_cap` (0.240 m/s), the most a periodic gait within
+#: ``l_max`` can have. Measured (docs/fullbody.md): 0.08 put the swing foot
+#: 1 cm beside the stance foot and the body fell at 1.75 s; 0.25, above the
+#: cap, made every cycle's QP infeasible and the plan's strides about 1 cm
+#: (no goal reached in 40 s); 0.2 (a periodic step width of at least
+#: 0.183 m) leaves every LIP cycle optimal.
+VY_MIN = 0.2
+#: Lowest forward velocity at a step's end, m/s: not scaled from Table I
+#: (-0.08 m/s at the G1's H) but 0, no step that ends walking backwards.
+#: Measured (docs/fullbody.md): beside an obstacle the plan's feet went
+#: 0.15 to 0.28 m forwards and back on alternate steps and the body fell
+#: (`circles` with the planner at 73.4 s); with 0 it reached the goal.
+VX_MIN = 0.0
+#: The LDCBF margin ``delta`` (m): the body's CoM is not the LIP's (landing
+#: errors p95 about 8 cm), and the collision boxes of the hands swing outside
+#: the standing body's disk. With 0 the right wrist touched a pillar of
+#: `circles` and the body fell at 69.3 s (docs/fullbody.md).
+DELTA = 0.05
 #: Highest forward velocity at a step's end, m/s: not scaled from Table I
 #: (0.637 m/s at the G1's H) but what the body walks. Measured with no
 #: controller (``walk-plan straight``, docs/fullbody.md): 40 steps of 0.05 m
@@ -92,6 +105,18 @@ def body_radius(H: float) -> float:
     return worst
 
 
+def lateral_velocity_cap(H: float, T: float, l_max: float, gravity: float = 9.81) -> float:
+    """The largest ``vy_min`` (m/s) a periodic gait meets with every foot
+    within ``l_max`` of the CoM (laterally, at the step's start): in the
+    LIP's symmetric sway the CoM starts a step ``e`` inside the stance foot
+    and moving towards it at ``beta e tanh(beta T / 2)``, and ends it moving
+    away at that speed (``beta = sqrt(g / H)``); ``e <= l_max`` bounds it.
+    Above it the gait rows (``VelLatLower`` with ``ReachLat*``) contradict
+    each other in steady walking and every QP is infeasible."""
+    beta = math.sqrt(gravity / H)
+    return beta * l_max * math.tanh(beta * T / 2.0)
+
+
 def derived_config() -> Dict[str, float]:
     """The controller settings taken from the model (names of
     ``ldcbf_nav.CONFIG_FIELDS``): ``com_height`` the CoM height of the
@@ -101,7 +126,9 @@ def derived_config() -> Dict[str, float]:
     Froude similarity (lengths times ``H``, times and velocities times
     ``sqrt(H)``, rates over ``sqrt(H)``; ``T`` rounded to ``STEP_QUANTUM``), which maps a LIP gait of one height
     to the same dimensionless gait of the other; except ``vy_min`` and
-    ``vx_max``, set to ``VY_MIN`` and ``VX_MAX``."""
+    ``vx_max`` and ``vx_min``, set to ``VY_MIN``, ``VX_MAX`` and ``VX_MIN`` (``VY_MIN`` below
+    :func:`lateral_velocity_cap`), and ``delta`` (``DELTA``), the LDCBF
+    margin for the body's tracking error."""
     import ldcbf_nav
 
     table = ldcbf_nav.default_config()
@@ -121,4 +148,7 @@ def derived_config() -> Dict[str, float]:
         out[key] = table[key] * math.sqrt(r)
     out["vy_min"] = VY_MIN
     out["vx_max"] = VX_MAX
+    out["vx_min"] = VX_MIN
+    out["delta"] = DELTA
+    assert out["vy_min"] < lateral_velocity_cap(H, out["step_duration"], out["l_max"]), "vy_min above what l_max allows"
     return out

@@ -55,6 +55,14 @@ class Options(walker.Gait):
     #: stance foot creeps less under the swing leg's reaction (MuJoCo's
     #: documentation recommends it against slip).
     impratio: float = 0.0
+    #: With a planner: the controller is given the next subgoal when the CoM
+    #: is within this of the current one, m (0.4: the LIP plant's
+    #: ``rrt.switch_radius``). Measured with the planner (docs/fullbody.md):
+    #: with 0.4 the body reached `circles` and fell on `paper` (81 s, 0.44 m
+    #: before the first subgoal, the plan's feet going back and forth as the
+    #: controller slowed down for it) and `simple`; with 0.8 it reached
+    #: `paper` and fell on `circles` and `simple`.
+    switch_radius: float = 0.4
     #: Frames per simulated second of an animation (0: none). Needs
     #: offscreen OpenGL (``MUJOCO_GL=egl``).
     animation_fps: float = 0.0
@@ -244,10 +252,20 @@ def shift_weight(w: walker.Walker, options: Options) -> None:
         w.stand(mid + s * (goal - mid), yaw, 0.5 + 0.5 * options.initial_shift * s * sign)
 
 
-def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=None, trace=None) -> Dict[str, Any]:
+def run(
+    scenario: Dict[str, Any],
+    config: Dict[str, Any],
+    options: Options,
+    log=None,
+    trace=None,
+    subgoals: Optional[Sequence[Sequence[float]]] = None,
+) -> Dict[str, Any]:
     """Walks ``scenario`` (``ldcbf_nav.load_scenario``'s dict) with the
     controller configured by ``config``; returns the summary, the per-step
-    records and the sampled paths (see ``report.py``)."""
+    records and the sampled paths (see ``report.py``). ``subgoals`` (W, m;
+    the last one the goal): the controller is given them in order, the next
+    when the CoM is within ``options.switch_radius`` of the current one, as the LIP
+    plant follows its planner's subgoals; ``None``: the goal alone."""
     import ldcbf_nav
 
     ctl = ldcbf_nav.Controller(config)
@@ -262,6 +280,8 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
     T = config["step_duration"]
     per_control = max(1, round(options.control_period / dt))
     goal = np.asarray(scenario["goal"], dtype=float)
+    waypoints = [np.asarray(g, dtype=float) for g in subgoals] if subgoals is not None and len(subgoals) else [goal]
+    current = 0
     time_limit = options.time_limit if options.time_limit is not None else scenario["time_limit"]
 
     # Start: standing in double support, then the CoM over the stance sole.
@@ -309,6 +329,8 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
         if tick % per_control == 0:
             com = body.com()
             vel = body.com_velocity()
+            while current + 1 < len(waypoints) and np.linalg.norm(com[:2] - waypoints[current]) <= options.switch_radius:
+                current += 1
             out = ctl.step(
                 com_position=com[:2],
                 com_velocity=vel[:2],
@@ -317,7 +339,7 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
                 stance_foot=w.soles[w.stance],
                 stance_side=w.stance,
                 time_in_step=w.time_in_step,
-                goal=goal,
+                goal=waypoints[current],
                 obstacles=obstacles,
             )
             last_status = out["status"]
@@ -397,6 +419,8 @@ def run(scenario: Dict[str, Any], config: Dict[str, Any], options: Options, log=
         "wall_time": wall,
         "real_time_factor": t / wall if wall > 0 else None,
         "controller_status": status_counts,
+        "subgoals": [[float(x) for x in g] for g in waypoints],
+        "subgoals_passed": current,
         "ik_soft_feet_ticks": ik.soft_ticks,
         "widened_targets": widened,
         "physics_dt": dt,

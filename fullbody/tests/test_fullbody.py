@@ -42,6 +42,20 @@ def test_derived_config_comes_from_the_model():
     assert 0.2 < cfg["body_radius"] < 0.4
     assert cfg["step_duration"] == pytest.approx(0.4 * math.sqrt(cfg["com_height"]), abs=0.001)
     assert round(cfg["step_duration"] / 0.002, 9).is_integer()
+    # The gait rows agree: a periodic sway within l_max reaches vy_min.
+    cap = robot.lateral_velocity_cap(cfg["com_height"], cfg["step_duration"], cfg["l_max"])
+    assert cap == pytest.approx(0.240, abs=0.001)
+    assert cfg["vy_min"] < cap
+
+
+def test_lip_with_the_g1_settings_reaches_circles_with_optimal_cycles():
+    """The LIP plant with the derived settings (``lip circles``): the goal
+    reached and no cycle's QP infeasible (vy_min 0.25 made every one)."""
+    import ldcbf_nav
+
+    summary = ldcbf_nav.simulate("circles", **cli.lip_overrides([]))["summary"]
+    assert summary["reached_goal"]
+    assert summary["status_counts"].get("infeasible", 0) == 0
 
 
 def test_obstacles_are_prisms_touching_the_robot_only():
