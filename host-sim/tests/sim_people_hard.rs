@@ -46,6 +46,25 @@ fn crowd_seed_601_people_side_by_side_are_no_wall() {
     assert_eq!(a.contacts_robot, 0, "{a:?}");
 }
 
+/// Regression (`crowd` seeds 614, on main since 4f008a8, and 715, unseen
+/// seeds 700..719): a person walking at the robot at 0.2-0.3 m/s was never
+/// given a velocity (two standard deviations of the filter's steady-state
+/// estimate are about 0.31 m/s), stood in the map as a wall for seconds, and
+/// the robot walked into them. Travelling 0.3 m is evidence of motion too
+/// (`TrackParams::still_radius`).
+#[test]
+#[cfg_attr(
+    debug_assertions,
+    ignore = "closed loops with LiDAR: run with --release (.ci/run does)"
+)]
+fn crowd_people_walking_slowly_at_the_robot_are_seen_moving() {
+    for seed in [614, 715] {
+        let a = lidar_batch("crowd", seed, seed + 1);
+        assert_eq!(a.runs, 1);
+        assert_eq!(a.contacts_robot, 0, "crowd {seed}: {a:?}");
+    }
+}
+
 /// Regressions of the reachable set's variants that were not kept
 /// (docs/results.md, "People hard to track"): `circle-crossing` seed 517
 /// walked into a person with the set grown for 0.4 s, and `orca-crowd` seed

@@ -416,3 +416,37 @@ fn the_jambs_of_a_door_beside_the_path_are_no_people() {
         );
     }
 }
+
+/// A person walking slowly at the robot (`crowd` seed 614: 0.3 m/s): in the
+/// filter's steady state two standard deviations of the velocity estimate
+/// are about 0.31 m/s, so the speed was never significant and the person
+/// stood in the map as a wall for 2.8 s while the robot walked into them.
+/// Walking 0.3 m is evidence too ([`TrackParams::still_radius`]): the
+/// person has a velocity within 2 s of first sight, and from then on.
+#[test]
+fn a_person_walking_slowly_at_the_robot_gets_a_velocity() {
+    for speed in [0.2, 0.3] {
+        let people = [Person::walking([2.6, 0.4], 0.25, [-speed, -0.15 * speed])];
+        let frames = record(&people, &[], 0.0, 0.0, 6.0);
+        let first = frames
+            .iter()
+            .find(|f| nearest(&f.scan, f.truth[0].0, 0.35).is_some())
+            .map(|f| f.t)
+            .expect("the person is seen");
+        let late: Vec<f64> = frames
+            .iter()
+            .filter(|f| f.t >= first + 2.0)
+            .filter(|f| {
+                nearest(&f.scan, f.truth[0].0, 0.35)
+                    .is_none_or(|i| f.scan.velocities[i] == Vector2::zeros())
+            })
+            .map(|f| f.t)
+            .collect();
+        assert!(
+            late.is_empty(),
+            "{speed} m/s, seen at {first} s: no velocity at {} scans from 2 s after, the first {:?}",
+            late.len(),
+            late.first()
+        );
+    }
+}
