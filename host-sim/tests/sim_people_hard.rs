@@ -7,7 +7,7 @@
 
 mod people_batch;
 
-use people_batch::lidar_batch;
+use people_batch::{assert_no_robot_caused_contact, lidar_batch};
 
 #[test]
 #[cfg_attr(
@@ -41,9 +41,7 @@ fn lidar_tracking_no_robot_caused_contact_on_people_hard_to_see() {
     ignore = "a closed loop with LiDAR: run with --release (.ci/run does)"
 )]
 fn crowd_seed_601_people_side_by_side_are_no_wall() {
-    let a = lidar_batch("crowd", 601, 602);
-    assert_eq!(a.runs, 1);
-    assert_eq!(a.contacts_robot, 0, "{a:?}");
+    assert_no_robot_caused_contact(&[("crowd", 601)]);
 }
 
 /// Regression (`crowd` seeds 614, on main since 4f008a8, and 715, unseen
@@ -58,11 +56,7 @@ fn crowd_seed_601_people_side_by_side_are_no_wall() {
     ignore = "closed loops with LiDAR: run with --release (.ci/run does)"
 )]
 fn crowd_people_walking_slowly_at_the_robot_are_seen_moving() {
-    for seed in [614, 715] {
-        let a = lidar_batch("crowd", seed, seed + 1);
-        assert_eq!(a.runs, 1);
-        assert_eq!(a.contacts_robot, 0, "crowd {seed}: {a:?}");
-    }
+    assert_no_robot_caused_contact(&[("crowd", 614), ("crowd", 715)]);
 }
 
 /// Regressions of the reachable set's variants that were not kept
@@ -77,9 +71,5 @@ fn crowd_people_walking_slowly_at_the_robot_are_seen_moving() {
     ignore = "two closed loops with LiDAR: run with --release (.ci/run does)"
 )]
 fn the_reachable_set_variants_that_failed_keep_their_cases_clear() {
-    for (family, seed) in [("circle-crossing", 517), ("orca-crowd", 416)] {
-        let a = lidar_batch(family, seed, seed + 1);
-        assert_eq!(a.runs, 1, "{family} {seed}");
-        assert_eq!(a.contacts_robot, 0, "{family} {seed}: {a:?}");
-    }
+    assert_no_robot_caused_contact(&[("circle-crossing", 517), ("orca-crowd", 416)]);
 }

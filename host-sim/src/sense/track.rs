@@ -201,10 +201,9 @@ pub struct Track {
     /// The point the estimated position has stayed within
     /// [`TrackParams::still_radius`] of since `anchor_time` (s), m.
     pub anchor: Vector2<f64>,
-    /// Since when the position has stayed near `anchor`, s.
+    /// Since when the position has stayed near `anchor` (the track's start
+    /// at the latest), s.
     pub anchor_time: f64,
-    /// When the track started, s.
-    pub born: f64,
     /// The track has been given a velocity ([`Motion::Moving`]): from then
     /// on it is moving, with its current estimate (a person who slows, or
     /// whose visible outline shifts its centre against the walk, is not
@@ -437,7 +436,6 @@ impl Tracker {
                     updates: 1,
                     anchor: z[j],
                     anchor_time: t,
-                    born: t,
                     moving: false,
                     small: false,
                 });
@@ -465,8 +463,8 @@ impl Tracker {
                     tr.anchor = tr.position();
                     tr.anchor_time = t;
                 }
-                // Old enough, and near one point for still_time: at rest.
-                let still = t - tr.born >= pr.still_time && t - tr.anchor_time >= pr.still_time;
+                // Near one point for still_time (so at least that old): at rest.
+                let still = t - tr.anchor_time >= pr.still_time;
                 // A flat face is never a person ([`flat`]): a track that
                 // moved (the visible part of a wall's end sliding as the
                 // robot walks past) and is now matched with one is at rest.
