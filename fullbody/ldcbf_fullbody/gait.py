@@ -1,14 +1,9 @@
-"""The walking references between footsteps, in W (m, rad, s): the swing
-foot's path and the CoM's LIP reference.
-
-The controller's model is the LIP with its zero-moment point at the stance
-sole point and an instantaneous exchange of support at the end of each step
-(docs/maths.md §1); the references follow that model exactly, so the body is
-asked to do what the controller predicted.
+"""The swing foot's references between footsteps, in W (m, rad, s): its
+horizontal path to the latest target, its height, and a smooth 0 -> 1 ramp
+(the CoM's reference is ``preview.py``'s, the step's timing ``walker.py``'s).
 """
 
 import math
-from typing import Tuple
 
 import numpy as np
 
@@ -17,13 +12,6 @@ def smoothstep(s: float) -> float:
     """Quintic 0 -> 1 on s in [0, 1], zero velocity and acceleration at both ends."""
     s = min(max(s, 0.0), 1.0)
     return s * s * s * (10.0 + s * (-15.0 + 6.0 * s))
-
-
-#: The swing foot moves horizontally between these fractions of the step
-#: (it lifts and lands vertically); a target changed after ``SWING_END`` is
-#: not followed (it counts as landing error).
-SWING_START = 0.1
-SWING_END = 0.85
 
 
 def swing_height(phase: float, height: float, lift: float = 0.0) -> float:
@@ -40,7 +28,7 @@ class Swing:
     position, velocity and acceleration, moving between the fractions
     ``begin`` and ``end`` of the step and ending at rest."""
 
-    def __init__(self, start: np.ndarray, begin: float = SWING_START, end: float = SWING_END) -> None:
+    def __init__(self, start: np.ndarray, begin: float, end: float) -> None:
         #: The fractions of the step between which the foot moves horizontally.
         self.begin, self.end = begin, end
         self.x = np.array(start, dtype=float)
@@ -66,10 +54,3 @@ class Swing:
         self.v = v0 + a0 * t + 3.0 * c3 * t**2 + 4.0 * c4 * t**3 + 5.0 * c5 * t**4
         self.a = a0 + 6.0 * c3 * t + 12.0 * c4 * t**2 + 20.0 * c5 * t**3
         return self.x.copy()
-
-
-def lip_flow(p: np.ndarray, v: np.ndarray, foot: np.ndarray, beta: float, tau: float) -> Tuple[np.ndarray, np.ndarray]:
-    """The LIP's closed-form flow over ``tau`` (s) with the ZMP at ``foot``:
-    ``p'' = beta^2 (p - foot)`` per horizontal axis (docs/maths.md §1)."""
-    c, s = math.cosh(beta * tau), math.sinh(beta * tau)
-    return c * p + (s / beta) * v + (1.0 - c) * foot, beta * s * p + c * v - beta * s * foot

@@ -211,7 +211,6 @@ class Walker:
         self.path = self._new_path()
         self.com_ref = body.com()[:2].copy()
         self.preview.reset(self.com_ref)
-        self.zmp_ref = self.soles[stance].copy()
         self.stabiliser = Stabiliser(gait_, math.sqrt(g / H), self.dt)
         self.damping = FootDamping(gait_, self.dt)
 
@@ -238,10 +237,13 @@ class Walker:
             self.preview.advance(zmp_reference(self.horizon_times, tau, self.T, self.gait.double_support, self.zmp_from, chain))
         s = (self.ticks % self.per_preview + 1) * self.dt
         self.com_ref, vel_ref = self.preview.sample(s)
-        chain = [self.soles[self.stance], np.asarray(target, dtype=float)]
-        self.zmp_ref = zmp_reference(np.zeros(1), tau, self.T, self.gait.double_support, self.zmp_from, chain)[0]
         body = self.body
-        delta = self.stabiliser.offset(self.zmp_ref, self.com_ref, vel_ref, body.com()[:2], body.com_velocity()[:2], body.zmp())
+        delta = self.stabiliser.delta
+        if self.gait.zmp_admittance:
+            # The stabiliser's references and measurements, only when it is on.
+            chain = [self.soles[self.stance], np.asarray(target, dtype=float)]
+            zmp_ref = zmp_reference(np.zeros(1), tau, self.T, self.gait.double_support, self.zmp_from, chain)[0]
+            delta = self.stabiliser.offset(zmp_ref, self.com_ref, vel_ref, body.com()[:2], body.com_velocity()[:2], body.zmp())
         phase = self.tick_in_step / self.per_step
         swing_xy = self.path.advance(target, phase, self.dt, self.T)
         cmd_xy = swing_xy + self.gait.swing_feedback * (swing_xy - self.body.sole(self.swing)[:2]) if phase >= self.lift else swing_xy
