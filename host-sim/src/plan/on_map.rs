@@ -33,7 +33,7 @@
 use ldcbf_controller::nalgebra::Vector2;
 
 use super::{PlanError, RrtParams, attempt_margins, nearest_free, shortcut};
-use crate::world::grid::{OccupancyGrid, dist, grid_search_with};
+use crate::world::grid::{CellDistances, OccupancyGrid, dist, grid_search_with};
 
 /// A perceived map as the planner reads it: cells of side `resolution` (m),
 /// `width x height`, row by row (`j * width + i`), lower-left corner `origin`
@@ -93,9 +93,10 @@ pub fn plan_on_map(
         .into_iter()
         .filter(|&m| m > floor)
         .chain(core::iter::once(floor));
+    let distances = CellDistances::new(map.occupied, map.width, map.resolution);
     let mut last = PlanError::NoPath { nodes: 0 };
     for m in margins {
-        match search(map, start, goal, params, body_radius + m) {
+        match search(map, &distances, start, goal, params, body_radius + m) {
             Ok(p) => return Ok(p),
             Err(e) => last = e,
         }
@@ -103,23 +104,17 @@ pub fn plan_on_map(
     Err(last)
 }
 
-/// One A* search on `map` with the occupied cells inflated by `inflation`
-/// (m).
+/// One A* search on `map` (`distances`: its occupied cells' distance
+/// transform) with the occupied cells inflated by `inflation` (m).
 fn search(
     map: &CellMap<'_>,
+    distances: &CellDistances,
     start: Vector2<f64>,
     goal: Vector2<f64>,
     params: &RrtParams,
     inflation: f64,
 ) -> Result<MapPlan, PlanError> {
-    let grid = OccupancyGrid::from_cells(
-        map.origin,
-        map.resolution,
-        map.width,
-        map.height,
-        map.occupied,
-        inflation,
-    );
+    let grid = OccupancyGrid::from_distances(map.origin, distances, inflation);
     let reach = inflation + 2.0 * map.resolution;
     let (s_in, g_in) = ([start.x, start.y], [goal.x, goal.y]);
     let mut entry = false;

@@ -43,9 +43,9 @@ use crate::plan::on_map::{CellMap, plan_on_map};
 use crate::scenario::Scenario;
 use crate::sense::movers::{MoverScan, Movers};
 use crate::sense::track::TrackParams;
-use crate::sense::{CellState, Lidar, OccupancyMap, faces};
+use crate::sense::{Lidar, OccupancyMap, faces};
 use crate::world::Polygon;
-use crate::world::grid::OccupancyGrid;
+use crate::world::grid::InflatedCells;
 
 /// Why a path was (re)planned.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
@@ -284,9 +284,9 @@ impl Mapper {
             ReplanReason::Stalled
         } else if time + 1e-9 >= self.next_check {
             self.next_check = time + scenario.rrt.replan_period;
-            let (occupied, _) = self.flags();
+            let (occupied, _) = self.log.map.flags();
             let m = &self.log.map;
-            let grid = OccupancyGrid::from_cells(
+            let mut grid = InflatedCells::new(
                 m.origin,
                 m.resolution,
                 m.width,
@@ -294,7 +294,7 @@ impl Mapper {
                 &occupied,
                 scenario.robot.body_radius,
             );
-            if !path_blocked(&grid, position, subgoals) {
+            if !path_blocked(&mut grid, position, subgoals) {
                 return None;
             }
             ReplanReason::Blocked
@@ -302,7 +302,7 @@ impl Mapper {
             return None;
         };
         self.next_check = time + scenario.rrt.replan_period;
-        let (occupied, unknown) = self.flags();
+        let (occupied, unknown) = self.log.map.flags();
         let map = &self.log.map;
         let cells = CellMap {
             origin: map.origin,
@@ -341,15 +341,6 @@ impl Mapper {
             },
         ))
     }
-
-    /// The map's occupied and unknown cells, row by row.
-    fn flags(&self) -> (Vec<bool>, Vec<bool>) {
-        let states = self.log.map.states();
-        (
-            states.iter().map(|s| *s == CellState::Occupied).collect(),
-            states.iter().map(|s| *s == CellState::Unknown).collect(),
-        )
-    }
 }
 
 /// Whether the rest of the path (from `position`, m, through `subgoals`)
@@ -357,7 +348,11 @@ impl Mapper {
 /// occupied cell, or a leg between two free cells that leaves the free cells.
 /// A leg from or to a point inside the inflation (the robot near a wall, a
 /// goal near a wall) is the plan's way out or in and is not checked.
-fn path_blocked(grid: &OccupancyGrid, position: Vector2<f64>, subgoals: &[Vector2<f64>]) -> bool {
+fn path_blocked(
+    grid: &mut InflatedCells<'_>,
+    position: Vector2<f64>,
+    subgoals: &[Vector2<f64>],
+) -> bool {
     let mut prev = [position.x, position.y];
     for (k, s) in subgoals.iter().enumerate() {
         let q = [s.x, s.y];

@@ -117,15 +117,22 @@ impl OccupancyGrid {
         inflation: f64,
     ) -> Self {
         assert_eq!(cells.len(), width * height, "one flag per cell");
-        let d = distance_transform(cells, width, height, resolution);
-        let tol = 1e-9 * resolution;
+        let d = CellDistances::new(cells, width, resolution);
+        Self::from_distances(origin, &d, inflation)
+    }
+
+    /// [`OccupancyGrid::from_cells`] from the cells' distance transform
+    /// computed once ([`CellDistances`]), for several `inflation`s (m) of one
+    /// map; the same grid as `from_cells` with those cells.
+    pub fn from_distances(origin: Vector2<f64>, d: &CellDistances, inflation: f64) -> Self {
+        let tol = 1e-9 * d.resolution;
         OccupancyGrid {
             origin,
-            resolution,
-            width,
-            height,
-            occupied: d.iter().map(|&x| x <= inflation + tol).collect(),
-            clearance: d.iter().map(|&x| (x - inflation).max(0.0)).collect(),
+            resolution: d.resolution,
+            width: d.width,
+            height: d.height,
+            occupied: d.d.iter().map(|&x| x <= inflation + tol).collect(),
+            clearance: d.d.iter().map(|&x| (x - inflation).max(0.0)).collect(),
         }
     }
 
@@ -158,17 +165,138 @@ impl OccupancyGrid {
     /// Whether the straight segment `a -> b` (m) stays in free cells (points at
     /// most `resolution / 4` apart are checked, both ends included).
     pub fn segment_free(&self, a: [f64; 2], b: [f64; 2]) -> bool {
-        let len = dist(a, b);
-        let n = (len / (0.25 * self.resolution)).ceil().max(1.0) as usize;
-        (0..=n).all(|k| {
-            let t = k as f64 / n as f64;
-            self.is_free([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])])
-        })
+        segment_all(a, b, self.resolution, |p| self.is_free(p))
     }
 
     /// Number of occupied cells.
     pub fn occupied_count(&self) -> usize {
         self.occupied.iter().filter(|&&o| o).count()
+    }
+}
+
+/// Whether `free` holds at points of the segment `a -> b` (m) at most
+/// `resolution / 4` apart, both ends included.
+fn segment_all(
+    a: [f64; 2],
+    b: [f64; 2],
+    resolution: f64,
+    mut free: impl FnMut([f64; 2]) -> bool,
+) -> bool {
+    let len = dist(a, b);
+    let n = (len / (0.25 * resolution)).ceil().max(1.0) as usize;
+    (0..=n).all(|k| {
+        let t = k as f64 / n as f64;
+        free([a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])])
+    })
+}
+
+/// The distance from each cell centre of a grid to the nearest flagged cell
+/// centre (m, `inf` when none is flagged): [`distance_transform`] computed
+/// once, so that grids of several inflations share it
+/// ([`OccupancyGrid::from_distances`]).
+#[derive(Clone, Debug)]
+pub struct CellDistances {
+    resolution: f64,
+    width: usize,
+    height: usize,
+    d: Vec<f64>,
+}
+
+impl CellDistances {
+    /// The distances of `cells` (row by row, `j * width + i`, `width` cells a
+    /// row) with cells of side `resolution` (m).
+    pub fn new(cells: &[bool], width: usize, resolution: f64) -> Self {
+        let height = cells.len().checked_div(width).unwrap_or(0);
+        assert_eq!(cells.len(), width * height, "whole rows of cells");
+        CellDistances {
+            resolution,
+            width,
+            height,
+            d: distance_transform(cells, width, height, resolution),
+        }
+    }
+}
+
+/// The free test of [`OccupancyGrid::from_cells`] (a cell is occupied when a
+/// flagged cell centre is within `inflation` of its centre) answered cell by
+/// cell from the flagged cells around it, without the distance transform of
+/// the whole grid: for a few questions (is a path still free?) on a large
+/// map that changes every scan. Each cell's answer is kept.
+#[derive(Clone, Debug)]
+pub struct InflatedCells<'a> {
+    origin: Vector2<f64>,
+    resolution: f64,
+    width: usize,
+    height: usize,
+    cells: &'a [bool],
+    inflation: f64,
+    /// Per cell: 0 not asked yet, 1 free, 2 occupied.
+    known: Vec<u8>,
+}
+
+impl<'a> InflatedCells<'a> {
+    /// The view of `cells` (`width x height`, row by row, cells of side
+    /// `resolution` m, lower-left corner `origin` m) inflated by
+    /// `inflation` (m).
+    pub fn new(
+        origin: Vector2<f64>,
+        resolution: f64,
+        width: usize,
+        height: usize,
+        cells: &'a [bool],
+        inflation: f64,
+    ) -> Self {
+        assert_eq!(cells.len(), width * height, "one flag per cell");
+        InflatedCells {
+            origin,
+            resolution,
+            width,
+            height,
+            cells,
+            inflation,
+            known: vec![0; cells.len()],
+        }
+    }
+
+    /// Whether `p` (m) is inside the grid and in a free cell: the same answer
+    /// as [`OccupancyGrid::is_free`] of `OccupancyGrid::from_cells` with the
+    /// same arguments.
+    pub fn is_free(&mut self, p: [f64; 2]) -> bool {
+        let i = ((p[0] - self.origin.x) / self.resolution).floor();
+        let j = ((p[1] - self.origin.y) / self.resolution).floor();
+        if !(i >= 0.0 && j >= 0.0 && i < self.width as f64 && j < self.height as f64) {
+            return false;
+        }
+        let (i, j) = (i as usize, j as usize);
+        let k = j * self.width + i;
+        if self.known[k] == 0 {
+            self.known[k] = if self.occupied_within(i, j) { 2 } else { 1 };
+        }
+        self.known[k] == 1
+    }
+
+    /// [`OccupancyGrid::segment_free`] on this view.
+    pub fn segment_free(&mut self, a: [f64; 2], b: [f64; 2]) -> bool {
+        let r = self.resolution;
+        segment_all(a, b, r, |p| self.is_free(p))
+    }
+
+    /// Whether a flagged cell centre is within `inflation` of cell `(i, j)`'s
+    /// centre, by the distance transform's own arithmetic (the square root of
+    /// the integer squared cell distance, times the cell side).
+    fn occupied_within(&self, i: usize, j: usize) -> bool {
+        let r = self.resolution;
+        let limit = self.inflation + 1e-9 * r;
+        let reach = (limit / r).floor().max(0.0) as usize;
+        let (i0, i1) = (i.saturating_sub(reach), (i + reach).min(self.width - 1));
+        let (j0, j1) = (j.saturating_sub(reach), (j + reach).min(self.height - 1));
+        (j0..=j1).any(|jj| {
+            let dj = jj.abs_diff(j);
+            (i0..=i1).any(|ii| {
+                let di = ii.abs_diff(i);
+                self.cells[jj * self.width + ii] && ((di * di + dj * dj) as f64).sqrt() * r <= limit
+            })
+        })
     }
 }
 
@@ -429,5 +557,38 @@ mod tests {
         assert!((g.clearance([1.55, 0.05]) - 0.7).abs() < 0.11);
         assert!(!g.segment_free([-1.5, 0.0], [1.5, 0.0]));
         assert!(g.segment_free([-1.5, -1.5], [1.5, -1.5]));
+    }
+
+    proptest::proptest! {
+        /// The lazy view answers every point and segment as the grid built
+        /// from the whole distance transform does, and `from_distances`
+        /// builds that grid for any inflation.
+        #[test]
+        fn the_lazy_inflation_agrees_with_the_distance_transform(
+            w in 1usize..24,
+            h in 1usize..24,
+            flags in proptest::collection::vec(proptest::bool::weighted(0.08), 576),
+            inflation in 0.0f64..0.6,
+            resolution in proptest::sample::select(vec![0.05, 0.1, 0.25]),
+            points in proptest::collection::vec((-0.5f64..1.0, -0.5f64..1.0), 12),
+        ) {
+            let cells = &flags[..w * h];
+            let origin = Vector2::new(-0.3, 0.2);
+            let grid = OccupancyGrid::from_cells(origin, resolution, w, h, cells, inflation);
+            let d = CellDistances::new(cells, w, resolution);
+            let again = OccupancyGrid::from_distances(origin, &d, inflation);
+            proptest::prop_assert_eq!(&grid.occupied, &again.occupied);
+            proptest::prop_assert_eq!(&grid.clearance, &again.clearance);
+            let mut lazy = InflatedCells::new(origin, resolution, w, h, cells, inflation);
+            let size = [w as f64 * resolution, h as f64 * resolution];
+            let at = |(u, v): (f64, f64)| [origin.x + u * size[0] * 1.2, origin.y + v * size[1] * 1.2];
+            for p in &points {
+                proptest::prop_assert_eq!(lazy.is_free(at(*p)), grid.is_free(at(*p)));
+            }
+            for pair in points.windows(2) {
+                let (a, b) = (at(pair[0]), at(pair[1]));
+                proptest::prop_assert_eq!(lazy.segment_free(a, b), grid.segment_free(a, b));
+            }
+        }
     }
 }

@@ -122,6 +122,17 @@ fn logit(p: f64) -> f32 {
 /// |log-odds| below this is unknown.
 const UNKNOWN_EPS: f32 = 1e-3;
 
+/// The state of a cell of log-odds `l`.
+fn state_of(l: f32) -> CellState {
+    if l.abs() < UNKNOWN_EPS {
+        CellState::Unknown
+    } else if l > 0.0 {
+        CellState::Occupied
+    } else {
+        CellState::Free
+    }
+}
+
 /// A log-odds occupancy grid over a box that grows with the scans (module
 /// docs).
 #[derive(Clone, Debug)]
@@ -218,14 +229,7 @@ impl OccupancyMap {
 
     /// The state of cell `(i, j)` (module docs).
     pub fn state(&self, i: usize, j: usize) -> CellState {
-        let l = self.log_odds[j * self.width + i];
-        if l.abs() < UNKNOWN_EPS {
-            CellState::Unknown
-        } else if l > 0.0 {
-            CellState::Occupied
-        } else {
-            CellState::Free
-        }
+        state_of(self.log_odds[j * self.width + i])
     }
 
     /// The state of the cell containing `p` ([`CellState::Unknown`] outside).
@@ -236,10 +240,23 @@ impl OccupancyMap {
 
     /// Every cell's state, row by row (`j * width + i`).
     pub fn states(&self) -> Vec<CellState> {
-        (0..self.height)
-            .flat_map(|j| (0..self.width).map(move |i| (i, j)))
-            .map(|(i, j)| self.state(i, j))
-            .collect()
+        self.log_odds.iter().map(|&l| state_of(l)).collect()
+    }
+
+    /// Every cell's `(occupied, unknown)` flags, row by row (`j * width +
+    /// i`): the planner's view of [`OccupancyMap::states`].
+    pub fn flags(&self) -> (Vec<bool>, Vec<bool>) {
+        let occupied = self
+            .log_odds
+            .iter()
+            .map(|&l| state_of(l) == CellState::Occupied)
+            .collect();
+        let unknown = self
+            .log_odds
+            .iter()
+            .map(|&l| l.abs() < UNKNOWN_EPS)
+            .collect();
+        (occupied, unknown)
     }
 
     /// The column range `(i0, i1)` and row range `(j0, j1)` (inclusive) of

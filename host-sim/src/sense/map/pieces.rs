@@ -38,13 +38,12 @@ impl OccupancyMap {
             rng(at.y - reach, self.origin.y, self.height),
             rng(at.y + reach, self.origin.y, self.height),
         );
-        let wanted = |i: usize, j: usize| {
-            let dd = (self.centre(i, j) - at).norm();
-            match self.state(i, j) {
-                CellState::Occupied => dd <= radius,
-                CellState::Unknown => dd <= ur && self.is_frontier(i, j),
-                CellState::Free => false,
-            }
+        // The state first: most cells near the robot are free, and need no
+        // distance.
+        let wanted = |i: usize, j: usize| match self.state(i, j) {
+            CellState::Occupied => (self.centre(i, j) - at).norm() <= radius,
+            CellState::Unknown => (self.centre(i, j) - at).norm() <= ur && self.is_frontier(i, j),
+            CellState::Free => false,
         };
         let mut rects = Vec::new();
         // Open rectangles: (i_first, i_last, j_first), extended row by row.
@@ -52,11 +51,19 @@ impl OccupancyMap {
         for j in j0..=j1 + 1 {
             let mut runs = Vec::new();
             if j <= j1 {
-                let mut i = i0;
-                while i <= i1 {
+                // Only the row's chord of the disk of radius `reach` (one
+                // cell of slack each side) can hold a wanted cell.
+                let dy = self.origin.y + (j as f64 + 0.5) * r - at.y;
+                let half = (reach * reach - dy * dy).max(0.0).sqrt();
+                let (lo, hi) = (
+                    rng(at.x - half - r, self.origin.x, self.width).max(i0),
+                    rng(at.x + half + r, self.origin.x, self.width).min(i1),
+                );
+                let mut i = lo;
+                while i <= hi {
                     if wanted(i, j) {
                         let a = i;
-                        while i < i1 && wanted(i + 1, j) {
+                        while i < hi && wanted(i + 1, j) {
                             i += 1;
                         }
                         runs.push((a, i));
