@@ -1,24 +1,45 @@
-//! People who are hard to see (issue 35): 20 seeds of each of the families
-//! `group-crossing`, `headon-offset` and `occluded-person`
-//! (`host-sim/src/world/people_hard.rs`) with the LiDAR tracker
+//! The people families of issue 35 on 20 seeds each: the robot never moves
+//! into a person (`contacts_robot`) with the LiDAR tracker
 //! (`host-sim/src/sense/movers.rs`, `sense/track.rs`), planning on the
-//! perceived map (`planner = "rrt_star"`) at `delta = 0.05`: the robot never
-//! moves into a person (`contacts_robot`). Release builds only (`.ci/run`).
+//! perceived map (`planner = "rrt_star"`) at `delta = 0.05`; and the named
+//! regressions of contacts found on unseen seeds. Release builds only
+//! (`.ci/run`).
 
 mod people_batch;
 
+use ldcbf_sim::world::crowd::families::FAMILIES as REACTING;
 use people_batch::{assert_no_robot_caused_contact, lidar_batch};
 
+/// The scripted families issue 35 added (`world/people_hard.rs`, and
+/// `room-crossing` of `world/people.rs`); with the families of people who
+/// react ([`REACTING`]), every new people family. The older `crossing` and
+/// `headon` are `sim_people`'s; `crowd` (constant-velocity people crossing
+/// the robot's start) still has robot-caused contacts (seeds 0 and 249,
+/// docs/results.md) and is not asserted here.
+const NEW_SCRIPTED: &[&str] = &[
+    "room-crossing",
+    "group-crossing",
+    "headon-offset",
+    "occluded-person",
+];
+
+/// Seeds 0..20 of every new people family (280 closed loops).
 #[test]
 #[cfg_attr(
     debug_assertions,
-    ignore = "60 closed loops with LiDAR: run with --release (.ci/run does)"
+    ignore = "280 closed loops with LiDAR: run with --release (.ci/run does)"
 )]
-fn lidar_tracking_no_robot_caused_contact_on_people_hard_to_see() {
+fn every_new_people_family_on_20_seeds_has_no_robot_caused_contact() {
+    let families: Vec<String> = NEW_SCRIPTED
+        .iter()
+        .map(|f| f.to_string())
+        .chain(REACTING.iter().map(|f| f.replace('_', "-")))
+        .collect();
+    assert_eq!(families.len(), 14);
     let mut failed = Vec::new();
-    for family in ["group-crossing", "headon-offset", "occluded-person"] {
+    for family in &families {
         let a = lidar_batch(family, 0, 20);
-        assert_eq!(a.runs, 20);
+        assert_eq!(a.runs, 20, "{family}");
         if a.contacts_robot != 0 {
             failed.push(format!(
                 "{family}: {} robot-caused contacts",

@@ -7,10 +7,11 @@
 //! the seeds with the command that replays one; keep it as a named
 //! regression test and fix the cause (never pin the seed to pass).
 //! `LDCBF_SOAK_SEED=S` replays the draw that starts at seed `S`. Release
-//! builds only. Not in `.ci/run` yet: `crowd` seeds 249 and 614 still have
-//! a robot-caused contact, and 3 of 340 runs of the people families on
-//! unseen seeds 700..719 (docs/results.md), so a draw of 34 runs fails
-//! often; it joins CI once those are fixed.
+//! builds only. Not in `.ci/run` yet: `crowd` seeds 0 and 249 still have a
+//! robot-caused contact (docs/results.md, "People hard to track"), so a
+//! draw that includes `crowd` fails now and then; it joins CI once those
+//! are fixed (the 14 new families are asserted on seeds 0..19 in CI by
+//! `sim_people_hard`).
 
 mod people_batch;
 
