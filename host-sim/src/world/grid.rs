@@ -138,10 +138,7 @@ impl OccupancyGrid {
 
     /// The cell containing `p`, if inside the grid.
     pub fn cell_of(&self, p: [f64; 2]) -> Option<(usize, usize)> {
-        let i = ((p[0] - self.origin.x) / self.resolution).floor();
-        let j = ((p[1] - self.origin.y) / self.resolution).floor();
-        (i >= 0.0 && j >= 0.0 && i < self.width as f64 && j < self.height as f64)
-            .then_some((i as usize, j as usize))
+        cell_of(self.origin, self.resolution, self.width, self.height, p)
     }
 
     /// Whether cell `(i, j)` is occupied (inflated obstacle).
@@ -174,6 +171,22 @@ impl OccupancyGrid {
     }
 }
 
+/// The cell `(i, j)` of a `width x height` grid of cells of side
+/// `resolution` (m), lower-left corner `origin` (m), that contains `p` (m),
+/// if inside the grid.
+fn cell_of(
+    origin: Vector2<f64>,
+    resolution: f64,
+    width: usize,
+    height: usize,
+    p: [f64; 2],
+) -> Option<(usize, usize)> {
+    let i = ((p[0] - origin.x) / resolution).floor();
+    let j = ((p[1] - origin.y) / resolution).floor();
+    (i >= 0.0 && j >= 0.0 && i < width as f64 && j < height as f64)
+        .then_some((i as usize, j as usize))
+}
+
 /// Whether `free` holds at points of the segment `a -> b` (m) at most
 /// `resolution / 4` apart, both ends included.
 fn segment_all(
@@ -191,7 +204,7 @@ fn segment_all(
 }
 
 /// The distance from each cell centre of a grid to the nearest flagged cell
-/// centre (m, `inf` when none is flagged): [`distance_transform`] computed
+/// centre (m, `inf` when none is flagged): the exact distance transform computed
 /// once, so that grids of several inflations share it
 /// ([`OccupancyGrid::from_distances`]).
 #[derive(Clone, Debug)]
@@ -262,12 +275,9 @@ impl<'a> InflatedCells<'a> {
     /// as [`OccupancyGrid::is_free`] of `OccupancyGrid::from_cells` with the
     /// same arguments.
     pub fn is_free(&mut self, p: [f64; 2]) -> bool {
-        let i = ((p[0] - self.origin.x) / self.resolution).floor();
-        let j = ((p[1] - self.origin.y) / self.resolution).floor();
-        if !(i >= 0.0 && j >= 0.0 && i < self.width as f64 && j < self.height as f64) {
+        let Some((i, j)) = cell_of(self.origin, self.resolution, self.width, self.height, p) else {
             return false;
-        }
-        let (i, j) = (i as usize, j as usize);
+        };
         let k = j * self.width + i;
         if self.known[k] == 0 {
             self.known[k] = if self.occupied_within(i, j) { 2 } else { 1 };
