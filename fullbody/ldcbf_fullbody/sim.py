@@ -5,10 +5,12 @@ Per physics tick (``dt`` = 2 ms): the walker (``walker.py``: the ZMP preview
 CoM, the swing path, foot damping) gives both feet's poses and the CoM; the
 IK (``wbc.py``) turns them into joint targets; MuJoCo's position servos track
 them; link-obstacle contacts are counted.
-Every ``control_period`` the controller is given the *measured* CoM position
-and velocity (MuJoCo's whole-body CoM), the pelvis heading, the turning rate
-in force, the measured stance sole point, the time in the step, the goal and
-the obstacles, and returns the swing foot's target and the next turning rate.
+Every ``control_period`` until the step's ``commit`` fraction the controller
+is given the *measured* CoM position and velocity (MuJoCo's whole-body CoM),
+the pelvis heading, the turning rate in force, the measured stance sole
+point, the time in the step, the goal and the obstacles, and returns the
+swing foot's target and the next turning rate; after it, to touchdown, the
+step is committed: the controller is not asked and its last target stands.
 
 A step lasts the controller's ``T``; at its end the support changes sides
 (as in the LIP plant), and the landed foot's measured sole point becomes the
@@ -41,10 +43,15 @@ class Options(walker.Gait):
     obstacle_height: float = 1.5
     #: Controller period, s (20 Hz).
     control_period: float = 0.05
-    #: The swing foot follows the controller's target until this fraction of
-    #: the step, then holds the last one (committed) to touchdown (1: never
-    #: frozen; the path itself stops moving horizontally at ``swing_end``).
-    swing_freeze: float = 1.0
+    #: The footstep is committed at this fraction of the step: from then to
+    #: touchdown the controller is not asked (its last ``foot_target`` is the
+    #: step's target, its last turning rate the next step's, its last plan the
+    #: preview's), so the swing foot's target no longer moves (1: never
+    #: committed, the controller re-plans ``f_0`` every cycle to touchdown;
+    #: the path itself stops moving horizontally at ``swing_end``). 0.55:
+    #: measured with 0.4 to 1 (docs/fullbody.md), the only value tried that
+    #: reached all three shipped maps with the planner.
+    commit: float = 0.55
     #: Smallest lateral distance (m) between the sole points, along the stance
     #: foot's lateral axis: a controller target closer to (or across) the
     #: stance foot is moved out to it (0: off). The controller has no such
@@ -86,7 +93,7 @@ class StepRecord:
     planned_x: float
     planned_y: float
     #: The controller's last target before touchdown (differs from the
-    #: planned, committed one when it changed after ``swing_freeze``).
+    #: planned one when ``min_foot_width`` moved it).
     latest_x: float
     latest_y: float
     #: Where the swing path ended (the IK's last horizontal target).
@@ -320,6 +327,7 @@ def run(
     fell = False
     status_counts: Dict[str, int] = {}
     widened = 0
+    skipped = 0
     t0 = time.perf_counter()
     t = 0.0
     tick = 0
@@ -331,30 +339,32 @@ def run(
             vel = body.com_velocity()
             while current + 1 < len(waypoints) and np.linalg.norm(com[:2] - waypoints[current]) <= options.switch_radius:
                 current += 1
-            out = ctl.step(
-                com_position=com[:2],
-                com_velocity=vel[:2],
-                heading=body.heading(),
-                turning_rate=omega,
-                stance_foot=w.soles[w.stance],
-                stance_side=w.stance,
-                time_in_step=w.time_in_step,
-                goal=waypoints[current],
-                obstacles=obstacles,
-            )
-            last_status = out["status"]
-            status_counts[last_status] = status_counts.get(last_status, 0) + 1
-            latest = np.asarray(out["foot_target"], dtype=float)
-            if w.tick_in_step < options.swing_freeze * w.per_step:
+            if w.tick_in_step < options.commit * w.per_step:
+                out = ctl.step(
+                    com_position=com[:2],
+                    com_velocity=vel[:2],
+                    heading=body.heading(),
+                    turning_rate=omega,
+                    stance_foot=w.soles[w.stance],
+                    stance_side=w.stance,
+                    time_in_step=w.time_in_step,
+                    goal=waypoints[current],
+                    obstacles=obstacles,
+                )
+                last_status = out["status"]
+                status_counts[last_status] = status_counts.get(last_status, 0) + 1
+                latest = np.asarray(out["foot_target"], dtype=float)
                 target, moved = separated(latest, w.soles[w.stance], w.yaws[w.stance], w.swing, options.min_foot_width)
                 widened += int(moved)
                 future = [np.asarray(f, dtype=float) for f in out["plan"]["feet"][1:]]
+                next_omega = float(out["turning_rate"])
+            else:
+                skipped += 1
             if trace:
                 trace(
                     f"t={t:6.3f} com {com.round(3)} v {vel[:2].round(2)} ref {w.com_ref.round(3)} "
                     f"stance {w.stance} {w.soles[w.stance].round(3)} target {target.round(3)} swing {body.sole(w.swing).round(3)}"
                 )
-            next_omega = float(out["turning_rate"])
             samples["t"].append(t)
             samples["com"].append(com.copy())
             samples["left"].append(body.sole("left").copy())
@@ -423,6 +433,7 @@ def run(
         "subgoals_passed": current,
         "ik_soft_feet_ticks": ik.soft_ticks,
         "widened_targets": widened,
+        "committed_cycles": skipped,
         "physics_dt": dt,
     }
     return {"frames": frames, "summary": summary, "steps": steps, "samples": samples, "tracked": tracked, "obstacles": obstacles, "goal": goal, "start": start}

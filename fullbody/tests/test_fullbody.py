@@ -117,9 +117,12 @@ def test_short_walk_stays_up_and_clear(tmp_path):
     assert summary["falls"] == 0
     assert summary["link_contacts"] == 0
     assert summary["steps"] >= 30
-    # A regression bound (measured 7.0 cm), not the 3 cm target
-    # (docs/fullbody.md).
-    assert summary["landing_error_p95_m"] <= 0.08
+    # The footstep committed at 55 % of the step: the controller is not asked
+    # after it, and the foot lands near the committed target (the issue's
+    # 3 cm with a margin: measured 3.0 cm; 7 cm when the controller re-planned
+    # to touchdown).
+    assert summary["committed_cycles"] > 0
+    assert summary["landing_error_p95_m"] <= 0.035
     assert (out / "steps.csv").read_text().count("\n") == summary["steps"] + 1
     assert (out / "run.png").stat().st_size > 10_000
 
