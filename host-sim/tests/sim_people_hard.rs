@@ -7,12 +7,11 @@
 
 mod people_batch;
 
-use ldcbf_sim::world::crowd::families::FAMILIES as REACTING;
-use people_batch::{assert_no_robot_caused_contact, lidar_batch};
+use people_batch::{assert_no_robot_caused_contact, lidar_batch, with_reacting};
 
 /// The scripted families issue 35 added (`world/people_hard.rs`, and
 /// `room-crossing` of `world/people.rs`); with the families of people who
-/// react ([`REACTING`]), every new people family. The older `crossing` and
+/// react (`world/crowd/families.rs`), every new people family. The older `crossing` and
 /// `headon` are `sim_people`'s; `crowd` (constant-velocity people crossing
 /// the robot's start) still has robot-caused contacts (seeds 0 and 249,
 /// docs/results.md) and is not asserted here.
@@ -30,11 +29,7 @@ const NEW_SCRIPTED: &[&str] = &[
     ignore = "280 closed loops with LiDAR: run with --release (.ci/run does)"
 )]
 fn every_new_people_family_on_20_seeds_has_no_robot_caused_contact() {
-    let families: Vec<String> = NEW_SCRIPTED
-        .iter()
-        .map(|f| f.to_string())
-        .chain(REACTING.iter().map(|f| f.replace('_', "-")))
-        .collect();
+    let families = with_reacting(NEW_SCRIPTED);
     assert_eq!(families.len(), 14);
     let mut failed = Vec::new();
     for family in &families {

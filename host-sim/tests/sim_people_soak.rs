@@ -17,8 +17,7 @@ mod people_batch;
 
 use std::time::{SystemTime, UNIX_EPOCH};
 
-use ldcbf_sim::world::crowd::families::FAMILIES as REACTING;
-use people_batch::lidar_batch;
+use people_batch::{lidar_batch, with_reacting};
 
 /// The scripted families with people (constant velocities).
 const SCRIPTED: &[&str] = &[
@@ -51,11 +50,7 @@ fn people_families_on_new_seeds_never_see_the_robot_walk_into_a_person() {
         }
     };
     println!("LDCBF_SOAK_SEED={base}");
-    let families: Vec<String> = SCRIPTED
-        .iter()
-        .map(|f| f.to_string())
-        .chain(REACTING.iter().map(|f| f.replace('_', "-")))
-        .collect();
+    let families = with_reacting(SCRIPTED);
     assert_eq!(families.len(), 17);
     let mut failed = Vec::new();
     for (k, family) in families.iter().enumerate() {

@@ -5,6 +5,17 @@
 use ldcbf_sim::plan::Planner;
 use ldcbf_sim::sense::Perception;
 use ldcbf_sim::studies::batch::{Aggregate, BatchRequest, SeedRange, run_batch};
+use ldcbf_sim::world::crowd::families::FAMILIES as REACTING;
+
+/// The scenario names of the scripted families `scripted`, then of every
+/// family of people who react (`world/crowd/families.rs`).
+pub fn with_reacting(scripted: &[&str]) -> Vec<String> {
+    scripted
+        .iter()
+        .map(|f| f.to_string())
+        .chain(REACTING.iter().map(|f| f.replace('_', "-")))
+        .collect()
+}
 
 /// Seeds `start..end` of `family` (a scenario name) with LiDAR, `rrt_star`
 /// and `delta = 0.05`; prints and returns the aggregate.
