@@ -327,7 +327,7 @@ def run(
     fell = False
     status_counts: Dict[str, int] = {}
     widened = 0
-    skipped = 0
+    committed = 0
     t0 = time.perf_counter()
     t = 0.0
     tick = 0
@@ -359,7 +359,7 @@ def run(
                 future = [np.asarray(f, dtype=float) for f in out["plan"]["feet"][1:]]
                 next_omega = float(out["turning_rate"])
             else:
-                skipped += 1
+                committed += 1
             if trace:
                 trace(
                     f"t={t:6.3f} com {com.round(3)} v {vel[:2].round(2)} ref {w.com_ref.round(3)} "
@@ -433,7 +433,7 @@ def run(
         "subgoals_passed": current,
         "ik_soft_feet_ticks": ik.soft_ticks,
         "widened_targets": widened,
-        "committed_cycles": skipped,
+        "committed_cycles": committed,
         "physics_dt": dt,
     }
     return {"frames": frames, "summary": summary, "steps": steps, "samples": samples, "tracked": tracked, "obstacles": obstacles, "goal": goal, "start": start}

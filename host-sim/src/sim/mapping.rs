@@ -284,8 +284,8 @@ impl Mapper {
             ReplanReason::Stalled
         } else if time + 1e-9 >= self.next_check {
             self.next_check = time + scenario.rrt.replan_period;
-            let (occupied, _) = self.log.map.flags();
             let m = &self.log.map;
+            let occupied = m.occupied();
             let mut grid = InflatedCells::new(
                 m.origin,
                 m.resolution,

@@ -243,20 +243,24 @@ impl OccupancyMap {
         self.log_odds.iter().map(|&l| state_of(l)).collect()
     }
 
+    /// Whether each cell is [`CellState::Occupied`], row by row (`j * width
+    /// + i`).
+    pub fn occupied(&self) -> Vec<bool> {
+        self.flagged(CellState::Occupied)
+    }
+
     /// Every cell's `(occupied, unknown)` flags, row by row (`j * width +
     /// i`): the planner's view of [`OccupancyMap::states`].
     pub fn flags(&self) -> (Vec<bool>, Vec<bool>) {
-        let occupied = self
-            .log_odds
+        (self.occupied(), self.flagged(CellState::Unknown))
+    }
+
+    /// Whether each cell is in `state`, row by row.
+    fn flagged(&self, state: CellState) -> Vec<bool> {
+        self.log_odds
             .iter()
-            .map(|&l| state_of(l) == CellState::Occupied)
-            .collect();
-        let unknown = self
-            .log_odds
-            .iter()
-            .map(|&l| l.abs() < UNKNOWN_EPS)
-            .collect();
-        (occupied, unknown)
+            .map(|&l| state_of(l) == state)
+            .collect()
     }
 
     /// The column range `(i0, i1)` and row range `(j0, j1)` (inclusive) of

@@ -53,7 +53,7 @@ impl OccupancyMap {
             if j <= j1 {
                 // Only the row's chord of the disk of radius `reach` (one
                 // cell of slack each side) can hold a wanted cell.
-                let dy = self.origin.y + (j as f64 + 0.5) * r - at.y;
+                let dy = self.centre(i0, j).y - at.y;
                 let half = (reach * reach - dy * dy).max(0.0).sqrt();
                 let (lo, hi) = (
                     rng(at.x - half - r, self.origin.x, self.width).max(i0),
